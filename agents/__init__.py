@@ -1,0 +1,1 @@
+"""Agents, training, evaluation, sweeps and the ``flownav`` command line."""

@@ -1,0 +1,23 @@
+"""Optical-flow depth estimation for small drones (the thesis's estimator).
+
+FAST keypoints → pyramidal Lucas-Kanade flow → rotation compensation from the known rotation → depth from the
+known translation, plus the sector histogram that turns the depth points into a fixed-size observation.
+numpy and OpenCV only: no MuJoCo, Gymnasium or torch here.
+
+Public API:
+    :class:`CameraIntrinsics`, :class:`FlowDepthEstimator`, :class:`DepthPoints`, :func:`sector_histogram`,
+    :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.evaluation`.
+"""
+
+from estimator.camera import CameraIntrinsics
+from estimator.estimator import DepthPoints, FlowDepthEstimator
+from estimator.histogram import DEFAULT_BIN_EDGES, DEFAULT_SECTORS, sector_histogram
+
+__all__ = [
+    "DEFAULT_BIN_EDGES",
+    "DEFAULT_SECTORS",
+    "CameraIntrinsics",
+    "DepthPoints",
+    "FlowDepthEstimator",
+    "sector_histogram",
+]

@@ -1,0 +1,328 @@
+"""The flow depth estimator: FAST → pyramidal LK → derotation → depth from the known translation."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import cv2
+import numpy as np
+
+from estimator import geometry, tracking
+from estimator._validation import (
+    as_rotation_matrix,
+    as_translation_vector,
+    require_bool,
+    require_int_in_range,
+    require_non_negative_finite,
+    require_positive_finite,
+)
+from estimator.camera import CameraIntrinsics
+
+TIMING_KEYS = ("prepare", "fast", "flow", "depth", "total")
+
+
+@dataclass
+class DepthPoints:
+    """Result of one estimation: one row per FAST keypoint of the previous frame.
+
+    Attributes:
+        points: (N, 2) float32 keypoint pixel positions in the previous image.
+        next_points: (N, 2) float32 tracked positions in the next image; meaningless where ``tracked`` is
+            False.
+        depth: (N,) float64 z-depth in metres in the previous camera frame. Finite and positive where
+            ``valid``; may be NaN, negative or meaningless elsewhere.
+        valid: (N,) bool: the depth passed every check (tracking and geometry).
+        tracked: (N,) bool: LK converged, its error is within ``max_lk_error`` and the forward-backward check
+            (when on) passed. ``valid`` implies ``tracked``.
+        parallax_px: (N,) float64 translational flow (after derotation) behind the depth, in pixels.
+        timings: Seconds per stage: ``"prepare"`` (grayscale conversion and brightness normalisation of the
+            new frame, and of the previous one in :meth:`FlowDepthEstimator.estimate`), ``"fast"``, ``"flow"``
+            (pyramidal LK, both directions), ``"depth"`` (derotation, depth and checks) and ``"total"`` (the
+            whole call, including input checks).
+    """
+
+    points: np.ndarray
+    next_points: np.ndarray
+    depth: np.ndarray
+    valid: np.ndarray
+    tracked: np.ndarray
+    parallax_px: np.ndarray
+    timings: dict[str, float] = field(default_factory=lambda: dict.fromkeys(TIMING_KEYS, 0.0))
+
+    @classmethod
+    def empty(cls, timings: dict[str, float] | None = None) -> DepthPoints:
+        """A result with no points (first frame of a stream, or a frame without corners)."""
+        return cls(
+            points=np.empty((0, 2), dtype=np.float32),
+            next_points=np.empty((0, 2), dtype=np.float32),
+            depth=np.empty(0, dtype=np.float64),
+            valid=np.empty(0, dtype=bool),
+            tracked=np.empty(0, dtype=bool),
+            parallax_px=np.empty(0, dtype=np.float64),
+            timings=dict(timings) if timings is not None else dict.fromkeys(TIMING_KEYS, 0.0),
+        )
+
+    @property
+    def num_points(self) -> int:
+        """Number of keypoints detected in the previous frame (N)."""
+        return len(self.points)
+
+    @property
+    def num_tracked(self) -> int:
+        """Number of keypoints that were tracked into the next frame (``tracked.sum()``)."""
+        return int(np.count_nonzero(self.tracked))
+
+    @property
+    def num_valid(self) -> int:
+        """Number of keypoints with a trusted depth (``valid.sum()``)."""
+        return int(np.count_nonzero(self.valid))
+
+
+@dataclass
+class _Frame:
+    # What one frame contributes, prepared once: the raw grayscale for FAST (whose threshold is in raw grey
+    # levels) and the image LK tracks on (the normalised one when brightness normalisation is on).
+    gray: np.ndarray
+    flow_image: np.ndarray
+
+
+class FlowDepthEstimator:
+    """Sparse depth from optical flow and known camera motion (the thesis's estimator).
+
+    Pipeline per frame pair: FAST corners in the previous frame → pyramidal Lucas-Kanade into the next frame
+    (optionally checked backwards) → derotation with the known rotation → depth from the remaining,
+    translational flow and the known translation → validity checks.
+
+    Conventions: images are uint8 grayscale (H, W) or RGB (H, W, 3) of the intrinsics' size; the motion from
+    the previous to the next camera frame is ``X_next = R @ X_prev + t`` in the OpenCV camera frame (x right,
+    y down, z forward), metres; depth is the z-depth in the previous camera frame.
+
+    Defaults and the measurements behind them (ICL-NUIM living room 1, frames 0→2 / 0→4 with ground-truth
+    motion, 640×480; Middlebury RubberWhale for the flow stage):
+
+    MEASUREMENTS_PLACEHOLDER
+
+    Args:
+        intrinsics: Camera intrinsics; images must be ``intrinsics.width`` × ``intrinsics.height``.
+        method: ``"triangulation"`` (least squares over both flow components, default) or ``"thesis"``
+            (Euler-angle derotation and per-point larger-component depth, thesis eqs. 4.12/4.15/4.18,
+            Fig. 24).
+            See :func:`estimator.geometry.solve_depth`.
+        fast_threshold: FAST intensity threshold in grey levels, an integer in [1, 255]. Lower finds more,
+            weaker corners.
+        max_points: Most keypoints kept per frame (strongest first, see ``spread_keypoints``), an integer
+            >= 1, or None for every FAST corner. Bounds the time per frame.
+        win_size: LK window side in pixels, an integer in [3, 101] (thesis: 10).
+        max_level: Highest LK pyramid level, an integer in [0, 8] (thesis: 3; 0 = no pyramid).
+        max_lk_error: Largest accepted LK error (mean absolute intensity difference over the window, grey
+            levels), > 0 (thesis: 5).
+        spread_keypoints: When more than ``max_points`` corners are found, balance the kept ones over a
+            ``spread_grid`` of cells instead of taking the strongest overall (which crowd onto textured
+            objects, as the thesis observed).
+        spread_grid: ``(rows, cols)`` of the spreading grid, each an integer in [1, 64].
+        forward_backward: Track every point back from the next into the previous frame and reject points
+            that do not return to within ``fb_max_error_px``.
+        fb_max_error_px: Largest accepted forward-backward error in pixels, > 0.
+        normalize_brightness: Normalise every frame to a fixed mean and standard deviation before LK
+            tracks on it, which makes LK robust to global exposure changes (thesis §5.2.3). FAST still
+            runs on the raw image so ``fast_threshold`` keeps its meaning.
+        min_parallax_px: Smallest translational flow in pixels for a depth to be valid, >= 0. Points near
+            the focus of expansion, when hovering or without translation have no parallax and no depth.
+        max_epipolar_error_px: Largest distance in pixels of the tracked point from the line the known motion
+            allows (the epipolar line through the derotated position), > 0. A static point can only be off
+            that line by flow noise plus the motion error; mistracks (repeated texture, occlusion edges) and
+            moving objects usually are off by more.
+
+    Raises:
+        ValueError: A parameter is out of range; the message names it, its value and the allowed range.
+    """
+
+    def __init__(
+        self,
+        intrinsics: CameraIntrinsics,
+        *,
+        method: str = "triangulation",
+        fast_threshold: int = 20,
+        max_points: int | None = 1000,
+        win_size: int = 10,
+        max_level: int = 3,
+        max_lk_error: float = 5.0,
+        spread_keypoints: bool = True,
+        spread_grid: tuple[int, int] = (6, 8),
+        forward_backward: bool = True,
+        fb_max_error_px: float = 0.5,
+        normalize_brightness: bool = False,
+        min_parallax_px: float = 1.0,
+        max_epipolar_error_px: float = 1.0,
+    ) -> None:
+        if not isinstance(intrinsics, CameraIntrinsics):
+            raise ValueError(f"intrinsics must be a CameraIntrinsics, got {type(intrinsics).__name__}")
+        if method not in geometry.METHODS:
+            raise ValueError(f"method must be one of {geometry.METHODS}, got {method!r}")
+        self.intrinsics = intrinsics
+        self.method = method
+        self.fast_threshold = require_int_in_range("fast_threshold", fast_threshold, 1, 255)
+        self.max_points = None if max_points is None else require_int_in_range("max_points", max_points, 1)
+        self.win_size = require_int_in_range("win_size", win_size, 3, 101)
+        self.max_level = require_int_in_range("max_level", max_level, 0, 8)
+        self.max_lk_error = require_positive_finite("max_lk_error", max_lk_error)
+        self.spread_keypoints = require_bool("spread_keypoints", spread_keypoints)
+        self.spread_grid = _as_grid("spread_grid", spread_grid)
+        self.forward_backward = require_bool("forward_backward", forward_backward)
+        self.fb_max_error_px = require_positive_finite("fb_max_error_px", fb_max_error_px)
+        self.normalize_brightness = require_bool("normalize_brightness", normalize_brightness)
+        self.min_parallax_px = require_non_negative_finite("min_parallax_px", min_parallax_px)
+        self.max_epipolar_error_px = require_positive_finite("max_epipolar_error_px", max_epipolar_error_px)
+        self._detector = cv2.FastFeatureDetector_create(self.fast_threshold, True)
+        self._previous: _Frame | None = None
+
+    def estimate(
+        self, prev_image: np.ndarray, next_image: np.ndarray, rotation: Any, translation: Any
+    ) -> DepthPoints:
+        """Depth of the previous frame's keypoints from one frame pair.
+
+        Args:
+            prev_image: Previous frame, uint8 (H, W) or (H, W, 3) RGB, of the intrinsics' size.
+            next_image: Next frame, same size.
+            rotation: (3, 3) rotation matrix from the previous to the next camera frame.
+            translation: (3,) translation in metres, ``X_next = R @ X_prev + t``.
+
+        Returns:
+            :class:`DepthPoints` for the keypoints of ``prev_image``.
+
+        Raises:
+            ValueError: An image is not uint8 (H, W) or (H, W, 3), the images differ in size or do not match
+                the intrinsics, ``rotation`` is not a rotation matrix, or the motion is not finite.
+        """
+        start = time.perf_counter()
+        rotation, translation = self._check_motion(rotation, translation)
+        prev_gray = tracking.to_grayscale(prev_image, "prev_image")
+        next_gray = tracking.to_grayscale(next_image, "next_image")
+        if prev_gray.shape != next_gray.shape:
+            raise ValueError(
+                "prev_image and next_image must have the same size, got "
+                f"{prev_gray.shape[1]}x{prev_gray.shape[0]} and {next_gray.shape[1]}x{next_gray.shape[0]}"
+            )
+        self._check_size(prev_gray, "prev_image")
+        timings = dict.fromkeys(TIMING_KEYS, 0.0)
+        previous = self._prepare(prev_gray, timings)
+        current = self._prepare(next_gray, timings)
+        return self._estimate_pair(previous, current, rotation, translation, timings, start)
+
+    def update(self, image: np.ndarray, rotation: Any, translation: Any) -> DepthPoints:
+        """Streaming estimation: depth of the previous frame's keypoints, then remember this frame.
+
+        The frame is converted and normalised once and kept as the previous frame of the next call (see
+        :mod:`estimator.tracking` for why LK's image pyramids cannot be kept too).
+
+        Args:
+            image: The new frame, uint8 (H, W) or (H, W, 3) RGB, of the intrinsics' size.
+            rotation: (3, 3) rotation from the previous frame's camera to this one's (ignored, but checked,
+                on the first call).
+            translation: (3,) translation in metres from the previous frame to this one,
+                ``X_this = R @ X_previous + t``.
+
+        Returns:
+            :class:`DepthPoints` for the previous frame's keypoints; empty on the first call after
+            construction or :meth:`reset`.
+
+        Raises:
+            ValueError: As :meth:`estimate`.
+        """
+        start = time.perf_counter()
+        rotation, translation = self._check_motion(rotation, translation)
+        gray = tracking.to_grayscale(image, "image")
+        self._check_size(gray, "image")
+        timings = dict.fromkeys(TIMING_KEYS, 0.0)
+        current = self._prepare(gray, timings)
+        previous, self._previous = self._previous, current
+        if previous is None:
+            timings["total"] = time.perf_counter() - start
+            return DepthPoints.empty(timings)
+        return self._estimate_pair(previous, current, rotation, translation, timings, start)
+
+    def reset(self) -> None:
+        """Forget the previous frame: the next :meth:`update` starts a new stream and returns empty."""
+        self._previous = None
+
+    def _estimate_pair(
+        self,
+        previous: _Frame,
+        current: _Frame,
+        rotation: np.ndarray,
+        translation: np.ndarray,
+        timings: dict[str, float],
+        start: float,
+    ) -> DepthPoints:
+        stage_start = time.perf_counter()
+        spread_grid = self.spread_grid if self.spread_keypoints else None
+        points = tracking.detect_keypoints(previous.gray, self._detector, self.max_points, spread_grid)
+        timings["fast"] = time.perf_counter() - stage_start
+        if len(points) == 0:
+            timings["total"] = time.perf_counter() - start
+            return DepthPoints.empty(timings)
+
+        stage_start = time.perf_counter()
+        tracks = tracking.track_points(
+            previous.flow_image,
+            current.flow_image,
+            points,
+            self.win_size,
+            self.max_level,
+            self.forward_backward,
+        )
+        timings["flow"] = time.perf_counter() - stage_start
+
+        stage_start = time.perf_counter()
+        tracked = tracks.status & (tracks.lk_error <= self.max_lk_error)
+        if self.forward_backward:
+            tracked &= tracks.fb_error_px <= self.fb_max_error_px
+        solution = geometry.solve_depth(
+            self.intrinsics.normalize(points),
+            self.intrinsics.normalize(tracks.next_points),
+            rotation,
+            translation,
+            self.intrinsics.focal_scale,
+            self.method,
+        )
+        geometry_ok = geometry.valid_depth_mask(solution, self.min_parallax_px, self.max_epipolar_error_px)
+        valid = tracked & geometry_ok
+        timings["depth"] = time.perf_counter() - stage_start
+        timings["total"] = time.perf_counter() - start
+        return DepthPoints(
+            points=points,
+            next_points=tracks.next_points,
+            depth=solution.depth,
+            valid=valid,
+            tracked=tracked,
+            parallax_px=solution.parallax_px,
+            timings=timings,
+        )
+
+    def _prepare(self, gray: np.ndarray, timings: dict[str, float]) -> _Frame:
+        stage_start = time.perf_counter()
+        flow_image = tracking.normalize_brightness(gray) if self.normalize_brightness else gray
+        timings["prepare"] += time.perf_counter() - stage_start
+        return _Frame(gray=gray, flow_image=flow_image)
+
+    def _check_size(self, gray: np.ndarray, name: str) -> None:
+        height, width = gray.shape
+        if (width, height) != self.intrinsics.image_size:
+            raise ValueError(
+                f"{name} must be {self.intrinsics.width}x{self.intrinsics.height} (width x height) to match "
+                f"the camera intrinsics, got {width}x{height}"
+            )
+
+    @staticmethod
+    def _check_motion(rotation: Any, translation: Any) -> tuple[np.ndarray, np.ndarray]:
+        return as_rotation_matrix("rotation", rotation), as_translation_vector("translation", translation)
+
+
+def _as_grid(name: str, value: Any) -> tuple[int, int]:
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise ValueError(f"{name} must be a (rows, cols) pair of integers in [1, 64], got {value!r}")
+    rows = require_int_in_range(f"{name}[0] (rows)", value[0], 1, 64)
+    cols = require_int_in_range(f"{name}[1] (cols)", value[1], 1, 64)
+    return rows, cols

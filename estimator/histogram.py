@@ -1,0 +1,124 @@
+"""Sector depth histograms: the fixed-size observation built from a variable number of depth points."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from estimator._validation import require_int_in_range
+
+#: Default depth bin edges in metres: finer near the drone, where obstacles matter. Bins are
+#: [0, 1), [1, 2), [2, 3), [3, 5), [5, 8) and the open far bin [8, inf).
+DEFAULT_BIN_EDGES: tuple[float, ...] = (0.0, 1.0, 2.0, 3.0, 5.0, 8.0, 13.0)
+#: Default sector grid (rows, cols): left / centre / right crossed with up / level / down.
+DEFAULT_SECTORS: tuple[int, int] = (3, 3)
+
+
+def sector_histogram(
+    points: Any,
+    depth: Any,
+    valid: Any,
+    image_size: tuple[int, int],
+    sectors: tuple[int, int] = DEFAULT_SECTORS,
+    bin_edges: Any = DEFAULT_BIN_EDGES,
+) -> np.ndarray:
+    """Per image sector, the distribution of valid point depths over depth bins.
+
+    The image is cut into a ``rows × cols`` grid of equal sectors (in the pixel-centre convention: pixel
+    ``(u, v)`` covers ``[u - 0.5, u + 0.5)``, so sector boundaries fall at multiples of ``width / cols``
+    from the image's left edge at ``u = -0.5``). Each valid point counts once in its sector, in the bin of
+    its depth. Each sector's counts are then divided by its number of valid points, so:
+
+    * a sector with points sums to 1 over its bins (a distribution; the number of points does not leak in,
+      which keeps the observation comparable when the corner count varies with texture and threshold);
+    * a sector with no valid point is all zeros (distinguishable from any distribution).
+
+    Bins are ``[e0, e1), [e1, e2), …``; depths below the first edge count in the first bin and depths at or
+    beyond the last edge count in the last bin, which is therefore open: ``[e[-2], inf)`` ("far"). Points
+    outside the image and invalid points are ignored.
+
+    Args:
+        points: (N, 2) pixel positions ``(u, v)``.
+        depth: (N,) depths in metres; must be finite where ``valid``.
+        valid: (N,) bool mask of points to count.
+        image_size: ``(width, height)`` in pixels, positive integers.
+        sectors: ``(rows, cols)``, positive integers.
+        bin_edges: At least two strictly increasing finite edges in metres; ``len(bin_edges) - 1`` bins.
+
+    Returns:
+        float32 array of shape (rows, cols, bins), every entry in [0, 1].
+
+    Raises:
+        ValueError: A shape, dtype or length does not match, a valid point has a non-finite position or
+            depth, or ``image_size``, ``sectors`` or ``bin_edges`` is malformed.
+    """
+    width, height = _as_pair("image_size", image_size, "(width, height)")
+    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    edges = _as_bin_edges(bin_edges)
+    points, depth, valid = _as_point_arrays(points, depth, valid)
+    bins = len(edges) - 1
+
+    u = points[valid, 0].astype(np.float64) + 0.5
+    v = points[valid, 1].astype(np.float64) + 0.5
+    counted_depth = depth[valid]
+    inside = (u >= 0.0) & (u < width) & (v >= 0.0) & (v < height)
+    u, v, counted_depth = u[inside], v[inside], counted_depth[inside]
+
+    # min() guards the float edge case u * cols / width rounding up to cols for u just below width.
+    column = np.minimum((u * cols / width).astype(np.intp), cols - 1)
+    row = np.minimum((v * rows / height).astype(np.intp), rows - 1)
+    depth_bin = np.clip(np.searchsorted(edges, counted_depth, side="right") - 1, 0, bins - 1)
+    flat_index = (row * cols + column) * bins + depth_bin
+    counts = np.bincount(flat_index, minlength=rows * cols * bins).reshape(rows, cols, bins)
+
+    per_sector = counts.sum(axis=2, keepdims=True)
+    histogram = np.zeros(counts.shape, dtype=np.float32)
+    np.divide(counts, per_sector, out=histogram, where=per_sector > 0, casting="unsafe")
+    return histogram
+
+
+def _as_pair(name: str, value: Any, meaning: str) -> tuple[int, int]:
+    if isinstance(value, np.ndarray):
+        value = tuple(value.tolist())
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise ValueError(f"{name} must be a pair of positive integers {meaning}, got {value!r}")
+    first = require_int_in_range(f"{name}[0]", value[0], 1)
+    second = require_int_in_range(f"{name}[1]", value[1], 1)
+    return first, second
+
+
+def _as_bin_edges(value: Any) -> np.ndarray:
+    try:
+        edges = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"bin_edges must be a sequence of numbers, got {value!r}") from None
+    if edges.ndim != 1 or len(edges) < 2:
+        raise ValueError(f"bin_edges must be a 1-D sequence of at least 2 edges, got shape {edges.shape}")
+    if not np.all(np.isfinite(edges)):
+        raise ValueError(f"bin_edges must be finite, got {edges.tolist()}")
+    if not np.all(np.diff(edges) > 0.0):
+        raise ValueError(f"bin_edges must be strictly increasing, got {edges.tolist()}")
+    return edges
+
+
+def _as_point_arrays(points: Any, depth: Any, valid: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    points = np.asarray(points)
+    depth = np.asarray(depth)
+    valid = np.asarray(valid)
+    if points.ndim != 2 or points.shape[1] != 2 or not np.issubdtype(points.dtype, np.number):
+        raise ValueError(f"points must be a numeric (N, 2) array of pixel positions, got {points.shape}")
+    if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
+        raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
+    if valid.ndim != 1 or valid.dtype != np.bool_:
+        raise ValueError(f"valid must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}")
+    if not len(points) == len(depth) == len(valid):
+        raise ValueError(
+            "points, depth and valid must have the same length N, got "
+            f"{len(points)}, {len(depth)} and {len(valid)}"
+        )
+    if not np.all(np.isfinite(depth[valid])):
+        raise ValueError("depth must be finite where valid is True")
+    if not np.all(np.isfinite(points[valid])):
+        raise ValueError("points must be finite where valid is True")
+    return points, depth.astype(np.float64, copy=False), valid

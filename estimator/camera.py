@@ -52,9 +52,7 @@ class CameraIntrinsics:
         object.__setattr__(self, "height", require_int_in_range("height", self.height, 1))
 
     @classmethod
-    def from_fov(
-        cls, width: int, height: int, fov_deg: float, axis: str = "vertical"
-    ) -> CameraIntrinsics:
+    def from_fov(cls, width: int, height: int, fov_deg: float, axis: str = "vertical") -> CameraIntrinsics:
         """Intrinsics of an ideal camera from its field of view (thesis eq. 4.16).
 
         ``f = (size / 2) / tan(fov / 2)`` where ``size`` is the image height for a vertical FOV and the width

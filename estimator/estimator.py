@@ -153,7 +153,7 @@ class FlowDepthEstimator:
         spread_grid: tuple[int, int] = (6, 8),
         forward_backward: bool = True,
         fb_max_error_px: float = 0.5,
-        normalize_brightness: bool = False,
+        normalize_brightness: bool = True,
         min_parallax_px: float = 1.0,
         max_epipolar_error_px: float = 1.0,
     ) -> None:

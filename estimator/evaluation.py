@@ -138,9 +138,7 @@ def evaluate_sequence(
         for second in range(first + 1, min(first + max_gap, len(images) - 1) + 1):
             rotation, translation = relative_motion(poses[first], poses[second])
             result = estimator.estimate(images[first], images[second], rotation, translation)
-            rows.append(
-                _pair_errors((first, second), result, true_depth, rotation, translation, intrinsics)
-            )
+            rows.append(_pair_errors((first, second), result, true_depth, rotation, translation, intrinsics))
     return rows
 
 

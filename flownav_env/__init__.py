@@ -1,0 +1,37 @@
+"""FlowNav's MuJoCo quadcopter-camera environment; importing it registers the Gymnasium ids.
+
+| id                      | layout     | time limit (steps) |
+|-------------------------|------------|--------------------|
+| ``FlowNav-v0``          | field      | 400                |
+| ``FlowNavCorridor-v0``  | corridor   | 400                |
+| ``FlowNavSingle-v0``    | single     | 200                |
+| ``FlowNavThree-v0``     | three      | 250                |
+
+Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``.
+"""
+
+from __future__ import annotations
+
+import os
+
+# Headless by default: the offscreen renderer needs a GL backend picked before mujoco is imported.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from gymnasium.envs.registration import register, registry
+
+from flownav_env.env import FlowNavEnv
+
+ENV_IDS = {
+    "FlowNav-v0": ({"layout": "field"}, 400),
+    "FlowNavCorridor-v0": ({"layout": "corridor"}, 400),
+    "FlowNavSingle-v0": ({"layout": "single"}, 200),
+    "FlowNavThree-v0": ({"layout": "three"}, 250),
+}
+
+for _env_id, (_kwargs, _steps) in ENV_IDS.items():
+    if _env_id not in registry:
+        register(
+            id=_env_id, entry_point="flownav_env.env:FlowNavEnv", kwargs=_kwargs, max_episode_steps=_steps
+        )
+
+__all__ = ["ENV_IDS", "FlowNavEnv"]

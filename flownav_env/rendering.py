@@ -1,0 +1,93 @@
+"""Offscreen rendering: the forward camera's frames and the human-facing view with the flow overlay.
+
+Renderers (and their GL contexts) are created lazily on first use, so an env can be constructed in one process
+and stepped in another (``SubprocVecEnv``, ``AsyncVectorEnv``). Headless rendering goes through MuJoCo's
+``MUJOCO_GL`` backend; :mod:`flownav_env` defaults it to ``egl``.
+"""
+
+from __future__ import annotations
+
+import cv2
+import mujoco
+import numpy as np
+
+
+class CameraRenderer:
+    """Renders one named camera of a model at a fixed size, creating the GL context on first use."""
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
+        self.model = model
+        self.width = width
+        self.height = height
+        self._renderer: mujoco.Renderer | None = None
+
+    def render(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
+        """RGB image (height, width, 3) uint8 of ``camera``, row 0 at the top."""
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+        self._renderer.update_scene(data, camera=camera)
+        return self._renderer.render()
+
+    def render_depth(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
+        """Depth buffer (height, width) float32: z-depth in metres along the camera axis."""
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+        self._renderer.enable_depth_rendering()
+        try:
+            self._renderer.update_scene(data, camera=camera)
+            return self._renderer.render().copy()
+        finally:
+            self._renderer.disable_depth_rendering()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+def depth_colour(depth: np.ndarray, max_depth: float) -> np.ndarray:
+    """RGB colours (N, 3) uint8 for depths: red near, through yellow and green, to blue far."""
+    if np.size(depth) == 0:
+        return np.zeros((0, 3), np.uint8)
+    scaled = np.clip(np.asarray(depth, np.float32) / max_depth, 0.0, 1.0)
+    lut_input = (255 * (1.0 - scaled)).astype(np.uint8).reshape(-1, 1)
+    return cv2.applyColorMap(lut_input, cv2.COLORMAP_JET).reshape(-1, 3)[:, ::-1]
+
+
+def draw_flow_overlay(
+    image: np.ndarray,
+    points: np.ndarray,
+    next_points: np.ndarray,
+    depth: np.ndarray,
+    valid: np.ndarray,
+    *,
+    scale: int,
+    max_depth: float,
+) -> np.ndarray:
+    """The thesis's camera view (Figs. 25–27): tracked points, flow vectors and depth-coloured circles.
+
+    Args:
+        image: the camera's RGB frame (H, W, 3).
+        points, next_points: (N, 2) pixel positions in the previous and the current frame.
+        depth: (N,) estimated depth (m); drawn where ``valid``.
+        valid: (N,) bool.
+        scale: integer upscaling of the frame so the annotations stay legible.
+        max_depth: depth mapped to the far end of the colour scale.
+
+    Returns:
+        RGB image (H·scale, W·scale, 3).
+    """
+    canvas = cv2.resize(
+        image, (image.shape[1] * scale, image.shape[0] * scale), interpolation=cv2.INTER_NEAREST
+    )
+    start = np.round(np.asarray(points) * scale + scale / 2).astype(np.int32)
+    end = np.round(np.asarray(next_points) * scale + scale / 2).astype(np.int32)
+    valid = np.asarray(valid, bool)
+    colours = depth_colour(np.where(valid, depth, max_depth), max_depth)
+    for (x0, y0), (x1, y1) in zip(start[~valid], end[~valid], strict=False):
+        cv2.line(canvas, (int(x0), int(y0)), (int(x1), int(y1)), (160, 160, 160), 1, cv2.LINE_AA)
+    for (x0, y0), (x1, y1), colour in zip(start[valid], end[valid], colours[valid], strict=False):
+        rgb = tuple(int(c) for c in colour)
+        cv2.line(canvas, (int(x0), int(y0)), (int(x1), int(y1)), (255, 255, 255), 1, cv2.LINE_AA)
+        cv2.circle(canvas, (int(x1), int(y1)), 3, rgb, -1, cv2.LINE_AA)
+    return canvas

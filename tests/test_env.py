@@ -1,0 +1,306 @@
+"""FlowNav-v0: API conformance, determinism, episode ends, sensor extremes, bad kwargs, resource release."""
+
+from __future__ import annotations
+
+import gc
+import resource
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import flownav_env
+from flownav_env import ENV_IDS, FlowNavEnv
+
+SMALL = {"camera_width": 64, "camera_height": 48}
+
+
+def make(env_id: str = "FlowNav-v0", **kwargs) -> gym.Env:
+    return gym.make(env_id, **{**SMALL, **kwargs})
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_IDS))
+def test_registered_ids_pass_gymnasium_and_sb3_checkers(env_id: str) -> None:
+    env = make(env_id)
+    try:
+        gym_check_env(env.unwrapped, skip_render_check=True)
+        sb3_check_env(env.unwrapped, warn=False)
+    finally:
+        env.close()
+
+
+def test_same_seed_gives_identical_observations() -> None:
+    def rollout() -> list[np.ndarray]:
+        env = make(attitude_jitter_deg=1.0, rotation_error=0.05, translation_error=0.05)
+        obs, _ = env.reset(seed=123)
+        frames = [np.concatenate([obs["depth_histogram"].ravel(), obs["state"]])]
+        actions = np.random.default_rng(0).uniform(-1, 1, (8, 3))
+        for action in actions:
+            obs, *_ = env.step(action)
+            frames.append(np.concatenate([obs["depth_histogram"].ravel(), obs["state"]]))
+        env.close()
+        return frames
+
+    first, second = rollout(), rollout()
+    for a, b in zip(first, second, strict=False):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"forward_speed": 0.0},  # hover: no translation, no depth
+        {"forward_speed": 3.0},
+        {"attitude_jitter_deg": 2.5},
+        {"brightness": 0.0},
+        {"brightness": 4.0},
+        {"rotation_error": 1.0, "translation_error": 1.0},
+        {"obs_source": "oracle"},
+    ],
+    ids=lambda kwargs: ",".join(f"{k}={v}" for k, v in kwargs.items()),
+)
+def test_observations_finite_and_inside_space_at_sensor_extremes(kwargs: dict) -> None:
+    env = make(**kwargs)
+    obs, _ = env.reset(seed=1)
+    assert env.observation_space.contains(obs)
+    for _ in range(6):
+        obs, reward, terminated, _truncated, _info = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+        assert all(np.all(np.isfinite(value)) for value in obs.values())
+        assert np.isfinite(reward)
+        if terminated:
+            break
+    env.close()
+
+
+def test_flow_observation_sees_the_obstacle_ahead() -> None:
+    env = make("FlowNavSingle-v0", camera_width=160, camera_height=120)
+    env.reset(seed=0)
+    valid_counts = []
+    for _ in range(10):
+        obs, _, _, _, info = env.step(np.zeros(3))
+        valid_counts.append(info["points_valid"])
+    env.close()
+    assert np.median(valid_counts) >= 20
+    assert obs["depth_histogram"].sum() > 0
+
+
+def test_hover_is_valid_and_keeps_position() -> None:
+    env = make(forward_speed=0.0)
+    env.reset(seed=2)
+    for _ in range(10):
+        _obs, _, terminated, _, info = env.step(np.zeros(3))
+    env.close()
+    assert not terminated
+    assert abs(info["progress"]) < 0.05
+    assert info["points_valid"] == 0  # no translation, no parallax: nothing is claimed
+
+
+def test_flying_straight_into_a_capsule_terminates_with_collision() -> None:
+    env = make("FlowNavSingle-v0")
+    env.reset(seed=0)
+    for _ in range(200):
+        _, _reward, terminated, truncated, info = env.step(np.zeros(3))
+        if terminated or truncated:
+            break
+    env.close()
+    assert terminated and not truncated
+    assert info["collision"] and not info["success"]
+    assert info["reward_collision"] < 0
+    assert 3.5 < info["progress"] < 5.0  # the capsule stands at x = 5 m with radius 0.5 m
+
+
+def test_reaching_the_goal_ends_with_success() -> None:
+    env = make("FlowNavSingle-v0", forward_speed=2.0)
+    env.reset(seed=0)
+    # Sidestep the capsule by flying right, then carry on to the goal line.
+    for step in range(200):
+        action = np.array([1.0 if step < 25 else 0.0, 0.0, 0.0])
+        _, _reward, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+    env.close()
+    assert terminated and info["success"] and not info["collision"]
+    assert info["reward_success"] > 0
+
+
+def test_leaving_the_bounds_terminates() -> None:
+    env = make(lateral_bound=1.0)
+    env.reset(seed=0)
+    for _ in range(100):
+        _, _, terminated, _, info = env.step(np.array([-1.0, 0.0, 0.0]))
+        if terminated:
+            break
+    env.close()
+    assert terminated and info["out_of_bounds"] and not info["collision"]
+
+
+def test_body_tilts_when_accelerating_sideways() -> None:
+    env = make(forward_speed=0.0)
+    env.reset(seed=0)
+    obs, *_ = env.step(np.array([1.0, 0.0, 0.0]))
+    env.close()
+    roll = obs["state"][3]
+    assert abs(np.degrees(roll)) > 2.0
+
+
+def test_rgb_array_render_shows_camera_and_chase_views() -> None:
+    env = make(render_mode="rgb_array")
+    env.reset(seed=0)
+    env.step(np.zeros(3))
+    frame = env.render()
+    env.close()
+    assert frame.shape == (240, 640, 3) and frame.dtype == np.uint8
+    assert frame[:, :320].std() > 5 and frame[:, 320:].std() > 5
+
+
+def test_info_carries_truth_and_estimator_statistics() -> None:
+    env = make(rotation_error=0.1, translation_error=0.1)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(3))
+    env.close()
+    for key in (
+        "collision",
+        "success",
+        "progress",
+        "min_clearance",
+        "points_tracked",
+        "points_valid",
+        "true_rotation",
+        "true_translation",
+    ):
+        assert key in info
+    np.testing.assert_allclose(info["true_rotation"] @ info["true_rotation"].T, np.eye(3), atol=1e-9)
+    assert 0.05 < np.linalg.norm(info["true_translation"]) < 0.15  # ≈ 0.1 m per frame by default
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"forward_speed": -1.0}, r"forward_speed must be in \[0.0, 5.0\], got -1.0"),
+        ({"layout": "maze"}, r"layout must be one of 'field', 'corridor', 'single', 'three', got 'maze'"),
+        ({"camera_width": 0}, r"camera_width must be an integer in \[16, 1280\], got 0"),
+        ({"camera_height": 10_000}, r"camera_height must be an integer in \[16, 1280\], got 10000"),
+        ({"rotation_error": 1.5}, r"rotation_error must be in \[0.0, 1.0\], got 1.5"),
+        ({"translation_error": -0.1}, r"translation_error must be in \[0.0, 1.0\], got -0.1"),
+        ({"attitude_jitter_deg": float("nan")}, r"attitude_jitter_deg must be in \[0.0, 10.0\], got nan"),
+        ({"brightness": -0.5}, r"brightness must be in \[0.0, 4.0\], got -0.5"),
+        ({"obs_source": "lidar"}, r"obs_source must be one of 'flow', 'oracle', got 'lidar'"),
+        ({"frame_rate": 0}, r"frame_rate must be in \[1.0, 50.0\], got 0"),
+        ({"histogram_sectors": (0, 3)}, r"histogram_sectors\[0\] must be an integer in \[1, 32\], got 0"),
+        ({"histogram_sectors": 3}, r"histogram_sectors must be \(rows, cols\), got 3"),
+        ({"depth_bin_edges": (1.0, 0.5)}, r"depth_bin_edges must be >= 2 increasing finite depths"),
+        ({"obstacle_density": 2.0}, r"obstacle_density must be in \[0.0, 1.0\], got 2.0"),
+        ({"obstacle_radius": 0.0}, r"obstacle_radius must be in \(0.0, 2.0\], got 0.0"),
+        ({"max_height": 0.5}, r"max_height must be in \(1.0, 20.0\], got 0.5"),
+        ({"physics_timestep": 0.01}, r"physics_timestep must be in \[0.0005, 0.005\], got 0.01"),
+        ({"render_mode": "human"}, r"render_mode must be one of 'rgb_array', got 'human'"),
+        ({"texture_seed": "a"}, r"texture_seed must be an integer, got 'a'"),
+        ({"success_bonus": -1.0}, r"success_bonus must be in \[0.0, inf\), got -1.0"),
+    ],
+)
+def test_bad_kwargs_raise_value_error_naming_kwarg_value_and_range(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        FlowNavEnv(**{**SMALL, **kwargs})
+
+
+def test_non_finite_action_is_rejected() -> None:
+    env = FlowNavEnv(**SMALL)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be finite"):
+        env.step(np.array([np.nan, 0.0, 0.0]))
+    env.close()
+
+
+def test_make_close_cycles_do_not_grow_memory() -> None:
+    def cycle() -> None:
+        env = make(render_mode="rgb_array")
+        env.reset(seed=0)
+        env.step(np.zeros(3))
+        env.render()
+        env.close()
+
+    for _ in range(3):  # warm up allocator pools and GL driver caches
+        cycle()
+    gc.collect()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for _ in range(15):
+        cycle()
+    gc.collect()
+    grown_mib = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
+    assert grown_mib < 40, f"peak RSS grew {grown_mib:.1f} MiB over 15 make/close cycles"
+
+
+def test_env_id_table_matches_registry() -> None:
+    for env_id, (kwargs, steps) in flownav_env.ENV_IDS.items():
+        spec = gym.spec(env_id)
+        assert spec.max_episode_steps == steps
+        assert spec.kwargs["layout"] == kwargs["layout"]
+
+
+def test_ray_cast_truth_matches_the_renderers_depth_buffer() -> None:
+    env = FlowNavEnv(layout="three", camera_width=160, camera_height=120)
+    env.reset(seed=0)
+    depth_buffer = env._camera.render_depth(env.physics.data, env.physics.camera_id)
+    rows, cols = np.mgrid[4:120:8, 4:160:8]
+    pixels = np.column_stack([cols.ravel(), rows.ravel()]).astype(np.float64)
+    truth = env._true_depth(pixels, env.physics.camera_pose())
+    buffer = depth_buffer[rows.ravel(), cols.ravel()]
+    near = np.isfinite(truth) & (truth < 30)
+    env.close()
+    assert near.sum() > 100
+    relative = np.abs(truth[near] - buffer[near]) / truth[near]
+    assert np.median(relative) < 0.01
+
+
+def test_estimator_depth_on_env_frames_matches_depth_buffer_on_obstacles() -> None:
+    """A frame pair rendered by the env with known motion: estimated depth vs the renderer's depth buffer."""
+    from estimator import FlowDepthEstimator
+
+    env = FlowNavEnv(layout="three", camera_width=320, camera_height=240)
+    env.reset(seed=0)
+    physics = env.physics
+    first = env._gray(env._camera.render(physics.data, physics.camera_id))
+    first_pose = physics.camera_pose()
+    depth_buffer = env._camera.render_depth(physics.data, physics.camera_id)
+    env.step(np.zeros(3))
+    second = env._gray(env._camera.render(physics.data, physics.camera_id))
+    rotation, translation = flownav_env.camera.relative_motion(*first_pose, *physics.camera_pose())
+    obstacle_ids = set(physics.obstacle_geoms.tolist())
+    env.close()
+
+    result = FlowDepthEstimator(env.intrinsics).estimate(first, second, rotation, translation)
+    pixels = np.round(result.points[result.valid]).astype(int)
+    truth = depth_buffer[pixels[:, 1], pixels[:, 0]]
+    on_obstacle = truth < 15.0  # capsules are within 15 m; the ground at the horizon is farther
+    assert obstacle_ids and on_obstacle.sum() >= 20
+    relative = np.abs(result.depth[result.valid][on_obstacle] - truth[on_obstacle]) / truth[on_obstacle]
+    assert np.median(relative) <= 0.05
+
+
+@pytest.mark.parametrize("vector", ["sb3_subproc", "gym_async"])
+def test_env_steps_inside_subprocess_vector_envs(vector: str) -> None:
+    if vector == "sb3_subproc":
+        from stable_baselines3.common.env_util import make_vec_env
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        # "module:id" makes each worker import flownav_env (and so register the ids) before gym.make.
+        envs = make_vec_env(
+            "flownav_env:FlowNav-v0", n_envs=2, seed=0, vec_env_cls=SubprocVecEnv, env_kwargs=SMALL
+        )
+        envs.reset()
+        obs, rewards, _dones, _infos = envs.step(np.zeros((2, 3), np.float32))
+        envs.close()
+        assert obs["depth_histogram"].shape[0] == 2 and np.all(np.isfinite(rewards))
+    else:
+        # A forked child inherits the parent's EGL state, which hangs once the parent has rendered: fork server.
+        envs = gym.vector.AsyncVectorEnv(
+            [lambda: make(render_mode="rgb_array") for _ in range(2)], context="forkserver"
+        )
+        envs.reset(seed=0)
+        obs, rewards, *_ = envs.step(np.zeros((2, 3), np.float32))
+        frames = envs.call("render")
+        envs.close()
+        assert obs["state"].shape == (2, 7) and frames[0].shape == (240, 640, 3)

@@ -1,0 +1,272 @@
+"""Trains a PPO policy on FlowNav from a YAML config (``flownav train --config configs/ppo_flow.yaml``).
+
+Read top to bottom: load and validate the config; build ``n_envs`` environments in subprocesses (with sensor
+errors randomised per episode for a robust policy); build PPO, or resume it from the newest checkpoint; learn
+with a progress bar, TensorBoard logs, periodic checkpoints, an evaluation on held-out seeds and a wall-clock
+budget; save the policy with its config, learning curve and the hardware and time it took.
+
+Outputs: ``runs/<name>/`` (TensorBoard logs, checkpoints, evaluations) and ``results/policies/<name>.zip``
+(+ ``.yaml`` config copy, ``_learning_curve.png``, ``.json`` training record).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.config import check_env_kwargs, field_range, load_config
+
+HELP = "train a PPO policy from a YAML config (resumable)"
+
+
+@dataclass
+class PPOParams:
+    """stable-baselines3 PPO hyperparameters (see its docs); ``net_arch`` sizes both actor and critic."""
+
+    learning_rate: float = field_range(1e-6, 1.0, default=3e-4)
+    n_steps: int = field_range(8, 100_000, default=512)
+    batch_size: int = field_range(8, 100_000, default=256)
+    n_epochs: int = field_range(1, 100, default=10)
+    gamma: float = field_range(0.0, 1.0, default=0.99)
+    gae_lambda: float = field_range(0.0, 1.0, default=0.95)
+    clip_range: float = field_range(0.01, 1.0, default=0.2)
+    ent_coef: float = field_range(0.0, 1.0, default=0.0)
+    net_arch: list[int] = field_range(1, 4096, default_factory=lambda: [64, 64])
+
+
+@dataclass
+class Randomization:
+    """Per-episode uniform ranges [low, high] of the sensor variables (for ``ppo_robust``); empty = fixed."""
+
+    rotation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
+    translation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
+    attitude_jitter_deg: list[float] = field_range(0.0, 10.0, default_factory=list)
+    brightness: list[float] = field_range(0.0, 4.0, default_factory=list)
+
+    def validate(self) -> None:
+        for name, bounds in asdict(self).items():
+            if bounds and (len(bounds) != 2 or bounds[0] > bounds[1]):
+                raise ValueError(f"key 'randomize.{name}' must be [low, high] with low <= high, got {bounds}")
+
+
+@dataclass
+class TrainConfig:
+    """A training run. Every key of the YAML file maps to a field here."""
+
+    name: str
+    env_id: str = "FlowNav-v0"
+    env: dict[str, Any] = field(default_factory=dict)
+    randomize: Randomization = field(default_factory=Randomization)
+    total_timesteps: int = field_range(1, 100_000_000, default=400_000)
+    n_envs: int = field_range(1, 64, default=2)
+    seed: int = field_range(0, 2**31 - 1, default=0)
+    max_minutes: float = field_range(0.1, 10_000.0, default=60.0)
+    checkpoint_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_episodes: int = field_range(1, 1000, default=10)
+    ppo: PPOParams = field(default_factory=PPOParams)
+
+
+def make_env_factory(config: TrainConfig, rank: int):
+    """A picklable-by-closure factory for SubprocVecEnv workers."""
+
+    def factory():
+        import gymnasium as gym
+        from stable_baselines3.common.monitor import Monitor
+
+        import flownav_env  # noqa: F401  (registers the ids in the worker)
+        from agents.wrappers import SensorRandomization
+
+        env = gym.make(config.env_id, **config.env)
+        if any(asdict(config.randomize).values()):
+            env = SensorRandomization(env, asdict(config.randomize))
+        return Monitor(env)
+
+    return factory
+
+
+def latest_checkpoint(directory: Path) -> Path | None:
+    checkpoints = sorted(directory.glob("*_steps.zip"), key=lambda p: int(p.stem.split("_")[-2]))
+    return checkpoints[-1] if checkpoints else None
+
+
+def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    data = np.load(evaluations)
+    steps, returns = data["timesteps"], data["results"]
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.plot(steps, returns.mean(axis=1), marker="o", label="mean return (held-out seeds)")
+    ax.fill_between(steps, returns.min(axis=1), returns.max(axis=1), alpha=0.2, label="min–max")
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("episode return")
+    ax.set_title(title)
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    fig.savefig(output, dpi=120)
+    plt.close(fig)
+
+
+def train(
+    config: TrainConfig, *, config_path: Path, resume: bool, runs_dir: Path, policies_dir: Path
+) -> Path:
+    """Run the training described by ``config``; returns the saved policy's path."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import (
+        BaseCallback,
+        CallbackList,
+        CheckpointCallback,
+        EvalCallback,
+    )
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    from agents.evaluation import TRAIN_EVAL_SEED_START
+
+    torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
+    run_dir = runs_dir / config.name
+    checkpoint_dir = run_dir / "checkpoints"
+    factories = [make_env_factory(config, i) for i in range(config.n_envs)]
+    vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
+    envs = vec_cls(factories, **({"start_method": "forkserver"} if vec_cls is SubprocVecEnv else {}))
+    envs.seed(config.seed)
+    eval_env = DummyVecEnv([make_env_factory(config, 0)])
+    eval_env.seed(TRAIN_EVAL_SEED_START + config.seed)
+
+    checkpoint = latest_checkpoint(checkpoint_dir) if resume else None
+    if checkpoint is not None:
+        model = PPO.load(checkpoint, env=envs, device="cpu", tensorboard_log=str(run_dir / "tb"))
+        print(f"resuming from {checkpoint} at {model.num_timesteps} steps")
+    else:
+        if resume:
+            print(f"no checkpoint in {checkpoint_dir}: starting fresh")
+        params = asdict(config.ppo)
+        net_arch = params.pop("net_arch")
+        model = PPO(
+            "MultiInputPolicy",
+            envs,
+            policy_kwargs={"net_arch": net_arch},
+            tensorboard_log=str(run_dir / "tb"),
+            seed=config.seed,
+            device="cpu",
+            verbose=0,
+            **params,
+        )
+
+    class WallClockBudget(BaseCallback):
+        """Stops learning once the run has used ``max_minutes`` (this session's share)."""
+
+        def __init__(self, minutes: float) -> None:
+            super().__init__()
+            self.deadline = time.monotonic() + 60.0 * minutes
+
+        def _on_step(self) -> bool:
+            return time.monotonic() < self.deadline
+
+    per_env = max(1, config.n_envs)
+    callbacks = CallbackList(
+        [
+            CheckpointCallback(
+                max(1, config.checkpoint_every // per_env), str(checkpoint_dir), name_prefix=config.name
+            ),
+            EvalCallback(
+                eval_env,
+                n_eval_episodes=config.eval_episodes,
+                eval_freq=max(1, config.eval_every // per_env),
+                log_path=str(run_dir),
+                best_model_save_path=str(run_dir / "best"),
+                deterministic=True,
+                verbose=0,
+            ),
+            WallClockBudget(config.max_minutes),
+        ]
+    )
+    started = time.perf_counter()
+    steps_before = model.num_timesteps
+    remaining = max(0, config.total_timesteps - model.num_timesteps)
+    try:
+        model.learn(
+            remaining,
+            callback=callbacks,
+            progress_bar=True,
+            reset_num_timesteps=checkpoint is None,
+            tb_log_name=config.name,
+        )
+    finally:
+        # Interrupted or not, keep what was learned: the checkpoint is the resume point.
+        model.save(checkpoint_dir / f"{config.name}_{model.num_timesteps}_steps.zip")
+        envs.close()
+        eval_env.close()
+    wall_minutes = (time.perf_counter() - started) / 60.0
+
+    policies_dir.mkdir(parents=True, exist_ok=True)
+    policy_path = policies_dir / f"{config.name}.zip"
+    model.save(policy_path)
+    shutil.copyfile(config_path, policies_dir / f"{config.name}.yaml")
+    evaluations = run_dir / "evaluations.npz"
+    if evaluations.exists():
+        plot_learning_curve(evaluations, policies_dir / f"{config.name}_learning_curve.png", config.name)
+        shutil.copyfile(evaluations, policies_dir / f"{config.name}_evaluations.npz")
+    record_path = policies_dir / f"{config.name}.json"
+    record = (
+        json.loads(record_path.read_text())
+        if record_path.exists() and checkpoint is not None
+        else {"sessions": []}
+    )
+    record["sessions"].append(
+        {
+            "steps_this_session": int(model.num_timesteps - steps_before),
+            "wall_minutes": round(wall_minutes, 1),
+            "steps_per_second": round((model.num_timesteps - steps_before) / max(wall_minutes * 60, 1e-9), 1),
+            "cpu": platform.processor() or platform.machine(),
+            "cores": os.cpu_count(),
+            "n_envs": config.n_envs,
+        }
+    )
+    record["total_timesteps"] = int(model.num_timesteps)
+    record["total_wall_minutes"] = round(sum(s["wall_minutes"] for s in record["sessions"]), 1)
+    record["command"] = f"flownav train --config {config_path}" + (" --resume" if resume else "")
+    record_path.write_text(json.dumps(record, indent=2))
+    print(f"saved {policy_path} after {model.num_timesteps} steps ({wall_minutes:.1f} min this session)")
+    return policy_path
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--config", required=True, help="training config YAML, e.g. configs/ppo_flow.yaml")
+    parser.add_argument(
+        "--resume", action="store_true", help="continue from the newest checkpoint of the run"
+    )
+    parser.add_argument("--runs-dir", default="runs", help="logs and checkpoints (default runs/)")
+    parser.add_argument("--policies-dir", default="results/policies", help="where the trained policy goes")
+    parser.add_argument("--total-timesteps", type=int, help="override the config's total_timesteps")
+    parser.add_argument("--max-minutes", type=float, help="override the config's wall-clock budget")
+
+
+def run(args: argparse.Namespace) -> int:
+    config_path = Path(args.config)
+    config = load_config(config_path, TrainConfig)
+    if args.total_timesteps is not None:
+        config.total_timesteps = args.total_timesteps
+    if args.max_minutes is not None:
+        config.max_minutes = args.max_minutes
+    check_env_kwargs(config.env, str(config_path))
+    train(
+        config,
+        config_path=config_path,
+        resume=args.resume,
+        runs_dir=Path(args.runs_dir),
+        policies_dir=Path(args.policies_dir),
+    )
+    return 0

@@ -1,0 +1,154 @@
+"""flownav_env.recording: file round trip, resampling, slerp, playback exactness and determinism, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flownav_env.recording import (
+    CameraPath,
+    PlaybackSettings,
+    PlaybackWorld,
+    camera_rotation,
+    label_world_points,
+    load_path,
+    matrix_from_quat,
+    path_from_poses,
+    play_back,
+    quat_from_matrix,
+    resample_by_distance,
+    save_path,
+    slerp,
+)
+from flownav_env.sensor import rotation_from_vector
+
+SIZE = (48, 36)
+
+
+def random_path(frames: int = 6, seed: int = 0) -> CameraPath:
+    rng = np.random.default_rng(seed)
+    rotations = np.array(
+        [camera_rotation(0.1 * i, rotation_from_vector(rng.normal(0, 0.05, 3))) for i in range(frames)]
+    )
+    positions = np.column_stack(
+        [np.arange(frames) * 0.1, rng.normal(0, 0.02, (frames, 2)) + np.array([0.0, 1.0])]
+    )
+    return path_from_poses(
+        rotations, positions, 10.0, obstacles=[[3.0, 0.0], [4.0, 1.0]], materials=[0, 3], texture_seed=2
+    )
+
+
+def test_file_round_trip_is_exact(tmp_path) -> None:
+    path = random_path()
+    loaded = load_path(save_path(path, tmp_path / "path.npz"))
+    for name in ("times", "positions", "quaternions", "obstacles", "materials"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(path, name))
+    assert (loaded.frame_rate, loaded.texture_seed) == (path.frame_rate, path.texture_seed)
+    assert (loaded.obstacle_radius, loaded.obstacle_height) == (path.obstacle_radius, path.obstacle_height)
+
+
+def test_recorded_path_plays_back_at_the_recorded_poses_and_round_trips(tmp_path) -> None:
+    path = load_path(save_path(random_path(), tmp_path / "path.npz"))
+    world = PlaybackWorld(path, *SIZE)
+    try:
+        frames = list(play_back(path, world, PlaybackSettings()))
+    finally:
+        world.close()
+    assert len(frames) == len(path)
+    np.testing.assert_allclose([f.position for f in frames], path.positions, atol=1e-12)
+    np.testing.assert_allclose([f.rotation for f in frames], path.rotations(), atol=1e-12)
+    replayed = path_from_poses(
+        np.array([f.rotation for f in frames]), np.array([f.position for f in frames]), path.frame_rate
+    )
+    again = load_path(save_path(replayed, tmp_path / "replayed.npz"))
+    np.testing.assert_allclose(again.positions, path.positions, atol=1e-12)
+    np.testing.assert_allclose(again.rotations(), path.rotations(), atol=1e-12)
+    assert frames[0].image.shape == (SIZE[1], SIZE[0], 3)
+
+
+def test_quaternion_round_trip_and_slerp() -> None:
+    rotation = rotation_from_vector([0.3, -1.2, 2.9])
+    np.testing.assert_allclose(matrix_from_quat(quat_from_matrix(rotation)), rotation, atol=1e-12)
+    start, end = np.eye(3), rotation_from_vector([0.0, 0.0, 1.0])
+    middle = matrix_from_quat(slerp(quat_from_matrix(start), quat_from_matrix(end), 0.5))
+    np.testing.assert_allclose(middle, rotation_from_vector([0.0, 0.0, 0.5]), atol=1e-12)
+    # q and -q are one rotation: slerp must take the short way, not a 2π detour.
+    q = quat_from_matrix(end)
+    np.testing.assert_allclose(matrix_from_quat(slerp(q, -quat_from_matrix(start), 0.5)), middle, atol=1e-12)
+
+
+def test_resampling_spaces_frames_by_distance_and_slerps_rotations() -> None:
+    rotations = np.array([camera_rotation(0.0), camera_rotation(0.4)])
+    path = path_from_poses(rotations, [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0]], 10.0)
+    resampled = resample_by_distance(path, 0.25)
+    assert len(resampled) == 5
+    np.testing.assert_allclose(resampled.positions[:, 0], [0.0, 0.25, 0.5, 0.75, 1.0], atol=1e-12)
+    np.testing.assert_allclose(resampled.rotations()[2], camera_rotation(0.2), atol=1e-12)
+    np.testing.assert_allclose(resampled.times, np.arange(5) / 10.0)
+    assert len(resample_by_distance(path, 0.25, max_frames=3)) == 3
+    # Resampling at the recorded spacing gives the recorded poses back.
+    path = random_path()
+    steps = np.linalg.norm(np.diff(path.positions, axis=0), axis=1)
+    uniform = path.with_poses(
+        path.times, np.cumsum(np.r_[0, np.full(5, 0.1)])[:, None] * [1, 0, 0], path.quaternions
+    )
+    again = resample_by_distance(uniform, 0.1)
+    np.testing.assert_allclose(again.positions, uniform.positions, atol=1e-12)
+    np.testing.assert_allclose(again.rotations(), uniform.rotations(), atol=1e-12)
+    assert steps.min() > 0
+
+
+def test_playback_is_deterministic_for_a_seed() -> None:
+    path = random_path(frames=4)
+    settings = PlaybackSettings(attitude_jitter_deg=1.0, rotation_error=0.05, translation_error=0.05, seed=7)
+    world = PlaybackWorld(path, *SIZE)
+    try:
+        first = list(play_back(path, world, settings))
+        second = list(play_back(path, world, settings))
+        other = list(play_back(path, world, PlaybackSettings(attitude_jitter_deg=1.0, seed=8)))
+    finally:
+        world.close()
+    for a, b in zip(first, second, strict=True):
+        np.testing.assert_array_equal(a.image, b.image)
+        np.testing.assert_array_equal(a.told_motion[0], b.told_motion[0])
+        np.testing.assert_array_equal(a.told_motion[1], b.told_motion[1])
+    assert not np.array_equal(first[1].rotation, other[1].rotation)
+
+
+def test_labels_capsule_ground_and_sky() -> None:
+    points = np.array([[3.5, 0.0, 1.0], [1.0, 2.0, 0.0], [np.nan, np.nan, np.nan]])
+    np.testing.assert_array_equal(label_world_points(points, np.array([[4.0, 0.0]]), 0.5, 2.0), [0, -1, -2])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"brightness": 5.0}, "brightness must be in [0.0, 4.0], got 5.0"),
+        ({"distance_per_frame": 0.0}, "distance_per_frame must be in (0.0, 10.0], got 0.0"),
+        ({"attitude_jitter_deg": -1}, "attitude_jitter_deg must be in [0.0, 10.0], got -1"),
+        ({"rotation_error": "x"}, "rotation_error must be a number in [0.0, 1.0], got 'x'"),
+        ({"max_frames": 1}, "max_frames must be an integer >= 2 or None, got 1"),
+    ],
+)
+def test_bad_playback_settings_name_value_and_range(kwargs, message) -> None:
+    with pytest.raises(ValueError) as error:
+        PlaybackSettings(**kwargs)
+    assert str(error.value) == message
+
+
+def test_bad_paths_and_files(tmp_path) -> None:
+    path = random_path()
+    with pytest.raises(ValueError, match=r"distance_per_frame must be in \(0, "):
+        resample_by_distance(path, 100.0)
+    still = path_from_poses(path.rotations(), np.zeros((len(path), 3)), 10.0)
+    with pytest.raises(ValueError, match="does not move"):
+        resample_by_distance(still, 0.1)
+    with pytest.raises(ValueError, match="strictly increasing"):
+        CameraPath([0.0, 0.0], np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), 10.0)
+    with pytest.raises(ValueError, match="unit norm"):
+        CameraPath([0.0, 0.1], np.zeros((2, 3)), np.tile([2.0, 0, 0, 0], (2, 1)), 10.0)
+    with pytest.raises(FileNotFoundError):
+        load_path(tmp_path / "missing.npz")
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(ValueError, match="not a flownav-camera-path file"):
+        load_path(tmp_path / "other.npz")

@@ -93,10 +93,17 @@ def append_record(path: Path, record: EpisodeRecord) -> None:
     """Append one row and flush it to disk, so an interrupted run loses at most the episode in flight."""
     path.parent.mkdir(parents=True, exist_ok=True)
     new_file = not path.exists() or path.stat().st_size == 0
+    torn = False
+    if not new_file:
+        with path.open("rb") as existing:
+            existing.seek(-1, os.SEEK_END)
+            torn = existing.read(1) != b"\n"
     with path.open("a", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=CSV_FIELDS)
         if new_file:
             writer.writeheader()
+        if torn:
+            handle.write("\n")  # end a row cut off by an interruption; reading skips it
         writer.writerow(asdict(record))
         handle.flush()
         os.fsync(handle.fileno())

@@ -1,0 +1,40 @@
+"""The main job in a few minutes: flies the bee baseline, the straight floor and every shipped PPO policy on
+the same few held-out seeds of FlowNav-v0 and prints the comparison table (collision and success rates with
+Wilson 95 % intervals). The full benchmark is ``flownav sweep`` (results/benchmark.md)."""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+from agents.evaluation import EVAL_SEED_START
+
+HELP = "short evaluation of the shipped policies and the baselines (the README's main job)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--episodes", type=int, default=5, help="episodes per agent (default 5)")
+    parser.add_argument("--env-id", default="FlowNav-v0")
+    parser.add_argument("--policy-dir", default="results/policies")
+    parser.add_argument("--workers", type=int, default=2)
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.episodes import EpisodeTask, execute
+    from agents.evaluation import format_summary, read_records, summarise
+    from agents.policies import LEARNED_AGENTS
+
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    shipped = [name for name in LEARNED_AGENTS if (Path(args.policy_dir) / f"{name}.zip").exists()]
+    agents = ["straight", "bee", *shipped]
+    seeds = range(EVAL_SEED_START, EVAL_SEED_START + args.episodes)
+    tasks = [EpisodeTask(a, "clean", 0.0, s, args.env_id, (), args.policy_dir) for a in agents for s in seeds]
+    with tempfile.TemporaryDirectory() as scratch:
+        episodes = Path(scratch) / "demo.csv"
+        execute(tasks, episodes, workers=args.workers, description="demo")
+        table = summarise(read_records(episodes))
+    print(f"\n{args.env_id}, {args.episodes} held-out seeds per agent (from {EVAL_SEED_START}):\n")
+    print(format_summary(table))
+    return 0

@@ -1,0 +1,212 @@
+"""The benchmark's sweep: every agent under each sensor error at several levels, on the same held-out seeds.
+
+Each (agent, factor, level) cell flies the same seeds, so agents and levels are compared on identical
+obstacle layouts. Episodes are appended to ``<out>/sweep_episodes.csv`` as they end (re-running resumes);
+the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals) and the
+figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
+
+Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR]``), the same tasks either way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from agents.config import check_env_kwargs, field_range, load_config
+from agents.evaluation import EVAL_SEED_START
+
+HELP = "sweep agents × sensor errors (collision rates with 95 % CIs; resumable; local or Ray)"
+
+
+@dataclass
+class SweepConfig:
+    """A sweep. ``factors`` maps each FlowNavEnv sensor kwarg to its levels beyond the clean setting."""
+
+    agents: list[str]
+    factors: dict[str, list[float]]
+    env_id: str = "FlowNav-v0"
+    env: dict[str, Any] = field(default_factory=dict)
+    episodes: int = field_range(1, 100_000, default=100)
+    seed_start: int = field_range(EVAL_SEED_START, None, default=EVAL_SEED_START)
+    workers: int = field_range(1, 256, default=2)
+    backend: Literal["local", "ray"] = "local"
+    policy_dir: str = "results/policies"
+
+    def validate(self) -> None:
+        from agents.episodes import SWEEP_FACTORS
+        from agents.policies import AGENT_NAMES
+
+        for agent in self.agents:
+            if agent not in AGENT_NAMES:
+                raise ValueError(f"key 'agents': unknown agent {agent!r} (allowed: {', '.join(AGENT_NAMES)})")
+        for factor, levels in self.factors.items():
+            if factor not in SWEEP_FACTORS:
+                raise ValueError(
+                    f"key 'factors.{factor}': not a sweep factor (allowed: {', '.join(SWEEP_FACTORS)})"
+                )
+            if (
+                not isinstance(levels, list)
+                or not levels
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in levels)
+            ):
+                raise ValueError(
+                    f"key 'factors.{factor}' must be a non-empty list of numbers, got {levels!r}"
+                )
+
+
+def build_tasks(config: SweepConfig, agents: list[str]) -> list:
+    """Every (agent, factor, level, seed) episode, the clean setting first, ordered so a worker stays on a cell."""
+    from agents.episodes import EpisodeTask
+
+    seeds = range(config.seed_start, config.seed_start + config.episodes)
+    cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
+    for factor, levels in config.factors.items():
+        cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
+    return [
+        EpisodeTask(
+            agent, factor, level, seed, config.env_id, tuple(sorted(kwargs.items())), config.policy_dir
+        )
+        for agent in agents
+        for factor, level, kwargs in cells
+        for seed in seeds
+    ]
+
+
+SUMMARY_FIELDS = [
+    "agent",
+    "factor",
+    "level",
+    "episodes",
+    "collisions",
+    "collision_rate",
+    "ci_low",
+    "ci_high",
+    "success_rate",
+    "success_ci_low",
+    "success_ci_high",
+    "median_progress_m",
+    "median_min_clearance_m",
+]
+
+
+def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]]:
+    from agents.evaluation import summarise
+
+    table = summarise(rows)
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_FIELDS)
+        writer.writeheader()
+        for row in table:
+            writer.writerow({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()})
+    return table
+
+
+def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
+    """A panel per factor: collision rate against level, a line per agent, its Wilson 95 % band shaded.
+    The clean setting is drawn at each factor's neutral level."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    neutral = {
+        "rotation_error": 0.0,
+        "translation_error": 0.0,
+        "attitude_jitter_deg": 0.0,
+        "brightness": 1.0,
+        "forward_speed": 1.0,
+    }
+    units = {
+        "rotation_error": "rotation error (relative)",
+        "translation_error": "translation error (relative)",
+        "attitude_jitter_deg": "attitude jitter (deg)",
+        "brightness": "brightness (1 = daylight)",
+        "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
+    }
+    agents = sorted({r["agent"] for r in table})
+    fig, axes = plt.subplots(1, len(factors), figsize=(3.6 * len(factors), 3.4), sharey=True, squeeze=False)
+    for ax, factor in zip(axes[0], factors):
+        for agent in agents:
+            points = [
+                (neutral.get(factor, 0.0), r) for r in table if r["agent"] == agent and r["factor"] == "clean"
+            ]
+            points += [(r["level"], r) for r in table if r["agent"] == agent and r["factor"] == factor]
+            points.sort(key=lambda p: p[0])
+            if not points:
+                continue
+            xs = [p[0] for p in points]
+            line = ax.plot(xs, [p[1]["collision_rate"] for p in points], marker="o", label=agent)[0]
+            ax.fill_between(
+                xs,
+                [p[1]["ci_low"] for p in points],
+                [p[1]["ci_high"] for p in points],
+                color=line.get_color(),
+                alpha=0.15,
+            )
+        ax.set_xlabel(units.get(factor, factor))
+        ax.set_ylim(0, 1)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("collision rate (95 % CI)")
+    axes[0][-1].legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--config", default="configs/sweep.yaml")
+    parser.add_argument(
+        "--out", default="results", help="folder of sweep_episodes.csv, sweep.csv and the figure"
+    )
+    parser.add_argument("--episodes", type=int, help="override the config's episodes per cell")
+    parser.add_argument("--workers", type=int, help="override the config's local worker count")
+    parser.add_argument("--backend", choices=("local", "ray"), help="override the config's backend")
+    parser.add_argument("--address", help="Ray cluster address (default: start a local Ray instance)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.episodes import execute
+    from agents.evaluation import format_summary, read_records
+
+    config_path = Path(args.config)
+    config = load_config(config_path, SweepConfig)
+    for name in ("episodes", "workers", "backend"):
+        if getattr(args, name) is not None:
+            setattr(config, name, getattr(args, name))
+    if config.episodes < 1 or config.workers < 1:
+        raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
+    check_env_kwargs(config.env, str(config_path))
+    agents = [
+        a for a in config.agents if not a.startswith("ppo") or (Path(config.policy_dir) / f"{a}.zip").exists()
+    ]
+    for skipped in sorted(set(config.agents) - set(agents)):
+        print(f"skipping {skipped}: no policy at {config.policy_dir}/{skipped}.zip")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    episodes_csv = out / "sweep_episodes.csv"
+    started = time.perf_counter()
+    tasks = build_tasks(config, agents)
+    flown = execute(
+        tasks,
+        episodes_csv,
+        backend=config.backend,
+        workers=config.workers,
+        address=args.address,
+        description="sweep",
+    )
+    wanted = {(t.agent, t.factor, t.level, t.seed) for t in tasks}
+    rows = [
+        r for r in read_records(episodes_csv) if (r["agent"], r["factor"], r["level"], r["seed"]) in wanted
+    ]
+    table = write_summary(rows, out / "sweep.csv")
+    plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
+    print(format_summary(table))
+    print(
+        f"{flown} episodes flown in {(time.perf_counter() - started) / 60:.1f} min; {len(rows)} in the summary"
+    )
+    return 0

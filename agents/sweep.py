@@ -130,7 +130,7 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     }
     agents = sorted({r["agent"] for r in table})
     fig, axes = plt.subplots(1, len(factors), figsize=(3.6 * len(factors), 3.4), sharey=True, squeeze=False)
-    for ax, factor in zip(axes[0], factors):
+    for ax, factor in zip(axes[0], factors, strict=True):
         for agent in agents:
             points = [
                 (neutral.get(factor, 0.0), r) for r in table if r["agent"] == agent and r["factor"] == "clean"

@@ -81,16 +81,33 @@ def to_grayscale(image: Any, name: str, expected_size: tuple[int, int] | None = 
     return np.ascontiguousarray(image)
 
 
+def brightness_map(gray: np.ndarray) -> tuple[float, float]:
+    """Gain and offset of the affine map taking a frame to a fixed mean (128) and standard deviation (48).
+
+    Flat frames (std < 1) are only shifted.
+    """
+    mean, std = cv2.meanStdDev(gray)
+    mean, std = float(mean[0, 0]), float(std[0, 0])
+    gain = _NORMALIZED_STD / std if std >= 1.0 else 1.0
+    return gain, _NORMALIZED_MEAN - gain * mean
+
+
+def apply_brightness_map(gray: np.ndarray, gain: float, offset: float) -> np.ndarray:
+    """``gain · gray + offset`` saturated to uint8."""
+    # addWeighted computes in float and saturates to uint8 in one pass, faster than numpy round-tripping.
+    return cv2.addWeighted(gray, gain, gray, 0.0, offset)
+
+
 def normalize_brightness(gray: np.ndarray) -> np.ndarray:
-    """Affine intensity map of a frame to a fixed mean and standard deviation.
+    """Affine intensity map of a frame to a fixed mean and standard deviation (its own :func:`brightness_map`).
 
     LK assumes brightness constancy. An exposure or gain change between frames (auto-exposure, flicker,
     flying into shade; thesis §5.2.3) breaks it; mapping every frame to the same mean and standard deviation
-    undoes any global gain-and-offset change. Each frame is normalised on its own (not relative to its
-    neighbour) so that in streaming use every frame is still prepared once. Flat frames (std < 1) are only
-    shifted. A percentile stretch was tried instead and rejected: the percentiles move with the frame's
-    content, so the stretch itself broke brightness constancy between frames (valid points 0->4 fell from
-    292 to 31).
+    undoes any global gain-and-offset change. A percentile stretch was tried instead and rejected: the
+    percentiles move with the frame's content, so the stretch itself broke brightness constancy between
+    frames (valid points 0->4 fell from 292 to 31). The mean and standard deviation move with the content too
+    (sky replacing ground as the camera pitches), which is why the estimator's default ``"pair"`` mode maps
+    both frames of a pair with the previous frame's map instead.
 
     Args:
         gray: uint8 (H, W) image.
@@ -98,11 +115,7 @@ def normalize_brightness(gray: np.ndarray) -> np.ndarray:
     Returns:
         uint8 (H, W) image with mean ~128 and std ~48 (saturated at 0 and 255).
     """
-    mean, std = cv2.meanStdDev(gray)
-    mean, std = float(mean[0, 0]), float(std[0, 0])
-    gain = _NORMALIZED_STD / std if std >= 1.0 else 1.0
-    # addWeighted computes in float and saturates to uint8 in one pass, faster than numpy round-tripping.
-    return cv2.addWeighted(gray, gain, gray, 0.0, _NORMALIZED_MEAN - gain * mean)
+    return apply_brightness_map(gray, *brightness_map(gray))
 
 
 def detect_keypoints(

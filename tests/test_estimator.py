@@ -125,16 +125,39 @@ def test_hovering_gives_no_valid_depth_and_no_warnings(icl, method):
     assert rotating_only.num_valid == 0
 
 
-def test_brightness_normalisation_survives_an_exposure_change(icl):
+def test_per_frame_brightness_normalisation_survives_an_exposure_change(icl):
     frames, true_depth, poses = icl
     rotation, translation = relative_motion(poses[0], poses[2])
     darker = cv2.convertScaleAbs(frames[2], alpha=0.7)
-    normalised = FlowDepthEstimator(ICL_INTRINSICS).estimate(frames[0], darker, rotation, translation)
+    normalised = FlowDepthEstimator(ICL_INTRINSICS, normalize_brightness="frame").estimate(
+        frames[0], darker, rotation, translation
+    )
     raw = FlowDepthEstimator(ICL_INTRINSICS, normalize_brightness=False).estimate(
         frames[0], darker, rotation, translation
     )
     assert normalised.num_valid >= 200 and np.median(_relative_errors(normalised, true_depth)) <= 0.03
     assert raw.num_valid < 20
+
+
+def test_pair_normalisation_restores_a_dark_scene(icl):
+    """A scene lit at 25 %: on raw frames FAST's threshold finds few corners; the pair mode's shared contrast
+    stretch gives them back, with both frames still mapped alike (as the brightness is constant)."""
+    frames, true_depth, poses = icl
+    rotation, translation = relative_motion(poses[0], poses[2])
+    dark = [cv2.convertScaleAbs(frame, alpha=0.25) for frame in frames]
+    paired = FlowDepthEstimator(ICL_INTRINSICS, normalize_brightness="pair").estimate(
+        dark[0], dark[2], rotation, translation
+    )
+    raw = FlowDepthEstimator(ICL_INTRINSICS, normalize_brightness="off").estimate(
+        dark[0], dark[2], rotation, translation
+    )
+    assert paired.num_valid >= 100 and paired.num_valid >= 3 * max(raw.num_valid, 1)
+    assert np.median(_relative_errors(paired, true_depth)) <= 0.03
+
+
+def test_true_and_false_select_pair_and_off_modes():
+    assert FlowDepthEstimator(SMALL, normalize_brightness=True).normalize_brightness == "pair"
+    assert FlowDepthEstimator(SMALL, normalize_brightness=False).normalize_brightness == "off"
 
 
 def test_frame_without_corners_gives_empty_result():
@@ -167,7 +190,14 @@ def test_empty_depth_points():
         ({"spread_grid": 8}, r"spread_grid must be a \(rows, cols\) pair of integers in \[1, 64\], got 8"),
         ({"forward_backward": "yes"}, r"forward_backward must be True or False, got 'yes'"),
         ({"fb_max_error_px": -1.0}, r"fb_max_error_px must be a positive finite number"),
-        ({"normalize_brightness": None}, r"normalize_brightness must be True or False, got None"),
+        (
+            {"normalize_brightness": None},
+            r"normalize_brightness must be one of 'pair', 'frame', 'off' \(or True/False\), got None",
+        ),
+        (
+            {"normalize_brightness": "auto"},
+            r"normalize_brightness must be one of 'pair', 'frame', 'off'.*got 'auto'",
+        ),
         ({"min_parallax_px": -0.5}, r"min_parallax_px must be a finite number >= 0"),
         ({"min_parallax_px": float("inf")}, r"min_parallax_px must be a finite number >= 0"),
         ({"max_epipolar_error_px": 0}, r"max_epipolar_error_px must be a positive finite number"),

@@ -304,3 +304,32 @@ def test_env_steps_inside_subprocess_vector_envs(vector: str) -> None:
         frames = envs.call("render")
         envs.close()
         assert obs["state"].shape == (2, 7) and frames[0].shape == (240, 640, 3)
+
+
+def _table_after(doc: str, heading: str) -> list[list[str]]:
+    """Rows (cells) of the first Markdown table after ``heading`` in a docstring, header and rule dropped."""
+    lines = doc[doc.index(heading) :].splitlines()
+    start = next(i for i, line in enumerate(lines) if line.strip().startswith("|"))
+    rows = []
+    for line in lines[start:]:
+        if not line.strip().startswith("|"):
+            break
+        rows.append([cell.strip() for cell in line.strip().strip("|").split("|")])
+    return rows[2:]
+
+
+def test_docstring_tables_match_the_spaces_and_the_constructor() -> None:
+    import inspect
+    import re
+
+    doc = FlowNavEnv.__doc__
+    env = FlowNavEnv(**SMALL)
+    env.close()
+    assert len(_table_after(doc, "## Action Space")) == env.action_space.shape[0]
+    state_rows = _table_after(doc, "``state`` (clipped")
+    assert len(state_rows) == env.observation_space["state"].shape[0] == len(flownav_env.env.STATE_FIELDS)
+    documented = set()
+    for row in _table_after(doc, "## Arguments"):
+        documented.update(re.findall(r"``(\w+)``", row[0]))
+    parameters = set(inspect.signature(FlowNavEnv.__init__).parameters) - {"self"}
+    assert documented == parameters

@@ -361,10 +361,13 @@ class FlowNavEnv(gym.Env):
             raise ValueError(f"action must be finite, got {action!r}")
         x_before = self.physics.position()[0]
         velocity_target = self._velocity_target(action)
-        collision = self.physics.advance(velocity_target, -action[2] * self.max_yaw_rate, self.substeps)
-
         rng = self.np_random
-        self.physics.set_camera_mount(jitter_rotation(self.attitude_jitter_deg, rng))
+        collision = self.physics.advance(
+            velocity_target,
+            -action[2] * self.max_yaw_rate,
+            self.substeps,
+            camera_disturbance=jitter_rotation(self.attitude_jitter_deg, rng),
+        )
         previous_pose, self._camera_pose = self._camera_pose, self.physics.camera_pose()
         true_rotation, true_translation = relative_motion(*previous_pose, *self._camera_pose)
         told_rotation, told_translation = corrupt_motion(

@@ -101,14 +101,28 @@ class FlowNavPhysics:
         mujoco.mj_forward(self.model, self.data)
 
     # --- stepping -----------------------------------------------------------------------------------------------
-    def advance(self, velocity_target_world: np.ndarray, yaw_rate: float, substeps: int) -> bool:
+    def advance(
+        self,
+        velocity_target_world: np.ndarray,
+        yaw_rate: float,
+        substeps: int,
+        camera_disturbance: np.ndarray | None = None,
+    ) -> bool:
         """Fly ``substeps`` physics steps under the velocity controller; stop early on contact.
+
+        Args:
+            velocity_target_world: (3,) commanded velocity, m/s.
+            yaw_rate: commanded yaw rate, rad/s.
+            substeps: physics steps to take.
+            camera_disturbance: the camera mount's rotation for the frame taken after this advance (see
+                :meth:`set_camera_mount`); None keeps the current one.
 
         Returns:
             True if the drone touched an obstacle or the ground.
         """
         data, model = self.data, self.model
         drag = self.quad.drag_coefficient
+        collided = False
         for _ in range(substeps):
             rotation = data.xmat[self.drone_body].reshape(3, 3)
             velocity = data.qvel[:3]
@@ -118,12 +132,14 @@ class FlowNavPhysics:
             data.xfrc_applied[self.drone_body, :3] = -drag * velocity
             mujoco.mj_step(model, data)
             if self.in_contact():
-                mujoco.mj_forward(model, data)
-                return True
-        # mj_step leaves positions integrated but kinematics (and camera poses) from before the last step.
+                collided = True
+                break
+        if camera_disturbance is not None:
+            self._mount_camera(camera_disturbance)
+        # mj_step leaves kinematics (and camera poses) from before its integration: refresh them, once.
         mujoco.mj_kinematics(model, data)
         mujoco.mj_camlight(model, data)
-        return False
+        return collided
 
     def in_contact(self) -> bool:
         contacts = self.data.contact
@@ -134,10 +150,13 @@ class FlowNavPhysics:
 
     def set_camera_mount(self, disturbance: np.ndarray) -> None:
         """Rotate the camera on its mount by ``disturbance`` (3, 3, in the mount's own axes) and refresh poses."""
-        mount = self._camera_mount_rotation.reshape(3, 3) @ disturbance
-        self.model.cam_quat[self.camera_id] = _quat_from_matrix(mount)
+        self._mount_camera(disturbance)
         mujoco.mj_kinematics(self.model, self.data)
         mujoco.mj_camlight(self.model, self.data)
+
+    def _mount_camera(self, disturbance: np.ndarray) -> None:
+        mount = self._camera_mount_rotation.reshape(3, 3) @ disturbance
+        self.model.cam_quat[self.camera_id] = _quat_from_matrix(mount)
 
     # --- named state accessors ----------------------------------------------------------------------------------
     def position(self) -> np.ndarray:

@@ -378,7 +378,8 @@ class FlowNavEnv(gym.Env):
         self._depth_points = points
         true_depth = self._true_depth(points.points, previous_pose)
         if self.obs_source == "oracle":
-            depth, valid = true_depth, np.isfinite(true_depth)
+            # The same points the estimator tracked, with their true depth (parallax or not).
+            depth, valid = true_depth, points.tracked & np.isfinite(true_depth)
         else:
             depth, valid = points.depth, points.valid
         histogram = sector_histogram(

@@ -158,6 +158,74 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     plt.close(fig)
 
 
+def hardware_summary() -> str:
+    """CPU model and core count of this machine, for reports."""
+    import os
+    import platform
+
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores"
+
+
+def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
+    """Collision rate [95 % CI] per agent (rows) and level (columns) of one factor, the clean run first."""
+    agents = sorted({r["agent"] for r in table})
+    levels = sorted({r["level"] for r in table if r["factor"] == factor})
+    cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
+    header = "| agent | clean | " + " | ".join(f"{factor}={level:g}" for level in levels) + " |"
+    lines = [header, "|---" * (len(levels) + 2) + "|"]
+    for agent in agents:
+        row = [cells.get((agent, "clean", 0.0))] + [cells.get((agent, factor, level)) for level in levels]
+        lines.append(
+            f"| {agent} | "
+            + " | ".join(
+                "–" if r is None else f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
+                for r in row
+            )
+            + " |"
+        )
+    return "\n".join(lines)
+
+
+def write_report(
+    path: Path,
+    table: list[dict[str, Any]],
+    config_path: Path,
+    command: str,
+    minutes: float,
+    factors: list[str],
+) -> None:
+    """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
+    from agents.evaluation import format_summary
+
+    parts = [
+        "# Sweep: collision rate per agent and sensor error",
+        "",
+        f"Command: `{command}`  ",
+        f"Config: `{config_path}`  ",
+        f"Hardware: {hardware_summary()}  ",
+        f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown).",
+        "",
+        "```yaml",
+        config_path.read_text().strip(),
+        "```",
+        "",
+        "Collision rate with its Wilson 95 % interval, per factor (levels beyond the clean setting):",
+        "",
+    ]
+    for factor in factors:
+        parts += [f"### {factor}", "", pivot_markdown(table, factor), ""]
+    parts += ["## All cells", "", format_summary(table), ""]
+    path.write_text("\n".join(parts))
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", default="configs/sweep.yaml")
     parser.add_argument(
@@ -205,8 +273,10 @@ def run(args: argparse.Namespace) -> int:
     ]
     table = write_summary(rows, out / "sweep.csv")
     plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
+    minutes = (time.perf_counter() - started) / 60
+    options = {k: v for k, v in vars(args).items() if v is not None and k not in ("handler", "command")}
+    command = "flownav sweep " + " ".join(f"--{k.replace('_', '-')} {v}" for k, v in options.items())
+    write_report(out / "sweep.md", table, config_path, command, minutes, list(config.factors))
     print(format_summary(table))
-    print(
-        f"{flown} episodes flown in {(time.perf_counter() - started) / 60:.1f} min; {len(rows)} in the summary"
-    )
+    print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
     return 0

@@ -68,7 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated WxH candidates (default 64x48,96x72,128x96,160x120,240x180,320x240)",
     )
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
-    env.add_argument("--repeats", type=int, default=3, help="timed blocks per configuration (default 3)")
+    env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
     env.add_argument("--out", type=Path, default=Path("results"), help="output folder (default results)")
     env.add_argument("--no-progress", action="store_true", help="hide the progress bars")
@@ -119,7 +119,33 @@ def hardware_summary() -> str:
     except OSError:
         pass
     lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`")
+    lines.append(f"- code: {code_version()}")
     return "\n".join(lines)
+
+
+def code_version() -> str:
+    """The git commit the run used, flagged when the measured packages had uncommitted changes.
+
+    Other work lands on the same branch while benchmarks run, so a result is only reproducible with its commit.
+    """
+    root = Path(__file__).resolve().parents[1]
+
+    def git(*args: str) -> str:
+        try:
+            result = subprocess.run(
+                ["git", *args], cwd=root, capture_output=True, text=True, check=False, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return ""
+        return result.stdout.strip() if result.returncode == 0 else ""
+
+    commit = git("rev-parse", "--short", "HEAD")
+    if not commit:
+        return "unknown (not a git checkout)"
+    dirty = git("status", "--porcelain", "--", "estimator", "flownav_env", "agents")
+    return f"commit `{commit}`" + (
+        " with uncommitted changes in estimator/, flownav_env/ or agents/" if dirty else ""
+    )
 
 
 def _lscpu_field(name: str) -> str | None:

@@ -37,13 +37,14 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 WIN_SIZE = 10
 MAX_LEVEL = 3
 # Configurations of the streaming estimator timed against the bare baseline.
+# Brightness normalisation is pinned off (the estimator's default): equal point counts need FAST on the same raw
+# frames as the bare baseline. FB off then does exactly the baseline's FAST + LK work plus the depth stage.
 ESTIMATOR_CONFIGS: dict[str, dict[str, Any]] = {
-    "fb_on": {"forward_backward": True, "normalize_brightness": True},
-    "fb_off": {"forward_backward": False, "normalize_brightness": True},
-    # Same LK work as the bare baseline: what is left over it is the estimator's own overhead and depth stage.
-    "fb_off_raw": {"forward_backward": False, "normalize_brightness": False},
+    "fb_on": {"forward_backward": True, "normalize_brightness": False},
+    "fb_off": {"forward_backward": False, "normalize_brightness": False},
 }
 TARGET_RATIO_BARE = 1.0
+DEFAULT_THRESHOLD = 20  # FlowDepthEstimator's default fast_threshold
 TARGET_DEPTH_SPEEDUP = 50.0
 
 
@@ -313,68 +314,79 @@ DEPTH_FUNCTIONS = {
 # --- timing -----------------------------------------------------------------------------------------------------
 @dataclass
 class _Pass:
-    """Per-frame figures of one timed pass of one configuration over the flight."""
+    """Per-frame figures of one configuration in one timed pass over the flight."""
 
     seconds: list[float] = field(default_factory=list)
-    stages: dict[str, list[float]] = field(default_factory=dict)
+    stages: dict[str, list[float]] = field(
+        default_factory=lambda: {k: [] for k in ("prepare", "fast", "flow", "depth")}
+    )
     corners: list[int] = field(default_factory=list)
     tracked_in: list[int] = field(default_factory=list)
     valid: list[int] = field(default_factory=list)
 
 
-def _time_bare(flight: Flight, threshold: int) -> _Pass:
+def _stream_pass(
+    flight: Flight, threshold: int, names: Sequence[str], keep: list[Any] | None = None
+) -> dict[str, _Pass]:
+    """One pass over the flight with every configuration, interleaved frame by frame.
+
+    On a shared machine the load changes within seconds; running all configurations on the same frame pair
+    back to back (in an order rotating with the frame) puts each estimator call next to its bare baseline
+    in time, so the per-frame ratio sees nearly the same machine on both sides.
+    """
     import cv2
 
-    detector = cv2.FastFeatureDetector_create(threshold, True)
-    result = _Pass()
-    frames = flight.frames
-    for index in range(1, len(frames)):
-        previous, current = frames[index - 1], frames[index]
-        start = time.perf_counter()
-        keypoints = detector.detect(previous)
-        if keypoints:
-            points = cv2.KeyPoint_convert(keypoints).reshape(-1, 1, 2)
-            cv2.calcOpticalFlowPyrLK(
-                previous, current, points, None, winSize=(WIN_SIZE, WIN_SIZE), maxLevel=MAX_LEVEL
-            )
-        result.seconds.append(time.perf_counter() - start)
-        result.corners.append(len(keypoints))
-    return result
-
-
-def _time_estimator(
-    flight: Flight, threshold: int, config: dict[str, Any], keep: list[Any] | None = None
-) -> _Pass:
     from estimator import FlowDepthEstimator
 
-    estimator = FlowDepthEstimator(
-        flight.intrinsics,
-        fast_threshold=threshold,
-        max_points=None,
-        win_size=WIN_SIZE,
-        max_level=MAX_LEVEL,
-        **config,
-    )
-    result = _Pass(stages={key: [] for key in ("prepare", "fast", "flow", "depth")})
+    detector = cv2.FastFeatureDetector_create(threshold, True)
+    estimators = {
+        name: FlowDepthEstimator(
+            flight.intrinsics,
+            fast_threshold=threshold,
+            max_points=None,
+            win_size=WIN_SIZE,
+            max_level=MAX_LEVEL,
+            **ESTIMATOR_CONFIGS[name],
+        )
+        for name in names
+        if name != "bare"
+    }
     frames = flight.frames
-    estimator.update(frames[0], np.eye(3), np.zeros(3))  # starts the stream: nothing to estimate yet
+    for estimator in estimators.values():
+        estimator.update(frames[0], np.eye(3), np.zeros(3))  # starts the stream: nothing to estimate yet
+    results = {name: _Pass() for name in names}
     for index in range(1, len(frames)):
+        previous, current = frames[index - 1], frames[index]
         rotation, translation = flight.rotations[index - 1], flight.translations[index - 1]
-        start = time.perf_counter()
-        points = estimator.update(frames[index], rotation, translation)
-        result.seconds.append(time.perf_counter() - start)
-        for key, values in result.stages.items():
-            values.append(points.timings[key])
-        result.tracked_in.append(points.num_points)
-        result.valid.append(points.num_valid)
-        if keep is not None:
-            keep.append(points)
-    return result
+        shift = index % len(names)
+        for name in [*names[shift:], *names[:shift]]:
+            result = results[name]
+            if name == "bare":
+                start = time.perf_counter()
+                keypoints = detector.detect(previous)
+                if keypoints:
+                    points = cv2.KeyPoint_convert(keypoints).reshape(-1, 1, 2)
+                    cv2.calcOpticalFlowPyrLK(
+                        previous, current, points, None, winSize=(WIN_SIZE, WIN_SIZE), maxLevel=MAX_LEVEL
+                    )
+                result.seconds.append(time.perf_counter() - start)
+                result.corners.append(len(keypoints))
+                continue
+            start = time.perf_counter()
+            depth_points = estimators[name].update(current, rotation, translation)
+            result.seconds.append(time.perf_counter() - start)
+            for key, values in result.stages.items():
+                values.append(depth_points.timings[key])
+            result.tracked_in.append(depth_points.num_points)
+            result.valid.append(depth_points.num_valid)
+            if keep is not None and name == "fb_on":
+                keep.append(depth_points)
+    return results
 
 
 @contextmanager
 def _quiet_gc() -> Iterator[None]:
-    # A collection landing inside one configuration's pass would be charged to it alone; collect between
+    # A collection landing inside one configuration's call would be charged to it alone; collect between
     # passes instead.
     gc.collect()
     gc.disable()
@@ -400,8 +412,8 @@ def run_estimator_table(
     Args:
         flight: from :func:`record_flight`.
         thresholds: FAST thresholds to sweep.
-        repeats: timed passes per configuration, alternated (bare and estimator configurations in a rotating
-            order within each threshold, thresholds in alternating order between repeats).
+        repeats: timed passes per threshold (configurations interleaved frame by frame inside a pass,
+            thresholds visited forward and backward on alternate passes).
         loop_frames: frame pairs on which the depth loops are timed (the first ones of the flight).
         progress: show tqdm progress bars.
 
@@ -422,65 +434,52 @@ def run_estimator_table(
             f"loop_frames={loop_frames}, thresholds={list(thresholds)}"
         )
     names = ["bare", *ESTIMATOR_CONFIGS]
-    passes: dict[tuple[int, str], list[_Pass]] = {(t, n): [] for t in thresholds for n in names}
-    kept: dict[int, list[Any]] = {t: [] for t in thresholds}
+    passes: dict[int, list[dict[str, _Pass]]] = {threshold: [] for threshold in thresholds}
+    kept: dict[int, list[Any]] = {threshold: [] for threshold in thresholds}
 
     # Warm-up: first calls allocate OpenCV's buffers and import lazily; not timed.
-    for name in names:
-        short = Flight(
-            flight.frames[:3], flight.rotations[:2], flight.translations[:2], flight.intrinsics, None
-        )
-        if name == "bare":
-            _time_bare(short, thresholds[0])
-        else:
-            _time_estimator(short, thresholds[0], ESTIMATOR_CONFIGS[name])
+    short = Flight(flight.frames[:3], flight.rotations[:2], flight.translations[:2], flight.intrinsics, None)
+    _stream_pass(short, thresholds[0], names)
 
-    bar = tqdm(total=repeats * len(thresholds) * len(names), desc="stream passes", disable=not progress)
+    bar = tqdm(total=repeats * len(thresholds), desc="stream passes", disable=not progress)
     for repeat in range(repeats):
         order = list(thresholds) if repeat % 2 == 0 else list(reversed(thresholds))
-        for position, threshold in enumerate(order):
-            shift = (repeat + position) % len(names)
-            for name in names[shift:] + names[:shift]:
-                with _quiet_gc():
-                    if name == "bare":
-                        result = _time_bare(flight, threshold)
-                    else:
-                        keep = kept[threshold] if (name == "fb_on" and repeat == 0) else None
-                        result = _time_estimator(flight, threshold, ESTIMATOR_CONFIGS[name], keep)
-                passes[threshold, name].append(result)
-                bar.update()
+        for threshold in order:
+            with _quiet_gc():
+                keep = kept[threshold] if repeat == 0 else None
+                passes[threshold].append(_stream_pass(flight, threshold, names, keep))
+            bar.update()
     bar.close()
 
-    defaults = FlowDepthEstimator(flight.intrinsics)
     rows = []
     for threshold in thresholds:
-        bare = passes[threshold, "bare"]
-        on = passes[threshold, "fb_on"]
+        runs = passes[threshold]
+        first = runs[0]
         row: dict[str, Any] = {
             "fast_threshold": threshold,
-            "points_found": _median([_median(p.corners) for p in bare]),
-            "points_used": _median(on[0].valid),
+            "points_found": _median(first["bare"].corners),
+            "points_used": _median(first["fb_on"].valid),
+            # Equal point counts: the uncapped estimator tracks every FAST corner, as the bare baseline does.
+            "equal_counts": first["bare"].corners == first["fb_on"].tracked_in,
         }
-        # Equal point counts: the uncapped estimator tracks every FAST corner, as the bare baseline does.
-        row["equal_counts"] = bool(bare[0].corners == on[0].tracked_in)
         for stage in ("prepare", "fast", "flow", "depth"):
-            row[f"ms_{stage}"] = 1e3 * _median([_median(p.stages[stage]) for p in on])
-        row["ms_total"] = 1e3 * _median([_median(p.seconds) for p in on])
+            row[f"ms_{stage}"] = 1e3 * _median([_median(run["fb_on"].stages[stage]) for run in runs])
+        row["ms_total"] = 1e3 * _median([_median(run["fb_on"].seconds) for run in runs])
         row["fps"] = 1e3 / row["ms_total"] if row["ms_total"] > 0 else math.nan
-        row["ms_bare_fast_lk"] = 1e3 * _median([_median(p.seconds) for p in bare])
+        row["ms_bare_fast_lk"] = 1e3 * _median([_median(run["bare"].seconds) for run in runs])
         for name in ESTIMATOR_CONFIGS:
-            ratios = [
-                _median(p.seconds) / _median(b.seconds)
-                for p, b in zip(passes[threshold, name], bare, strict=True)
-            ]
+            # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
+            # the frames of a pass, then the median and range over the passes.
+            ratios = [_median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
             if name != "fb_on":
-                row[f"ms_total_{name}"] = 1e3 * _median([_median(p.seconds) for p in passes[threshold, name]])
+                row[f"ms_total_{name}"] = 1e3 * _median([_median(run[name].seconds) for run in runs])
             row[f"ratio_{name}"] = _median(ratios)
             row[f"ratio_{name}_min"] = min(ratios)
             row[f"ratio_{name}_max"] = max(ratios)
         row["depth_error_median_pct"] = 100 * _depth_error(flight, kept[threshold])
         rows.append(row)
 
+    defaults = FlowDepthEstimator(flight.intrinsics)
     depth_rows = _time_depth_stage(flight, thresholds, kept, repeats, loop_frames, defaults, progress)
     return rows, depth_rows
 
@@ -672,6 +671,19 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
     plt.close(figure)
 
 
+def _estimator_settings() -> str:
+    # Read from a default instance rather than written out, so the report cannot drift from the estimator.
+    from estimator import CameraIntrinsics, FlowDepthEstimator
+
+    defaults = FlowDepthEstimator(CameraIntrinsics.from_fov(64, 48, 60.0))
+    return (
+        f"method `{defaults.method}`, LK window {defaults.win_size}×{defaults.win_size}, max level "
+        f"{defaults.max_level}, max LK error {defaults.max_lk_error:g}, FB check {defaults.forward_backward} at "
+        f"{defaults.fb_max_error_px:g} px, brightness normalisation `{defaults.normalize_brightness}`, min parallax "
+        f"{defaults.min_parallax_px:g} px, epipolar check {defaults.max_epipolar_error_px:g} px"
+    )
+
+
 def _report(
     rows: list[dict[str, Any]],
     depth_rows: list[dict[str, Any]],
@@ -698,7 +710,6 @@ def _report(
             "bare FAST+LK ms",
             "ratio FB on",
             "ratio FB off",
-            "ratio FB off, raw",
             "depth err. %",
         ],
         [
@@ -715,7 +726,6 @@ def _report(
                 ms(row["ms_bare_fast_lk"]),
                 f"{row['ratio_fb_on']:.2f}",
                 f"{row['ratio_fb_off']:.2f}",
-                f"{row['ratio_fb_off_raw']:.2f}",
                 f"{row['depth_error_median_pct']:.1f}",
             ]
             for row in rows
@@ -747,27 +757,34 @@ def _report(
             for row in depth_rows
         ],
     )
+
     # Targets are judged where the point count is in the working range (hundreds or more): at a handful of
     # points every pipeline is dominated by fixed per-call costs.
-    working = [row for row in rows if row["points_found"] >= 100] or rows
-    working_depth = [row for row in depth_rows if row["points_per_frame"] >= 100] or depth_rows
-    ratio_on = [row["ratio_fb_on"] for row in working]
-    ratio_off = [row["ratio_fb_off"] for row in working]
-    ratio_raw = [row["ratio_fb_off_raw"] for row in working]
-    speed_floats = [row["speedup_vs_loop_floats"] for row in working_depth]
-    speed_numpy = [row["speedup_vs_loop_numpy"] for row in working_depth]
-
-    def span(values: list[float], unit: str = "×") -> str:
-        return f"{min(values):.2f}{unit}–{max(values):.2f}{unit}"
-
-    def verdict(met: bool) -> str:
-        return "**met**" if met else "**missed**"
+    def judge(key: str, table: list[dict[str, Any]], ok: Callable[[float], bool]) -> str:
+        count_key = "points_found" if "points_found" in table[0] else "points_per_frame"
+        working = [row for row in table if row[count_key] >= 100] or table
+        values = [row[key] for row in working]
+        at_default = next((row[key] for row in table if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
+        unit = "×"
+        head = (
+            f"{at_default:.2f}{unit} → **{'met' if ok(at_default) else 'missed'}**"
+            if at_default is not None
+            else "(default threshold not swept)"
+        )
+        met = sum(ok(value) for value in values)
+        return f"{head} (range {min(values):.2f}–{max(values):.2f}{unit}, met in {met} of {len(values)} rows)"
 
     max_difference = max(row["max_relative_depth_difference"] for row in depth_rows)
     agreement = min(row["valid_mask_agreement"] for row in depth_rows)
-    threshold_list = ", ".join(str(row["fast_threshold"]) for row in working)
+    default_row = next((row for row in rows if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
+    default_text = (
+        f"{DEFAULT_THRESHOLD}, {default_row['points_found']:.0f} points per frame here"
+        if default_row is not None
+        else f"{DEFAULT_THRESHOLD}, not in this sweep"
+    )
+    threshold_list = ", ".join(str(row["fast_threshold"]) for row in rows if row["points_found"] >= 100)
     if not any(row["points_found"] >= 100 for row in rows):
-        threshold_list += "; no row reached 100 points, so all rows are used"
+        threshold_list = "none reached 100 points, so all rows are used"
     return f"""# Estimator performance (thesis Table 3, Figs. 39–40)
 
 Generated {today()} by
@@ -778,7 +795,8 @@ Generated {today()} by
 
 in {elapsed:.0f} s. Machine: **shared** with other engineers' test runs and a PPO training run, so absolute
 times are noisy; every estimator figure was measured alternated with the bare OpenCV baseline in the same
-process, and ratios are taken pass by pass before the median over {repeats} passes.
+process, frame by frame, and ratios are taken frame by frame before the medians over frames and {repeats}
+passes.
 
 {hardware_summary()}
 
@@ -788,8 +806,7 @@ process, and ratios are taken pass by pass before the median over {repeats} pass
   {flight["frame_rate"]:.0f} frames/s = {flight["forward_speed"] / flight["frame_rate"]:.2f} m per frame, weaving
   in yaw, height and sideways: `agents.bench_estimator.scripted_action`); {flight["frames"]} frame pairs,
   the estimator told the true relative motion of each pair.
-- Estimator: `FlowDepthEstimator` defaults (triangulation, LK window {WIN_SIZE}×{WIN_SIZE}, max level {MAX_LEVEL},
-  max LK error 5, FB check 0.5 px, brightness normalisation, min parallax 1 px, epipolar check 1 px) except
+- Estimator: `FlowDepthEstimator` defaults ({_estimator_settings()}) except
   `max_points=None`: uncapped, so that (as in the thesis) the point count follows the threshold and the bare
   baseline tracks the very same corners. Streaming through `update`; per frame that is one frame preparation,
   FAST on the previous frame, LK and the depth stage.
@@ -797,13 +814,19 @@ process, and ratios are taken pass by pass before the median over {repeats} pass
   `cv2.KeyPoint_convert` + one `cv2.calcOpticalFlowPyrLK(previous, next, ..., winSize=({WIN_SIZE}, {WIN_SIZE}),
   maxLevel={MAX_LEVEL})` (OpenCV's default stopping criteria, the estimator's too), on the same grayscale frames.
   Point counts were equal per frame in every row: {all(row["equal_counts"] for row in rows)}.
-- Timing: `time.perf_counter` around each call, GC paused inside a pass; per pass the median over the
-  frames, then the median over {repeats} passes. Within a threshold the configurations run in a rotating order;
-  thresholds run forward and backward on alternate passes. Stage columns are the estimator's own
-  `DepthPoints.timings` (FB on). FPS = 1000 / total ms (estimator alone, no rendering).
-- "ratio" = estimator frame time / bare FAST+LK frame time on the same frames and points. *FB on* = defaults;
-  *FB off* = `forward_backward=False`; *FB off, raw* = also `normalize_brightness=False` (the same LK work as
-  the baseline: what remains is the estimator's own overhead plus the depth stage).
+- Timing: `time.perf_counter` around each call, GC paused inside a pass. The configurations are interleaved
+  frame by frame: on each frame pair the bare baseline and the two estimator configurations run back to
+  back, in an order rotating with the frame, so that each estimator call is compared with a bare call made
+  moments before or after it (on a shared machine the load changes within seconds). Each configuration
+  keeps its own stream; the interleaving costs every side some cache warmth alike. Times: median over the
+  frames of a pass, then median over {repeats} passes (thresholds run forward and backward on alternate
+  passes). Stage columns are the estimator's own `DepthPoints.timings` (FB on). FPS = 1000 / total ms
+  (estimator alone, no rendering).
+- "ratio" = estimator frame time / bare FAST+LK frame time on the same frame pair and points, median over
+  the frames of a pass, then over the passes (the range over passes is in the CSV). *FB on* = defaults;
+  *FB off* = `forward_backward=False`: the same FAST + LK work as the baseline, so what remains is the
+  estimator's own overhead (input checks, keypoint selection, the Python around the OpenCV calls) plus the
+  depth stage.
 - "depth err." = median relative error of the used depths against the ray-cast true depth of the scene
   (FB on, all pairs).
 
@@ -829,21 +852,21 @@ each timed {repeats}× alternated per frame. The loops reproduce the kernel: lar
 
 ## Targets
 
-Judged on the rows with ≥ 100 points per frame (thresholds {threshold_list}); at a handful of points fixed
-per-call costs dominate every variant.
+Verdicts at the estimator's default threshold ({default_text}), with the range over the rows with ≥ 100
+points per frame (thresholds {threshold_list}; at a handful of points fixed per-call costs dominate).
 
 - Streaming frame time ≤ {TARGET_RATIO_BARE:.1f}× bare FAST + LK at equal point counts:
-  FB on {span(ratio_on)} → {verdict(max(ratio_on) <= TARGET_RATIO_BARE)};
-  FB off {span(ratio_off)} → {verdict(max(ratio_off) <= TARGET_RATIO_BARE)};
-  FB off without brightness normalisation {span(ratio_raw)} → {verdict(max(ratio_raw) <= TARGET_RATIO_BARE)}.
-  The target cannot be met by construction with FB on: the forward-backward check is a second full LK pass,
-  so the flow stage alone is about 2× the baseline's LK. With FB off the estimator does the baseline's work
-  plus brightness normalisation (a full-frame pass) and the depth stage; the raw configuration shows what the
-  depth stage and the Python around it cost on top of bare OpenCV.
-- Depth stage ≥ {TARGET_DEPTH_SPEEDUP:.0f}× faster than the per-point loop: against the plain-float loop
-  {span(speed_floats)} → {verdict(min(speed_floats) >= TARGET_DEPTH_SPEEDUP)}; against the numpy-per-point loop
-  {span(speed_numpy)} → {verdict(min(speed_numpy) >= TARGET_DEPTH_SPEEDUP)}. The speed-up grows with the point
-  count (the vectorised stage has a fixed cost of some tens of µs per frame).
+  FB on (default) {judge("ratio_fb_on", rows, lambda v: v <= TARGET_RATIO_BARE)};
+  FB off {judge("ratio_fb_off", rows, lambda v: v <= TARGET_RATIO_BARE)}.
+  With FB on the target cannot be met by construction: the forward-backward check is a second full LK pass,
+  so the flow stage alone is about twice the baseline's LK. With FB off the estimator does the baseline's
+  work plus the depth stage and its own overhead, so ≤ 1.0× is only reachable within measurement noise; how
+  close it gets is the measure of that overhead.
+- Depth stage ≥ {TARGET_DEPTH_SPEEDUP:.0f}× faster than the per-point loop: against the numpy-per-point loop
+  {judge("speedup_vs_loop_numpy", depth_rows, lambda v: v >= TARGET_DEPTH_SPEEDUP)}; against the plain-float
+  loop {judge("speedup_vs_loop_floats", depth_rows, lambda v: v >= TARGET_DEPTH_SPEEDUP)}. The speed-up grows
+  with the point count: the vectorised stage has a fixed cost of about a tenth of a millisecond per frame
+  (some thirty small numpy calls), the loops none.
 
 Files: `estimator_performance.csv` (Table 3, all columns including the min/max ratio over passes),
 `estimator_performance_depth_stage.csv`, `estimator_performance.png`.

@@ -11,7 +11,14 @@ import numpy as np
 
 from flownav_env.camera import opencv_camera_pose
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams, VelocityController
-from flownav_env.scene import PARKED_Z, LayoutParams, build_scene_xml, material_names, paint_textures
+from flownav_env.scene import (
+    PARKED_GROUP,
+    PARKED_Z,
+    LayoutParams,
+    build_scene_xml,
+    material_names,
+    paint_textures,
+)
 
 
 def _quat_from_matrix(rotation: np.ndarray) -> np.ndarray:
@@ -77,10 +84,12 @@ class FlowNavPhysics:
         geoms = self.obstacle_geoms
         bodies = self.model.geom_bodyid[geoms]
         self.model.body_pos[bodies] = (0.0, 0.0, PARKED_Z)
+        self.model.geom_group[geoms] = PARKED_GROUP
         if count:
             self.model.body_pos[bodies[:count], :2] = positions
             self.model.body_pos[bodies[:count], 2] = self.layout.obstacle_height / 2.0
             self.model.geom_matid[geoms[:count]] = self.material_ids[materials]
+            self.model.geom_group[geoms[:count]] = 0
         self.data.mocap_pos[self.model.body_mocapid[bodies]] = self.model.body_pos[bodies]
         self.obstacle_positions = np.asarray(positions, np.float64).reshape(-1, 2)
 

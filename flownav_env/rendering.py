@@ -11,6 +11,8 @@ import cv2
 import mujoco
 import numpy as np
 
+from flownav_env.scene import PARKED_GROUP
+
 
 class CameraRenderer:
     """Renders one named camera of a model at a fixed size, creating the GL context on first use."""
@@ -20,12 +22,14 @@ class CameraRenderer:
         self.width = width
         self.height = height
         self._renderer: mujoco.Renderer | None = None
+        self._options = mujoco.MjvOption()
+        self._options.geomgroup[PARKED_GROUP] = 0
 
     def render(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
         """RGB image (height, width, 3) uint8 of ``camera``, row 0 at the top."""
         if self._renderer is None:
             self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
-        self._renderer.update_scene(data, camera=camera)
+        self._renderer.update_scene(data, camera=camera, scene_option=self._options)
         return self._renderer.render()
 
     def render_depth(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
@@ -34,7 +38,7 @@ class CameraRenderer:
             self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
         self._renderer.enable_depth_rendering()
         try:
-            self._renderer.update_scene(data, camera=camera)
+            self._renderer.update_scene(data, camera=camera, scene_option=self._options)
             return self._renderer.render().copy()
         finally:
             self._renderer.disable_depth_rendering()

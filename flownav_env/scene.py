@@ -23,6 +23,10 @@ LAYOUTS = ("field", "corridor", "single", "three")
 TEXTURE_SIZE = 256
 MATERIALS_PER_KIND = 2
 PARKED_Z = -50.0
+# Parked capsules move to a geom group the renderers do not draw: drawn underground they cost render time.
+PARKED_GROUP = 3
+# The plane's third size is its rendering grid spacing; a fine grid multiplies the triangles the software
+# rasteriser draws (0.1 m took half of each frame) for no visible difference under a directional sun.
 
 
 @dataclass(frozen=True)
@@ -162,7 +166,7 @@ def build_scene_xml(
   <worldbody>
     <light name="sun" directional="true" pos="0 0 10" dir="-0.3 -0.2 -1" diffuse="0.7 0.7 0.7"
            specular="0.1 0.1 0.1" castshadow="false"/>
-    <geom name="ground" type="plane" size="100 100 0.1" material="grass"/>
+    <geom name="ground" type="plane" size="100 100 10" material="grass"/>
     {capsules}
     <body name="drone" pos="0 0 1">
       <freejoint name="drone"/>

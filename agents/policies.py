@@ -85,14 +85,16 @@ class BeeAgent:
     slides away from the nearer side, and when the centre columns loom (their nearness exceeds
     ``frontal_threshold``) it also turns and slides toward the emptier side. Only the sector rows at and above
     the horizon are used: the bottom row mostly sees the ground. Height and heading are held as in
-    :class:`StraightAgent`. Gains were tuned on training seeds only (``agents.tune_bee``).
+    :class:`StraightAgent`. The gains are the best of a random search on training seeds 0-11 only
+    (``python -m agents.tune_bee``, ranking in ``results/bee_tuning/ranking.md``): 4 of 12 successes against 3
+    of 12 for the hand-set start (1.5, 2.0, 0.15, 0.5), a difference well inside the noise of 12 episodes.
     """
 
     bin_edges: tuple[float, ...] = tuple(DEFAULT_BIN_EDGES)
-    centring_gain: float = 1.5
-    frontal_gain: float = 2.0
-    frontal_threshold: float = 0.15
-    yaw_gain: float = 0.5
+    centring_gain: float = 1.798
+    frontal_gain: float = 1.297
+    frontal_threshold: float = 0.398
+    yaw_gain: float = 1.363
     obstacle_rows: int = 2
     flight_height: float = 1.0
     height_gain: float = 2.0

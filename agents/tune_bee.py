@@ -23,13 +23,14 @@ SEARCH_SPACE = {
 }
 
 
-def candidates(count: int, seed: int) -> list[dict[str, float]]:
-    """The defaults first, then ``count - 1`` log-uniform draws from :data:`SEARCH_SPACE`."""
-    from agents.policies import BeeAgent
+# The hand-set gains the search started from (fixed, so candidate indices in a resumed CSV keep their meaning).
+HAND_SET_START = {"centring_gain": 1.5, "frontal_gain": 2.0, "frontal_threshold": 0.15, "yaw_gain": 0.5}
 
-    defaults = BeeAgent()
+
+def candidates(count: int, seed: int) -> list[dict[str, float]]:
+    """The hand-set start first, then ``count - 1`` log-uniform draws from :data:`SEARCH_SPACE`."""
     rng = np.random.default_rng(seed)
-    drawn = [{name: float(getattr(defaults, name)) for name in SEARCH_SPACE}]
+    drawn = [dict(HAND_SET_START)]
     for _ in range(count - 1):
         drawn.append(
             {

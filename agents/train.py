@@ -119,6 +119,26 @@ def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
     plt.close(fig)
 
 
+def select_policy(model, run_dir: Path, policy_path: Path) -> str:
+    """Ship the checkpoint with the best mean return on the held-out training-eval seeds (SB3's EvalCallback
+    keeps it as ``best/best_model.zip``), else the last one; returns which, for the training record.
+
+    PPO's return on a fresh batch of layouts swings a lot between updates, so the last update is often not
+    the best policy seen. The selection uses the eval callback's seeds (from 500,000), never the
+    benchmark's evaluation seeds (from 1,000,000).
+    """
+    best = run_dir / "best" / "best_model.zip"
+    evaluations = run_dir / "evaluations.npz"
+    if best.exists() and evaluations.exists():
+        data = np.load(evaluations)
+        means = data["results"].mean(axis=1)
+        index = int(np.argmax(means))
+        shutil.copyfile(best, policy_path)
+        return f"best held-out eval: mean return {means[index]:.2f} at {int(data['timesteps'][index])} steps"
+    model.save(policy_path)
+    return f"last: {model.num_timesteps} steps"
+
+
 def train(
     config: TrainConfig, *, config_path: Path, resume: bool, runs_dir: Path, policies_dir: Path
 ) -> Path:
@@ -213,7 +233,7 @@ def train(
 
     policies_dir.mkdir(parents=True, exist_ok=True)
     policy_path = policies_dir / f"{config.name}.zip"
-    model.save(policy_path)
+    selected = select_policy(model, run_dir, policy_path)
     shutil.copyfile(config_path, policies_dir / f"{config.name}.yaml")
     evaluations = run_dir / "evaluations.npz"
     if evaluations.exists():
@@ -236,6 +256,7 @@ def train(
         }
     )
     record["total_timesteps"] = int(model.num_timesteps)
+    record["selected"] = selected
     record["total_wall_minutes"] = round(sum(s["wall_minutes"] for s in record["sessions"]), 1)
     record["command"] = f"flownav train --config {config_path}" + (" --resume" if resume else "")
     record_path.write_text(json.dumps(record, indent=2))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -16,7 +17,7 @@ from agents.episodes import EpisodeTask, execute, pending_tasks
 from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
 from agents.policies import BeeAgent, StraightAgent, load_agent, sector_nearness
 from agents.sweep import SweepConfig, build_tasks
-from agents.train import TrainConfig, train
+from agents.train import TrainConfig, latest_checkpoint, train
 from agents.wrappers import SensorRandomization
 
 SMALL = {"camera_width": 96, "camera_height": 72}

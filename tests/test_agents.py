@@ -91,16 +91,18 @@ def test_tiny_ppo_run_saves_loads_and_resumes(tmp_path: Path) -> None:
     policy = train(
         config, config_path=path, resume=False, runs_dir=tmp_path / "runs", policies_dir=tmp_path / "pol"
     )
-    first = PPO.load(policy, device="cpu")
-    assert first.num_timesteps == 128
+    checkpoints = tmp_path / "runs" / "ppo_flow" / "checkpoints"
+    assert PPO.load(latest_checkpoint(checkpoints), device="cpu").num_timesteps == 128
     assert (tmp_path / "pol" / "ppo_flow.yaml").exists() and (tmp_path / "pol" / "ppo_flow.json").exists()
 
     config.total_timesteps = 256  # as if the first run had been interrupted at 128 of 256 steps
     policy = train(
         config, config_path=path, resume=True, runs_dir=tmp_path / "runs", policies_dir=tmp_path / "pol"
     )
-    resumed = PPO.load(policy, device="cpu")
-    assert resumed.num_timesteps == 256
+    assert PPO.load(latest_checkpoint(checkpoints), device="cpu").num_timesteps == 256
+    record = json.loads((tmp_path / "pol" / "ppo_flow.json").read_text())
+    assert record["total_timesteps"] == 256 and len(record["sessions"]) == 2
+    assert record["selected"].startswith("best held-out eval")  # the shipped policy is the best evaluated one
 
     agent = load_agent("ppo_flow", policy)
     env = gym.make("FlowNavSingle-v0", **SMALL)

@@ -224,6 +224,9 @@ def train(
             reset_num_timesteps=checkpoint is None,
             tb_log_name=config.name,
         )
+    except KeyboardInterrupt:
+        # Ctrl-C ends this session's share early; what was learned is still saved and shipped below.
+        print(f"interrupted at {model.num_timesteps} steps: saving; --resume continues from here")
     finally:
         # Interrupted or not, keep what was learned: the checkpoint is the resume point.
         model.save(checkpoint_dir / f"{config.name}_{model.num_timesteps}_steps.zip")

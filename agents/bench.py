@@ -22,6 +22,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from agents.machine import cpu_model
+
 HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
 
 
@@ -111,8 +113,7 @@ def run(args: argparse.Namespace) -> int:
 def hardware_summary() -> str:
     """CPU model, core count, load and GL renderer facts for the report header (one Markdown list)."""
     lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
-    model = _lscpu_field("Model name")
-    lines.append(f"- CPU: {model or platform.processor() or 'unknown'}; `nproc` = {os.cpu_count()}")
+    lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
     try:
         load = ", ".join(f"{value:.2f}" for value in os.getloadavg())
         lines.append(f"- load average (1, 5, 15 min) at the end of the run: {load}")
@@ -146,18 +147,6 @@ def code_version() -> str:
     return f"commit `{commit}`" + (
         " with uncommitted changes in estimator/, flownav_env/ or agents/" if dirty else ""
     )
-
-
-def _lscpu_field(name: str) -> str | None:
-    try:
-        output = subprocess.run(["lscpu"], capture_output=True, text=True, check=False, timeout=10).stdout
-    except (OSError, subprocess.SubprocessError):
-        return None
-    for line in output.splitlines():
-        key, _, value = line.partition(":")
-        if key.strip() == name:
-            return value.strip()
-    return None
 
 
 def today() -> str:

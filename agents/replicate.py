@@ -8,10 +8,11 @@ import argparse
 import json
 import math
 import os
-import platform
 import time
 from pathlib import Path
 from typing import Any
+
+from agents.machine import machine_summary
 
 HELP = "reproduce the thesis's estimator experiments (record/playback, Tables 2-3, test-sets C-H)"
 
@@ -84,30 +85,11 @@ def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool =
             "config": _display_path(config_path),
             "camera": f"{config.camera.width}x{config.camera.height}, vertical FOV {config.camera.fov_deg:g} deg",
             "wall_s": time.perf_counter() - started,
-            "hardware": hardware_description(),
+            "hardware": machine_summary(),
         }
     )
     (out_dir / f"{name}.json").write_text(json.dumps(result, indent=1, default=_json_default))
     return result
-
-
-def hardware_description() -> str:
-    """CPU model, logical cores available to this process, Python and library versions."""
-    import cv2
-    import mujoco
-
-    model = platform.processor() or "unknown CPU"
-    cpuinfo = Path("/proc/cpuinfo")
-    if cpuinfo.is_file():
-        for line in cpuinfo.read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return (
-        f"{model}, {cores} cores available (shared), Python {platform.python_version()}, "
-        f"MuJoCo {mujoco.__version__}, OpenCV {cv2.__version__}, rendering MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
-    )
 
 
 def _display_path(path: Path) -> str:

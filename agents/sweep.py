@@ -158,22 +158,6 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     plt.close(fig)
 
 
-def hardware_summary() -> str:
-    """CPU model and core count of this machine, for reports."""
-    import os
-    import platform
-
-    model = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{model}, {os.cpu_count()} cores"
-
-
 def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
     """Collision rate [95 % CI] per agent (rows) and level (columns) of one factor, the clean run first."""
     agents = sorted({r["agent"] for r in table})
@@ -204,13 +188,14 @@ def write_report(
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
     from agents.evaluation import format_summary
+    from agents.machine import machine_summary
 
     parts = [
         "# Sweep: collision rate per agent and sensor error",
         "",
         f"Command: `{command}`  ",
         f"Config: `{config_path}`  ",
-        f"Hardware: {hardware_summary()}  ",
+        f"Hardware: {machine_summary()}  ",
         f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown).",
         "",
         "```yaml",

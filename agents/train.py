@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import shutil
 import time
 from dataclasses import asdict, dataclass, field
@@ -24,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import check_env_kwargs, field_range, load_config
+from agents.machine import available_cores, cpu_model
 
 HELP = "train a PPO policy from a YAML config (resumable)"
 
@@ -253,8 +252,8 @@ def train(
             "steps_this_session": int(model.num_timesteps - steps_before),
             "wall_minutes": round(wall_minutes, 1),
             "steps_per_second": round((model.num_timesteps - steps_before) / max(wall_minutes * 60, 1e-9), 1),
-            "cpu": platform.processor() or platform.machine(),
-            "cores": os.cpu_count(),
+            "cpu": cpu_model(),
+            "cores": available_cores(),
             "n_envs": config.n_envs,
         }
     )

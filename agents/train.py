@@ -112,7 +112,7 @@ def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
     ax.set_xlabel("environment steps")
     ax.set_ylabel("episode return")
     ax.set_title(title)
-    ax.legend(loc="lower right")
+    ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     fig.savefig(output, dpi=120)
     plt.close(fig)

@@ -175,21 +175,21 @@ class FlowNavEnv(gym.Env):
 
     ## Default resolution
     160×120, chosen by measurement (``flownav bench env``, ``results/env_performance.md``: one process, the
-    field layout and a scripted flight, medians per frame; a shared 2-core CPU with software OpenGL):
+    field layout and a scripted flight, medians per frame; a 2-core CPU with software OpenGL):
 
     | resolution | steps/s | real time × | points tracked | points valid | median depth error |
     |------------|---------|-------------|----------------|--------------|--------------------|
-    | 64×48      | 93      | 9.3         | 25             | 2            | 13.4 %             |
-    | 96×72      | 86      | 8.6         | 42             | 10           | 7.6 %              |
-    | 128×96     | 79      | 7.9         | 61             | 21           | 5.1 %              |
-    | 160×120    | 73      | 7.3         | 80             | 34           | 4.2 %              |
-    | 240×180    | 64      | 6.4         | 132            | 75           | 2.6 %              |
-    | 320×240    | 54      | 5.4         | 199            | 125          | 1.9 %              |
+    | 64×48      | 194     | 19.3        | 25             | 2            | 13.4 %             |
+    | 96×72      | 186     | 18.6        | 42             | 10           | 7.6 %              |
+    | 128×96     | 164     | 16.4        | 61             | 21           | 5.1 %              |
+    | 160×120    | 151     | 15.0        | 79             | 34           | 4.1 %              |
+    | 240×180    | 123     | 12.2        | 132            | 75           | 2.6 %              |
+    | 320×240    | 109     | 10.9        | 198            | 126          | 1.9 %              |
 
     160×120 is the smallest size with a median depth error ≤ 5 % and at least two valid points per histogram
-    sector (34 for 3×5 sectors). Rendering is about three quarters of a step at every size, so steps/s fall
-    only slowly with resolution: 240×180 gives 2.2× the valid points for 12 % fewer steps/s, and is the next
-    candidate if the policy needs denser histograms.
+    sector (34 for 3×5 sectors). Rendering is over half of a step at every size (software OpenGL), so steps/s
+    fall only slowly with resolution: 240×180 gives 2.2× the valid points for 19 % fewer steps/s, and is the
+    next candidate if a policy needs denser histograms.
 
     ## Version History
     * v0: initial version.

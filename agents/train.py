@@ -40,6 +40,9 @@ class PPOParams:
     clip_range: float = field_range(0.01, 1.0, default=0.2)
     ent_coef: float = field_range(0.0, 1.0, default=0.0)
     net_arch: list[int] = field_range(1, 4096, default_factory=lambda: [64, 64])
+    # Initial log standard deviation of the Gaussian actions: 0 (std 1) on a [-1, 1] action box is mostly
+    # clipped, bang-bang exploration that crashes early; lower starts calmer.
+    log_std_init: float = field_range(-5.0, 2.0, default=0.0)
 
 
 @dataclass
@@ -173,10 +176,11 @@ def train(
             print(f"no checkpoint in {checkpoint_dir}: starting fresh")
         params = asdict(config.ppo)
         net_arch = params.pop("net_arch")
+        log_std_init = params.pop("log_std_init")
         model = PPO(
             "MultiInputPolicy",
             envs,
-            policy_kwargs={"net_arch": net_arch},
+            policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
             tensorboard_log=str(run_dir / "tb"),
             seed=config.seed,
             device="cpu",

@@ -15,10 +15,12 @@ from __future__ import annotations
 import argparse
 import csv
 import datetime
+import gc
 import os
 import platform
 import subprocess
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -110,6 +112,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 # --- shared helpers of the two benchmarks ----------------------------------------------------------------------
+@contextmanager
+def quiet_gc() -> Iterator[None]:
+    """No garbage collection inside a timed block: a collection there would be charged to that side of the
+    comparison alone; collect between blocks instead."""
+    gc.collect()
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
+
+
 def hardware_summary() -> str:
     """CPU model, core count, load and GL renderer facts for the report header (one Markdown list)."""
     lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]

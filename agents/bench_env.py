@@ -10,19 +10,17 @@ the env's own physics, renderer and estimator objects from outside (wrappers aro
 
 from __future__ import annotations
 
-import gc
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.bench import hardware_summary, markdown_table, today, write_csv
+from agents.bench import hardware_summary, markdown_table, quiet_gc, today, write_csv
 
 # The GL backend is read when mujoco is first imported; set it before anything below imports mujoco.
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -175,17 +173,6 @@ def _env_block(subject: _Subject, steps: int, seed: int, record: bool) -> float:
     return elapsed / steps
 
 
-@contextmanager
-def _quiet_gc() -> Iterator[None]:
-    # A garbage collection inside one block would be charged to that side of the comparison alone.
-    gc.collect()
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.enable()
-
-
 def measure_env(
     resolutions: Sequence[tuple[int, int]] = DEFAULT_RESOLUTIONS,
     steps: int = 100,
@@ -231,7 +218,7 @@ def measure_env(
         for repeat in range(repeats):
             order = subjects if repeat % 2 == 0 else subjects[::-1]
             for position, subject in enumerate(order):
-                with _quiet_gc():
+                with quiet_gc():
                     if (repeat + position) % 2 == 0:
                         subject.env_blocks.append(_env_block(subject, steps, seed, record=True))
                         subject.bare_blocks.append(_bare_block(subject, steps))

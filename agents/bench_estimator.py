@@ -16,7 +16,6 @@ threshold, and so that the bare baseline tracks exactly the same corners (equal 
 
 from __future__ import annotations
 
-import gc
 import math
 import os
 import time
@@ -28,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.bench import hardware_summary, markdown_table, today, write_csv
+from agents.bench import hardware_summary, markdown_table, quiet_gc, today, write_csv
 
 # The GL backend is read when mujoco is first imported (by flownav_env, inside the functions below).
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -384,18 +383,6 @@ def _stream_pass(
     return results
 
 
-@contextmanager
-def _quiet_gc() -> Iterator[None]:
-    # A collection landing inside one configuration's call would be charged to it alone; collect between
-    # passes instead.
-    gc.collect()
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.enable()
-
-
 def _median(values: Sequence[float]) -> float:
     return float(np.median(values)) if len(values) else math.nan
 
@@ -445,7 +432,7 @@ def run_estimator_table(
     for repeat in range(repeats):
         order = list(thresholds) if repeat % 2 == 0 else list(reversed(thresholds))
         for threshold in order:
-            with _quiet_gc():
+            with quiet_gc():
                 keep = kept[threshold] if repeat == 0 else None
                 passes[threshold].append(_stream_pass(flight, threshold, names, keep))
             bar.update()
@@ -528,7 +515,7 @@ def _time_depth_stage(
             )
             seconds: dict[str, list[float]] = {name: [] for name in DEPTH_FUNCTIONS}
             outputs = {}
-            with _quiet_gc():
+            with quiet_gc():
                 for repeat in range(repeats):
                     names = list(DEPTH_FUNCTIONS)
                     shift = repeat % len(names)

@@ -30,7 +30,8 @@ def run(args: argparse.Namespace) -> int:
     shipped = [name for name in LEARNED_AGENTS if (Path(args.policy_dir) / f"{name}.zip").exists()]
     agents = ["straight", "bee", *shipped]
     seeds = range(EVAL_SEED_START, EVAL_SEED_START + args.episodes)
-    tasks = [EpisodeTask(a, "clean", 0.0, s, args.env_id, (), args.policy_dir) for a in agents for s in seeds]
+    policies = {name: str(Path(args.policy_dir) / f"{name}.zip") for name in shipped}
+    tasks = [EpisodeTask(a, "clean", 0.0, s, args.env_id, (), policies.get(a)) for a in agents for s in seeds]
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"
         execute(tasks, episodes, workers=args.workers, description="demo")

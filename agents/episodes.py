@@ -26,7 +26,7 @@ class EpisodeTask:
     seed: int
     env_id: str = "FlowNav-v0"
     env_kwargs: tuple[tuple[str, Any], ...] = ()
-    policy_dir: str = "results/policies"
+    policy: str | None = None  # a learned agent's .zip; None: results/policies/<agent>.zip
     bee_params: tuple[tuple[str, float], ...] = field(default=())
 
     def env_settings(self) -> dict[str, Any]:
@@ -61,15 +61,14 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
     from agents.policies import load_agent
 
     settings = task.env_settings()
-    key = (task.agent, task.env_id, tuple(sorted(settings.items())), task.policy_dir, task.bee_params)
+    key = (task.agent, task.env_id, tuple(sorted(settings.items())), task.policy, task.bee_params)
     if key not in _CACHE:
         for env, _ in _CACHE.values():
             env.close()
         _CACHE.clear()
         limit = episode_step_limit(task.env_id, settings)
         env = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
-        policy = f"{task.policy_dir}/{task.agent}.zip" if task.agent.startswith("ppo") else None
-        _CACHE[key] = (env, load_agent(task.agent, policy, **dict(task.bee_params)))
+        _CACHE[key] = (env, load_agent(task.agent, task.policy, **dict(task.bee_params)))
     return _CACHE[key]
 
 

@@ -67,13 +67,10 @@ def run(args: argparse.Namespace) -> int:
             f"--seed-start must be >= {EVAL_SEED_START} (training uses the seeds below), got {args.seed_start}"
         )
     env_kwargs = check_env_kwargs(dict(args.env), "command line", key="--env")
-    policy_dir = str(Path(args.policy).parent) if args.policy else "results/policies"
-    if args.policy and Path(args.policy).stem != args.agent:
-        raise ValueError(f"--policy file must be named {args.agent}.zip, got {args.policy}")
     factor, level = record_label(env_kwargs)
     tasks = [
         EpisodeTask(
-            args.agent, factor, level, seed, args.env_id, tuple(sorted(env_kwargs.items())), policy_dir
+            args.agent, factor, level, seed, args.env_id, tuple(sorted(env_kwargs.items())), args.policy
         )
         for seed in range(args.seed_start, args.seed_start + args.episodes)
     ]

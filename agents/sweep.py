@@ -62,6 +62,7 @@ class SweepConfig:
 def build_tasks(config: SweepConfig, agents: list[str]) -> list:
     """Every (agent, factor, level, seed) episode, the clean setting first, ordered so a worker stays on a cell."""
     from agents.episodes import EpisodeTask
+    from agents.policies import LEARNED_AGENTS
 
     seeds = range(config.seed_start, config.seed_start + config.episodes)
     cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
@@ -69,7 +70,13 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list:
         cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
     return [
         EpisodeTask(
-            agent, factor, level, seed, config.env_id, tuple(sorted(kwargs.items())), config.policy_dir
+            agent,
+            factor,
+            level,
+            seed,
+            config.env_id,
+            tuple(sorted(kwargs.items())),
+            str(Path(config.policy_dir) / f"{agent}.zip") if agent in LEARNED_AGENTS else None,
         )
         for agent in agents
         for factor, level, kwargs in cells

@@ -30,7 +30,11 @@ class EpisodeTask:
     bee_params: tuple[tuple[str, float], ...] = field(default=())
 
     def env_settings(self) -> dict[str, Any]:
-        return dict(self.env_kwargs)
+        """The env kwargs to fly with: the agent's own (a learned agent keeps what it was trained with, such
+        as oracle observations), then this task's on top."""
+        from agents.policies import agent_env_kwargs
+
+        return {**agent_env_kwargs(self.agent, self.policy), **dict(self.env_kwargs)}
 
 
 def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:

@@ -127,6 +127,28 @@ class BeeAgent:
         return (actions if batched else actions[0]), state
 
 
+def policy_file(name: str, path: str | Path | None = None) -> Path:
+    """Where the learned agent ``name`` is stored: ``path`` if given, else ``results/policies/<name>.zip``."""
+    return Path(path) if path else Path("results/policies") / f"{name}.zip"
+
+
+def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
+    """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
+    ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle
+    observations, a policy trained at another resolution keeps it); empty for hand-written agents or when
+    no config copy exists. A sweep cell's own kwargs go on top of these.
+    """
+    if name not in LEARNED_AGENTS:
+        return {}
+    config_path = policy_file(name, path).with_suffix(".yaml")
+    if not config_path.is_file():
+        return {}
+    from agents.config import load_config
+    from agents.train import TrainConfig
+
+    return dict(load_config(config_path, TrainConfig).env)
+
+
 def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: float) -> Agent:
     """The agent called ``name`` (see :data:`AGENT_NAMES`).
 
@@ -145,7 +167,7 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
     if name in LEARNED_AGENTS:
         from stable_baselines3 import PPO
 
-        path = Path(policy_path) if policy_path else Path("results/policies") / f"{name}.zip"
+        path = policy_file(name, policy_path)
         if not path.is_file():
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
         return PPO.load(path, device="cpu")

@@ -30,12 +30,12 @@ def record_episode(
     import imageio.v2 as imageio
 
     import flownav_env  # noqa: F401
-    from agents.policies import load_agent
+    from agents.policies import agent_env_kwargs, load_agent
 
     if max_steps < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps}")
     agent = load_agent(agent_name, policy)
-    env = gym.make(env_id, render_mode="rgb_array")
+    env = gym.make(env_id, render_mode="rgb_array", **agent_env_kwargs(agent_name, policy))
     out.parent.mkdir(parents=True, exist_ok=True)
     observation, info = env.reset(seed=seed)
     fps = env.metadata.get("render_fps", 10)

@@ -15,7 +15,7 @@ import flownav_env  # noqa: F401
 from agents.config import ConfigError, load_config
 from agents.episodes import EpisodeTask, execute, pending_tasks
 from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
-from agents.policies import BeeAgent, StraightAgent, load_agent, sector_nearness
+from agents.policies import BeeAgent, StraightAgent, agent_env_kwargs, load_agent, sector_nearness
 from agents.sweep import SweepConfig, build_tasks
 from agents.train import TrainConfig, latest_checkpoint, train
 from agents.wrappers import SensorRandomization
@@ -110,6 +110,19 @@ def test_tiny_ppo_run_saves_loads_and_resumes(tmp_path: Path) -> None:
     action, _ = agent.predict(observation, deterministic=True)
     env.close()
     assert action.shape == (3,)
+
+
+def test_learned_agents_fly_with_the_env_settings_they_were_trained_with(tmp_path: Path) -> None:
+    policy = tmp_path / "ppo_oracle.zip"
+    policy.with_suffix(".yaml").write_text(
+        yaml.safe_dump({"name": "ppo_oracle", "env": {"obs_source": "oracle", **SMALL}})
+    )
+    assert agent_env_kwargs("ppo_oracle", policy) == {"obs_source": "oracle", **SMALL}
+    task = EpisodeTask("ppo_oracle", "brightness", 0.5, 0, policy=str(policy), env_kwargs=(("brightness", 0.5),))
+    assert task.env_settings() == {"obs_source": "oracle", **SMALL, "brightness": 0.5}
+    override = EpisodeTask("ppo_oracle", "clean", 0.0, 0, policy=str(policy), env_kwargs=(("camera_width", 64),))
+    assert override.env_settings()["camera_width"] == 64  # the task's settings win
+    assert agent_env_kwargs("bee") == {} and agent_env_kwargs("ppo_robust", tmp_path / "none.zip") == {}
 
 
 def test_evaluation_resumes_after_interruption(tmp_path: Path) -> None:

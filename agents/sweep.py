@@ -60,7 +60,9 @@ class SweepConfig:
 
 
 def build_tasks(config: SweepConfig, agents: list[str]) -> list:
-    """Every (agent, factor, level, seed) episode, the clean setting first, ordered so a worker stays on a cell."""
+    """Every (agent, factor, level, seed) episode, cell by cell with the clean setting first and every agent
+    within a cell, so that a sweep cut short has compared all agents on the cells it reached; within a cell an
+    agent's seeds run in a row, so a worker keeps its env."""
     from agents.episodes import EpisodeTask
     from agents.policies import LEARNED_AGENTS
 
@@ -78,8 +80,8 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list:
             tuple(sorted(kwargs.items())),
             str(Path(config.policy_dir) / f"{agent}.zip") if agent in LEARNED_AGENTS else None,
         )
-        for agent in agents
         for factor, level, kwargs in cells
+        for agent in agents
         for seed in seeds
     ]
 

@@ -118,9 +118,13 @@ def test_learned_agents_fly_with_the_env_settings_they_were_trained_with(tmp_pat
         yaml.safe_dump({"name": "ppo_oracle", "env": {"obs_source": "oracle", **SMALL}})
     )
     assert agent_env_kwargs("ppo_oracle", policy) == {"obs_source": "oracle", **SMALL}
-    task = EpisodeTask("ppo_oracle", "brightness", 0.5, 0, policy=str(policy), env_kwargs=(("brightness", 0.5),))
+    task = EpisodeTask(
+        "ppo_oracle", "brightness", 0.5, 0, policy=str(policy), env_kwargs=(("brightness", 0.5),)
+    )
     assert task.env_settings() == {"obs_source": "oracle", **SMALL, "brightness": 0.5}
-    override = EpisodeTask("ppo_oracle", "clean", 0.0, 0, policy=str(policy), env_kwargs=(("camera_width", 64),))
+    override = EpisodeTask(
+        "ppo_oracle", "clean", 0.0, 0, policy=str(policy), env_kwargs=(("camera_width", 64),)
+    )
     assert override.env_settings()["camera_width"] == 64  # the task's settings win
     assert agent_env_kwargs("bee") == {} and agent_env_kwargs("ppo_robust", tmp_path / "none.zip") == {}
 
@@ -171,6 +175,18 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     rows = read_records(tmp_path / "out" / "sweep_episodes.csv")
     table = {(r["agent"], r["factor"]): r for r in summarise(rows)}
     assert table[("straight", "clean")]["collision_rate"] == 1.0
+
+
+def test_sweep_flies_cell_by_cell_so_a_cut_short_sweep_compares_every_agent(tmp_path: Path) -> None:
+    config = load_config(write_sweep_config(tmp_path), SweepConfig)
+    order = [
+        (t.factor, t.agent, t.seed - config.seed_start) for t in build_tasks(config, ["straight", "bee"])
+    ]
+    assert order == [
+        ("clean", "straight", 0), ("clean", "straight", 1), ("clean", "bee", 0), ("clean", "bee", 1),
+        ("rotation_error", "straight", 0), ("rotation_error", "straight", 1),
+        ("rotation_error", "bee", 0), ("rotation_error", "bee", 1),
+    ]  # fmt: skip
 
 
 def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:

@@ -192,7 +192,7 @@ def write_report(
     table: list[dict[str, Any]],
     config_path: Path,
     command: str,
-    minutes: float,
+    minutes: float | None,
     factors: list[str],
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
@@ -205,7 +205,11 @@ def write_report(
         f"Command: `{command}`  ",
         f"Config: `{config_path}`  ",
         f"Hardware: {machine_summary()}  ",
-        f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown).",
+        (
+            f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown)."
+            if minutes is not None
+            else "Rebuilt with `--report-only` from the episodes flown so far."
+        ),
         "",
         "```yaml",
         config_path.read_text().strip(),
@@ -229,6 +233,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=int, help="override the config's local worker count")
     parser.add_argument("--backend", choices=("local", "ray"), help="override the config's backend")
     parser.add_argument("--address", help="Ray cluster address (default: start a local Ray instance)")
+    parser.add_argument(
+        "--report-only",
+        action="store_true",
+        help="fly nothing: rebuild sweep.csv, sweep.md and the figure from the episodes flown so far",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -253,14 +262,16 @@ def run(args: argparse.Namespace) -> int:
     episodes_csv = out / "sweep_episodes.csv"
     started = time.perf_counter()
     tasks = build_tasks(config, agents)
-    flown = execute(
-        tasks,
-        episodes_csv,
-        backend=config.backend,
-        workers=config.workers,
-        address=args.address,
-        description="sweep",
-    )
+    flown = 0
+    if not args.report_only:
+        flown = execute(
+            tasks,
+            episodes_csv,
+            backend=config.backend,
+            workers=config.workers,
+            address=args.address,
+            description="sweep",
+        )
     wanted = {(t.agent, t.factor, t.level, t.seed) for t in tasks}
     rows = [
         r for r in read_records(episodes_csv) if (r["agent"], r["factor"], r["level"], r["seed"]) in wanted
@@ -268,9 +279,20 @@ def run(args: argparse.Namespace) -> int:
     table = write_summary(rows, out / "sweep.csv")
     plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
     minutes = (time.perf_counter() - started) / 60
-    options = {k: v for k, v in vars(args).items() if v is not None and k not in ("handler", "command")}
+    options = {
+        k: v
+        for k, v in vars(args).items()
+        if v not in (None, False) and k not in ("handler", "command", "report_only")
+    }
     command = "flownav sweep " + " ".join(f"--{k.replace('_', '-')} {v}" for k, v in options.items())
-    write_report(out / "sweep.md", table, config_path, command, minutes, list(config.factors))
+    write_report(
+        out / "sweep.md",
+        table,
+        config_path,
+        command,
+        None if args.report_only else minutes,
+        list(config.factors),
+    )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
     return 0

@@ -176,6 +176,14 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     table = {(r["agent"], r["factor"]): r for r in summarise(rows)}
     assert table[("straight", "clean")]["collision_rate"] == 1.0
 
+    # --report-only rebuilds the outputs from the episodes so far and flies nothing, even when more are asked for
+    (tmp_path / "out" / "sweep.csv").unlink()
+    args = ["sweep", "--config", str(config_path), "--out", str(tmp_path / "out"), "--episodes", "5"]
+    assert main([*args, "--report-only"]) == 0
+    assert len(read_records(tmp_path / "out" / "sweep_episodes.csv")) == len(rows)
+    assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
+    assert "Rebuilt with `--report-only`" in (tmp_path / "out" / "sweep.md").read_text()
+
 
 def test_sweep_flies_cell_by_cell_so_a_cut_short_sweep_compares_every_agent(tmp_path: Path) -> None:
     config = load_config(write_sweep_config(tmp_path), SweepConfig)

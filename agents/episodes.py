@@ -6,6 +6,7 @@ A task names an agent, a sensor factor and its level, and a seed; the worker kee
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -65,7 +66,8 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
     from agents.policies import load_agent
 
     settings = task.env_settings()
-    key = (task.agent, task.env_id, tuple(sorted(settings.items())), task.policy, task.bee_params)
+    # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
+    key = (task.agent, task.env_id, json.dumps(settings, sort_keys=True, default=str), task.policy, task.bee_params)
     if key not in _CACHE:
         for env, _ in _CACHE.values():
             env.close()

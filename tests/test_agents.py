@@ -13,7 +13,7 @@ import yaml
 
 import flownav_env  # noqa: F401
 from agents.config import ConfigError, load_config
-from agents.episodes import EpisodeTask, execute, pending_tasks
+from agents.episodes import EpisodeTask, execute, pending_tasks, run_task
 from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
 from agents.policies import BeeAgent, StraightAgent, agent_env_kwargs, load_agent, sector_nearness
 from agents.sweep import SweepConfig, build_tasks
@@ -127,6 +127,8 @@ def test_learned_agents_fly_with_the_env_settings_they_were_trained_with(tmp_pat
     )
     assert override.env_settings()["camera_width"] == 64  # the task's settings win
     assert agent_env_kwargs("bee") == {} and agent_env_kwargs("ppo_robust", tmp_path / "none.zip") == {}
+    nested = (*SMALL.items(), ("estimator_kwargs", {"min_parallax_px": 2.0}))  # a dict inside the settings
+    assert run_task(EpisodeTask("straight", "clean", 0.0, 0, "FlowNavSingle-v0", nested)).collision
 
 
 def test_evaluation_resumes_after_interruption(tmp_path: Path) -> None:

@@ -67,7 +67,13 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
 
     settings = task.env_settings()
     # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
-    key = (task.agent, task.env_id, json.dumps(settings, sort_keys=True, default=str), task.policy, task.bee_params)
+    key = (
+        task.agent,
+        task.env_id,
+        json.dumps(settings, sort_keys=True, default=str),
+        task.policy,
+        task.bee_params,
+    )
     if key not in _CACHE:
         for env, _ in _CACHE.values():
             env.close()

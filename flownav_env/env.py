@@ -20,7 +20,7 @@ from flownav_env.rendering import CameraRenderer, draw_flow_overlay
 from flownav_env.scene import LAYOUT_FUNCTIONS, LAYOUTS, LayoutParams, material_names
 from flownav_env.sensor import corrupt_motion, jitter_rotation
 
-OBS_SOURCES = ("flow", "oracle")
+OBS_SOURCES = ("flow", "oracle", "oracle_valid")
 STATE_FIELDS = (
     "forward_velocity",
     "lateral_velocity",
@@ -79,7 +79,8 @@ class FlowNavEnv(gym.Env):
     distance per frame (``forward_speed`` / ``frame_rate``), scene brightness, and relative errors on the
     rotation and translation the estimator is told. ``obs_source="oracle"`` replaces the estimated depths by
     the true depths at the same tracked points (ray-cast in the scene), separating estimator error from
-    policy error.
+    policy error; ``"oracle_valid"`` keeps only the points the estimator gave a valid depth but uses their
+    true depth, separating *which* points the estimator delivers from *how well* it measures them.
 
     ## Action Space
     ``Box(-1, 1, (3,), float32)``; values outside [-1, 1] are clipped. Positive values steer toward the right
@@ -155,7 +156,7 @@ class FlowNavEnv(gym.Env):
     | ``brightness`` | 1.0 | scene light level (1 = daylight), in [0, 4] |
     | ``rotation_error`` | 0 | relative error of the rotation told to the estimator, in [0, 1] |
     | ``translation_error`` | 0 | relative error of the translation told to the estimator, in [0, 1] |
-    | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator) or ``"oracle"`` (true depth at the tracked points) |
+    | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
@@ -393,6 +394,8 @@ class FlowNavEnv(gym.Env):
         if self.obs_source == "oracle":
             # The same points the estimator tracked, with their true depth (parallax or not).
             depth, valid = true_depth, points.tracked & np.isfinite(true_depth)
+        elif self.obs_source == "oracle_valid":
+            depth, valid = true_depth, points.valid & np.isfinite(true_depth)
         else:
             depth, valid = points.depth, points.valid
         histogram = sector_histogram(

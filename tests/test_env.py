@@ -48,6 +48,23 @@ def test_same_seed_gives_identical_observations() -> None:
         np.testing.assert_array_equal(a, b)
 
 
+def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
+    flow_env, truth_env = make(), make(obs_source="oracle_valid")
+    flow_obs, _ = flow_env.reset(seed=3)
+    truth_obs, _ = truth_env.reset(seed=3)
+    differs = False
+    for _ in range(8):  # the same seed and actions fly the same frames, so the same points are valid
+        flow_obs, *_ = flow_env.step(np.zeros(3))
+        truth_obs, *_, info = truth_env.step(np.zeros(3))
+        flow_occupied = flow_obs["depth_histogram"].sum(-1) > 0
+        truth_occupied = truth_obs["depth_histogram"].sum(-1) > 0
+        assert not np.any(truth_occupied & ~flow_occupied)  # only sectors holding valid points
+        differs |= not np.allclose(flow_obs["depth_histogram"], truth_obs["depth_histogram"])
+    assert differs and info["points_valid"] > 0  # ... with their true depths, not the estimates
+    flow_env.close()
+    truth_env.close()
+
+
 @pytest.mark.parametrize(
     "kwargs",
     [
@@ -58,6 +75,7 @@ def test_same_seed_gives_identical_observations() -> None:
         {"brightness": 4.0},
         {"rotation_error": 1.0, "translation_error": 1.0},
         {"obs_source": "oracle"},
+        {"obs_source": "oracle_valid"},
     ],
     ids=lambda kwargs: ",".join(f"{k}={v}" for k, v in kwargs.items()),
 )
@@ -187,7 +205,7 @@ def test_info_carries_truth_and_estimator_statistics() -> None:
         ({"translation_error": -0.1}, r"translation_error must be in \[0.0, 1.0\], got -0.1"),
         ({"attitude_jitter_deg": float("nan")}, r"attitude_jitter_deg must be in \[0.0, 10.0\], got nan"),
         ({"brightness": -0.5}, r"brightness must be in \[0.0, 4.0\], got -0.5"),
-        ({"obs_source": "lidar"}, r"obs_source must be one of 'flow', 'oracle', got 'lidar'"),
+        ({"obs_source": "lidar"}, r"obs_source must be one of 'flow', 'oracle', 'oracle_valid', got 'lidar'"),
         ({"frame_rate": 0}, r"frame_rate must be in \[1.0, 50.0\], got 0"),
         ({"histogram_sectors": (0, 3)}, r"histogram_sectors\[0\] must be an integer in \[1, 32\], got 0"),
         ({"histogram_sectors": 3}, r"histogram_sectors must be \(rows, cols\), got 3"),

@@ -6,12 +6,12 @@ numpy and OpenCV only: no MuJoCo, Gymnasium or torch here.
 
 Public API:
     :class:`CameraIntrinsics`, :class:`FlowDepthEstimator`, :class:`DepthPoints`, :func:`sector_histogram`,
-    :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.evaluation`.
+    :func:`sector_fraction`, :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.evaluation`.
 """
 
 from estimator.camera import CameraIntrinsics
 from estimator.estimator import DepthPoints, FlowDepthEstimator
-from estimator.histogram import DEFAULT_BIN_EDGES, DEFAULT_SECTORS, sector_histogram
+from estimator.histogram import DEFAULT_BIN_EDGES, DEFAULT_SECTORS, sector_fraction, sector_histogram
 
 __all__ = [
     "DEFAULT_BIN_EDGES",
@@ -19,5 +19,6 @@ __all__ = [
     "CameraIntrinsics",
     "DepthPoints",
     "FlowDepthEstimator",
+    "sector_fraction",
     "sector_histogram",
 ]

@@ -59,23 +59,79 @@ def sector_histogram(
     points, depth, valid = _as_point_arrays(points, depth, valid)
     bins = len(edges) - 1
 
-    u = points[valid, 0].astype(np.float64) + 0.5
-    v = points[valid, 1].astype(np.float64) + 0.5
-    counted_depth = depth[valid]
-    inside = (u >= 0.0) & (u < width) & (v >= 0.0) & (v < height)
-    u, v, counted_depth = u[inside], v[inside], counted_depth[inside]
-
-    # min() guards the float edge case u * cols / width rounding up to cols for u just below width.
-    column = np.minimum((u * cols / width).astype(np.intp), cols - 1)
-    row = np.minimum((v * rows / height).astype(np.intp), rows - 1)
+    sector, inside = _sector_index(points[valid], (width, height), (rows, cols))
+    counted_depth = depth[valid][inside]
     depth_bin = np.clip(np.searchsorted(edges, counted_depth, side="right") - 1, 0, bins - 1)
-    flat_index = (row * cols + column) * bins + depth_bin
-    counts = np.bincount(flat_index, minlength=rows * cols * bins).reshape(rows, cols, bins)
+    counts = np.bincount(sector * bins + depth_bin, minlength=rows * cols * bins).reshape(rows, cols, bins)
 
     per_sector = counts.sum(axis=2, keepdims=True)
     histogram = np.zeros(counts.shape, dtype=np.float32)
     np.divide(counts, per_sector, out=histogram, where=per_sector > 0, casting="unsafe")
     return histogram
+
+
+def sector_fraction(
+    points: Any,
+    selected: Any,
+    among: Any,
+    image_size: tuple[int, int],
+    sectors: tuple[int, int] = DEFAULT_SECTORS,
+) -> np.ndarray:
+    """Per image sector, the fraction of the ``among`` points that are also ``selected``.
+
+    For example the share of tracked points that got no valid depth: in forward flight those are the far
+    points and the points near the focus of expansion, whose parallax is too small to range. Sectors follow
+    :func:`sector_histogram`; a sector without ``among`` points is 0.
+
+    Args:
+        points: (N, 2) pixel positions ``(u, v)``.
+        selected: (N,) bool mask; only its entries inside ``among`` count.
+        among: (N,) bool mask of the points to count in each sector; positions must be finite there.
+        image_size: ``(width, height)`` in pixels, positive integers.
+        sectors: ``(rows, cols)``, positive integers.
+
+    Returns:
+        float32 array of shape (rows, cols), every entry in [0, 1].
+
+    Raises:
+        ValueError: A shape, dtype or length does not match, an ``among`` point has a non-finite position, or
+            ``image_size`` or ``sectors`` is malformed.
+    """
+    width, height = _as_pair("image_size", image_size, "(width, height)")
+    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    if len(np.asarray(points)) != np.asarray(among).size:
+        raise ValueError(
+            f"points and among must have the same length N, got {len(np.asarray(points))} and "
+            f"{np.asarray(among).size}"
+        )
+    points, _, among = _as_point_arrays(points, np.zeros(np.asarray(among).size), among, mask_name="among")
+    selected = np.asarray(selected)
+    if selected.shape != among.shape or selected.dtype != np.bool_:
+        raise ValueError(
+            f"selected must be a bool (N,) array like among ({among.shape}), got shape {selected.shape} and "
+            f"dtype {selected.dtype}"
+        )
+    sector, inside = _sector_index(points[among], (width, height), (rows, cols))
+    totals = np.bincount(sector, minlength=rows * cols)
+    hits = np.bincount(sector, weights=selected[among][inside], minlength=rows * cols)
+    fraction = np.zeros(rows * cols, dtype=np.float32)
+    np.divide(hits, totals, out=fraction, where=totals > 0, casting="unsafe")
+    return fraction.reshape(rows, cols)
+
+
+def _sector_index(
+    points: np.ndarray, image_size: tuple[int, int], sectors: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Flat sector index (row-major) of each point inside the image, and which points are inside."""
+    width, height = image_size
+    rows, cols = sectors
+    u = points[:, 0].astype(np.float64) + 0.5
+    v = points[:, 1].astype(np.float64) + 0.5
+    inside = (u >= 0.0) & (u < width) & (v >= 0.0) & (v < height)
+    # min() guards the float edge case u * cols / width rounding up to cols for u just below width.
+    column = np.minimum((u[inside] * cols / width).astype(np.intp), cols - 1)
+    row = np.minimum((v[inside] * rows / height).astype(np.intp), rows - 1)
+    return row * cols + column, inside
 
 
 def _as_pair(name: str, value: Any, meaning: str) -> tuple[int, int]:
@@ -102,7 +158,9 @@ def _as_bin_edges(value: Any) -> np.ndarray:
     return edges
 
 
-def _as_point_arrays(points: Any, depth: Any, valid: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _as_point_arrays(
+    points: Any, depth: Any, valid: Any, mask_name: str = "valid"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     points = np.asarray(points)
     depth = np.asarray(depth)
     valid = np.asarray(valid)
@@ -111,14 +169,16 @@ def _as_point_arrays(points: Any, depth: Any, valid: Any) -> tuple[np.ndarray, n
     if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
         raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
     if valid.ndim != 1 or valid.dtype != np.bool_:
-        raise ValueError(f"valid must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}")
+        raise ValueError(
+            f"{mask_name} must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}"
+        )
     if not len(points) == len(depth) == len(valid):
         raise ValueError(
-            "points, depth and valid must have the same length N, got "
+            f"points, depth and {mask_name} must have the same length N, got "
             f"{len(points)}, {len(depth)} and {len(valid)}"
         )
     if not np.all(np.isfinite(depth[valid])):
-        raise ValueError("depth must be finite where valid is True")
+        raise ValueError(f"depth must be finite where {mask_name} is True")
     if not np.all(np.isfinite(points[valid])):
-        raise ValueError("points must be finite where valid is True")
+        raise ValueError(f"points must be finite where {mask_name} is True")
     return points, depth.astype(np.float64, copy=False), valid

@@ -12,7 +12,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from estimator import DEFAULT_BIN_EDGES, CameraIntrinsics, DepthPoints, FlowDepthEstimator, sector_histogram
+from estimator import (
+    DEFAULT_BIN_EDGES,
+    CameraIntrinsics,
+    DepthPoints,
+    FlowDepthEstimator,
+    sector_fraction,
+    sector_histogram,
+)
 from flownav_env.camera import relative_motion
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams
@@ -95,12 +102,13 @@ class FlowNavEnv(gym.Env):
     Forward speed is not an action: the drone holds ``forward_speed`` along its heading.
 
     ## Observation Space
-    ``Dict`` of two float32 boxes:
+    ``Dict`` of float32 boxes (two, or three with ``observe_unresolved=True``):
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
     | ``depth_histogram``| (rows, cols, bins)     | [0, 1]               | per image sector (``histogram_sectors``, row 0 at the top, column 0 at the left), the fraction of its valid depth points in each depth bin (``depth_bin_edges``, m; beyond the last edge counts in the last bin); an empty sector is all zeros |
     | ``state``         | (7,)                    | see below            | what a real drone knows of itself         |
+    | ``unresolved``    | (rows, cols)            | [0, 1]               | only with ``observe_unresolved=True``: per sector, the share of the tracked points that got no depth to count (too little parallax: far away, or near the focus of expansion); 0 where nothing was tracked |
 
     ``state`` (clipped to the bounds of the space):
 
@@ -158,6 +166,7 @@ class FlowNavEnv(gym.Env):
     | ``translation_error`` | 0 | relative error of the translation told to the estimator, in [0, 1] |
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
+    | ``observe_unresolved`` | False | add the ``unresolved`` key: where the estimator tracks points it cannot range (a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall) |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
     | ``max_vertical_speed`` | 0.5 | vertical speed at action 1 (m/s), in (0, 5] |
@@ -222,6 +231,7 @@ class FlowNavEnv(gym.Env):
         translation_error: float = 0.0,
         obs_source: str = "flow",
         histogram_sectors: Sequence[int] = (3, 5),
+        observe_unresolved: bool = False,
         depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
         max_lateral_speed: float = 1.0,
         max_vertical_speed: float = 0.5,
@@ -237,6 +247,9 @@ class FlowNavEnv(gym.Env):
     ) -> None:
         self.layout = _require_choice("layout", layout, LAYOUTS)
         self.obs_source = _require_choice("obs_source", obs_source, OBS_SOURCES)
+        if not isinstance(observe_unresolved, (bool, np.bool_)):
+            raise ValueError(f"observe_unresolved must be True or False, got {observe_unresolved!r}")
+        self.observe_unresolved = bool(observe_unresolved)
         if render_mode is not None:
             _require_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.render_mode = render_mode
@@ -328,12 +341,13 @@ class FlowNavEnv(gym.Env):
         self._materials = len(material_names())
 
         rows, cols = self.histogram_sectors
-        self.observation_space = spaces.Dict(
-            {
-                "depth_histogram": spaces.Box(0.0, 1.0, (rows, cols, len(edges) - 1), np.float32),
-                "state": spaces.Box(STATE_LOW, STATE_HIGH, dtype=np.float32),
-            }
-        )
+        boxes = {
+            "depth_histogram": spaces.Box(0.0, 1.0, (rows, cols, len(edges) - 1), np.float32),
+            "state": spaces.Box(STATE_LOW, STATE_HIGH, dtype=np.float32),
+        }
+        if self.observe_unresolved:
+            boxes["unresolved"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+        self.observation_space = spaces.Dict(boxes)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
 
         self._goal_x = self.layout_params.field_length
@@ -358,6 +372,7 @@ class FlowNavEnv(gym.Env):
         self._frame = self._camera.render(self.physics.data, self.physics.camera_id)
         self._depth_points = self.estimator.update(self._gray(self._frame), np.eye(3), np.zeros(3))
         histogram = np.zeros(self.observation_space["depth_histogram"].shape, np.float32)
+        no_points = np.zeros(len(self._depth_points.points), bool)
         info = {
             "collision": False,
             "success": False,
@@ -367,7 +382,7 @@ class FlowNavEnv(gym.Env):
             "min_clearance": self._min_clearance,
             **self._estimator_info(self._depth_points, np.zeros(0)),
         }
-        return {"depth_histogram": histogram, "state": self._state()}, info
+        return self._observation(histogram, self._depth_points, no_points), info
 
     def step(self, action):
         action = np.clip(np.asarray(action, np.float64).reshape(3), -1.0, 1.0)
@@ -431,7 +446,7 @@ class FlowNavEnv(gym.Env):
             **self._estimator_info(points, true_depth),
             **terms,
         }
-        observation = {"depth_histogram": histogram, "state": self._state()}
+        observation = self._observation(histogram, points, valid)
         terminated = collision or success or out_of_bounds
         return observation, float(sum(terms.values())), terminated, False, info
 
@@ -466,6 +481,20 @@ class FlowNavEnv(gym.Env):
             self._view = None
 
     # --- helpers ----------------------------------------------------------------------------------------------
+    def _observation(
+        self, histogram: np.ndarray, points: DepthPoints, counted: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        observation = {"depth_histogram": histogram, "state": self._state()}
+        if self.observe_unresolved:
+            observation["unresolved"] = sector_fraction(
+                points.points,
+                points.tracked & ~counted,
+                points.tracked,
+                self.intrinsics.image_size,
+                sectors=self.histogram_sectors,
+            )
+        return observation
+
     @staticmethod
     def _gray(frame: np.ndarray) -> np.ndarray:
         return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)

@@ -48,6 +48,22 @@ def test_same_seed_gives_identical_observations() -> None:
         np.testing.assert_array_equal(a, b)
 
 
+def test_unresolved_share_complements_the_histogram() -> None:
+    env = make(observe_unresolved=True)
+    obs, _ = env.reset(seed=2)
+    assert not obs["unresolved"].any()  # nothing tracked before the first pair
+    seen_partial = False
+    for _ in range(6):
+        obs, *_, info = env.step(np.zeros(3))
+        ranged = obs["depth_histogram"].sum(-1) > 0
+        # a sector whose tracked points are all unresolved has no ranged point, and vice versa
+        assert not np.any((obs["unresolved"] == 1.0) & ranged)
+        assert np.all(ranged[(obs["unresolved"] > 0) & (obs["unresolved"] < 1)])
+        seen_partial |= bool(np.any((obs["unresolved"] > 0) & (obs["unresolved"] < 1)))
+    assert seen_partial and info["points_tracked"] > info["points_valid"]
+    env.close()
+
+
 def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
     flow_env, truth_env = make(), make(obs_source="oracle_valid")
     flow_obs, _ = flow_env.reset(seed=3)
@@ -76,6 +92,8 @@ def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
         {"rotation_error": 1.0, "translation_error": 1.0},
         {"obs_source": "oracle"},
         {"obs_source": "oracle_valid"},
+        {"observe_unresolved": True},
+        {"observe_unresolved": True, "obs_source": "oracle", "forward_speed": 0.0},
     ],
     ids=lambda kwargs: ",".join(f"{k}={v}" for k, v in kwargs.items()),
 )
@@ -205,6 +223,7 @@ def test_info_carries_truth_and_estimator_statistics() -> None:
         ({"translation_error": -0.1}, r"translation_error must be in \[0.0, 1.0\], got -0.1"),
         ({"attitude_jitter_deg": float("nan")}, r"attitude_jitter_deg must be in \[0.0, 10.0\], got nan"),
         ({"brightness": -0.5}, r"brightness must be in \[0.0, 4.0\], got -0.5"),
+        ({"observe_unresolved": "yes"}, r"observe_unresolved must be True or False, got 'yes'"),
         ({"obs_source": "lidar"}, r"obs_source must be one of 'flow', 'oracle', 'oracle_valid', got 'lidar'"),
         ({"frame_rate": 0}, r"frame_rate must be in \[1.0, 50.0\], got 0"),
         ({"histogram_sectors": (0, 3)}, r"histogram_sectors\[0\] must be an integer in \[1, 32\], got 0"),

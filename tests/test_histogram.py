@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from estimator import DEFAULT_BIN_EDGES, sector_histogram
+from estimator import DEFAULT_BIN_EDGES, sector_fraction, sector_histogram
 
 IMAGE_SIZE = (640, 480)
 
@@ -124,3 +124,27 @@ def test_bad_input_raises_value_error_naming_the_argument(kwargs, message):
     arguments.update(kwargs)
     with pytest.raises(ValueError, match=message):
         sector_histogram(**arguments)
+
+
+def test_sector_fraction_counts_selected_among_the_points_of_each_sector():
+    points = np.array([[1.0, 1.0], [2.0, 2.0], [3.0, 1.0], [15.0, 1.0], [15.0, 9.0], [50.0, 5.0]])
+    among = np.array([True, True, True, True, False, True])  # the last one is outside the 20x10 image
+    selected = np.array([True, False, False, True, True, True])
+    fraction = sector_fraction(points, selected, among, (20, 10), sectors=(2, 2))
+    assert fraction.dtype == np.float32 and fraction.shape == (2, 2)
+    # top left: 1 of 3; top right: 1 of 1; bottom right: its only point is not among; bottom left: empty
+    np.testing.assert_allclose(fraction, [[1 / 3, 1.0], [0.0, 0.0]])
+
+
+@pytest.mark.parametrize(
+    ("selected", "among", "message"),
+    [
+        (np.ones(2, bool), np.ones(3, bool), r"selected must be a bool \(N,\) array like among"),
+        (np.ones(3), np.ones(3, bool), "selected must be a bool"),
+        (np.ones(3, bool), np.ones(3), r"among must be a bool \(N,\) array"),
+        (np.ones(3, bool), np.ones(2, bool), "points and among must have the same length N, got 3 and 2"),
+    ],
+)
+def test_sector_fraction_bad_input_names_the_argument(selected, among, message):
+    with pytest.raises(ValueError, match=message):
+        sector_fraction(np.zeros((3, 2)), selected, among, (20, 10))

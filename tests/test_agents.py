@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 import flownav_env  # noqa: F401
-from agents.config import ConfigError, load_config
+from agents.config import ConfigError, check_env_kwargs, load_config
 from agents.episodes import EpisodeTask, execute, pending_tasks, run_task
 from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
 from agents.policies import BeeAgent, StraightAgent, agent_env_kwargs, load_agent, sector_nearness
@@ -320,6 +320,9 @@ def test_shipped_configs_load() -> None:
     root = Path(__file__).resolve().parents[1] / "configs"
     for name in ("ppo_flow", "ppo_robust", "ppo_oracle"):
         assert load_config(root / f"{name}.yaml", TrainConfig).name == name
+    for experiment in sorted((root / "experiments").glob("*.yaml")):
+        config = load_config(experiment, TrainConfig)
+        assert config.name == experiment.stem and check_env_kwargs(config.env, str(experiment)) == config.env
     assert math.isclose(len(load_config(root / "sweep.yaml", SweepConfig).factors), 5)
 
 

@@ -18,6 +18,7 @@ COMMANDS = {
     "eval-estimator": "agents.eval_estimator",
     "bench": "agents.bench",
     "train": "agents.train",
+    "curves": "agents.curves",
     "evaluate": "agents.evaluate",
     "sweep": "agents.sweep",
     "video": "agents.video",

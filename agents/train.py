@@ -102,23 +102,9 @@ def latest_checkpoint(directory: Path) -> Path | None:
 
 
 def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
-    import matplotlib
+    from agents.curves import plot_learning_curves
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    data = np.load(evaluations)
-    steps, returns = data["timesteps"], data["results"]
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    ax.plot(steps, returns.mean(axis=1), marker="o", label="mean return (held-out seeds)")
-    ax.fill_between(steps, returns.min(axis=1), returns.max(axis=1), alpha=0.2, label="min–max")
-    ax.set_xlabel("environment steps")
-    ax.set_ylabel("episode return")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(output, dpi=120)
-    plt.close(fig)
+    plot_learning_curves({"mean return (held-out seeds)": evaluations}, output, title)
 
 
 def select_policy(model, run_dir: Path, policy_path: Path) -> str:

@@ -338,3 +338,22 @@ def test_cli_reports_bad_input_in_one_line(capsys) -> None:
 
     assert main(["evaluate", "--agent", "bee", "--episodes", "0"]) == 2
     assert "flownav evaluate: error: --episodes must be >= 1, got 0" in capsys.readouterr().err
+
+
+def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path, capsys) -> None:
+    from agents.cli import main
+    from agents.curves import run_label
+
+    for name, scale in (("ppo_a", 1.0), ("ppo_b", 2.0)):
+        np.savez(
+            tmp_path / f"{name}_evaluations.npz",
+            timesteps=np.array([100, 200, 300]),
+            results=scale * np.arange(6.0).reshape(3, 2),
+        )
+    out = tmp_path / "curves.png"
+    files = [str(tmp_path / "ppo_a_evaluations.npz"), str(tmp_path / "ppo_b_evaluations.npz")]
+    assert main(["curves", *files, "--out", str(out)]) == 0
+    assert out.stat().st_size > 10_000
+    assert run_label(Path("runs/ppo_x/evaluations.npz")) == "ppo_x"
+    assert main(["curves", str(tmp_path / "none.npz"), "--out", str(out)]) == 2
+    assert "evaluations file not found" in capsys.readouterr().err

@@ -1,0 +1,65 @@
+"""Compares training runs: the held-out evaluation return of each run against environment steps, in one
+figure (``flownav curves results/policies/ppo_flow_evaluations.npz ... --out results/learning_curves.png``).
+Each input is the ``evaluations.npz`` an SB3 ``EvalCallback`` writes (``runs/<name>/evaluations.npz``, copied
+to ``results/policies/<name>_evaluations.npz``); a run is labelled by its file name."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+HELP = "plot the held-out evaluation return of training runs against steps, one line per run"
+
+
+def run_label(evaluations: Path) -> str:
+    """``results/policies/ppo_flow_evaluations.npz`` → ``ppo_flow``; ``runs/ppo_flow/evaluations.npz`` →
+    ``ppo_flow``."""
+    stem = evaluations.stem
+    return stem.removesuffix("_evaluations") if stem != "evaluations" else evaluations.parent.name
+
+
+def plot_learning_curves(
+    curves: Mapping[str, Path], output: Path, title: str = "held-out evaluation"
+) -> None:
+    """One line per run (mean return over the evaluation episodes) with its min–max band."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    for label, path in curves.items():
+        data = np.load(path)
+        steps, returns = data["timesteps"], data["results"]
+        line = ax.plot(steps, returns.mean(axis=1), marker="o", markersize=3, label=label)[0]
+        ax.fill_between(steps, returns.min(axis=1), returns.max(axis=1), color=line.get_color(), alpha=0.12)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("episode return (mean; band: min–max)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    output.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(output, dpi=120)
+    plt.close(fig)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("evaluations", nargs="+", help="evaluations.npz files, one per run")
+    parser.add_argument("--out", default="results/learning_curves.png")
+
+
+def run(args: argparse.Namespace) -> int:
+    paths = [Path(p) for p in args.evaluations]
+    for path in paths:
+        if not path.is_file():
+            raise FileNotFoundError(f"evaluations file not found: {path}")
+    curves = {run_label(path): path for path in paths}
+    if len(curves) != len(paths):
+        raise ValueError(f"two evaluations files give the same run name: {[str(p) for p in paths]}")
+    plot_learning_curves(curves, Path(args.out))
+    print(f"wrote {args.out}")
+    return 0

@@ -24,7 +24,8 @@ def run_label(evaluations: Path) -> str:
 def plot_learning_curves(
     curves: Mapping[str, Path], output: Path, title: str = "held-out evaluation"
 ) -> None:
-    """One line per run (mean return over the evaluation episodes) with its min–max band."""
+    """One line per run (mean return over the evaluation episodes); a single run also gets its min–max band
+    (with several, the overlapping bands hide the lines)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -35,9 +36,12 @@ def plot_learning_curves(
         data = np.load(path)
         steps, returns = data["timesteps"], data["results"]
         line = ax.plot(steps, returns.mean(axis=1), marker="o", markersize=3, label=label)[0]
-        ax.fill_between(steps, returns.min(axis=1), returns.max(axis=1), color=line.get_color(), alpha=0.12)
+        if len(curves) == 1:
+            ax.fill_between(
+                steps, returns.min(axis=1), returns.max(axis=1), color=line.get_color(), alpha=0.2
+            )
     ax.set_xlabel("environment steps")
-    ax.set_ylabel("episode return (mean; band: min–max)")
+    ax.set_ylabel("episode return (mean)" if len(curves) > 1 else "episode return (mean; band: min–max)")
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
@@ -50,6 +54,7 @@ def plot_learning_curves(
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("evaluations", nargs="+", help="evaluations.npz files, one per run")
     parser.add_argument("--out", default="results/learning_curves.png")
+    parser.add_argument("--title", default="held-out evaluation")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,6 +65,6 @@ def run(args: argparse.Namespace) -> int:
     curves = {run_label(path): path for path in paths}
     if len(curves) != len(paths):
         raise ValueError(f"two evaluations files give the same run name: {[str(p) for p in paths]}")
-    plot_learning_curves(curves, Path(args.out))
+    plot_learning_curves(curves, Path(args.out), args.title)
     print(f"wrote {args.out}")
     return 0

@@ -23,14 +23,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from agents.episodes import EpisodeTask, execute
     from agents.evaluation import format_summary, read_records, summarise
-    from agents.policies import LEARNED_AGENTS
+    from agents.policies import LEARNED_AGENTS, policy_file
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    shipped = [name for name in LEARNED_AGENTS if (Path(args.policy_dir) / f"{name}.zip").exists()]
-    agents = ["straight", "bee", *shipped]
+    files = {name: policy_file(name, directory=args.policy_dir) for name in LEARNED_AGENTS}
+    policies = {name: str(path) for name, path in files.items() if path.exists()}
+    agents = ["straight", "bee", *policies]
     seeds = range(EVAL_SEED_START, EVAL_SEED_START + args.episodes)
-    policies = {name: str(Path(args.policy_dir) / f"{name}.zip") for name in shipped}
     tasks = [EpisodeTask(a, "clean", 0.0, s, args.env_id, (), policies.get(a)) for a in agents for s in seeds]
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"

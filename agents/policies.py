@@ -127,9 +127,11 @@ class BeeAgent:
         return (actions if batched else actions[0]), state
 
 
-def policy_file(name: str, path: str | Path | None = None) -> Path:
-    """Where the learned agent ``name`` is stored: ``path`` if given, else ``results/policies/<name>.zip``."""
-    return Path(path) if path else Path("results/policies") / f"{name}.zip"
+def policy_file(
+    name: str, path: str | Path | None = None, directory: str | Path = "results/policies"
+) -> Path:
+    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``."""
+    return Path(path) if path else Path(directory) / f"{name}.zip"
 
 
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:

@@ -64,7 +64,7 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list:
     within a cell, so that a sweep cut short has compared all agents on the cells it reached; within a cell an
     agent's seeds run in a row, so a worker keeps its env."""
     from agents.episodes import EpisodeTask
-    from agents.policies import LEARNED_AGENTS
+    from agents.policies import LEARNED_AGENTS, policy_file
 
     seeds = range(config.seed_start, config.seed_start + config.episodes)
     cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
@@ -78,7 +78,7 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list:
             seed,
             config.env_id,
             tuple(sorted(kwargs.items())),
-            str(Path(config.policy_dir) / f"{agent}.zip") if agent in LEARNED_AGENTS else None,
+            str(policy_file(agent, directory=config.policy_dir)) if agent in LEARNED_AGENTS else None,
         )
         for factor, level, kwargs in cells
         for agent in agents
@@ -252,11 +252,13 @@ def run(args: argparse.Namespace) -> int:
     if config.episodes < 1 or config.workers < 1:
         raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
-    agents = [
-        a for a in config.agents if not a.startswith("ppo") or (Path(config.policy_dir) / f"{a}.zip").exists()
-    ]
-    for skipped in sorted(set(config.agents) - set(agents)):
-        print(f"skipping {skipped}: no policy at {config.policy_dir}/{skipped}.zip")
+    from agents.policies import LEARNED_AGENTS, policy_file
+
+    files = {a: policy_file(a, directory=config.policy_dir) for a in config.agents if a in LEARNED_AGENTS}
+    missing = {a: path for a, path in files.items() if not path.exists()}
+    agents = [a for a in config.agents if a not in missing]
+    for skipped, path in sorted(missing.items()):
+        print(f"skipping {skipped}: no policy at {path}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     episodes_csv = out / "sweep_episodes.csv"

@@ -99,12 +99,7 @@ def sector_fraction(
     """
     width, height = _as_pair("image_size", image_size, "(width, height)")
     rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
-    if len(np.asarray(points)) != np.asarray(among).size:
-        raise ValueError(
-            f"points and among must have the same length N, got {len(np.asarray(points))} and "
-            f"{np.asarray(among).size}"
-        )
-    points, _, among = _as_point_arrays(points, np.zeros(np.asarray(among).size), among, mask_name="among")
+    points, _, among = _as_point_arrays(points, None, among, mask_name="among")
     selected = np.asarray(selected)
     if selected.shape != among.shape or selected.dtype != np.bool_:
         raise ValueError(
@@ -159,26 +154,29 @@ def _as_bin_edges(value: Any) -> np.ndarray:
 
 
 def _as_point_arrays(
-    points: Any, depth: Any, valid: Any, mask_name: str = "valid"
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    points: Any, depth: Any | None, valid: Any, mask_name: str = "valid"
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Checked arrays; ``depth=None`` checks only the points and the mask."""
     points = np.asarray(points)
-    depth = np.asarray(depth)
     valid = np.asarray(valid)
     if points.ndim != 2 or points.shape[1] != 2 or not np.issubdtype(points.dtype, np.number):
         raise ValueError(f"points must be a numeric (N, 2) array of pixel positions, got {points.shape}")
-    if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
-        raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
+    if depth is not None:
+        depth = np.asarray(depth)
+        if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
+            raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
     if valid.ndim != 1 or valid.dtype != np.bool_:
         raise ValueError(
             f"{mask_name} must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}"
         )
-    if not len(points) == len(depth) == len(valid):
+    arrays = {"points": points, **({"depth": depth} if depth is not None else {}), mask_name: valid}
+    if len({len(array) for array in arrays.values()}) != 1:
         raise ValueError(
-            f"points, depth and {mask_name} must have the same length N, got "
-            f"{len(points)}, {len(depth)} and {len(valid)}"
+            f"{', '.join(list(arrays)[:-1])} and {mask_name} must have the same length N, got "
+            f"{', '.join(str(len(a)) for a in list(arrays.values())[:-1])} and {len(valid)}"
         )
-    if not np.all(np.isfinite(depth[valid])):
+    if depth is not None and not np.all(np.isfinite(depth[valid])):
         raise ValueError(f"depth must be finite where {mask_name} is True")
     if not np.all(np.isfinite(points[valid])):
         raise ValueError(f"points must be finite where {mask_name} is True")
-    return points, depth.astype(np.float64, copy=False), valid
+    return points, (None if depth is None else depth.astype(np.float64, copy=False)), valid

@@ -20,7 +20,7 @@ from typing import Any, Literal
 from agents.config import check_env_kwargs, field_range, load_config
 from agents.evaluation import EVAL_SEED_START
 
-HELP = "sweep agents × sensor errors (collision rates with 95 % CIs; resumable; local or Ray)"
+HELP = "sweep agents × sensor errors (collision rates with 95 %% CIs; resumable; local or Ray)"
 
 
 @dataclass

@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 import flownav_env  # noqa: F401
+from agents.cli import COMMANDS
 from agents.config import ConfigError, check_env_kwargs, load_config
 from agents.episodes import EpisodeTask, execute, pending_tasks, run_task
 from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
@@ -338,6 +339,17 @@ def test_cli_reports_bad_input_in_one_line(capsys) -> None:
 
     assert main(["evaluate", "--agent", "bee", "--episodes", "0"]) == 2
     assert "flownav evaluate: error: --episodes must be >= 1, got 0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", [[], *[[name] for name in COMMANDS]])
+def test_every_help_page_renders(command: list[str], capsys) -> None:
+    # argparse %-formats help strings: a bare "%" in one crashes `flownav --help` itself.
+    from agents.cli import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main([*command, "--help"])
+    assert exit_info.value.code == 0
+    assert "usage: flownav" in capsys.readouterr().out
 
 
 def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path, capsys) -> None:

@@ -13,6 +13,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import flownav_env
 from flownav_env import ENV_IDS, FlowNavEnv
+from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
 
 SMALL = {"camera_width": 64, "camera_height": 48}
 
@@ -236,11 +237,26 @@ def test_info_carries_truth_and_estimator_statistics() -> None:
         ({"render_mode": "human"}, r"render_mode must be one of 'rgb_array', got 'human'"),
         ({"texture_seed": "a"}, r"texture_seed must be an integer, got 'a'"),
         ({"success_bonus": -1.0}, r"success_bonus must be in \[0.0, inf\), got -1.0"),
+        (
+            {"estimator_kwargs": 5},
+            r"estimator_kwargs must be a mapping of FlowDepthEstimator arguments, got 5",
+        ),
+        (
+            {"estimator_kwargs": {"fast_thresh": 3}},
+            r"unknown keys \['fast_thresh'\]; allowed: method, fast_t",
+        ),
+        ({"estimator_kwargs": {"fast_threshold": 0}}, r"fast_threshold must be an integer with 1 <= "),
     ],
 )
 def test_bad_kwargs_raise_value_error_naming_kwarg_value_and_range(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         FlowNavEnv(**{**SMALL, **kwargs})
+
+
+def test_env_estimator_defaults_apply_under_the_callers_estimator_kwargs() -> None:
+    assert FlowNavEnv(**SMALL).estimator.fast_threshold == ENV_ESTIMATOR_DEFAULTS["fast_threshold"]
+    tuned = FlowNavEnv(**SMALL, estimator_kwargs={"fast_threshold": 33, "max_points": 50})
+    assert (tuned.estimator.fast_threshold, tuned.estimator.max_points) == (33, 50)
 
 
 def test_non_finite_action_is_rejected() -> None:

@@ -71,6 +71,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240)),
         help="comma-separated WxH candidates (default 64x48,96x72,128x96,160x120,240x180,320x240)",
     )
+    env.add_argument(
+        "--fast-thresholds",
+        type=_int_list,
+        default=(20, 15, 5),
+        help="comma-separated FAST thresholds compared at the default resolution (default 20,15,5)",
+    )
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
@@ -105,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             out_dir=args.out,
             progress=not args.no_progress,
+            fast_thresholds=args.fast_thresholds,
         )
     for path in paths:
         print(f"wrote {path}")

@@ -43,6 +43,7 @@ class _Subject:
     """One configuration under test: the env, its bare counterpart and the figures collected so far."""
 
     label: str
+    kind: str  # "default", "resolution" or "fast_threshold": which comparison the row belongs to
     env: Any
     width: int
     height: int
@@ -73,7 +74,7 @@ def _timed(function: Callable[..., Any], totals: dict[str, float], key: str) -> 
     return wrapper
 
 
-def _make_subject(label: str, kwargs: dict[str, Any], seed: int) -> _Subject:
+def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _Subject:
     import gymnasium as gym
     import mujoco
 
@@ -85,6 +86,7 @@ def _make_subject(label: str, kwargs: dict[str, Any], seed: int) -> _Subject:
     inner_physics = inner.physics
     subject = _Subject(
         label=label,
+        kind=kind,
         env=env,
         width=inner.intrinsics.width,
         height=inner.intrinsics.height,
@@ -179,8 +181,9 @@ def measure_env(
     repeats: int = 5,
     seed: int = 0,
     progress: bool = True,
+    fast_thresholds: Sequence[int] = (),
 ) -> list[dict[str, Any]]:
-    """Time FlowNav-v0 (default config and each resolution) against the bare MuJoCo loop, alternated.
+    """Time FlowNav-v0 (default config, each resolution, each FAST threshold) against the bare MuJoCo loop.
 
     Args:
         resolutions: ``(width, height)`` candidates.
@@ -189,9 +192,10 @@ def measure_env(
             every repeat, configurations visited forward and backward on alternate repeats.
         seed: seed of the first episode (later episodes use seed + 1, + 2, ...).
         progress: show a tqdm progress bar.
+        fast_thresholds: FAST thresholds to compare at the default resolution (``estimator_kwargs``).
 
     Returns:
-        One dict per configuration (the default first): steps/s, ratio, real-time factors, per-stage ms,
+        One dict per configuration (the default first, then resolutions, then thresholds): steps/s, ratio, real-time factors, per-stage ms,
         median points per frame and median depth error.
 
     Raises:
@@ -204,12 +208,16 @@ def measure_env(
             f"need steps >= 1, repeats >= 1 and at least one resolution, got steps={steps}, "
             f"repeats={repeats}, resolutions={list(resolutions)}"
         )
-    configs = [("FlowNav-v0 (default)", {})]
+    configs = [("FlowNav-v0 (default)", "default", {})]
     configs += [
-        (f"{width}×{height}", {"camera_width": width, "camera_height": height})
+        (f"{width}×{height}", "resolution", {"camera_width": width, "camera_height": height})
         for width, height in resolutions
     ]
-    subjects = [_make_subject(label, kwargs, seed) for label, kwargs in configs]
+    configs += [
+        (f"FAST {threshold}", "fast_threshold", {"estimator_kwargs": {"fast_threshold": threshold}})
+        for threshold in fast_thresholds
+    ]
+    subjects = [_make_subject(label, kind, kwargs, seed) for label, kind, kwargs in configs]
     try:
         for subject in subjects:  # warm-up: GL contexts, first-call allocations; not recorded
             _env_block(subject, WARMUP_STEPS, seed, record=False)
@@ -240,6 +248,8 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
     ratios = [env / bare for env, bare in zip(subject.env_blocks, subject.bare_blocks, strict=True)]
     row: dict[str, Any] = {
         "config": subject.label,
+        "kind": subject.kind,
+        "fast_threshold": subject.env.unwrapped.estimator.fast_threshold,
         "width": subject.width,
         "height": subject.height,
         "steps_per_s_env": 1.0 / env_step,
@@ -273,11 +283,12 @@ def run_env_benchmark(
     seed: int = 0,
     out_dir: str | Path = "results",
     progress: bool = True,
+    fast_thresholds: Sequence[int] = (),
 ) -> list[Path]:
     """Run :func:`measure_env` and write ``env_performance.md``, ``.csv`` and ``.png`` to ``out_dir``.
 
     Args:
-        resolutions, steps, repeats, seed, progress: see :func:`measure_env`.
+        resolutions, steps, repeats, seed, progress, fast_thresholds: see :func:`measure_env`.
         out_dir: output folder (created).
 
     Returns:
@@ -286,11 +297,12 @@ def run_env_benchmark(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    rows = measure_env(resolutions, steps, repeats, seed, progress)
+    rows = measure_env(resolutions, steps, repeats, seed, progress, fast_thresholds)
     elapsed = time.perf_counter() - started
     command = (
         "flownav bench env --resolutions "
         + ",".join(f"{w}x{h}" for w, h in resolutions)
+        + (" --fast-thresholds " + ",".join(map(str, fast_thresholds)) if fast_thresholds else "")
         + f" --steps {steps} --repeats {repeats} --seed {seed} --out {out_dir}"
     )
     csv_path = out_dir / "env_performance.csv"
@@ -338,7 +350,7 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
     error_axis = points_axis.twinx()
     error_axis.plot(x, [row["depth_error_median_pct"] for row in rows], "r^:", label="median depth error")
     error_axis.set_ylabel("median relative depth error (%)", color="r")
-    points_axis.set_title("Estimator output per resolution")
+    points_axis.set_title("Estimator output per configuration")
     handles = points_axis.get_legend_handles_labels()
     extra = error_axis.get_legend_handles_labels()
     points_axis.legend(handles[0] + extra[0], handles[1] + extra[1], fontsize=8, loc="center right")
@@ -364,6 +376,7 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
     table = markdown_table(
         [
             "config",
+            "FAST",
             "steps/s env",
             "steps/s bare",
             "env/bare",
@@ -376,6 +389,7 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
         [
             [
                 row["config"],
+                row["fast_threshold"],
                 f"{row['steps_per_s_env']:.1f}",
                 f"{row['steps_per_s_bare']:.1f}",
                 f"{row['ratio_env_bare']:.2f} ({row['ratio_min']:.2f}–{row['ratio_max']:.2f})",
@@ -405,7 +419,10 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
     default = rows[0]
     ratios = [row["ratio_env_bare"] for row in rows]
     choice = _choice_text(rows)
-    smallest = min(rows[1:] or rows, key=lambda row: row["width"] * row["height"])
+    smallest = min(
+        [row for row in rows if row["kind"] == "resolution"] or rows,
+        key=lambda row: row["width"] * row["height"],
+    )
     return f"""# Env performance: steps/s per camera resolution
 
 Generated {today()} by
@@ -451,7 +468,7 @@ and the ratio is taken block by block before the median over {repeats} blocks.
 ## Default resolution
 
 {choice}
-
+{_threshold_text(rows)}
 ## Targets
 - env/bare ≤ {TARGET_RATIO}: {min(ratios):.2f}–{max(ratios):.2f} over the configurations →
   **{"met" if max(ratios) <= TARGET_RATIO else "missed"}**{" (met for " + ", ".join(r["config"] for r in rows if r["ratio_env_bare"] <= TARGET_RATIO) + ")" if min(ratios) <= TARGET_RATIO < max(ratios) else ""}.
@@ -470,7 +487,7 @@ Files: `env_performance.csv` (all columns, including the per-block min/max ratio
 def _choice_text(rows: list[dict[str, Any]]) -> str:
     """The default-resolution paragraph: each candidate against the current default, and the criteria."""
     default = rows[0]
-    candidates = rows[1:]
+    candidates = [row for row in rows if row["kind"] == "resolution"]
     same = [
         row for row in candidates if (row["width"], row["height"]) == (default["width"], default["height"])
     ]
@@ -515,3 +532,34 @@ at least {MIN_VALID_PER_SECTOR:.0f} valid points per histogram sector ({default[
 {verdict}. Because rendering costs a large fixed time per frame here (software OpenGL), larger frames are
 cheap in relative terms on this machine; on a GPU renderer the estimator's share (which grows with the point
 count) would weigh more."""
+
+
+def _threshold_text(rows: list[dict[str, Any]]) -> str:
+    """The FAST-threshold paragraph: each threshold against the default config, at the default resolution."""
+    default = rows[0]
+    thresholds = [row for row in rows if row["kind"] == "fast_threshold"]
+    if not thresholds:
+        return ""
+    table = markdown_table(
+        ["FAST threshold", "steps/s vs default", "valid points", "valid points vs default", "depth err. %"],
+        [
+            [
+                row["fast_threshold"],
+                f"{default['ratio_env_bare'] / row['ratio_env_bare']:.2f}×",
+                f"{row['points_valid_median']:.0f}",
+                f"{row['points_valid_median'] / max(default['points_valid_median'], 1e-9):.2f}×",
+                f"{row['depth_error_median_pct']:.1f}",
+            ]
+            for row in sorted([default, *thresholds], key=lambda row: row["fast_threshold"])
+        ],
+    )
+    return f"""
+## FAST threshold
+
+At the default resolution, against the default config (FAST threshold {default["fast_threshold"]}, the env's
+`ENV_ESTIMATOR_DEFAULTS`). All these rows render the same frames, so their bare loops are the same work:
+"steps/s vs default" is the default's env/bare ratio over the row's, each ratio taken block by block against
+a bare loop run next to it, which cancels most of the load from other jobs on the machine.
+
+{table}
+"""

@@ -196,14 +196,18 @@ def write_report(
     factors: list[str],
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
+    from agents.bench import code_version
     from agents.evaluation import format_summary
     from agents.machine import machine_summary
+    from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
 
     parts = [
         "# Sweep: collision rate per agent and sensor error",
         "",
         f"Command: `{command}`  ",
         f"Config: `{config_path}`  ",
+        f"Env estimator defaults (under the config's `estimator_kwargs`): `{ENV_ESTIMATOR_DEFAULTS}`  ",
+        f"Code when this report was written: {code_version()}  ",
         f"Hardware: {machine_summary()}  ",
         (
             f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown)."

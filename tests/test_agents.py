@@ -186,6 +186,7 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert len(read_records(tmp_path / "out" / "sweep_episodes.csv")) == len(rows)
     assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
     assert "Rebuilt with `--report-only`" in (tmp_path / "out" / "sweep.md").read_text()
+    assert "fast_threshold" in (tmp_path / "out" / "sweep.md").read_text()
 
 
 def test_sweep_flies_cell_by_cell_so_a_cut_short_sweep_compares_every_agent(tmp_path: Path) -> None:

@@ -55,7 +55,7 @@ def test_estimator_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
 
 def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
     paths = bench_env.run_env_benchmark(
-        resolutions=((64, 48),), steps=3, repeats=1, out_dir=tmp_path, progress=False
+        resolutions=((64, 48),), steps=3, repeats=1, out_dir=tmp_path, progress=False, fast_thresholds=(30,)
     )
     assert all(path.is_file() and path.stat().st_size > 0 for path in paths)
     header = read_header(tmp_path / "env_performance.csv")
@@ -74,9 +74,12 @@ def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
     ):
         assert column in header
     with (tmp_path / "env_performance.csv").open() as handle:
-        configs = [row["config"] for row in csv.DictReader(handle)]
-    assert configs == ["FlowNav-v0 (default)", "64×48"]
-    assert "gym-pybullet-drones" in (tmp_path / "env_performance.md").read_text()
+        rows = list(csv.DictReader(handle))
+    assert [row["config"] for row in rows] == ["FlowNav-v0 (default)", "64×48", "FAST 30"]
+    assert [row["fast_threshold"] for row in rows] == ["10", "10", "30"]
+    report = (tmp_path / "env_performance.md").read_text()
+    assert "gym-pybullet-drones" in report and "## FAST threshold" in report
+    assert "--fast-thresholds 30" in report
 
 
 @pytest.mark.parametrize("loop", [bench_estimator.depth_loop_floats, bench_estimator.depth_loop_numpy])

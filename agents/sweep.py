@@ -32,6 +32,7 @@ class SweepConfig:
     env_id: str = "FlowNav-v0"
     env: dict[str, Any] = field(default_factory=dict)
     episodes: int = field_range(1, 100_000, default=100)
+    seed_block: int = field_range(1, 100_000, default=25)
     seed_start: int = field_range(EVAL_SEED_START, None, default=EVAL_SEED_START)
     workers: int = field_range(1, 256, default=2)
     backend: Literal["local", "ray"] = "local"
@@ -60,13 +61,18 @@ class SweepConfig:
 
 
 def build_tasks(config: SweepConfig, agents: list[str]) -> list:
-    """Every (agent, factor, level, seed) episode, cell by cell with the clean setting first and every agent
-    within a cell, so that a sweep cut short has compared all agents on the cells it reached; within a cell an
-    agent's seeds run in a row, so a worker keeps its env."""
+    """Every (agent, factor, level, seed) episode, in passes of ``config.seed_block`` seeds.
+
+    Each pass flies its seeds in every cell (the clean setting first, then the factors in config order) and,
+    within a cell, for every agent. A sweep cut short therefore has every cell at nearly the same count and
+    has compared all agents on the same layouts; a ``seed_block`` of at least ``episodes`` flies the cells one
+    after the other instead. Within a cell an agent's seeds run in a row, so a worker keeps its env.
+    """
     from agents.episodes import EpisodeTask
     from agents.policies import LEARNED_AGENTS, policy_file
 
     seeds = range(config.seed_start, config.seed_start + config.episodes)
+    passes = [seeds[start : start + config.seed_block] for start in range(0, len(seeds), config.seed_block)]
     cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
     for factor, levels in config.factors.items():
         cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
@@ -80,9 +86,10 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list:
             tuple(sorted(kwargs.items())),
             str(policy_file(agent, directory=config.policy_dir)) if agent in LEARNED_AGENTS else None,
         )
+        for seed_pass in passes
         for factor, level, kwargs in cells
         for agent in agents
-        for seed in seeds
+        for seed in seed_pass
     ]
 
 

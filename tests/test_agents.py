@@ -189,8 +189,9 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert "fast_threshold" in (tmp_path / "out" / "sweep.md").read_text()
 
 
-def test_sweep_flies_cell_by_cell_so_a_cut_short_sweep_compares_every_agent(tmp_path: Path) -> None:
+def test_sweep_flies_in_seed_passes_so_a_cut_short_sweep_covers_every_cell_and_agent(tmp_path: Path) -> None:
     config = load_config(write_sweep_config(tmp_path), SweepConfig)
+    config.episodes, config.seed_block = 3, 2
     order = [
         (t.factor, t.agent, t.seed - config.seed_start) for t in build_tasks(config, ["straight", "bee"])
     ]
@@ -198,7 +199,13 @@ def test_sweep_flies_cell_by_cell_so_a_cut_short_sweep_compares_every_agent(tmp_
         ("clean", "straight", 0), ("clean", "straight", 1), ("clean", "bee", 0), ("clean", "bee", 1),
         ("rotation_error", "straight", 0), ("rotation_error", "straight", 1),
         ("rotation_error", "bee", 0), ("rotation_error", "bee", 1),
+        ("clean", "straight", 2), ("clean", "bee", 2),
+        ("rotation_error", "straight", 2), ("rotation_error", "bee", 2),
     ]  # fmt: skip
+    config.seed_block = 3  # one pass: the cells one after the other
+    assert [(t.factor, t.agent) for t in build_tasks(config, ["bee"])] == [("clean", "bee")] * 3 + [
+        ("rotation_error", "bee")
+    ] * 3
 
 
 def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:

@@ -43,7 +43,7 @@ STATE_HIGH = np.array([5.0, 5.0, 5.0, math.pi, math.pi / 2, 10.0, math.pi], np.f
 VIEW_PANEL_SIZE = (320, 240)
 # The estimator's own FAST threshold (20) was chosen on 640×480 frames. The env's 160×120 frames hold a
 # sixteenth of the pixels, and at 20 only about a third of the tracked points get a depth: too sparse a
-# histogram to steer by. See "Default FAST threshold" in FlowNavEnv's docstring for the measurement.
+# histogram to steer by. See "Default resolution and FAST threshold" in FlowNavEnv's docstring for the measurement.
 ENV_ESTIMATOR_DEFAULTS: dict[str, Any] = {"fast_threshold": 10}
 
 

@@ -18,13 +18,12 @@ import datetime
 import gc
 import os
 import platform
-import subprocess
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from agents.machine import cpu_model
+from agents.machine import code_version, cpu_model
 
 HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
 
@@ -143,31 +142,6 @@ def hardware_summary() -> str:
     lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`")
     lines.append(f"- code: {code_version()}")
     return "\n".join(lines)
-
-
-def code_version() -> str:
-    """The git commit the run used, flagged when the measured packages had uncommitted changes.
-
-    Other work lands on the same branch while benchmarks run, so a result is only reproducible with its commit.
-    """
-    root = Path(__file__).resolve().parents[1]
-
-    def git(*args: str) -> str:
-        try:
-            result = subprocess.run(
-                ["git", *args], cwd=root, capture_output=True, text=True, check=False, timeout=10
-            )
-        except (OSError, subprocess.SubprocessError):
-            return ""
-        return result.stdout.strip() if result.returncode == 0 else ""
-
-    commit = git("rev-parse", "--short", "HEAD")
-    if not commit:
-        return "unknown (not a git checkout)"
-    dirty = git("status", "--porcelain", "--", "estimator", "flownav_env", "agents")
-    return f"commit `{commit}`" + (
-        " with uncommitted changes in estimator/, flownav_env/ or agents/" if dirty else ""
-    )
 
 
 def today() -> str:

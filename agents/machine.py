@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import platform
+import subprocess
 from pathlib import Path
 
 
@@ -30,4 +31,29 @@ def machine_summary() -> str:
     return (
         f"{cpu_model()}, {available_cores()} cores, Python {platform.python_version()}, "
         f"MuJoCo {mujoco.__version__}, OpenCV {cv2.__version__}, MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+    )
+
+
+def code_version() -> str:
+    """The git commit the run used, flagged when the measured packages had uncommitted changes.
+
+    Other work lands on the same branch while benchmarks run, so a result is only reproducible with its commit.
+    """
+    root = Path(__file__).resolve().parents[1]
+
+    def git(*args: str) -> str:
+        try:
+            result = subprocess.run(
+                ["git", *args], cwd=root, capture_output=True, text=True, check=False, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return ""
+        return result.stdout.strip() if result.returncode == 0 else ""
+
+    commit = git("rev-parse", "--short", "HEAD")
+    if not commit:
+        return "unknown (not a git checkout)"
+    dirty = git("status", "--porcelain", "--", "estimator", "flownav_env", "agents")
+    return f"commit `{commit}`" + (
+        " with uncommitted changes in estimator/, flownav_env/ or agents/" if dirty else ""
     )

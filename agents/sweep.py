@@ -203,9 +203,8 @@ def write_report(
     factors: list[str],
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
-    from agents.bench import code_version
     from agents.evaluation import format_summary
-    from agents.machine import machine_summary
+    from agents.machine import code_version, machine_summary
     from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
 
     parts = [

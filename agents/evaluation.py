@@ -134,6 +134,24 @@ def read_records(path: Path) -> list[dict[str, Any]]:
     return rows
 
 
+def drop_agents(path: Path, agents: Iterable[str]) -> int:
+    """Delete every row of ``agents`` from an episodes CSV, so a resumed run flies them again (after a policy
+    is retrained, its old episodes no longer describe it). Other rows are kept byte for byte; the file is
+    replaced atomically, so an interruption leaves either the old or the new file. Returns the rows deleted."""
+    if not path.exists():
+        return 0
+    dropped = set(agents)
+    with path.open(newline="") as handle:
+        lines = handle.read().splitlines(keepends=True)
+    if not lines:
+        return 0
+    kept = [lines[0]] + [line for line in lines[1:] if line.split(",", 1)[0] not in dropped]
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text("".join(kept))
+    os.replace(temporary, path)
+    return len(lines) - len(kept)
+
+
 def completed_keys(rows: Iterable[Mapping[str, Any]]) -> set[tuple[str, str, float, int]]:
     """(agent, factor, level, seed) of finished episodes: what a resumed run skips."""
     return {(r["agent"], r["factor"], float(r["level"]), int(r["seed"])) for r in rows}

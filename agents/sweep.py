@@ -5,6 +5,9 @@ obstacle layouts. Episodes are appended to ``<out>/sweep_episodes.csv`` as they 
 the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals) and the
 figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
 
+After a policy is retrained, ``--refly AGENT[,AGENT]`` deletes that agent's episodes so they are flown again;
+``--compare-with OLD/sweep_episodes.csv`` adds a table to ``sweep.md`` setting each cell beside an earlier sweep.
+
 Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR]``), the same tasks either way.
 """
 
@@ -194,6 +197,39 @@ def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
     return "\n".join(lines)
 
 
+def comparison_markdown(
+    table: list[dict[str, Any]], baseline: list[dict[str, Any]], baseline_name: str
+) -> str:
+    """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep."""
+    agents = sorted({r["agent"] for r in table})
+    cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
+    before = {(r["agent"], r["factor"], r["level"]): r for r in baseline}
+    keys = sorted({(r["factor"], r["level"]) for r in table}, key=lambda k: (k[0] != "clean", k))
+    header = (
+        "| factor | level | episodes | "
+        + " | ".join(agents)
+        + f" | {baseline_name}: "
+        + " / ".join(agents)
+        + " |"
+    )
+    lines = [header, "|---" * (len(agents) + 4) + "|"]
+    for factor, level in keys:
+        counts = sorted(
+            {cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells}
+        )
+        episodes = str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
+        now = [cells.get((a, factor, level)) for a in agents]
+        then = [before.get((a, factor, level)) for a in agents]
+        lines.append(
+            f"| {factor} | {'–' if factor == 'clean' else f'{level:g}'} | {episodes} | "
+            + " | ".join("–" if r is None else f"{r['collision_rate']:.2f}" for r in now)
+            + " | "
+            + " / ".join("–" if r is None else f"{r['collision_rate']:.2f}" for r in then)
+            + " |"
+        )
+    return "\n".join(lines)
+
+
 def write_report(
     path: Path,
     table: list[dict[str, Any]],
@@ -201,6 +237,7 @@ def write_report(
     command: str,
     minutes: float | None,
     factors: list[str],
+    baseline: tuple[Path, list[dict[str, Any]]] | None = None,
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
     from agents.evaluation import format_summary
@@ -230,6 +267,16 @@ def write_report(
     ]
     for factor in factors:
         parts += [f"### {factor}", "", pivot_markdown(table, factor), ""]
+    if baseline is not None:
+        baseline_path, baseline_table = baseline
+        parts += [
+            f"## Against `{baseline_path}`",
+            "",
+            "Collision rate per cell; the last column is the same cell in that sweep (– where it has none).",
+            "",
+            comparison_markdown(table, baseline_table, "baseline"),
+            "",
+        ]
     parts += ["## All cells", "", format_summary(table), ""]
     path.write_text("\n".join(parts))
 
@@ -248,11 +295,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="fly nothing: rebuild sweep.csv, sweep.md and the figure from the episodes flown so far",
     )
+    parser.add_argument(
+        "--refly",
+        metavar="AGENTS",
+        help="comma-separated agents whose episodes are deleted from sweep_episodes.csv before flying, "
+        "so they are flown again (after retraining a policy)",
+    )
+    parser.add_argument(
+        "--compare-with",
+        metavar="EPISODES_CSV",
+        help="an earlier sweep's sweep_episodes.csv: sweep.md gets a table of each cell beside it",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from agents.episodes import execute
-    from agents.evaluation import format_summary, read_records
+    from agents.evaluation import drop_agents, format_summary, read_records, summarise
 
     config_path = Path(args.config)
     config = load_config(config_path, SweepConfig)
@@ -269,9 +327,24 @@ def run(args: argparse.Namespace) -> int:
     agents = [a for a in config.agents if a not in missing]
     for skipped, path in sorted(missing.items()):
         print(f"skipping {skipped}: no policy at {path}")
+    refly = [a.strip() for a in (args.refly or "").split(",") if a.strip()]
+    for agent in refly:
+        if agent not in config.agents:
+            raise ValueError(
+                f"--refly: {agent!r} is not an agent of {config_path} ({', '.join(config.agents)})"
+            )
+    baseline_path = Path(args.compare_with) if args.compare_with else None
+    if baseline_path is not None and not baseline_path.is_file():
+        raise FileNotFoundError(f"--compare-with: no episodes CSV at {baseline_path}")
+    if refly and args.report_only:
+        raise ValueError(
+            "--refly deletes episodes to fly them again; it cannot be combined with --report-only"
+        )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     episodes_csv = out / "sweep_episodes.csv"
+    if refly:
+        print(f"--refly: deleted {drop_agents(episodes_csv, refly)} episodes of {', '.join(refly)}")
     started = time.perf_counter()
     tasks = build_tasks(config, agents)
     flown = 0
@@ -304,6 +377,7 @@ def run(args: argparse.Namespace) -> int:
         command,
         None if args.report_only else minutes,
         list(config.factors),
+        None if baseline_path is None else (baseline_path, summarise(read_records(baseline_path))),
     )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")

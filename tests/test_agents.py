@@ -15,7 +15,14 @@ import flownav_env  # noqa: F401
 from agents.cli import COMMANDS
 from agents.config import ConfigError, check_env_kwargs, load_config
 from agents.episodes import EpisodeTask, execute, pending_tasks, run_task
-from agents.evaluation import EVAL_SEED_START, read_records, run_episode, summarise, wilson_interval
+from agents.evaluation import (
+    EVAL_SEED_START,
+    drop_agents,
+    read_records,
+    run_episode,
+    summarise,
+    wilson_interval,
+)
 from agents.policies import BeeAgent, StraightAgent, agent_env_kwargs, load_agent, sector_nearness
 from agents.sweep import SweepConfig, build_tasks
 from agents.train import TrainConfig, latest_checkpoint, train
@@ -187,6 +194,52 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
     assert "Rebuilt with `--report-only`" in (tmp_path / "out" / "sweep.md").read_text()
     assert "fast_threshold" in (tmp_path / "out" / "sweep.md").read_text()
+
+    # --refly flies one agent again (a retrained policy); --compare-with sets each cell beside an earlier sweep
+    earlier = tmp_path / "earlier.csv"
+    earlier.write_bytes((tmp_path / "out" / "sweep_episodes.csv").read_bytes())
+    assert main([*args[:-2], "--refly", "bee", "--compare-with", str(earlier)]) == 0
+    refilled = read_records(tmp_path / "out" / "sweep_episodes.csv")
+    assert sorted(map(str, refilled)) == sorted(map(str, rows))  # the bee is deterministic on the same seeds
+    assert [r["agent"] for r in refilled][-4:] == ["bee"] * 4
+    report = (tmp_path / "out" / "sweep.md").read_text()
+    assert f"## Against `{earlier}`" in report
+    assert "| clean | – | 2 | 0.00 | 1.00 | 0.00 / 1.00 |" in report
+
+
+def test_drop_agents_deletes_only_their_rows_and_keeps_the_rest_byte_for_byte(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    assert drop_agents(path, ["bee"]) == 0  # no file yet: nothing to delete
+    tasks = [
+        EpisodeTask(agent, "clean", 0.0, EVAL_SEED_START, "FlowNavSingle-v0", tuple(SMALL.items()), None)
+        for agent in ("straight", "bee")
+    ]
+    execute(tasks, path)
+    header, straight_line, _ = path.read_text().splitlines(keepends=True)
+    assert drop_agents(path, ["bee", "ppo_flow"]) == 1
+    assert path.read_text() == header + straight_line
+    assert not path.with_name(path.name + ".tmp").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--refly", "ppo_flow"], r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)"),
+        (["--refly", "bee", "--report-only"], "cannot be combined with --report-only"),
+        (["--compare-with", "nowhere.csv"], "--compare-with: no episodes CSV at nowhere.csv"),
+    ],
+)
+def test_sweep_rejects_bad_refly_and_compare_options(
+    tmp_path: Path, capsys, extra: list, message: str
+) -> None:
+    import re
+
+    from agents.cli import main
+
+    args = ["sweep", "--config", str(write_sweep_config(tmp_path)), "--out", str(tmp_path / "out"), *extra]
+    assert main(args) == 2
+    assert re.search(message, capsys.readouterr().err)
+    assert not (tmp_path / "out" / "sweep_episodes.csv").exists()
 
 
 def test_sweep_flies_in_seed_passes_so_a_cut_short_sweep_covers_every_cell_and_agent(tmp_path: Path) -> None:

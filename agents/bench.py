@@ -23,7 +23,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from agents.machine import code_version, cpu_model
+from agents.machine import code_version, cpu_model, gl_renderer, is_software_renderer
 
 HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
 
@@ -139,7 +139,9 @@ def hardware_summary() -> str:
         lines.append(f"- load average (1, 5, 15 min) at the end of the run: {load}")
     except OSError:
         pass
-    lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`")
+    renderer = gl_renderer()
+    kind = "software rasterisation on the CPU" if is_software_renderer(renderer) else "hardware rendering"
+    lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
     lines.append(f"- code: {code_version()}")
     return "\n".join(lines)
 

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from agents.bench import hardware_summary, markdown_table, quiet_gc, today, write_csv
+from agents.machine import available_cores, gl_renderer, is_software_renderer
 
 # The GL backend is read when mujoco is first imported; set it before anything below imports mujoco.
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -360,19 +361,6 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
 
 
 def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, elapsed: float) -> str:
-    def gl_renderer() -> str:
-        try:
-            from mujoco.egl import GLContext
-            from OpenGL import GL
-
-            context = GLContext(16, 16)
-            context.make_current()
-            name = GL.glGetString(GL.GL_RENDERER).decode()
-            context.free()
-            return name
-        except Exception as error:  # the report must not fail on an unusual GL stack
-            return f"unknown ({type(error).__name__})"
-
     table = markdown_table(
         [
             "config",
@@ -418,7 +406,8 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
     )
     default = rows[0]
     ratios = [row["ratio_env_bare"] for row in rows]
-    choice = _choice_text(rows)
+    software = is_software_renderer(gl_renderer())
+    choice = _choice_text(rows, software)
     smallest = min(
         [row for row in rows if row["kind"] == "resolution"] or rows,
         key=lambda row: row["width"] * row["height"],
@@ -431,12 +420,11 @@ Generated {today()} by
 {command}
 ```
 
-in {elapsed:.0f} s. Machine: **shared** (2 cores, with other engineers' test runs and a PPO training run going
-on), so absolute rates are noisy; the env and the bare loop were alternated block by block in the same process,
-and the ratio is taken block by block before the median over {repeats} blocks.
+in {elapsed:.0f} s on the machine below. Absolute rates depend on it and on whatever else ran at the time, so the
+env and the bare loop were alternated block by block in the same process, and the ratio is taken block by block
+before the median over {repeats} blocks.
 
 {hardware_summary()}
-- OpenGL renderer behind EGL: {gl_renderer()} (software rasterisation on the CPU: no GPU on this machine)
 
 ## Set-up
 - Env: `gymnasium.make("FlowNav-v0", camera_width=W, camera_height=H)` (the default row: no kwargs), field
@@ -477,14 +465,14 @@ and the ratio is taken block by block before the median over {repeats} blocks.
   itself reaches {default["real_time_factor_bare"]:.1f}× here, so the ceiling is set by rendering, not by FlowNav.
 - gym-pybullet-drones reports {PYBULLET_DRONES_RTF}× real time for one drone with 64×48 vision (on its authors'
   hardware, not measured here). FlowNav at {smallest["config"]}: {smallest["real_time_factor_env"]:.1f}×
-  (bare loop {smallest["real_time_factor_bare"]:.1f}×), on a shared 2-core VM with software OpenGL; a like-for-like
+  (bare loop {smallest["real_time_factor_bare"]:.1f}×) on {available_cores()} cores with {"software" if software else "hardware"} OpenGL; a like-for-like
   comparison needs both on the same machine.
 
 Files: `env_performance.csv` (all columns, including the per-block min/max ratio), `env_performance.png`.
 """
 
 
-def _choice_text(rows: list[dict[str, Any]]) -> str:
+def _choice_text(rows: list[dict[str, Any]], software_renderer: bool) -> str:
     """The default-resolution paragraph: each candidate against the current default, and the criteria."""
     default = rows[0]
     candidates = [row for row in rows if row["kind"] == "resolution"]
@@ -523,15 +511,20 @@ def _choice_text(rows: list[dict[str, Any]]) -> str:
         if smallest is not None
         else "No candidate meets both"
     )
+    cost_note = (
+        "Rendering costs a large fixed time per frame here (software OpenGL), so larger frames are cheap in "
+        "relative terms; on a GPU renderer the estimator's share, which grows with the point count, weighs more."
+        if software_renderer
+        else "Rendering is on a GPU here, so the estimator's share of a step, which grows with the point count, "
+        "sets the cost of larger frames."
+    )
     return f"""Criteria: median depth error ≤ {MAX_DEPTH_ERROR_PCT:.0f} % (the env's accuracy requirement) and a median of
 at least {MIN_VALID_PER_SECTOR:.0f} valid points per histogram sector ({default["histogram_sectors"]} sectors →
 {min_valid:.0f} points), at the highest steps/s. Current default: {default["width"]}×{default["height"]}.
 
 {table}
 
-{verdict}. Because rendering costs a large fixed time per frame here (software OpenGL), larger frames are
-cheap in relative terms on this machine; on a GPU renderer the estimator's share (which grows with the point
-count) would weigh more."""
+{verdict}. {cost_note}"""
 
 
 def _threshold_text(rows: list[dict[str, Any]]) -> str:

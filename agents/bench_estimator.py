@@ -780,8 +780,8 @@ Generated {today()} by
 {command}
 ```
 
-in {elapsed:.0f} s. Machine: **shared** with other engineers' test runs and a PPO training run, so absolute
-times are noisy; every estimator figure was measured alternated with the bare OpenCV baseline in the same
+in {elapsed:.0f} s on the machine below. Absolute times depend on it and on whatever else ran at the time, so
+every estimator figure was measured alternated with the bare OpenCV baseline in the same
 process, frame by frame, and ratios are taken frame by frame before the medians over frames and {repeats}
 passes.
 

@@ -23,14 +23,44 @@ def available_cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
+SOFTWARE_RASTERISERS = ("llvmpipe", "softpipe", "swrast", "lavapipe", "software")
+
+
+def gl_renderer() -> str:
+    """The OpenGL renderer MuJoCo draws with, as the driver names it (Mesa's ``llvmpipe``, a GPU, ...).
+
+    Recorded with every result because rendered pixels, and so the estimator's corners, differ slightly
+    between renderers; ``unknown (...)`` where no context can be made, so a report never fails on it.
+    """
+    try:
+        import mujoco
+        from OpenGL import GL
+
+        context = mujoco.GLContext(16, 16)
+        context.make_current()
+        try:
+            name = GL.glGetString(GL.GL_RENDERER)
+        finally:
+            context.free()
+    except Exception as error:  # any GL stack failure: the report names it instead of failing
+        return f"unknown ({type(error).__name__})"
+    return name.decode() if isinstance(name, bytes) else str(name)
+
+
+def is_software_renderer(renderer: str) -> bool:
+    """Whether a renderer name from :func:`gl_renderer` is a CPU rasteriser (rendering then dominates a step)."""
+    return any(word in renderer.lower() for word in SOFTWARE_RASTERISERS)
+
+
 def machine_summary() -> str:
-    """One line: CPU, cores, Python, MuJoCo and OpenCV versions and the GL backend."""
+    """One line: CPU, cores, Python, MuJoCo and OpenCV versions, the GL backend and its renderer."""
     import cv2
     import mujoco
 
     return (
         f"{cpu_model()}, {available_cores()} cores, Python {platform.python_version()}, "
-        f"MuJoCo {mujoco.__version__}, OpenCV {cv2.__version__}, MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+        f"MuJoCo {mujoco.__version__}, OpenCV {cv2.__version__}, MUJOCO_GL={os.environ.get('MUJOCO_GL')} "
+        f"({gl_renderer()})"
     )
 
 

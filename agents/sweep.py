@@ -127,7 +127,7 @@ def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]
 
 def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
     """A panel per factor: collision rate against level, a line per agent, its Wilson 95 % band shaded.
-    The clean setting is drawn at each factor's neutral level."""
+    The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per agent."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -148,6 +148,23 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
     }
     agents = sorted({r["agent"] for r in table})
+    if not factors:  # a clean-only sweep: one bar per agent
+        clean = [r for r in table if r["factor"] == "clean"]
+        fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
+        rates = [r["collision_rate"] for r in clean]
+        errors = [
+            [r["collision_rate"] - r["ci_low"] for r in clean],
+            [r["ci_high"] - r["collision_rate"] for r in clean],
+        ]
+        ax.bar([r["agent"] for r in clean], rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7)
+        ax.set_ylim(0, 1)
+        ax.set_ylabel("collision rate (95 % CI)")
+        ax.set_title("clean sensors", fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        fig.tight_layout()
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return
     fig, axes = plt.subplots(1, len(factors), figsize=(3.6 * len(factors), 3.4), sharey=True, squeeze=False)
     for ax, factor in zip(axes[0], factors, strict=True):
         for agent in agents:

@@ -207,6 +207,15 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert "| clean | – | 2 | 0.00 | 1.00 | 0.00 / 1.00 |" in report
 
 
+def test_a_sweep_of_no_factors_flies_the_clean_cell_and_plots_it(tmp_path: Path) -> None:
+    from agents.cli import main
+
+    config_path = write_sweep_config(tmp_path, agents=["straight"], episodes=1, factors={})
+    assert main(["sweep", "--config", str(config_path), "--out", str(tmp_path / "out")]) == 0
+    assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 2
+    assert (tmp_path / "out" / "collision_vs_error.png").stat().st_size > 5_000
+
+
 def test_drop_agents_deletes_only_their_rows_and_keeps_the_rest_byte_for_byte(tmp_path: Path) -> None:
     path = tmp_path / "episodes.csv"
     assert drop_agents(path, ["bee"]) == 0  # no file yet: nothing to delete

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from agents import bench, bench_env, bench_estimator
+from agents import bench, bench_env, bench_estimator, machine
 from agents.cli import build_parser
 from estimator import CameraIntrinsics
 from estimator.geometry import euler_zyx_to_rotation
@@ -50,7 +50,8 @@ def test_estimator_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
         assert [row["fast_threshold"] for row in csv.DictReader(handle)] == ["30", "20"]
     assert "speedup_vs_loop_floats" in read_header(tmp_path / "estimator_performance_depth_stage.csv")
     report = (tmp_path / "estimator_performance.md").read_text()
-    assert "flownav bench estimator" in report and "## Targets" in report and "shared" in report
+    assert "flownav bench estimator" in report and "## Targets" in report
+    assert f"OpenGL renderer: {machine.gl_renderer()}" in report
 
 
 def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
@@ -80,6 +81,16 @@ def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
     report = (tmp_path / "env_performance.md").read_text()
     assert "gym-pybullet-drones" in report and "## FAST threshold" in report
     assert "--fast-thresholds 30" in report
+    software = machine.is_software_renderer(machine.gl_renderer())
+    assert ("software OpenGL" in report) == software and ("hardware OpenGL" in report) != software
+
+
+def test_gl_renderer_names_the_renderer_the_env_draws_with() -> None:
+    renderer = machine.gl_renderer()
+    assert renderer and not renderer.startswith("unknown"), renderer
+    assert renderer in machine.machine_summary()
+    assert machine.is_software_renderer("llvmpipe (LLVM 15.0.7, 256 bits)")
+    assert not machine.is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2")
 
 
 @pytest.mark.parametrize("loop", [bench_estimator.depth_loop_floats, bench_estimator.depth_loop_numpy])

@@ -214,34 +214,51 @@ def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
     return "\n".join(lines)
 
 
-def comparison_markdown(
-    table: list[dict[str, Any]], baseline: list[dict[str, Any]], baseline_name: str
-) -> str:
-    """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep."""
+def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]) -> str:
+    """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep, and per
+    agent the share of the seeds flown in both whose episode ended the same way (collision or not): rates can
+    agree while single episodes differ, e.g. on another renderer."""
+    from agents.evaluation import summarise
+
+    table, baseline = summarise(rows), summarise(baseline_rows)
     agents = sorted({r["agent"] for r in table})
     cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
     before = {(r["agent"], r["factor"], r["level"]): r for r in baseline}
+    outcomes: dict[tuple[str, str, float], dict[int, bool]] = {}
+    for row in baseline_rows:
+        outcomes.setdefault((row["agent"], row["factor"], float(row["level"])), {})[row["seed"]] = row[
+            "collision"
+        ]
+    agreement: dict[tuple[str, str, float], list[bool]] = {}
+    for row in rows:
+        key = (row["agent"], row["factor"], float(row["level"]))
+        if row["seed"] in outcomes.get(key, {}):
+            agreement.setdefault(key, []).append(outcomes[key][row["seed"]] == row["collision"])
     keys = sorted({(r["factor"], r["level"]) for r in table}, key=lambda k: (k[0] != "clean", k))
+    names = " / ".join(agents)
     header = (
-        "| factor | level | episodes | "
-        + " | ".join(agents)
-        + f" | {baseline_name}: "
-        + " / ".join(agents)
-        + " |"
+        f"| factor | level | episodes | {' | '.join(agents)} | baseline: {names} | same outcome: {names} |"
     )
-    lines = [header, "|---" * (len(agents) + 4) + "|"]
+    lines = [header, "|---" * (len(agents) + 5) + "|"]
+
+    def rate(row: dict[str, Any] | None) -> str:
+        return "–" if row is None else f"{row['collision_rate']:.2f}"
+
+    def share(same: list[bool] | None) -> str:
+        return "–" if not same else f"{sum(same)}/{len(same)}"
+
     for factor, level in keys:
         counts = sorted(
             {cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells}
         )
         episodes = str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
-        now = [cells.get((a, factor, level)) for a in agents]
-        then = [before.get((a, factor, level)) for a in agents]
         lines.append(
             f"| {factor} | {'–' if factor == 'clean' else f'{level:g}'} | {episodes} | "
-            + " | ".join("–" if r is None else f"{r['collision_rate']:.2f}" for r in now)
+            + " | ".join(rate(cells.get((a, factor, level))) for a in agents)
             + " | "
-            + " / ".join("–" if r is None else f"{r['collision_rate']:.2f}" for r in then)
+            + " / ".join(rate(before.get((a, factor, level))) for a in agents)
+            + " | "
+            + " / ".join(share(agreement.get((a, factor, level))) for a in agents)
             + " |"
         )
     return "\n".join(lines)
@@ -254,6 +271,7 @@ def write_report(
     command: str,
     minutes: float | None,
     factors: list[str],
+    rows: list[dict[str, Any]] | None = None,
     baseline: tuple[Path, list[dict[str, Any]]] | None = None,
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
@@ -268,11 +286,16 @@ def write_report(
         f"Config: `{config_path}`  ",
         f"Env estimator defaults (under the config's `estimator_kwargs`): `{ENV_ESTIMATOR_DEFAULTS}`  ",
         f"Code when this report was written: {code_version()}  ",
-        f"Hardware: {machine_summary()}  ",
-        (
-            f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown)."
+        *(
+            [
+                f"Hardware: {machine_summary()}  ",
+                f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown).",
+            ]
             if minutes is not None
-            else "Rebuilt with `--report-only` from the episodes flown so far."
+            else [
+                "Rebuilt with `--report-only` from the episodes flown so far, on (the episodes may have been "
+                f"flown elsewhere): {machine_summary()}"
+            ]
         ),
         "",
         "```yaml",
@@ -285,13 +308,14 @@ def write_report(
     for factor in factors:
         parts += [f"### {factor}", "", pivot_markdown(table, factor), ""]
     if baseline is not None:
-        baseline_path, baseline_table = baseline
+        baseline_path, baseline_rows = baseline
         parts += [
             f"## Against `{baseline_path}`",
             "",
-            "Collision rate per cell; the last column is the same cell in that sweep (– where it has none).",
+            "Collision rate per cell beside the same cell there (– where it has none), and per agent how many of",
+            "the seeds flown in both ended the same way (collision or not).",
             "",
-            comparison_markdown(table, baseline_table, "baseline"),
+            comparison_markdown(rows or [], baseline_rows),
             "",
         ]
     parts += ["## All cells", "", format_summary(table), ""]
@@ -327,7 +351,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agents.episodes import execute
-    from agents.evaluation import drop_agents, format_summary, read_records, summarise
+    from agents.evaluation import drop_agents, format_summary, read_records
 
     config_path = Path(args.config)
     config = load_config(config_path, SweepConfig)
@@ -394,7 +418,8 @@ def run(args: argparse.Namespace) -> int:
         command,
         None if args.report_only else minutes,
         list(config.factors),
-        None if baseline_path is None else (baseline_path, summarise(read_records(baseline_path))),
+        rows,
+        None if baseline_path is None else (baseline_path, read_records(baseline_path)),
     )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")

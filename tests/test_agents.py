@@ -204,7 +204,7 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert [r["agent"] for r in refilled][-4:] == ["bee"] * 4
     report = (tmp_path / "out" / "sweep.md").read_text()
     assert f"## Against `{earlier}`" in report
-    assert "| clean | – | 2 | 0.00 | 1.00 | 0.00 / 1.00 |" in report
+    assert "| clean | – | 2 | 0.00 | 1.00 | 0.00 / 1.00 | 2/2 / 2/2 |" in report
 
 
 def test_a_sweep_of_no_factors_flies_the_clean_cell_and_plots_it(tmp_path: Path) -> None:

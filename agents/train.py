@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import check_env_kwargs, field_range, load_config
-from agents.machine import available_cores, cpu_model
+from agents.machine import available_cores, code_version, cpu_model, gl_renderer
 
 HELP = "train a PPO policy from a YAML config (resumable)"
 
@@ -231,6 +231,8 @@ def train(
     if evaluations.exists():
         plot_learning_curve(evaluations, policies_dir / f"{config.name}_learning_curve.png", config.name)
         shutil.copyfile(evaluations, policies_dir / f"{config.name}_evaluations.npz")
+    from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
+
     record_path = policies_dir / f"{config.name}.json"
     record = (
         json.loads(record_path.read_text())
@@ -245,6 +247,10 @@ def train(
             "cpu": cpu_model(),
             "cores": available_cores(),
             "n_envs": config.n_envs,
+            # What the policy saw depends on these as much as on the config: record them per session.
+            "code": code_version(),
+            "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
+            "gl_renderer": gl_renderer(),
         }
     )
     record["total_timesteps"] = int(model.num_timesteps)

@@ -110,6 +110,8 @@ def test_tiny_ppo_run_saves_loads_and_resumes(tmp_path: Path) -> None:
     assert PPO.load(latest_checkpoint(checkpoints), device="cpu").num_timesteps == 256
     record = json.loads((tmp_path / "pol" / "ppo_flow.json").read_text())
     assert record["total_timesteps"] == 256 and len(record["sessions"]) == 2
+    assert record["sessions"][-1]["env_estimator_defaults"] == {"fast_threshold": 10}
+    assert record["sessions"][-1]["code"].startswith("commit") and record["sessions"][-1]["gl_renderer"]
     assert record["selected"].startswith("best held-out eval")  # the shipped policy is the best evaluated one
 
     agent = load_agent("ppo_flow", policy)

@@ -397,6 +397,9 @@ def test_shipped_configs_load() -> None:
         config = load_config(experiment, TrainConfig)
         assert config.name == experiment.stem and check_env_kwargs(config.env, str(experiment)) == config.env
     assert math.isclose(len(load_config(root / "sweep.yaml", SweepConfig).factors), 5)
+    for sweep in sorted(root.glob("sweep_*.yaml")):
+        config = load_config(sweep, SweepConfig)
+        assert check_env_kwargs(config.env, str(sweep)) == config.env
 
 
 def test_unknown_agent_and_missing_policy_errors(tmp_path: Path) -> None:

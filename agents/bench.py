@@ -130,8 +130,9 @@ def quiet_gc() -> Iterator[None]:
         gc.enable()
 
 
-def hardware_summary() -> str:
-    """CPU model, core count, load and GL renderer facts for the report header (one Markdown list)."""
+def hardware_summary(renderer: str | None = None) -> str:
+    """CPU model, core count, load and GL renderer facts for the report header (one Markdown list).
+    ``renderer``: :func:`agents.machine.gl_renderer`'s answer where the caller already asked for it."""
     lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
     lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
     try:
@@ -139,7 +140,7 @@ def hardware_summary() -> str:
         lines.append(f"- load average (1, 5, 15 min) at the end of the run: {load}")
     except OSError:
         pass
-    renderer = gl_renderer()
+    renderer = renderer if renderer is not None else gl_renderer()
     kind = "software rasterisation on the CPU" if is_software_renderer(renderer) else "hardware rendering"
     lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
     lines.append(f"- code: {code_version()}")

@@ -406,7 +406,8 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
     )
     default = rows[0]
     ratios = [row["ratio_env_bare"] for row in rows]
-    software = is_software_renderer(gl_renderer())
+    renderer = gl_renderer()
+    software = is_software_renderer(renderer)
     choice = _choice_text(rows, software)
     smallest = min(
         [row for row in rows if row["kind"] == "resolution"] or rows,
@@ -424,7 +425,7 @@ in {elapsed:.0f} s on the machine below. Absolute rates depend on it and on what
 env and the bare loop were alternated block by block in the same process, and the ratio is taken block by block
 before the median over {repeats} blocks.
 
-{hardware_summary()}
+{hardware_summary(renderer)}
 
 ## Set-up
 - Env: `gymnasium.make("FlowNav-v0", camera_width=W, camera_height=H)` (the default row: no kwargs), field

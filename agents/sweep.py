@@ -271,10 +271,10 @@ def write_report(
     command: str,
     minutes: float | None,
     factors: list[str],
-    rows: list[dict[str, Any]] | None = None,
-    baseline: tuple[Path, list[dict[str, Any]]] | None = None,
+    comparison: tuple[Path, str] | None = None,
 ) -> None:
-    """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md)."""
+    """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md);
+    ``comparison`` is an earlier sweep's episodes CSV and :func:`comparison_markdown` against it."""
     from agents.evaluation import format_summary
     from agents.machine import code_version, machine_summary
     from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
@@ -307,15 +307,15 @@ def write_report(
     ]
     for factor in factors:
         parts += [f"### {factor}", "", pivot_markdown(table, factor), ""]
-    if baseline is not None:
-        baseline_path, baseline_rows = baseline
+    if comparison is not None:
+        baseline_path, comparison_table = comparison
         parts += [
             f"## Against `{baseline_path}`",
             "",
             "Collision rate per cell beside the same cell there (– where it has none), and per agent how many of",
             "the seeds flown in both ended the same way (collision or not).",
             "",
-            comparison_markdown(rows or [], baseline_rows),
+            comparison_table,
             "",
         ]
     parts += ["## All cells", "", format_summary(table), ""]
@@ -418,8 +418,9 @@ def run(args: argparse.Namespace) -> int:
         command,
         None if args.report_only else minutes,
         list(config.factors),
-        rows,
-        None if baseline_path is None else (baseline_path, read_records(baseline_path)),
+        None
+        if baseline_path is None
+        else (baseline_path, comparison_markdown(rows, read_records(baseline_path))),
     )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")

@@ -1,6 +1,2 @@
-"""Agents, training, evaluation, sweeps and the ``flownav`` command line."""
-
-import os
-
-# Headless rendering unless the user chose a backend: it must be set before anything imports mujoco.
-os.environ.setdefault("MUJOCO_GL", "egl")
+"""Agents and everything done with them: policies, training, evaluation and sweeps, speed benchmarks, the
+thesis experiments and the ``flownav`` command line (one subpackage each; see the README's tour)."""

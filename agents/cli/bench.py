@@ -1,0 +1,127 @@
+"""Performance benchmarks that write their tables, CSVs and plots to ``results/``.
+
+``flownav bench estimator``: thesis Table 3 on a rendered 640×480 flight (points and ms per stage against the
+FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop).
+``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
+render loop of the same scene, with the per-stage breakdown of a step.
+
+Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
+baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
+shared with other jobs shifts both sides alike.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Register the ``estimator`` and ``env`` sub-subcommands and their options."""
+    targets = parser.add_subparsers(dest="target", required=True, metavar="TARGET")
+
+    estimator = targets.add_parser(
+        "estimator",
+        help="thesis Table 3: points and ms per stage vs FAST threshold on a 640x480 flight",
+    )
+    estimator.add_argument("--frames", type=int, default=40, help="frame pairs of the flight (default 40)")
+    estimator.add_argument(
+        "--repeats", type=int, default=3, help="timed passes per configuration (default 3)"
+    )
+    estimator.add_argument(
+        "--thresholds",
+        type=_int_list,
+        default=(50, 40, 30, 20, 15, 10, 5, 3, 1),
+        help="comma-separated FAST thresholds (default 50,40,30,20,15,10,5,3,1)",
+    )
+    estimator.add_argument("--width", type=int, default=640, help="camera width in px (default 640)")
+    estimator.add_argument("--height", type=int, default=480, help="camera height in px (default 480)")
+    estimator.add_argument("--layout", default="three", help="env layout of the flight (default three)")
+    estimator.add_argument("--seed", type=int, default=0, help="env seed of the flight (default 0)")
+    estimator.add_argument(
+        "--loop-frames",
+        type=int,
+        default=10,
+        help="frame pairs on which the per-point depth loops are timed (default 10; they are slow)",
+    )
+    estimator.add_argument(
+        "--out", type=Path, default=Path("results"), help="output folder (default results)"
+    )
+    estimator.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
+    env = targets.add_parser(
+        "env", help="steps/s per camera resolution vs a bare MuJoCo render + physics loop"
+    )
+    env.add_argument(
+        "--resolutions",
+        type=_resolution_list,
+        default=((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240)),
+        help="comma-separated WxH candidates (default 64x48,96x72,128x96,160x120,240x180,320x240)",
+    )
+    env.add_argument(
+        "--fast-thresholds",
+        type=_int_list,
+        default=(20, 15, 5),
+        help="comma-separated FAST thresholds compared at the default resolution (default 20,15,5)",
+    )
+    env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
+    env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
+    env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
+    env.add_argument("--out", type=Path, default=Path("results"), help="output folder (default results)")
+    env.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the chosen benchmark and write its files; returns the process exit code."""
+    if args.target == "estimator":
+        from agents.benchmarks.estimator_report import run_estimator_benchmark
+
+        paths = run_estimator_benchmark(
+            frames=args.frames,
+            thresholds=args.thresholds,
+            repeats=args.repeats,
+            width=args.width,
+            height=args.height,
+            layout=args.layout,
+            seed=args.seed,
+            loop_frames=args.loop_frames,
+            out_dir=args.out,
+            progress=not args.no_progress,
+        )
+    else:
+        from agents.benchmarks.env_report import run_env_benchmark
+
+        paths = run_env_benchmark(
+            resolutions=args.resolutions,
+            steps=args.steps,
+            repeats=args.repeats,
+            seed=args.seed,
+            out_dir=args.out,
+            progress=not args.no_progress,
+            fast_thresholds=args.fast_thresholds,
+        )
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def _int_list(text: str) -> tuple[int, ...]:
+    try:
+        values = tuple(int(part) for part in text.split(",") if part.strip())
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from error
+    if not values:
+        raise argparse.ArgumentTypeError("expected at least one integer")
+    return values
+
+
+def _resolution_list(text: str) -> tuple[tuple[int, int], ...]:
+    resolutions = []
+    for part in text.split(","):
+        width, sep, height = part.strip().lower().partition("x")
+        if not sep or not width.isdigit() or not height.isdigit():
+            raise argparse.ArgumentTypeError(f"expected WxH resolutions like 160x120, got {part!r}")
+        resolutions.append((int(width), int(height)))
+    return tuple(resolutions)

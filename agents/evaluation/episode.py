@@ -1,0 +1,75 @@
+"""One episode, the one place an agent flies: ``reset(seed)``, ``predict``/``step`` to the end, one record."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from agents.policies import Agent
+
+
+@dataclass
+class EpisodeRecord:
+    """What one episode came to; one CSV row."""
+
+    agent: str
+    factor: str
+    level: float
+    seed: int
+    collision: bool
+    success: bool
+    out_of_bounds: bool
+    truncated: bool
+    progress_m: float
+    time_s: float
+    steps: int
+    min_clearance_m: float
+    path_length_m: float
+    mean_points_valid: float
+    median_depth_error: float
+    episode_return: float
+
+
+def run_episode(
+    env: Any, agent: Agent, seed: int, *, label: str = "", factor: str = "clean", level: float = 0.0
+) -> EpisodeRecord:
+    """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
+    observation, info = env.reset(seed=seed)
+    position = np.array([0.0, 0.0, 0.0])
+    path_length, total_return, steps = 0.0, 0.0, 0
+    valid_points, depth_errors = [], []
+    terminated = truncated = False
+    while not (terminated or truncated):
+        action, _ = agent.predict(observation, deterministic=True)
+        observation, reward, terminated, truncated, info = env.step(action)
+        steps += 1
+        total_return += reward
+        new_position = info["position"]
+        if steps > 1:
+            path_length += float(np.linalg.norm(new_position - position))
+        position = new_position
+        valid_points.append(info["points_valid"])
+        if "depth_error_median" in info:
+            depth_errors.append(info["depth_error_median"])
+    frame_rate = env.unwrapped.frame_rate
+    return EpisodeRecord(
+        agent=label,
+        factor=factor,
+        level=float(level),
+        seed=int(seed),
+        collision=bool(info["collision"]),
+        success=bool(info["success"]),
+        out_of_bounds=bool(info.get("out_of_bounds", False)),
+        truncated=bool(truncated and not terminated),
+        progress_m=float(info["progress"]),
+        time_s=steps / frame_rate,
+        steps=steps,
+        min_clearance_m=float(info["min_clearance"]),
+        path_length_m=path_length,
+        mean_points_valid=float(np.mean(valid_points)) if valid_points else 0.0,
+        median_depth_error=float(np.median(depth_errors)) if depth_errors else math.nan,
+        episode_return=float(total_return),
+    )

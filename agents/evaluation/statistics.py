@@ -1,0 +1,67 @@
+"""Rates with their intervals: what a set of episode records says about an agent in a cell."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+
+def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (95 % by default); (0, 1) for no trials."""
+    if trials <= 0:
+        return 0.0, 1.0
+    p = successes / trials
+    denominator = 1 + z**2 / trials
+    centre = (p + z**2 / (2 * trials)) / denominator
+    half = z * math.sqrt(p * (1 - p) / trials + z**2 / (4 * trials**2)) / denominator
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
+    success rate with its interval, and medians of progress and clearance."""
+    groups: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
+    table = []
+    for (agent, factor, level), members in sorted(groups.items()):
+        n = len(members)
+        collisions = sum(bool(m["collision"]) for m in members)
+        successes = sum(bool(m["success"]) for m in members)
+        low, high = wilson_interval(collisions, n)
+        success_low, success_high = wilson_interval(successes, n)
+        table.append(
+            {
+                "agent": agent,
+                "factor": factor,
+                "level": level,
+                "episodes": n,
+                "collisions": collisions,
+                "collision_rate": collisions / n,
+                "ci_low": low,
+                "ci_high": high,
+                "success_rate": successes / n,
+                "success_ci_low": success_low,
+                "success_ci_high": success_high,
+                "median_progress_m": float(np.median([m["progress_m"] for m in members])),
+                "median_min_clearance_m": float(np.median([m["min_clearance_m"] for m in members])),
+            }
+        )
+    return table
+
+
+def format_summary(table: list[Mapping[str, Any]]) -> str:
+    """The summary as a Markdown table."""
+    header = "| agent | factor | level | episodes | collision rate [95 % CI] | success rate [95 % CI] | median progress (m) |"
+    lines = [header, "|---|---|---|---|---|---|---|"]
+    for r in table:
+        lines.append(
+            f"| {r['agent']} | {r['factor']} | {r['level']:g} | {r['episodes']} | "
+            f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
+            f"{r['success_rate']:.2f} [{r['success_ci_low']:.2f}, {r['success_ci_high']:.2f}] | "
+            f"{r['median_progress_m']:.1f} |"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,189 @@
+"""The benchmark's sweep: every agent under each sensor error at several levels, on the same held-out seeds.
+
+Each (agent, factor, level) cell flies the same seeds, so agents and levels are compared on identical
+obstacle layouts. Episodes are appended to ``<out>/sweep_episodes.csv`` as they end (re-running resumes);
+the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals) and the
+figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
+
+After a policy is retrained, ``--refly AGENT[,AGENT]`` deletes that agent's episodes so they are flown again;
+``--compare-with OLD/sweep_episodes.csv`` adds a table to ``sweep.md`` setting each cell beside an earlier sweep.
+
+Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR]``), the same tasks either way.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from agents.common.config import check_env_kwargs, field_range, load_config
+from agents.common.seeds import TEST_SEED_START
+from agents.evaluation.records import drop_agents, read_records
+from agents.evaluation.runner import EpisodeTask, execute
+from agents.evaluation.statistics import format_summary
+from agents.evaluation.sweep_report import (
+    comparison_markdown,
+    plot_collision_vs_error,
+    write_report,
+    write_summary,
+)
+from agents.policies import AGENT_NAMES, LEARNED_AGENTS, policy_file
+
+SWEEP_FACTORS = ("rotation_error", "translation_error", "attitude_jitter_deg", "brightness", "forward_speed")
+
+
+@dataclass
+class SweepConfig:
+    """A sweep. ``factors`` maps each FlowNavEnv sensor kwarg to its levels beyond the clean setting."""
+
+    agents: list[str]
+    factors: dict[str, list[float]]
+    env_id: str = "FlowNav-v0"
+    env: dict[str, Any] = field(default_factory=dict)
+    episodes: int = field_range(1, 100_000, default=100)
+    seed_block: int = field_range(1, 100_000, default=25)
+    seed_start: int = field_range(TEST_SEED_START, None, default=TEST_SEED_START)
+    workers: int = field_range(1, 256, default=2)
+    backend: Literal["local", "ray"] = "local"
+    policy_dir: str = "results/policies"
+
+    def validate(self) -> None:
+        for agent in self.agents:
+            if agent not in AGENT_NAMES:
+                raise ValueError(f"key 'agents': unknown agent {agent!r} (allowed: {', '.join(AGENT_NAMES)})")
+        for factor, levels in self.factors.items():
+            if factor not in SWEEP_FACTORS:
+                raise ValueError(
+                    f"key 'factors.{factor}': not a sweep factor (allowed: {', '.join(SWEEP_FACTORS)})"
+                )
+            if (
+                not isinstance(levels, list)
+                or not levels
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in levels)
+            ):
+                raise ValueError(
+                    f"key 'factors.{factor}' must be a non-empty list of numbers, got {levels!r}"
+                )
+
+
+def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
+    """Every (agent, factor, level, seed) episode, in passes of ``config.seed_block`` seeds.
+
+    Each pass flies its seeds in every cell (the clean setting first, then the factors in config order) and,
+    within a cell, for every agent. A sweep cut short therefore has every cell at nearly the same count and
+    has compared all agents on the same layouts; a ``seed_block`` of at least ``episodes`` flies the cells one
+    after the other instead. Within a cell an agent's seeds run in a row, so a worker keeps its env.
+    """
+    seeds = range(config.seed_start, config.seed_start + config.episodes)
+    passes = [seeds[start : start + config.seed_block] for start in range(0, len(seeds), config.seed_block)]
+    cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
+    for factor, levels in config.factors.items():
+        cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
+    return [
+        EpisodeTask(
+            agent,
+            factor,
+            level,
+            seed,
+            config.env_id,
+            tuple(sorted(kwargs.items())),
+            str(policy_file(agent, directory=config.policy_dir)) if agent in LEARNED_AGENTS else None,
+        )
+        for seed_pass in passes
+        for factor, level, kwargs in cells
+        for agent in agents
+        for seed in seed_pass
+    ]
+
+
+def run_sweep(
+    config_path: Path,
+    out: Path,
+    *,
+    overrides: dict[str, Any] | None = None,
+    refly: list[str] | None = None,
+    compare_with: Path | None = None,
+    report_only: bool = False,
+    address: str | None = None,
+    command: str = "flownav sweep",
+) -> list[dict[str, Any]]:
+    """Fly every episode of the sweep in ``config_path`` not yet in ``<out>/sweep_episodes.csv``, then write
+    ``sweep.csv``, ``collision_vs_error.png`` and ``sweep.md``; returns the summary table.
+
+    Args:
+        config_path: the sweep's YAML (:class:`SweepConfig`).
+        out: folder of the episodes CSV and the reports.
+        overrides: config fields to replace (``episodes``, ``workers``, ``backend``).
+        refly: agents whose episodes are deleted first, so they are flown again.
+        compare_with: an earlier sweep's episodes CSV to set each cell beside.
+        report_only: fly nothing, rebuild the reports from the episodes flown so far.
+        address: Ray cluster address.
+        command: the command line, for the report.
+
+    Raises:
+        ValueError / FileNotFoundError: bad config, overrides, agents or files; the message says which.
+    """
+    config = load_config(config_path, SweepConfig)
+    for name, value in (overrides or {}).items():
+        setattr(config, name, value)
+    if config.episodes < 1 or config.workers < 1:
+        raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
+    check_env_kwargs(config.env, str(config_path))
+
+    files = {a: policy_file(a, directory=config.policy_dir) for a in config.agents if a in LEARNED_AGENTS}
+    missing = {a: path for a, path in files.items() if not path.exists()}
+    agents = [a for a in config.agents if a not in missing]
+    for skipped, path in sorted(missing.items()):
+        print(f"skipping {skipped}: no policy at {path}")
+    refly = refly or []
+    for agent in refly:
+        if agent not in config.agents:
+            raise ValueError(
+                f"--refly: {agent!r} is not an agent of {config_path} ({', '.join(config.agents)})"
+            )
+    baseline_path = compare_with
+    if baseline_path is not None and not baseline_path.is_file():
+        raise FileNotFoundError(f"--compare-with: no episodes CSV at {baseline_path}")
+    if refly and report_only:
+        raise ValueError(
+            "--refly deletes episodes to fly them again; it cannot be combined with --report-only"
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    episodes_csv = out / "sweep_episodes.csv"
+    if refly:
+        print(f"--refly: deleted {drop_agents(episodes_csv, refly)} episodes of {', '.join(refly)}")
+    started = time.perf_counter()
+    tasks = build_tasks(config, agents)
+    flown = 0
+    if not report_only:
+        flown = execute(
+            tasks,
+            episodes_csv,
+            backend=config.backend,
+            workers=config.workers,
+            address=address,
+            description="sweep",
+        )
+    wanted = {(t.agent, t.factor, t.level, t.seed) for t in tasks}
+    rows = [
+        r for r in read_records(episodes_csv) if (r["agent"], r["factor"], r["level"], r["seed"]) in wanted
+    ]
+    table = write_summary(rows, out / "sweep.csv")
+    plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
+    minutes = (time.perf_counter() - started) / 60
+    write_report(
+        out / "sweep.md",
+        table,
+        config_path,
+        command,
+        None if report_only else minutes,
+        list(config.factors),
+        None
+        if baseline_path is None
+        else (baseline_path, comparison_markdown(rows, read_records(baseline_path))),
+    )
+    print(format_summary(table))
+    print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
+    return table

@@ -1,0 +1,228 @@
+"""The sweep's outputs: the summary CSV, the collision-against-error figure and ``sweep.md``."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+from agents.common.machine import code_version, machine_summary
+from agents.evaluation.statistics import format_summary, summarise
+from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
+
+SUMMARY_FIELDS = [
+    "agent",
+    "factor",
+    "level",
+    "episodes",
+    "collisions",
+    "collision_rate",
+    "ci_low",
+    "ci_high",
+    "success_rate",
+    "success_ci_low",
+    "success_ci_high",
+    "median_progress_m",
+    "median_min_clearance_m",
+]
+
+
+def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]]:
+    table = summarise(rows)
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_FIELDS)
+        writer.writeheader()
+        for row in table:
+            writer.writerow({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()})
+    return table
+
+
+def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
+    """A panel per factor: collision rate against level, a line per agent, its Wilson 95 % band shaded.
+    The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per agent."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    neutral = {
+        "rotation_error": 0.0,
+        "translation_error": 0.0,
+        "attitude_jitter_deg": 0.0,
+        "brightness": 1.0,
+        "forward_speed": 1.0,
+    }
+    units = {
+        "rotation_error": "rotation error (relative)",
+        "translation_error": "translation error (relative)",
+        "attitude_jitter_deg": "attitude jitter (deg)",
+        "brightness": "brightness (1 = daylight)",
+        "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
+    }
+    agents = sorted({r["agent"] for r in table})
+    if not factors:  # a clean-only sweep: one bar per agent
+        clean = [r for r in table if r["factor"] == "clean"]
+        fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
+        rates = [r["collision_rate"] for r in clean]
+        errors = [
+            [r["collision_rate"] - r["ci_low"] for r in clean],
+            [r["ci_high"] - r["collision_rate"] for r in clean],
+        ]
+        ax.bar([r["agent"] for r in clean], rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7)
+        ax.set_ylim(0, 1)
+        ax.set_ylabel("collision rate (95 % CI)")
+        ax.set_title("clean sensors", fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        fig.tight_layout()
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return
+    fig, axes = plt.subplots(1, len(factors), figsize=(3.6 * len(factors), 3.4), sharey=True, squeeze=False)
+    for ax, factor in zip(axes[0], factors, strict=True):
+        for agent in agents:
+            points = [
+                (neutral.get(factor, 0.0), r) for r in table if r["agent"] == agent and r["factor"] == "clean"
+            ]
+            points += [(r["level"], r) for r in table if r["agent"] == agent and r["factor"] == factor]
+            points.sort(key=lambda p: p[0])
+            if not points:
+                continue
+            xs = [p[0] for p in points]
+            line = ax.plot(xs, [p[1]["collision_rate"] for p in points], marker="o", label=agent)[0]
+            ax.fill_between(
+                xs,
+                [p[1]["ci_low"] for p in points],
+                [p[1]["ci_high"] for p in points],
+                color=line.get_color(),
+                alpha=0.15,
+            )
+        ax.set_xlabel(units.get(factor, factor))
+        ax.set_ylim(0, 1)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("collision rate (95 % CI)")
+    axes[0][-1].legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
+    """Collision rate [95 % CI] per agent (rows) and level (columns) of one factor, the clean run first."""
+    agents = sorted({r["agent"] for r in table})
+    levels = sorted({r["level"] for r in table if r["factor"] == factor})
+    cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
+    header = "| agent | clean | " + " | ".join(f"{factor}={level:g}" for level in levels) + " |"
+    lines = [header, "|---" * (len(levels) + 2) + "|"]
+    for agent in agents:
+        row = [cells.get((agent, "clean", 0.0))] + [cells.get((agent, factor, level)) for level in levels]
+        lines.append(
+            f"| {agent} | "
+            + " | ".join(
+                "–" if r is None else f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
+                for r in row
+            )
+            + " |"
+        )
+    return "\n".join(lines)
+
+
+def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]) -> str:
+    """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep, and per
+    agent the share of the seeds flown in both whose episode ended the same way (collision or not): rates can
+    agree while single episodes differ, e.g. on another renderer."""
+    table, baseline = summarise(rows), summarise(baseline_rows)
+    agents = sorted({r["agent"] for r in table})
+    cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
+    before = {(r["agent"], r["factor"], r["level"]): r for r in baseline}
+    outcomes: dict[tuple[str, str, float], dict[int, bool]] = {}
+    for row in baseline_rows:
+        outcomes.setdefault((row["agent"], row["factor"], float(row["level"])), {})[row["seed"]] = row[
+            "collision"
+        ]
+    agreement: dict[tuple[str, str, float], list[bool]] = {}
+    for row in rows:
+        key = (row["agent"], row["factor"], float(row["level"]))
+        if row["seed"] in outcomes.get(key, {}):
+            agreement.setdefault(key, []).append(outcomes[key][row["seed"]] == row["collision"])
+    keys = sorted({(r["factor"], r["level"]) for r in table}, key=lambda k: (k[0] != "clean", k))
+    names = " / ".join(agents)
+    header = (
+        f"| factor | level | episodes | {' | '.join(agents)} | baseline: {names} | same outcome: {names} |"
+    )
+    lines = [header, "|---" * (len(agents) + 5) + "|"]
+
+    def rate(row: dict[str, Any] | None) -> str:
+        return "–" if row is None else f"{row['collision_rate']:.2f}"
+
+    def share(same: list[bool] | None) -> str:
+        return "–" if not same else f"{sum(same)}/{len(same)}"
+
+    for factor, level in keys:
+        counts = sorted(
+            {cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells}
+        )
+        episodes = str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
+        lines.append(
+            f"| {factor} | {'–' if factor == 'clean' else f'{level:g}'} | {episodes} | "
+            + " | ".join(rate(cells.get((a, factor, level))) for a in agents)
+            + " | "
+            + " / ".join(rate(before.get((a, factor, level))) for a in agents)
+            + " | "
+            + " / ".join(share(agreement.get((a, factor, level))) for a in agents)
+            + " |"
+        )
+    return "\n".join(lines)
+
+
+def write_report(
+    path: Path,
+    table: list[dict[str, Any]],
+    config_path: Path,
+    command: str,
+    minutes: float | None,
+    factors: list[str],
+    comparison: tuple[Path, str] | None = None,
+) -> None:
+    """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md);
+    ``comparison`` is an earlier sweep's episodes CSV and :func:`comparison_markdown` against it."""
+    parts = [
+        "# Sweep: collision rate per agent and sensor error",
+        "",
+        f"Command: `{command}`  ",
+        f"Config: `{config_path}`  ",
+        f"Env estimator defaults (under the config's `estimator_kwargs`): `{ENV_ESTIMATOR_DEFAULTS}`  ",
+        f"Code when this report was written: {code_version()}  ",
+        *(
+            [
+                f"Hardware: {machine_summary()}  ",
+                f"Wall time of the last invocation: {minutes:.1f} min (episodes already in the CSV are not re-flown).",
+            ]
+            if minutes is not None
+            else [
+                "Rebuilt with `--report-only` from the episodes flown so far, on (the episodes may have been "
+                f"flown elsewhere): {machine_summary()}"
+            ]
+        ),
+        "",
+        "```yaml",
+        config_path.read_text().strip(),
+        "```",
+        "",
+        "Collision rate with its Wilson 95 % interval, per factor (levels beyond the clean setting):",
+        "",
+    ]
+    for factor in factors:
+        parts += [f"### {factor}", "", pivot_markdown(table, factor), ""]
+    if comparison is not None:
+        baseline_path, comparison_table = comparison
+        parts += [
+            f"## Against `{baseline_path}`",
+            "",
+            "Collision rate per cell beside the same cell there (– where it has none), and per agent how many of",
+            "the seeds flown in both ended the same way (collision or not).",
+            "",
+            comparison_table,
+            "",
+        ]
+    parts += ["## All cells", "", format_summary(table), ""]
+    path.write_text("\n".join(parts))

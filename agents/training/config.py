@@ -1,0 +1,60 @@
+"""A training run's YAML, as typed dataclasses: the PPO hyperparameters, the per-episode sensor
+randomisation and the run itself (``configs/ppo_*.yaml``)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from agents.common.config import field_range
+
+
+@dataclass
+class PPOParams:
+    """stable-baselines3 PPO hyperparameters (see its docs); ``net_arch`` sizes both actor and critic."""
+
+    learning_rate: float = field_range(1e-6, 1.0, default=3e-4)
+    n_steps: int = field_range(8, 100_000, default=512)
+    batch_size: int = field_range(8, 100_000, default=256)
+    n_epochs: int = field_range(1, 100, default=10)
+    gamma: float = field_range(0.0, 1.0, default=0.99)
+    gae_lambda: float = field_range(0.0, 1.0, default=0.95)
+    clip_range: float = field_range(0.01, 1.0, default=0.2)
+    ent_coef: float = field_range(0.0, 1.0, default=0.0)
+    net_arch: list[int] = field_range(1, 4096, default_factory=lambda: [64, 64])
+    # Initial log standard deviation of the Gaussian actions: 0 (std 1) on a [-1, 1] action box is mostly
+    # clipped, bang-bang exploration that crashes early; lower starts calmer.
+    log_std_init: float = field_range(-5.0, 2.0, default=0.0)
+
+
+@dataclass
+class Randomization:
+    """Per-episode uniform ranges [low, high] of the sensor variables (for ``ppo_robust``); empty = fixed."""
+
+    rotation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
+    translation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
+    attitude_jitter_deg: list[float] = field_range(0.0, 10.0, default_factory=list)
+    brightness: list[float] = field_range(0.0, 4.0, default_factory=list)
+
+    def validate(self) -> None:
+        for name, bounds in asdict(self).items():
+            if bounds and (len(bounds) != 2 or bounds[0] > bounds[1]):
+                raise ValueError(f"key 'randomize.{name}' must be [low, high] with low <= high, got {bounds}")
+
+
+@dataclass
+class TrainConfig:
+    """A training run. Every key of the YAML file maps to a field here."""
+
+    name: str
+    env_id: str = "FlowNav-v0"
+    env: dict[str, Any] = field(default_factory=dict)
+    randomize: Randomization = field(default_factory=Randomization)
+    total_timesteps: int = field_range(1, 100_000_000, default=400_000)
+    n_envs: int = field_range(1, 64, default=2)
+    seed: int = field_range(0, 2**31 - 1, default=0)
+    max_minutes: float = field_range(0.1, 10_000.0, default=60.0)
+    checkpoint_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_episodes: int = field_range(1, 1000, default=10)
+    ppo: PPOParams = field(default_factory=PPOParams)

@@ -1,0 +1,136 @@
+"""Smoke tests of the benchmarks (agents.benchmarks): they run on tiny sizes and write their files; no timed asserts."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from agents.benchmarks import depth_loops, env_report, estimator_report, flight
+from agents.cli import build_parser
+from agents.common import machine, tables
+from estimator import CameraIntrinsics
+from estimator.geometry import euler_zyx_to_rotation
+
+
+def read_header(path) -> list[str]:
+    with path.open() as handle:
+        return next(csv.reader(handle))
+
+
+def test_estimator_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
+    paths = estimator_report.run_estimator_benchmark(
+        frames=3,
+        thresholds=(30, 20),
+        repeats=1,
+        width=160,
+        height=120,
+        loop_frames=2,
+        out_dir=tmp_path,
+        progress=False,
+    )
+    assert all(path.is_file() and path.stat().st_size > 0 for path in paths)
+    header = read_header(tmp_path / "estimator_performance.csv")
+    for column in (
+        "fast_threshold",
+        "points_found",
+        "points_used",
+        "ms_fast",
+        "ms_flow",
+        "ms_depth",
+        "ms_total",
+        "fps",
+        "ms_bare_fast_lk",
+        "ratio_fb_on",
+        "ratio_fb_off",
+    ):
+        assert column in header
+    with (tmp_path / "estimator_performance.csv").open() as handle:
+        assert [row["fast_threshold"] for row in csv.DictReader(handle)] == ["30", "20"]
+    assert "speedup_vs_loop_floats" in read_header(tmp_path / "estimator_performance_depth_stage.csv")
+    report = (tmp_path / "estimator_performance.md").read_text()
+    assert "flownav bench estimator" in report and "## Targets" in report
+    assert f"OpenGL renderer: {machine.gl_renderer()}" in report
+
+
+def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
+    paths = env_report.run_env_benchmark(
+        resolutions=((64, 48),), steps=3, repeats=1, out_dir=tmp_path, progress=False, fast_thresholds=(30,)
+    )
+    assert all(path.is_file() and path.stat().st_size > 0 for path in paths)
+    header = read_header(tmp_path / "env_performance.csv")
+    for column in (
+        "steps_per_s_env",
+        "steps_per_s_bare",
+        "ratio_env_bare",
+        "real_time_factor_env",
+        "points_tracked_median",
+        "points_valid_median",
+        "depth_error_median_pct",
+        "ms_physics",
+        "ms_render",
+        "ms_estimator",
+        "ms_rest",
+    ):
+        assert column in header
+    with (tmp_path / "env_performance.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["config"] for row in rows] == ["FlowNav-v0 (default)", "64×48", "FAST 30"]
+    assert [row["fast_threshold"] for row in rows] == ["10", "10", "30"]
+    report = (tmp_path / "env_performance.md").read_text()
+    assert "gym-pybullet-drones" in report and "## FAST threshold" in report
+    assert "--fast-thresholds 30" in report
+    software = machine.is_software_renderer(machine.gl_renderer())
+    assert ("software OpenGL" in report) == software and ("hardware OpenGL" in report) != software
+
+
+def test_gl_renderer_names_the_renderer_the_env_draws_with() -> None:
+    renderer = machine.gl_renderer()
+    assert renderer and not renderer.startswith("unknown"), renderer
+    assert renderer in machine.machine_summary()
+    assert machine.is_software_renderer("llvmpipe (LLVM 15.0.7, 256 bits)")
+    assert not machine.is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2")
+
+
+@pytest.mark.parametrize("loop", [depth_loops.depth_loop_floats, depth_loops.depth_loop_numpy])
+def test_depth_loops_match_the_vectorised_stage(loop) -> None:
+    # The speed-up is only meaningful if the loops compute what the kernel computes.
+    rng = np.random.default_rng(0)
+    intrinsics = CameraIntrinsics.from_fov(160, 120, 60.0)
+    depth = rng.uniform(1.0, 8.0, 200)
+    points = rng.uniform([0, 0], [160, 120], (200, 2))
+    rotation = euler_zyx_to_rotation(0.01, -0.02, 0.015)
+    translation = np.array([0.02, -0.01, -0.1])
+    rays = np.column_stack([intrinsics.normalize(points), np.ones(200)]) * depth[:, None]
+    moved = rays @ rotation.T + translation
+    next_points = intrinsics.denormalize(moved[:, :2] / moved[:, 2:])
+    next_points += rng.normal(0, 0.3, next_points.shape)  # some points fail the epipolar check
+    arguments = (points, next_points, rotation, translation, intrinsics, 1.0, 1.0)
+    expected_depth, expected_valid = depth_loops.depth_vectorised(*arguments)
+    got_depth, got_valid = loop(*arguments)
+    np.testing.assert_allclose(got_depth, expected_depth, rtol=1e-9)
+    np.testing.assert_array_equal(got_valid, expected_valid)
+    assert 0 < expected_valid.sum() < 200
+
+
+def test_cli_parses_both_targets() -> None:
+    parser = build_parser()
+    args = parser.parse_args(["bench", "estimator", "--frames", "5", "--thresholds", "20,10"])
+    assert args.target == "estimator" and args.frames == 5 and args.thresholds == (20, 10)
+    args = parser.parse_args(["bench", "env", "--resolutions", "64x48,160x120"])
+    assert args.target == "env" and args.resolutions == ((64, 48), (160, 120))
+    with pytest.raises(SystemExit):
+        parser.parse_args(["bench", "env", "--resolutions", "64by48"])
+
+
+def test_record_flight_rejects_bad_frame_counts() -> None:
+    with pytest.raises(ValueError, match="frames"):
+        with flight.record_flight(0):
+            pass
+
+
+def test_markdown_table_shape() -> None:
+    table = tables.markdown_table(["a", "b"], [[1, math.pi]])
+    assert table.splitlines()[0] == "| a | b |" and len(table.splitlines()) == 3

@@ -1,0 +1,36 @@
+"""Config loading and the shipped configs."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+import flownav_env  # noqa: F401
+from agents.common.config import ConfigError, check_env_kwargs, load_config
+from agents.common.paths import CONFIGS_DIR
+from agents.evaluation.sweep import SweepConfig
+from agents.training.config import TrainConfig
+
+
+def test_config_file_errors(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match="config file not found"):
+        load_config(tmp_path / "missing.yaml", TrainConfig)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: [unclosed")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        load_config(bad, TrainConfig)
+
+
+def test_shipped_configs_load() -> None:
+    root = CONFIGS_DIR
+    for name in ("ppo_flow", "ppo_robust", "ppo_oracle"):
+        assert load_config(root / f"{name}.yaml", TrainConfig).name == name
+    for experiment in sorted((root / "experiments").glob("*.yaml")):
+        config = load_config(experiment, TrainConfig)
+        assert config.name == experiment.stem and check_env_kwargs(config.env, str(experiment)) == config.env
+    assert math.isclose(len(load_config(root / "sweep.yaml", SweepConfig).factors), 5)
+    for sweep in sorted(root.glob("sweep_*.yaml")):
+        config = load_config(sweep, SweepConfig)
+        assert check_env_kwargs(config.env, str(sweep)) == config.env

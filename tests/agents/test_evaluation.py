@@ -1,0 +1,85 @@
+"""Episodes, their CSV, statistics and the runner, on the real env at small resolutions."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+import flownav_env  # noqa: F401
+from agents.common.seeds import TEST_SEED_START
+from agents.evaluation.records import drop_agents, read_records
+from agents.evaluation.runner import EpisodeTask, execute, pending_tasks, run_task
+from agents.evaluation.statistics import wilson_interval
+from agents.policies import agent_env_kwargs
+
+SMALL = {"camera_width": 96, "camera_height": 72}
+
+
+def test_wilson_interval_matches_known_values() -> None:
+    low, high = wilson_interval(5, 10)
+    assert low == pytest.approx(0.2366, abs=1e-3) and high == pytest.approx(0.7634, abs=1e-3)
+    assert wilson_interval(0, 10)[0] == 0.0
+    assert wilson_interval(0, 0) == (0.0, 1.0)
+
+
+def test_learned_agents_fly_with_the_env_settings_they_were_trained_with(tmp_path: Path) -> None:
+    policy = tmp_path / "ppo_oracle.zip"
+    policy.with_suffix(".yaml").write_text(
+        yaml.safe_dump({"name": "ppo_oracle", "env": {"obs_source": "oracle", **SMALL}})
+    )
+    assert agent_env_kwargs("ppo_oracle", policy) == {"obs_source": "oracle", **SMALL}
+    task = EpisodeTask(
+        "ppo_oracle", "brightness", 0.5, 0, policy=str(policy), env_kwargs=(("brightness", 0.5),)
+    )
+    assert task.env_settings() == {"obs_source": "oracle", **SMALL, "brightness": 0.5}
+    override = EpisodeTask(
+        "ppo_oracle", "clean", 0.0, 0, policy=str(policy), env_kwargs=(("camera_width", 64),)
+    )
+    assert override.env_settings()["camera_width"] == 64  # the task's settings win
+    assert agent_env_kwargs("bee") == {} and agent_env_kwargs("ppo_robust", tmp_path / "none.zip") == {}
+    nested = (*SMALL.items(), ("estimator_kwargs", {"min_parallax_px": 2.0}))  # a dict inside the settings
+    assert run_task(EpisodeTask("straight", "clean", 0.0, 0, "FlowNavSingle-v0", nested)).collision
+
+
+def test_evaluation_resumes_after_interruption(tmp_path: Path) -> None:
+    csv_path = tmp_path / "episodes.csv"
+    env_kwargs = tuple(sorted(SMALL.items()))
+    tasks = [
+        EpisodeTask("straight", "clean", 0.0, TEST_SEED_START + i, "FlowNavSingle-v0", env_kwargs)
+        for i in range(2)
+    ]
+    assert execute(tasks[:1], csv_path) == 1  # "interrupted" after the first episode
+    with csv_path.open("a") as handle:
+        handle.write("straight,clean,0.0,1000001,Tr")  # an episode torn mid-write is not counted
+    assert [t.seed for t in pending_tasks(tasks, csv_path)] == [TEST_SEED_START + 1]
+    assert execute(tasks, csv_path) == 1
+    rows = read_records(csv_path)
+    assert sorted(r["seed"] for r in rows) == [TEST_SEED_START, TEST_SEED_START + 1]
+    assert all(r["collision"] for r in rows)
+
+
+def test_drop_agents_deletes_only_their_rows_and_keeps_the_rest_byte_for_byte(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    assert drop_agents(path, ["bee"]) == 0  # no file yet: nothing to delete
+    tasks = [
+        EpisodeTask(agent, "clean", 0.0, TEST_SEED_START, "FlowNavSingle-v0", tuple(SMALL.items()), None)
+        for agent in ("straight", "bee")
+    ]
+    execute(tasks, path)
+    header, straight_line, _ = path.read_text().splitlines(keepends=True)
+    assert drop_agents(path, ["bee", "ppo_flow"]) == 1
+    assert path.read_text() == header + straight_line
+    assert not path.with_name(path.name + ".tmp").exists()
+
+
+def test_video_writes_an_mp4(tmp_path: Path) -> None:
+    import imageio.v2 as imageio
+
+    from agents.evaluation.video import record_episode
+
+    out = tmp_path / "bee.mp4"
+    record_episode("bee", "FlowNavSingle-v0", TEST_SEED_START, out, max_steps=5)
+    frames = [frame for frame in imageio.get_reader(out)]  # list() trips on the reader's infinite len()
+    assert len(frames) == 5 and frames[0].shape == (240, 640, 3)

@@ -1,0 +1,147 @@
+"""The sensor-error sweep: tasks, resumption, reports, backends and config errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+import flownav_env  # noqa: F401
+from agents.common.config import ConfigError, load_config
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import execute
+from agents.evaluation.statistics import summarise
+from agents.evaluation.sweep import SweepConfig, build_tasks
+
+SMALL = {"camera_width": 96, "camera_height": 72}
+
+
+def write_sweep_config(tmp_path: Path, **overrides) -> Path:
+    config = {
+        "agents": ["straight", "bee"],
+        "env_id": "FlowNavSingle-v0",
+        "env": SMALL,
+        "episodes": 2,
+        "workers": 1,
+        "factors": {"rotation_error": [0.1]},
+        **overrides,
+    }
+    path = tmp_path / "sweep.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None:
+    from agents.cli import main
+
+    config_path = write_sweep_config(tmp_path)
+    assert main(["sweep", "--config", str(config_path), "--out", str(tmp_path / "out")]) == 0
+    summary = (tmp_path / "out" / "sweep.csv").read_text().splitlines()
+    assert summary[0].startswith(
+        "agent,factor,level,episodes,collisions,collision_rate,ci_low,ci_high,success_rate"
+    )
+    assert len(summary) == 1 + 2 * 2  # 2 agents × (clean + 1 level)
+    assert (tmp_path / "out" / "collision_vs_error.png").stat().st_size > 10_000
+    rows = read_records(tmp_path / "out" / "sweep_episodes.csv")
+    table = {(r["agent"], r["factor"]): r for r in summarise(rows)}
+    assert table[("straight", "clean")]["collision_rate"] == 1.0
+
+    # --report-only rebuilds the outputs from the episodes so far and flies nothing, even when more are asked for
+    (tmp_path / "out" / "sweep.csv").unlink()
+    args = ["sweep", "--config", str(config_path), "--out", str(tmp_path / "out"), "--episodes", "5"]
+    assert main([*args, "--report-only"]) == 0
+    assert len(read_records(tmp_path / "out" / "sweep_episodes.csv")) == len(rows)
+    assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
+    assert "Rebuilt with `--report-only`" in (tmp_path / "out" / "sweep.md").read_text()
+    assert "fast_threshold" in (tmp_path / "out" / "sweep.md").read_text()
+
+    # --refly flies one agent again (a retrained policy); --compare-with sets each cell beside an earlier sweep
+    earlier = tmp_path / "earlier.csv"
+    earlier.write_bytes((tmp_path / "out" / "sweep_episodes.csv").read_bytes())
+    assert main([*args[:-2], "--refly", "bee", "--compare-with", str(earlier)]) == 0
+    refilled = read_records(tmp_path / "out" / "sweep_episodes.csv")
+    assert sorted(map(str, refilled)) == sorted(map(str, rows))  # the bee is deterministic on the same seeds
+    assert [r["agent"] for r in refilled][-4:] == ["bee"] * 4
+    report = (tmp_path / "out" / "sweep.md").read_text()
+    assert f"## Against `{earlier}`" in report
+    assert "| clean | – | 2 | 0.00 | 1.00 | 0.00 / 1.00 | 2/2 / 2/2 |" in report
+
+
+def test_a_sweep_of_no_factors_flies_the_clean_cell_and_plots_it(tmp_path: Path) -> None:
+    from agents.cli import main
+
+    config_path = write_sweep_config(tmp_path, agents=["straight"], episodes=1, factors={})
+    assert main(["sweep", "--config", str(config_path), "--out", str(tmp_path / "out")]) == 0
+    assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 2
+    assert (tmp_path / "out" / "collision_vs_error.png").stat().st_size > 5_000
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--refly", "ppo_flow"], r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)"),
+        (["--refly", "bee", "--report-only"], "cannot be combined with --report-only"),
+        (["--compare-with", "nowhere.csv"], "--compare-with: no episodes CSV at nowhere.csv"),
+    ],
+)
+def test_sweep_rejects_bad_refly_and_compare_options(
+    tmp_path: Path, capsys, extra: list, message: str
+) -> None:
+    import re
+
+    from agents.cli import main
+
+    args = ["sweep", "--config", str(write_sweep_config(tmp_path)), "--out", str(tmp_path / "out"), *extra]
+    assert main(args) == 2
+    assert re.search(message, capsys.readouterr().err)
+    assert not (tmp_path / "out" / "sweep_episodes.csv").exists()
+
+
+def test_sweep_flies_in_seed_passes_so_a_cut_short_sweep_covers_every_cell_and_agent(tmp_path: Path) -> None:
+    config = load_config(write_sweep_config(tmp_path), SweepConfig)
+    config.episodes, config.seed_block = 3, 2
+    order = [
+        (t.factor, t.agent, t.seed - config.seed_start) for t in build_tasks(config, ["straight", "bee"])
+    ]
+    assert order == [
+        ("clean", "straight", 0), ("clean", "straight", 1), ("clean", "bee", 0), ("clean", "bee", 1),
+        ("rotation_error", "straight", 0), ("rotation_error", "straight", 1),
+        ("rotation_error", "bee", 0), ("rotation_error", "bee", 1),
+        ("clean", "straight", 2), ("clean", "bee", 2),
+        ("rotation_error", "straight", 2), ("rotation_error", "bee", 2),
+    ]  # fmt: skip
+    config.seed_block = 3  # one pass: the cells one after the other
+    assert [(t.factor, t.agent) for t in build_tasks(config, ["bee"])] == [("clean", "bee")] * 3 + [
+        ("rotation_error", "bee")
+    ] * 3
+
+
+def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
+    pytest.importorskip("ray")
+    config = load_config(write_sweep_config(tmp_path, agents=["straight"], episodes=1), SweepConfig)
+    tasks = build_tasks(config, ["straight"])
+    local_csv, ray_csv = tmp_path / "local.csv", tmp_path / "ray.csv"
+    execute(tasks, local_csv)
+    execute(tasks, ray_csv, backend="ray", workers=1)
+    key = ["seed", "factor", "level", "collision", "progress_m"]
+    assert [[r[k] for k in key] for r in read_records(local_csv)] == [
+        [r[k] for k in key] for r in sorted(read_records(ray_csv), key=lambda r: r["factor"])
+    ]
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"agents": ["wasp"]}, r"key 'agents': unknown agent 'wasp'"),
+        ({"factors": {"wind": [1.0]}}, r"key 'factors.wind': not a sweep factor"),
+        ({"episodes": 0}, r"key 'episodes' must be in \[1, 100000\], got 0"),
+        ({"backend": "slurm"}, r"key 'backend' must be one of 'local', 'ray', got 'slurm'"),
+        ({"seed_start": 5}, r"key 'seed_start' must be in \[1000000, inf\], got 5"),
+    ],
+)
+def test_sweep_config_errors_name_the_file_and_the_key(tmp_path: Path, overrides: dict, message: str) -> None:
+    path = write_sweep_config(tmp_path, **overrides)
+    with pytest.raises(ConfigError, match=message) as error:
+        load_config(path, SweepConfig)
+    assert str(path) in str(error.value)

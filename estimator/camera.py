@@ -106,6 +106,15 @@ class CameraIntrinsics:
         pixels = np.asarray(pixels, dtype=np.float64)
         return (pixels - np.array([self.cx, self.cy])) / self.focal_scale
 
+    def rays(self, pixels: np.ndarray) -> np.ndarray:
+        """Pixel coordinates (N, 2) → camera rays ``[x, y, 1]`` (N, 3) float64: a point at z-depth d lies at d · ray.
+
+        Scaling a ray by a z-depth gives the 3-D point, which is how ray casts and depth-to-point conversions
+        consume pixels; with zero pixels the result is an empty (0, 3) array.
+        """
+        normalized = self.normalize(pixels)
+        return np.column_stack([normalized, np.ones(len(normalized))])
+
     def denormalize(self, normalized: np.ndarray) -> np.ndarray:
         """Normalised image coordinates (N, 2) → pixel coordinates (N, 2) float64."""
         normalized = np.asarray(normalized, dtype=np.float64)

@@ -75,6 +75,27 @@ def read_trajectory_log(path: Path) -> list[np.ndarray]:
     return poses
 
 
+def relative_depth_error(depth: np.ndarray, true_depth: np.ndarray) -> np.ndarray:
+    """Element-wise ``|depth - true_depth| / true_depth``: the depth error as a share of the true distance.
+
+    Relative, not absolute, because the estimator's error grows with distance and the thesis reports it so.
+    Where there is nothing to compare (a true depth that is missing, i.e. NaN, or not positive, or an estimate
+    that is not finite) the error is NaN, so a caller can pass every point and take ``nanmedian``.
+
+    Args:
+        depth: Estimated depths, any shape.
+        true_depth: True depths, the same shape.
+
+    Returns:
+        The relative errors, the shape of the inputs, in the inputs' float type.
+    """
+    depth, true_depth = np.asarray(depth), np.asarray(true_depth)
+    errors = np.full(np.shape(depth), np.nan, np.result_type(depth, true_depth, np.float32))
+    usable = np.isfinite(true_depth) & (true_depth > 0) & np.isfinite(depth)
+    errors[usable] = np.abs(depth[usable] - true_depth[usable]) / true_depth[usable]
+    return errors
+
+
 def relative_motion(pose_from: np.ndarray, pose_to: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Motion ``(R, t)`` with ``X_to = R X_from + t`` from two camera-to-world poses."""
     transform = np.linalg.inv(pose_to) @ pose_from
@@ -188,7 +209,7 @@ def _pair_errors(
 
     evaluated = result.valid & known
     reference = point_true_depth[evaluated]
-    relative_error = np.abs(result.depth[evaluated] - reference) / reference
+    relative_error = relative_depth_error(result.depth[evaluated], reference)
 
     with_flow = result.tracked & known
     predicted = predict_next_pixels(

@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import os
 
-# Headless by default: the offscreen renderer needs a GL backend picked before mujoco is imported.
-os.environ.setdefault("MUJOCO_GL", "egl")
+# Headless by default: the offscreen renderer needs a GL backend picked before mujoco is imported. This is
+# the project's one place that picks it; a MUJOCO_GL already set (e.g. osmesa) wins.
+DEFAULT_GL_BACKEND = "egl"
+os.environ.setdefault("MUJOCO_GL", DEFAULT_GL_BACKEND)
 
-from gymnasium.envs.registration import register, registry
+from gymnasium.envs.registration import register, registry  # noqa: E402  (after the GL backend is set)
 
-from flownav_env.env import FlowNavEnv
+from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)
 
 ENV_IDS = {
     "FlowNav-v0": ({"layout": "field"}, 400),
@@ -34,4 +36,4 @@ for _env_id, (_kwargs, _steps) in ENV_IDS.items():
             id=_env_id, entry_point="flownav_env.env:FlowNavEnv", kwargs=_kwargs, max_episode_steps=_steps
         )
 
-__all__ = ["ENV_IDS", "FlowNavEnv"]
+__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv"]

@@ -25,10 +25,12 @@ def opencv_camera_pose(cam_xmat: np.ndarray, cam_xpos: np.ndarray) -> tuple[np.n
     return rotation, np.array(cam_xpos, np.float64)
 
 
-def relative_motion(
+def camera_motion_between(
     rotation_prev: np.ndarray, position_prev: np.ndarray, rotation_next: np.ndarray, position_next: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Motion between two camera poses as the estimator wants it: ``X_next = R @ X_prev + t``.
+
+    Not :func:`estimator.evaluation.relative_motion`, which takes 4×4 camera-to-world matrices.
 
     Args:
         rotation_prev, rotation_next: world-from-camera rotations (3, 3).

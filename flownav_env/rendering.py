@@ -13,6 +13,9 @@ import numpy as np
 
 from flownav_env.scene import PARKED_GROUP
 
+# Size (width, height) of each half of the env's rgb_array render: the camera panel and the chase view.
+VIEW_PANEL_SIZE = (320, 240)
+
 
 class CameraRenderer:
     """Renders one named camera of a model at a fixed size, creating the GL context on first use."""
@@ -95,3 +98,21 @@ def draw_flow_overlay(
         cv2.line(canvas, (int(x0), int(y0)), (int(x1), int(y1)), (255, 255, 255), 1, cv2.LINE_AA)
         cv2.circle(canvas, (int(x1), int(y1)), 3, rgb, -1, cv2.LINE_AA)
     return canvas
+
+
+def camera_panel(
+    frame: np.ndarray,
+    points: np.ndarray,
+    next_points: np.ndarray,
+    depth: np.ndarray,
+    valid: np.ndarray,
+    max_depth: float,
+) -> np.ndarray:
+    """The flow overlay of ``frame`` upscaled by a whole factor to fit, on black, into a
+    :data:`VIEW_PANEL_SIZE` panel: small camera frames stay legible beside the chase view."""
+    panel_width, panel_height = VIEW_PANEL_SIZE
+    scale = max(1, min(panel_width // frame.shape[1], panel_height // frame.shape[0]))
+    overlay = draw_flow_overlay(frame, points, next_points, depth, valid, scale=scale, max_depth=max_depth)
+    panel = np.zeros((panel_height, panel_width, 3), np.uint8)
+    panel[: overlay.shape[0], : overlay.shape[1]] = overlay[:panel_height, :panel_width]
+    return panel

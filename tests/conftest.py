@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
-# The GL backend is read when mujoco is first imported, so it must be set before any test module imports it.
-os.environ.setdefault("MUJOCO_GL", "egl")
+# flownav_env owns the headless GL default; importing it first sets it before any test module imports mujoco.
+import flownav_env  # noqa: F401
 
 TESTDATA = Path(__file__).resolve().parents[2] / "shared" / "testdata"

@@ -86,3 +86,13 @@ def test_invalid_field_names_the_field_and_range(field, value, message):
 def test_from_fov_rejects_bad_input(args, kwargs, message):
     with pytest.raises(ValueError, match=message):
         CameraIntrinsics.from_fov(*args, **kwargs)
+
+
+def test_rays_are_normalised_coordinates_with_unit_z():
+    intrinsics = CameraIntrinsics.from_fov(64, 48, 60.0)
+    pixels = np.array([[intrinsics.cx, intrinsics.cy], [0.0, 0.0]])
+    rays = intrinsics.rays(pixels)
+    np.testing.assert_array_equal(rays[:, :2], intrinsics.normalize(pixels))
+    np.testing.assert_array_equal(rays[:, 2], [1.0, 1.0])
+    np.testing.assert_array_equal(rays[0], [0.0, 0.0, 1.0])
+    assert intrinsics.rays(np.zeros((0, 2))).shape == (0, 3)

@@ -13,7 +13,8 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import flownav_env
 from flownav_env import ENV_IDS, FlowNavEnv
-from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
+from flownav_env.observation import STATE_FIELDS
+from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 SMALL = {"camera_width": 64, "camera_height": 48}
 
@@ -310,17 +311,19 @@ def test_ray_cast_truth_matches_the_renderers_depth_buffer() -> None:
 
 def test_estimator_depth_on_env_frames_matches_depth_buffer_on_obstacles() -> None:
     """A frame pair rendered by the env with known motion: estimated depth vs the renderer's depth buffer."""
+    import cv2
+
     from estimator import FlowDepthEstimator
 
     env = FlowNavEnv(layout="three", camera_width=320, camera_height=240)
     env.reset(seed=0)
     physics = env.physics
-    first = env._gray(env._camera.render(physics.data, physics.camera_id))
+    first = cv2.cvtColor(env._camera.render(physics.data, physics.camera_id), cv2.COLOR_RGB2GRAY)
     first_pose = physics.camera_pose()
     depth_buffer = env._camera.render_depth(physics.data, physics.camera_id)
     env.step(np.zeros(3))
-    second = env._gray(env._camera.render(physics.data, physics.camera_id))
-    rotation, translation = flownav_env.camera.relative_motion(*first_pose, *physics.camera_pose())
+    second = cv2.cvtColor(env._camera.render(physics.data, physics.camera_id), cv2.COLOR_RGB2GRAY)
+    rotation, translation = flownav_env.camera.camera_motion_between(*first_pose, *physics.camera_pose())
     obstacle_ids = set(physics.obstacle_geoms.tolist())
     env.close()
 
@@ -380,7 +383,7 @@ def test_docstring_tables_match_the_spaces_and_the_constructor() -> None:
     env.close()
     assert len(_table_after(doc, "## Action Space")) == env.action_space.shape[0]
     state_rows = _table_after(doc, "``state`` (clipped")
-    assert len(state_rows) == env.observation_space["state"].shape[0] == len(flownav_env.env.STATE_FIELDS)
+    assert len(state_rows) == env.observation_space["state"].shape[0] == len(STATE_FIELDS)
     documented = set()
     for row in _table_after(doc, "## Arguments"):
         documented.update(re.findall(r"``(\w+)``", row[0]))

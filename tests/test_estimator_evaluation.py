@@ -13,6 +13,7 @@ from estimator.evaluation import (
     evaluate_sequence,
     format_error_table,
     read_trajectory_log,
+    relative_depth_error,
     relative_motion,
 )
 
@@ -142,3 +143,12 @@ def test_cli_eval_estimator_prints_the_table(icl_copy, capsys):
     assert "median rel err" in output and "0->1" in output and "1->2" in output
     assert main(["eval-estimator", "--sequence", str(icl_copy / "missing")]) == 2
     assert "sequence folder not found" in capsys.readouterr().err
+
+
+def test_relative_depth_error_is_relative_and_nan_where_nothing_compares():
+    errors = relative_depth_error(
+        np.array([1.1, 4.0, 2.0, 1.0, 1.0, np.inf]), np.array([1.0, 5.0, np.nan, 2.0, 0.0, 1.0])
+    )
+    np.testing.assert_allclose(errors[[0, 1, 3]], [0.1, 0.2, 0.5])
+    assert np.all(np.isnan(errors[[2, 4, 5]]))  # missing truth, zero truth, infinite estimate
+    assert relative_depth_error(np.zeros((2, 3)), np.ones((2, 3))).shape == (2, 3)

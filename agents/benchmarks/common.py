@@ -30,7 +30,7 @@ def quiet_gc() -> Iterator[None]:
 
 def hardware_summary(renderer: str | None = None) -> str:
     """CPU model, core count, load and GL renderer facts for the report header (one Markdown list).
-    ``renderer``: :func:`agents.machine.gl_renderer`'s answer where the caller already asked for it."""
+    ``renderer``: :func:`agents.common.machine.gl_renderer`'s answer where the caller already asked for it."""
     lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
     lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
     try:

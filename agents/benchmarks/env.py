@@ -110,7 +110,7 @@ def _reset_bare(subject: _Subject) -> None:
     model, data = inner.physics.model, subject.bare_data
     # Obstacles are mocap bodies whose defaults the env wrote into the model, so a reset places them.
     mujoco.mj_resetData(model, data)
-    data.qpos[:3] = (0.0, 0.0, inner.flight_height)
+    data.qpos[:3] = (0.0, 0.0, inner.settings.flight_height)
     data.qpos[3:7] = (1.0, 0.0, 0.0, 0.0)
     data.qvel[:3] = (inner.forward_speed, 0.0, 0.0)
     data.ctrl[:] = inner.physics.quad.mass * 9.81 / 4  # hover trim, held: there is no controller

@@ -178,7 +178,7 @@ before the median over {repeats} blocks.
 ## Set-up
 - Env: `gymnasium.make("FlowNav-v0", camera_width=W, camera_height=H)` (the default row: no kwargs), field
   layout, {default["frame_rate"]:.0f} frames/s, {default["substeps"]} physics substeps per step. A fixed
-  scripted flight (`agents.bench_estimator.scripted_action`), identical at every resolution because the camera
+  scripted flight (`agents.benchmarks.flight.scripted_action`), identical at every resolution because the camera
   does not act on the dynamics; episodes end on collision/goal/time limit and restart with the next seed
   (resets not timed). Per block {steps} steps; steps/s = steps / summed step time, median over {repeats} blocks.
 - Bare loop, same model and scene (`env.unwrapped.physics.model`, its own `MjData`): per step

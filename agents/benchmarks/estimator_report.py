@@ -253,7 +253,7 @@ passes.
 - Frames: a scripted flight in FlowNavEnv (layout `{flight["layout"]}`, seed {flight["seed"]}, camera
   {flight["width"]}×{flight["height"]}, vertical FOV {flight["fov_deg"]:.0f}°, {flight["forward_speed"]} m/s at
   {flight["frame_rate"]:.0f} frames/s = {flight["forward_speed"] / flight["frame_rate"]:.2f} m per frame, weaving
-  in yaw, height and sideways: `agents.bench_estimator.scripted_action`); {flight["frames"]} frame pairs,
+  in yaw, height and sideways: `agents.benchmarks.flight.scripted_action`); {flight["frames"]} frame pairs,
   the estimator told the true relative motion of each pair.
 - Estimator: `FlowDepthEstimator` defaults ({_estimator_settings()}) except
   `max_points=None`: uncapped, so that (as in the thesis) the point count follows the threshold and the bare

@@ -102,7 +102,7 @@ def record_flight(
         def true_depth(index: int, pixels: np.ndarray) -> np.ndarray:
             if len(pixels) == 0:
                 return np.zeros(0)
-            rays = np.column_stack([intrinsics.normalize(pixels), np.ones(len(pixels))])
+            rays = intrinsics.rays(pixels)
             return physics.ray_depths(rays, *poses[index])
 
         yield Flight(

@@ -17,7 +17,7 @@ import inspect
 import math
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -71,6 +71,7 @@ def from_mapping(data: Any, schema: type[T], source: str = "<config>", prefix: s
         key = f"{prefix}{name}"
         values[name] = _convert(value, hints[name], source, key)
         _check_range(values[name], fields[name].metadata.get("range"), source, key)
+        _check_with(values[name], fields[name].metadata.get("check"), source, key)
     missing = [
         name
         for name, f in fields.items()
@@ -160,6 +161,16 @@ def _check_range(value: Any, bounds: tuple[float | None, float | None] | None, s
             raise ConfigError(f"{source}: key '{key}' must be in {interval}, got {value!r}")
 
 
+def _check_with(value: Any, check: Callable[[str, Any], Any] | None, source: str, key: str) -> None:
+    if check is None or value is None:
+        return
+    for item in value if isinstance(value, (list, tuple)) else [value]:
+        try:
+            check(key.rsplit(".", 1)[-1], item)
+        except ValueError as error:
+            raise ConfigError(f"{source}: key '{key}': {error}") from error
+
+
 def check_env_kwargs(env_kwargs: Mapping[str, Any], source: str, key: str = "env") -> dict[str, Any]:
     """Check ``env:`` keys against :class:`flownav_env.FlowNavEnv` by building (not stepping) one env.
 
@@ -183,3 +194,21 @@ def check_env_kwargs(env_kwargs: Mapping[str, Any], source: str, key: str = "env
 def field_range(low: float | None = None, high: float | None = None, **kwargs: Any) -> Any:
     """A dataclass field whose value (or each of its items) must lie in [low, high]."""
     return dataclasses.field(metadata={"range": (low, high)}, **kwargs)
+
+
+def checked_field(check: Callable[[str, Any], Any], **kwargs: Any) -> Any:
+    """A dataclass field whose value (or each of its items) must pass ``check(name, value)``, which raises
+    ValueError otherwise: for ranges owned elsewhere, such as :class:`flownav_env.settings.Range.check`."""
+    return dataclasses.field(metadata={"check": check}, **kwargs)
+
+
+def env_setting_field(setting: str, **kwargs: Any) -> Any:
+    """A dataclass field holding a value of FlowNavEnv's setting ``setting`` (or a list of them), checked
+    against the range :mod:`flownav_env.settings` owns for it, so no config writes that range again."""
+
+    def check(_: str, value: Any) -> Any:
+        from flownav_env.settings import check_setting
+
+        return check_setting(setting, value)
+
+    return checked_field(check, **kwargs)

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 from agents.common.machine import code_version, machine_summary
 from agents.evaluation.statistics import format_summary, summarise
-from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
+from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
 
 SUMMARY_FIELDS = [
     "agent",
@@ -45,13 +46,7 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    neutral = {
-        "rotation_error": 0.0,
-        "translation_error": 0.0,
-        "attitude_jitter_deg": 0.0,
-        "brightness": 1.0,
-        "forward_speed": 1.0,
-    }
+    neutral = {setting.name: setting.default for setting in dataclasses.fields(EnvSettings)}
     units = {
         "rotation_error": "rotation error (relative)",
         "translation_error": "translation error (relative)",

@@ -67,7 +67,7 @@ class BeeAgent:
     ``frontal_threshold``) it also turns and slides toward the emptier side. Only the sector rows at and above
     the horizon are used: the bottom row mostly sees the ground. Height and heading are held as in
     :class:`StraightAgent`. The gains are the best of 16 candidates of a random search on training seeds 0-29
-    only, at FlowNav-v0's defaults (``python -m agents.tune_bee --candidates 16 --seeds 30``, ranking in
+    only, at FlowNav-v0's defaults (``flownav tune-bee --candidates 16 --seeds 30``, ranking in
     ``results/bee_tuning/ranking.md``): 14 of 30 successes and 16 collisions, against 8 successes and 18
     collisions for the previous gains (1.798, 1.297, 0.398, 1.363; tuned at FAST threshold 20) and 7 and 20 for
     the hand-set start (1.5, 2.0, 0.15, 0.5): gentle centring with a strong frontal rule ranked first. With

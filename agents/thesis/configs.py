@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from agents.common.config import field_range
+from agents.common.config import checked_field, env_setting_field, field_range
+from flownav_env.playback import DISTANCE_PER_FRAME
 
 
 @dataclass
@@ -21,9 +22,9 @@ class ObstacleConfig:
 class CameraConfig:
     """Camera resolution and vertical field of view."""
 
-    width: int = field_range(16, 1280, default=640)
-    height: int = field_range(16, 1280, default=480)
-    fov_deg: float = field_range(10.0, 150.0, default=60.0)
+    width: int = env_setting_field("camera_width", default=640)
+    height: int = env_setting_field("camera_height", default=480)
+    fov_deg: float = env_setting_field("camera_fov_deg", default=60.0)
 
 
 def _one_capsule() -> list[ObstacleConfig]:
@@ -142,8 +143,8 @@ class RecordConfig:
 
     env_seed: int = field_range(0, None, default=0)
     steps: int = field_range(2, 10000, default=40)
-    forward_speed: float = field_range(0.1, 5.0, default=1.0)
-    frame_rate: float = field_range(1.0, 50.0, default=10.0)
+    forward_speed: float = env_setting_field("forward_speed", default=1.0)
+    frame_rate: float = env_setting_field("frame_rate", default=10.0)
     lateral_action: float = field_range(0.0, 1.0, default=0.3)
     vertical_action: float = field_range(0.0, 1.0, default=0.2)
     yaw_action: float = field_range(0.0, 1.0, default=0.3)
@@ -154,11 +155,11 @@ class RecordConfig:
 class BaseSettingsConfig:
     """The base run's test variables; each sweep changes one of them."""
 
-    distance_per_frame: float = field_range(0.001, 10.0, default=0.05)
-    brightness: float = field_range(0.0, 4.0, default=1.0)
-    attitude_jitter_deg: float = field_range(0.0, 10.0, default=0.0)
-    rotation_error: float = field_range(0.0, 1.0, default=0.0)
-    translation_error: float = field_range(0.0, 1.0, default=0.0)
+    distance_per_frame: float = checked_field(DISTANCE_PER_FRAME.check, default=0.05)
+    brightness: float = env_setting_field("brightness", default=1.0)
+    attitude_jitter_deg: float = env_setting_field("attitude_jitter_deg", default=0.0)
+    rotation_error: float = env_setting_field("rotation_error", default=0.0)
+    translation_error: float = env_setting_field("translation_error", default=0.0)
     max_frames: int = field_range(2, 10000, default=40)
 
 
@@ -166,11 +167,17 @@ class BaseSettingsConfig:
 class SweepConfig:
     """Values of each test variable (Appendices C–H); the others stay at the base run's values."""
 
-    attitude_jitter_deg: list[float] = field_range(0.0, 10.0, default_factory=lambda: [0.0, 1.0, 2.5])
-    distance_per_frame: list[float] = field_range(0.001, 10.0, default_factory=lambda: [0.005, 0.05, 0.3])
-    brightness: list[float] = field_range(0.0, 4.0, default_factory=lambda: [0.5, 1.0, 2.0])
-    rotation_error: list[float] = field_range(0.0, 1.0, default_factory=lambda: [0.0, 0.1])
-    translation_error: list[float] = field_range(0.0, 1.0, default_factory=lambda: [0.0, 0.1])
+    attitude_jitter_deg: list[float] = env_setting_field(
+        "attitude_jitter_deg", default_factory=lambda: [0.0, 1.0, 2.5]
+    )
+    distance_per_frame: list[float] = checked_field(
+        DISTANCE_PER_FRAME.check, default_factory=lambda: [0.005, 0.05, 0.3]
+    )
+    brightness: list[float] = env_setting_field("brightness", default_factory=lambda: [0.5, 1.0, 2.0])
+    rotation_error: list[float] = env_setting_field("rotation_error", default_factory=lambda: [0.0, 0.1])
+    translation_error: list[float] = env_setting_field(
+        "translation_error", default_factory=lambda: [0.0, 0.1]
+    )
 
 
 @dataclass

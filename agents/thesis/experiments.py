@@ -45,16 +45,15 @@ from agents.thesis.paths import (
     translation_path,
 )
 from agents.thesis.playback_runs import RunResult, run_playback
+from flownav_env.playback import PlaybackSettings, PlaybackWorld, save_path
 
 
 def _settings(config: ExperimentConfig, **kwargs: Any) -> Any:
-    from flownav_env.recording import PlaybackSettings
 
     return PlaybackSettings(seed=config.seed, **kwargs)
 
 
 def _world(path: Any, config: ExperimentConfig) -> Any:
-    from flownav_env.recording import PlaybackWorld
 
     return PlaybackWorld(path, config.camera.width, config.camera.height, config.camera.fov_deg)
 
@@ -260,8 +259,6 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from flownav_env.recording import save_path
 
     path = record_three_capsule_flight(config)
     if config.obstacles:

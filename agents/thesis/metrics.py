@@ -8,20 +8,12 @@ from typing import Any
 
 import numpy as np
 
+from estimator.evaluation import relative_depth_error
+
 METHODS = ("thesis", "triangulation")
 COMPONENT_VARIANTS = ("x-flow", "y-flow")
 # A depth counts as accurate within this relative error (the share of depths within 10 %).
 WITHIN = 0.10
-
-
-def relative_depth_errors(depth: np.ndarray, true_depth: np.ndarray) -> np.ndarray:
-    """``|d - d_true| / d_true`` per point (NaN where the truth is missing or not positive)."""
-    depth = np.asarray(depth, np.float64)
-    true_depth = np.asarray(true_depth, np.float64)
-    errors = np.full(depth.shape, np.nan)
-    usable = np.isfinite(true_depth) & (true_depth > 0) & np.isfinite(depth)
-    errors[usable] = np.abs(depth[usable] - true_depth[usable]) / true_depth[usable]
-    return errors
 
 
 def component_depth(
@@ -87,7 +79,7 @@ def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = Fa
             valid = valid & (np.asarray(frame["labels"]) >= 0)
         valid_counts.append(int(valid.sum()))
         tracked_counts.append(int(frame["tracked"]))
-        relative = relative_depth_errors(frame["depth"][valid], frame["true_depth"][valid])
+        relative = relative_depth_error(frame["depth"][valid], frame["true_depth"][valid])
         errors.append(relative[np.isfinite(relative)])
     all_errors = np.concatenate(errors) if errors else np.zeros(0)
     count = len(all_errors)

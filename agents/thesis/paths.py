@@ -20,6 +20,8 @@ from agents.thesis.configs import (
     ThreeCapsuleConfig,
     TranslationConfig,
 )
+from flownav_env.playback import path_from_poses, record_env_flight
+from flownav_env.rotations import camera_rotation, rotation_from_vector
 
 
 def scene_kwargs(
@@ -42,7 +44,6 @@ def _vector3(name: str, values: list[float]) -> np.ndarray:
 
 def straight_path(config: StraightConfig) -> Any:
     """Experiment 1's path: level camera looking along +x, moving ``distance_per_frame`` along +x per frame."""
-    from flownav_env.recording import camera_rotation, path_from_poses
 
     start = _vector3("start", config.start)
     steps = np.arange(config.frames)[:, None] * config.distance_per_frame
@@ -53,8 +54,6 @@ def straight_path(config: StraightConfig) -> Any:
 
 def rotation_path(config: RotationConfig, case: RotationCase) -> Any:
     """Experiment 2's path for one case: a fixed camera centre turning by the case's rotation each frame."""
-    from flownav_env.recording import camera_rotation, path_from_poses
-    from flownav_env.sensor import rotation_from_vector
 
     position = _vector3("position", config.position)
     rate = np.deg2rad([case.pitch_deg, case.yaw_deg, case.roll_deg])
@@ -67,7 +66,6 @@ def rotation_path(config: RotationConfig, case: RotationCase) -> Any:
 
 def translation_path(config: TranslationConfig, scene: SceneConfig) -> tuple[Any, int]:
     """Experiment 3's path: along the camera's x axis, then its y axis; returns (path, index of the turn)."""
-    from flownav_env.recording import camera_rotation, path_from_poses
 
     start = _vector3("start", config.start)
     rotation = camera_rotation(0.0)
@@ -89,8 +87,6 @@ def random_6dof_path(config: Random6DofConfig) -> Any:
     Raises:
         ValueError: ``min_period_frames`` exceeds ``max_period_frames``.
     """
-    from flownav_env.recording import camera_rotation, path_from_poses
-    from flownav_env.sensor import rotation_from_vector
 
     if config.min_period_frames > config.max_period_frames:
         raise ValueError(
@@ -124,7 +120,6 @@ def random_6dof_path(config: Random6DofConfig) -> Any:
 def record_three_capsule_flight(config: ThreeCapsuleConfig) -> Any:
     """Experiment 5's base path: FlowNavEnv's ``three`` layout flown under a scripted sinusoidal policy."""
     from flownav_env import FlowNavEnv
-    from flownav_env.recording import record_env_flight
 
     record = config.record
     env = FlowNavEnv(

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from agents.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
+from flownav_env.playback import play_back
 
 
 @dataclass
@@ -69,9 +70,9 @@ def run_playback(
     """Play a path back through the renderer into both estimators and compare every depth with the truth.
 
     Args:
-        path: :class:`flownav_env.recording.CameraPath`.
-        world: :class:`flownav_env.recording.PlaybackWorld` built from the path.
-        settings: :class:`flownav_env.recording.PlaybackSettings`.
+        path: :class:`flownav_env.playback.CameraPath`.
+        world: :class:`flownav_env.playback.PlaybackWorld` built from the path.
+        settings: :class:`flownav_env.playback.PlaybackSettings`.
         estimator_kwargs: :class:`estimator.FlowDepthEstimator` kwargs (without ``method``).
         component_variants: Also compute x-flow-only and y-flow-only depths from the thesis estimator's tracks.
         keep_residuals: Keep p1, p2 and the told rotation per frame (pure-rotation analysis).
@@ -85,7 +86,6 @@ def run_playback(
 
     from estimator import CameraIntrinsics, FlowDepthEstimator
     from estimator.geometry import solve_depth, valid_depth_mask
-    from flownav_env.recording import play_back
 
     intrinsics = CameraIntrinsics.from_fov(world.width, world.height, world.fov_deg)
     estimators = {m: FlowDepthEstimator(intrinsics, method=m, **estimator_kwargs) for m in METHODS}
@@ -125,7 +125,7 @@ def run_playback(
         ):
             key = points.tobytes()
             if key not in cache:
-                rays = np.column_stack([intrinsics.normalize(points), np.ones(len(points))])
+                rays = intrinsics.rays(points)
                 depth = world.true_depth(rays, rotation_prev, position_prev)
                 hits = position_prev + (rays * depth[:, None]) @ rotation_prev.T
                 cache[key] = (depth, world.label_points(hits))

@@ -186,7 +186,7 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
             lines += [
                 f"Recorded base flight: {result['recorded_frames']} frames, {result['recorded_length_m']:.2f} m; "
                 f"capsules at {', '.join(f'({x:.2f}, {y:.2f})' for x, y in result['obstacles'])} m "
-                "(saved as `three_capsule_path.npz`, format in `flownav_env/recording.py`).",
+                "(saved as `three_capsule_path.npz`, format in `flownav_env/playback/path.py`).",
                 "",
             ]
         if result.get("rows"):

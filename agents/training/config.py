@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from agents.common.config import field_range
+from agents.common.config import env_setting_field, field_range
 
 
 @dataclass
@@ -31,10 +31,10 @@ class PPOParams:
 class Randomization:
     """Per-episode uniform ranges [low, high] of the sensor variables (for ``ppo_robust``); empty = fixed."""
 
-    rotation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
-    translation_error: list[float] = field_range(0.0, 1.0, default_factory=list)
-    attitude_jitter_deg: list[float] = field_range(0.0, 10.0, default_factory=list)
-    brightness: list[float] = field_range(0.0, 4.0, default_factory=list)
+    rotation_error: list[float] = env_setting_field("rotation_error", default_factory=list)
+    translation_error: list[float] = env_setting_field("translation_error", default_factory=list)
+    attitude_jitter_deg: list[float] = env_setting_field("attitude_jitter_deg", default_factory=list)
+    brightness: list[float] = env_setting_field("brightness", default_factory=list)
 
     def validate(self) -> None:
         for name, bounds in asdict(self).items():

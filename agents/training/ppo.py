@@ -23,7 +23,7 @@ from agents.common.machine import available_cores, code_version, cpu_model, gl_r
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.training.config import TrainConfig
 from agents.training.curves import plot_learning_curves
-from flownav_env.env import ENV_ESTIMATOR_DEFAULTS
+from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 
 def make_env_factory(config: TrainConfig, rank: int):

@@ -1,26 +1,22 @@
-"""flownav_env.recording: file round trip, resampling, slerp, playback exactness and determinism, bad input."""
+"""flownav_env.playback: file round trip, resampling, slerp, playback exactness and determinism, bad input."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from flownav_env.recording import (
+from flownav_env.playback import (
     CameraPath,
     PlaybackSettings,
     PlaybackWorld,
-    camera_rotation,
     label_world_points,
     load_path,
-    matrix_from_quat,
     path_from_poses,
     play_back,
-    quat_from_matrix,
     resample_by_distance,
     save_path,
-    slerp,
 )
-from flownav_env.sensor import rotation_from_vector
+from flownav_env.rotations import camera_rotation, rotation_from_vector
 
 SIZE = (48, 36)
 
@@ -64,17 +60,6 @@ def test_recorded_path_plays_back_at_the_recorded_poses_and_round_trips(tmp_path
     np.testing.assert_allclose(again.positions, path.positions, atol=1e-12)
     np.testing.assert_allclose(again.rotations(), path.rotations(), atol=1e-12)
     assert frames[0].image.shape == (SIZE[1], SIZE[0], 3)
-
-
-def test_quaternion_round_trip_and_slerp() -> None:
-    rotation = rotation_from_vector([0.3, -1.2, 2.9])
-    np.testing.assert_allclose(matrix_from_quat(quat_from_matrix(rotation)), rotation, atol=1e-12)
-    start, end = np.eye(3), rotation_from_vector([0.0, 0.0, 1.0])
-    middle = matrix_from_quat(slerp(quat_from_matrix(start), quat_from_matrix(end), 0.5))
-    np.testing.assert_allclose(middle, rotation_from_vector([0.0, 0.0, 0.5]), atol=1e-12)
-    # q and -q are one rotation: slerp must take the short way, not a 2π detour.
-    q = quat_from_matrix(end)
-    np.testing.assert_allclose(matrix_from_quat(slerp(q, -quat_from_matrix(start), 0.5)), middle, atol=1e-12)
 
 
 def test_resampling_spaces_frames_by_distance_and_slerps_rotations() -> None:
@@ -134,6 +119,34 @@ def test_bad_playback_settings_name_value_and_range(kwargs, message) -> None:
     with pytest.raises(ValueError) as error:
         PlaybackSettings(**kwargs)
     assert str(error.value) == message
+
+
+@pytest.mark.parametrize(
+    ("size", "fov", "message"),
+    [
+        ((8, 36), 60.0, "width must be an integer in [16, 1280], got 8"),
+        ((48, 2000), 60.0, "height must be an integer in [16, 1280], got 2000"),
+        ((48, 36), 5.0, "fov_deg must be in [10.0, 150.0], got 5.0"),
+    ],
+)
+def test_bad_world_sizes_name_value_and_range(size, fov, message) -> None:
+    with pytest.raises(ValueError) as error:
+        PlaybackWorld(random_path(), *size, fov_deg=fov)
+    assert str(error.value) == message
+
+
+def test_world_brightness_is_checked_and_frames_carry_their_grey_image() -> None:
+    import cv2
+
+    path = random_path(frames=2)
+    world = PlaybackWorld(path, *SIZE)
+    try:
+        with pytest.raises(ValueError, match=r"^brightness must be in \[0.0, 4.0\], got -1$"):
+            world.set_brightness(-1)
+        frame = next(play_back(path, world, PlaybackSettings()))
+    finally:
+        world.close()
+    np.testing.assert_array_equal(frame.gray, cv2.cvtColor(frame.image, cv2.COLOR_RGB2GRAY))
 
 
 def test_bad_paths_and_files(tmp_path) -> None:

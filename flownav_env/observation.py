@@ -1,0 +1,130 @@
+"""What the FlowNav agent observes, assembled from the estimator's depth points and the drone's own state,
+and the estimator statistics the env reports in ``info``. No simulation happens here.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from gymnasium import spaces
+
+from estimator import CameraIntrinsics, DepthPoints, sector_fraction, sector_histogram
+from estimator.evaluation import relative_depth_error
+from flownav_env.settings import EnvSettings
+
+if TYPE_CHECKING:
+    from flownav_env.physics import FlowNavPhysics
+
+STATE_FIELDS = (
+    "forward_velocity",
+    "lateral_velocity",
+    "vertical_velocity",
+    "roll",
+    "pitch",
+    "height",
+    "heading_error",
+)
+STATE_LOW = np.array([-5.0, -5.0, -5.0, -math.pi, -math.pi / 2, 0.0, -math.pi], np.float32)
+STATE_HIGH = np.array([5.0, 5.0, 5.0, math.pi, math.pi / 2, 10.0, math.pi], np.float32)
+
+
+def observation_space(settings: EnvSettings) -> spaces.Dict:
+    """The ``Dict`` space of the observations these settings produce."""
+    rows, cols = settings.histogram_sectors
+    boxes = {
+        "depth_histogram": spaces.Box(0.0, 1.0, (rows, cols, len(settings.depth_bin_edges) - 1), np.float32),
+        "state": spaces.Box(STATE_LOW, STATE_HIGH, dtype=np.float32),
+    }
+    if settings.observe_unresolved:
+        boxes["unresolved"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+    return spaces.Dict(boxes)
+
+
+def observed_depths(
+    obs_source: str, points: DepthPoints, true_depth: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The depths the histogram counts and which points count, for each ``obs_source``.
+
+    The oracles keep the estimator's tracked points but swap in their true depths, so that comparing them
+    with ``"flow"`` separates the estimator's choice of points from its measurement of them.
+    """
+    if obs_source == "oracle":
+        # The same points the estimator tracked, with their true depth (parallax or not).
+        return true_depth, points.tracked & np.isfinite(true_depth)
+    if obs_source == "oracle_valid":
+        return true_depth, points.valid & np.isfinite(true_depth)
+    return points.depth, points.valid
+
+
+def depth_histogram(
+    settings: EnvSettings,
+    intrinsics: CameraIntrinsics,
+    points: DepthPoints,
+    depth: np.ndarray,
+    counted: np.ndarray,
+) -> np.ndarray:
+    """The ``depth_histogram`` observation of the counted points."""
+    return sector_histogram(
+        points.points,
+        depth,
+        counted,
+        intrinsics.image_size,
+        sectors=settings.histogram_sectors,
+        bin_edges=np.asarray(settings.depth_bin_edges, np.float64),
+    )
+
+
+def assemble_observation(
+    settings: EnvSettings,
+    intrinsics: CameraIntrinsics,
+    histogram: np.ndarray,
+    state: np.ndarray,
+    points: DepthPoints,
+    counted: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector) only when asked for."""
+    observation = {"depth_histogram": histogram, "state": state}
+    if settings.observe_unresolved:
+        observation["unresolved"] = sector_fraction(
+            points.points,
+            points.tracked & ~counted,
+            points.tracked,
+            intrinsics.image_size,
+            sectors=settings.histogram_sectors,
+        )
+    return observation
+
+
+def drone_state(physics: FlowNavPhysics) -> np.ndarray:
+    """The ``state`` observation: what a real drone knows of itself, clipped to the space's bounds."""
+    yaw = physics.yaw()
+    cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+    vx, vy, vz = physics.velocity_world()
+    roll, pitch = physics.roll_pitch()
+    state = np.array(
+        [
+            cos_yaw * vx + sin_yaw * vy,
+            -sin_yaw * vx + cos_yaw * vy,
+            vz,
+            roll,
+            pitch,
+            physics.position()[2],
+            math.atan2(math.sin(yaw), math.cos(yaw)),
+        ],
+        np.float32,
+    )
+    return np.clip(state, STATE_LOW, STATE_HIGH)
+
+
+def estimator_info(points: DepthPoints, true_depth: np.ndarray) -> dict[str, Any]:
+    """Estimator statistics; ``depth_error_median`` only when some valid point has a finite ground truth
+    (a reset frame has no truth yet, so it passes an empty ``true_depth``)."""
+    valid = np.asarray(points.valid, bool)
+    comparable = valid & np.isfinite(true_depth) if len(true_depth) == len(valid) else np.zeros_like(valid)
+    info: dict[str, Any] = {"points_tracked": len(valid), "points_valid": int(valid.sum())}
+    if comparable.any():
+        relative = relative_depth_error(points.depth[comparable], true_depth[comparable])
+        info["depth_error_median"] = float(np.median(relative))
+    return info

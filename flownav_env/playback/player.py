@@ -1,0 +1,127 @@
+"""Playing a camera path back under changed test variables (the thesis's playback mode, §3.5, §5.2)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from flownav_env.playback.path import CameraPath, resample_by_distance
+from flownav_env.playback.world import PlaybackWorld
+from flownav_env.sensor import Pose, SensorPipeline
+from flownav_env.settings import Range, SensorSettings, check_setting
+
+# Metres per frame a path may be resampled to.
+DISTANCE_PER_FRAME = Range(0.0, 10.0, low_open=True, unit="m", meaning="distance travelled per frame")
+
+
+@dataclass(frozen=True)
+class PlaybackSettings:
+    """The test variables of one playback (thesis §5.2, Appendices C–H).
+
+    Attributes:
+        brightness: Scene light level, 1 = daylight (range: the env's ``brightness`` setting).
+        distance_per_frame: Resample the path to this many metres per frame (:data:`DISTANCE_PER_FRAME`), or
+            None to play the recorded frames as they are.
+        attitude_jitter_deg: Camera attitude disturbance per frame, uniform ± this per axis, degrees. The
+            disturbance is real (the camera turns) and known (the estimator is told the true motion).
+        rotation_error: Relative error of each rotation component told to the estimator.
+        translation_error: Relative error of each translation component told to the estimator.
+        max_frames: Most frames to play (from the start), an integer >= 2, or None for all.
+        seed: Seed of the jitter and motion errors; the same seed gives the same playback.
+
+    Raises:
+        ValueError: A value is outside its range; the message names it, the value and the range.
+    """
+
+    brightness: float = 1.0
+    distance_per_frame: float | None = None
+    attitude_jitter_deg: float = 0.0
+    rotation_error: float = 0.0
+    translation_error: float = 0.0
+    max_frames: int | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_setting("brightness", self.brightness)
+        if self.distance_per_frame is not None:
+            DISTANCE_PER_FRAME.check("distance_per_frame", self.distance_per_frame)
+        for name in ("attitude_jitter_deg", "rotation_error", "translation_error"):
+            check_setting(name, getattr(self, name))
+        if self.max_frames is not None and (
+            isinstance(self.max_frames, bool) or not isinstance(self.max_frames, int) or self.max_frames < 2
+        ):
+            raise ValueError(f"max_frames must be an integer >= 2 or None, got {self.max_frames!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
+            raise ValueError(f"seed must be an integer, got {self.seed!r}")
+
+    @property
+    def sensor(self) -> SensorSettings:
+        """The sensor variables of this playback."""
+        return SensorSettings(
+            attitude_jitter_deg=self.attitude_jitter_deg,
+            brightness=self.brightness,
+            rotation_error=self.rotation_error,
+            translation_error=self.translation_error,
+        )
+
+
+@dataclass
+class PlaybackFrame:
+    """One played-back frame.
+
+    Attributes:
+        index: Frame number from 0.
+        image: RGB frame (H, W, 3) uint8.
+        rotation: World-from-camera rotation (OpenCV axes) the frame was rendered from, jitter included.
+        position: Camera position, m.
+        true_motion: ``(R, t)`` from the previous frame's camera to this one (``X_this = R X_prev + t``);
+            identity and zero on frame 0.
+        told_motion: The motion told to the estimator: ``true_motion`` with the configured errors.
+        gray: The frame in grey levels (H, W) uint8, as the estimators read it.
+    """
+
+    index: int
+    image: np.ndarray
+    rotation: np.ndarray
+    position: np.ndarray
+    true_motion: tuple[np.ndarray, np.ndarray]
+    told_motion: tuple[np.ndarray, np.ndarray]
+    gray: np.ndarray
+
+
+def play_back(path: CameraPath, world: PlaybackWorld, settings: PlaybackSettings) -> Iterator[PlaybackFrame]:
+    """Render a recorded path under the settings' test variables, frame by frame.
+
+    Each frame goes through :class:`flownav_env.sensor.SensorPipeline`, the env's own per-frame order; the
+    camera is placed at the recorded pose turned by the jitter (about its own centre). All random numbers come
+    from one generator seeded with ``settings.seed``, so a playback is deterministic for a seed.
+
+    Args:
+        path: The recorded path.
+        world: The scene to render in (built from the same path).
+        settings: The test variables.
+
+    Yields:
+        One :class:`PlaybackFrame` per (resampled) frame.
+
+    Raises:
+        ValueError: ``distance_per_frame`` is longer than the path.
+    """
+    if settings.distance_per_frame is not None:
+        path = resample_by_distance(path, settings.distance_per_frame, settings.max_frames)
+    elif settings.max_frames is not None and settings.max_frames < len(path):
+        count = settings.max_frames
+        path = path.with_poses(path.times[:count], path.positions[:count], path.quaternions[:count])
+    rng = np.random.default_rng(settings.seed)
+    world.set_brightness(settings.brightness)
+    sensor, pipeline = settings.sensor, SensorPipeline()
+    for index, (rotation, position) in enumerate(zip(path.rotations(), path.positions, strict=True)):
+
+        def place_camera(jitter: np.ndarray, rotation=rotation, position=position) -> Pose:
+            world.set_camera_pose(rotation @ jitter, position)
+            return world.camera_pose()
+
+        frame = pipeline.capture(sensor, rng, place_camera, world.render, first=index == 0)
+        yield PlaybackFrame(index, frame.image, *frame.pose, frame.true_motion, frame.told_motion, frame.gray)

@@ -1,0 +1,142 @@
+"""flownav_env.settings: one rule per setting, the messages they raise, and agreement with the env's
+constructor and its documented Arguments table."""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+from dataclasses import fields
+
+import numpy as np
+import pytest
+
+from flownav_env import FlowNavEnv
+from flownav_env.settings import (
+    ENV_ESTIMATOR_DEFAULTS,
+    SENSOR_FIELDS,
+    EnvSettings,
+    Range,
+    SensorSettings,
+    check_setting,
+    setting_range,
+)
+
+
+@pytest.mark.parametrize(
+    ("rule", "value", "message"),
+    [
+        (Range(0.0, 5.0), 7, "x must be in [0.0, 5.0], got 7"),
+        (Range(0.0, 5.0), "7", "x must be a number in [0.0, 5.0], got '7'"),
+        (Range(0.0, 5.0), True, "x must be a number in [0.0, 5.0], got True"),
+        (Range(0.0, 5.0), math.inf, "x must be in [0.0, 5.0], got inf"),
+        (Range(0.0, 5.0, low_open=True), 0.0, "x must be in (0.0, 5.0], got 0.0"),
+        (Range(0.0, math.inf, high_open=True), -1.0, "x must be in [0.0, inf), got -1.0"),
+        (Range(16, 1280, integer=True), 16.0, "x must be an integer in [16, 1280], got 16.0"),
+        (Range(16, 1280, integer=True), 1281, "x must be an integer in [16, 1280], got 1281"),
+    ],
+)
+def test_range_names_value_and_interval(rule: Range, value, message: str) -> None:
+    with pytest.raises(ValueError) as error:
+        rule.check("x", value)
+    assert str(error.value) == message
+
+
+def test_range_normalises_to_float_or_int() -> None:
+    assert Range(0.0, 5.0).check("x", np.int64(3)) == 3.0 and isinstance(Range(0.0, 5.0).check("x", 3), float)
+    assert type(Range(1, 32, integer=True).check("x", np.int32(4))) is int
+
+
+def test_a_range_tied_to_another_setting_must_be_resolved_first() -> None:
+    with pytest.raises(TypeError, match="depends on flight_height"):
+        next(f.metadata["rule"] for f in fields(EnvSettings) if f.name == "max_height").check("max_height", 3)
+
+
+def test_check_setting_and_setting_range() -> None:
+    assert check_setting("forward_speed", 2) == 2.0
+    assert check_setting("histogram_sectors", [2, 4]) == (2, 4)
+    assert setting_range("camera_width").high == 1280
+    # Tied ranges resolve against the other setting's default, or the value given.
+    assert str(setting_range("max_height").interval) == "(1.0, 20.0]"
+    assert setting_range("obstacle_height", obstacle_radius=0.25).low == 0.5
+    with pytest.raises(ValueError, match=r"^max_height must be in \(2.0, 20.0\], got 1.5$"):
+        check_setting("max_height", 1.5, flight_height=2.0)
+    with pytest.raises(ValueError, match=r"^forward_speed must be in \[0.0, 5.0\], got 7$"):
+        check_setting("forward_speed", 7)
+    with pytest.raises(ValueError, match=r"^unknown setting 'speed'; known: layout, "):
+        check_setting("speed", 1.0)
+    with pytest.raises(ValueError, match=r"^layout is not a numeric setting \(its rule is Choice\)$"):
+        setting_range("layout")
+
+
+def test_settings_normalise_and_derive() -> None:
+    settings = EnvSettings(
+        frame_rate=20, depth_bin_edges=np.array([0, 1, 4]), estimator_kwargs={"max_points": 9}
+    )
+    assert settings.frame_rate == 20.0 and settings.depth_bin_edges == (0.0, 1.0, 4.0)
+    assert settings.substeps == round(1 / (20 * 0.004))
+    assert settings.estimator_arguments() == {**ENV_ESTIMATOR_DEFAULTS, "max_points": 9}
+    assert settings.sensor == SensorSettings()
+    assert settings.layout_params().field_length == settings.field_length
+    with pytest.raises(TypeError):
+        settings.estimator_kwargs["max_points"] = 3  # stored read-only
+
+
+def test_with_sensor_checks_names_and_values() -> None:
+    settings = EnvSettings()
+    assert settings.with_sensor(brightness=2).sensor == SensorSettings(brightness=2.0)
+    with pytest.raises(
+        ValueError, match=r"^not sensor settings: \['forward_speed'\]; allowed: attitude_jitter"
+    ):
+        settings.with_sensor(forward_speed=2.0)
+    with pytest.raises(ValueError, match=r"^brightness must be in \[0.0, 4.0\], got 5$"):
+        settings.with_sensor(brightness=5)
+    with pytest.raises(ValueError, match=r"^rotation_error must be a number in \[0.0, 1.0\], got 'a'$"):
+        SensorSettings(rotation_error="a")
+
+
+def test_sensor_rules_are_the_env_rules() -> None:
+    env_rules = {f.name: f.metadata["rule"] for f in fields(EnvSettings)}
+    sensor_rules = {f.name: f.metadata["rule"] for f in fields(SensorSettings)}
+    assert tuple(sensor_rules) == SENSOR_FIELDS
+    assert all(sensor_rules[name] is env_rules[name] for name in SENSOR_FIELDS)
+
+
+def test_settings_mirror_the_env_constructor() -> None:
+    parameters = dict(inspect.signature(FlowNavEnv.__init__).parameters)
+    del parameters["self"], parameters["render_mode"]
+    assert set(parameters) == {f.name for f in fields(EnvSettings)}
+    defaults = EnvSettings()
+    for name, parameter in parameters.items():
+        default = parameter.default
+        expected = getattr(defaults, name)
+        assert expected == {} if default is None else check_setting(name, default) == expected, name
+
+
+def test_every_range_appears_in_the_arguments_table() -> None:
+    table = FlowNavEnv.__doc__[FlowNavEnv.__doc__.index("## Arguments") :]
+    rows = {}
+    for line in table.splitlines()[3:]:
+        if not line.startswith("    |"):
+            break
+        for name in re.findall(r"``(\w+)``", line.split("|")[1]):
+            rows[name] = line
+    for item in fields(EnvSettings):
+        rule = item.metadata["rule"]
+        if not isinstance(rule, Range):
+            continue
+        row = rows[item.name]
+        if rule.low_from is not None:
+            assert f"{rule.high:g}]" in row, item.name
+        elif math.isinf(rule.high):
+            assert f"≥ {rule.low:g}" in row, item.name
+        else:
+            match = re.search(r"in ([\[(])([\d.]+), ([\d.]+)([\])])", row)
+            assert match, item.name
+            opened, low, high, closed = match.groups()
+            assert (opened == "(", float(low), float(high), closed == ")") == (
+                rule.low_open,
+                rule.low,
+                rule.high,
+                rule.high_open,
+            ), item.name

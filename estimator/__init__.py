@@ -9,9 +9,17 @@ Public API:
     :func:`sector_fraction`, :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.evaluation`.
 """
 
+from importlib.metadata import PackageNotFoundError, version
+
 from estimator.camera import CameraIntrinsics
 from estimator.estimator import DepthPoints, FlowDepthEstimator
 from estimator.histogram import DEFAULT_BIN_EDGES, DEFAULT_SECTORS, sector_fraction, sector_histogram
+
+try:
+    # The one version of the flownav distribution (estimator, flownav_env and agents), from pyproject.toml.
+    __version__ = version("flownav")
+except PackageNotFoundError:  # a source tree that was never installed
+    __version__ = "unknown"
 
 __all__ = [
     "DEFAULT_BIN_EDGES",
@@ -19,6 +27,7 @@ __all__ = [
     "CameraIntrinsics",
     "DepthPoints",
     "FlowDepthEstimator",
+    "__version__",
     "sector_fraction",
     "sector_histogram",
 ]

@@ -21,6 +21,7 @@ os.environ.setdefault("MUJOCO_GL", DEFAULT_GL_BACKEND)
 
 from gymnasium.envs.registration import register, registry  # noqa: E402  (after the GL backend is set)
 
+from estimator import __version__  # noqa: E402
 from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)
 
 ENV_IDS = {
@@ -36,4 +37,4 @@ for _env_id, (_kwargs, _steps) in ENV_IDS.items():
             id=_env_id, entry_point="flownav_env.env:FlowNavEnv", kwargs=_kwargs, max_episode_steps=_steps
         )
 
-__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv"]
+__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv", "__version__"]

@@ -22,7 +22,7 @@ from flownav_env.observation import (
     observed_depths,
 )
 from flownav_env.physics import FlowNavPhysics
-from flownav_env.quadrotor import ControllerGains, QuadrotorParams
+from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_command
 from flownav_env.rendering import VIEW_PANEL_SIZE, CameraRenderer, camera_panel
 from flownav_env.scene import LAYOUT_FUNCTIONS, material_names
 from flownav_env.sensor import Pose, SensorPipeline
@@ -231,6 +231,7 @@ class FlowNavEnv(gym.Env):
         self.physics.set_brightness(settings.brightness)
         self._camera = CameraRenderer(self.physics.model, settings.camera_width, settings.camera_height)
         self._view: CameraRenderer | None = None
+        self._closed = False
         self._materials = len(material_names())
         self._sensor = SensorPipeline()
 
@@ -260,6 +261,7 @@ class FlowNavEnv(gym.Env):
 
     # --- Gymnasium API ----------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        self._require_open("reset")
         super().reset(seed=seed)
         rng = self.np_random
         positions, self._goal_x = LAYOUT_FUNCTIONS[self.layout](rng, self.layout_params)
@@ -290,12 +292,19 @@ class FlowNavEnv(gym.Env):
         return self._observation(histogram, self._depth_points, no_points), info
 
     def step(self, action):
+        self._require_open("step")
         action = np.clip(np.asarray(action, np.float64).reshape(3), -1.0, 1.0)
         if not np.all(np.isfinite(action)):
             raise ValueError(f"action must be finite, got {action!r}")
         settings = self.settings
         x_before = self.physics.position()[0]
-        velocity_target = self._velocity_target(action)
+        velocity_target = velocity_command(
+            self.physics.yaw(),
+            action,
+            self.forward_speed,
+            settings.max_lateral_speed,
+            settings.max_vertical_speed,
+        )
         collision = False
 
         def fly(jitter: np.ndarray) -> Pose:
@@ -363,12 +372,18 @@ class FlowNavEnv(gym.Env):
         return np.concatenate([panel, self._view.render(self.physics.data, "chase")], axis=1)
 
     def close(self) -> None:
+        self._closed = True
         self._camera.close()
         if self._view is not None:
             self._view.close()
             self._view = None
 
     # --- helpers ----------------------------------------------------------------------------------------------
+    def _require_open(self, method: str) -> None:
+        # A closed env would quietly make a new GL context; a closed env is a bug in the caller.
+        if self._closed:
+            raise RuntimeError(f"{method}() called on a closed FlowNavEnv; make a new env instead")
+
     def _render_camera(self) -> np.ndarray:
         return self._camera.render(self.physics.data, self.physics.camera_id)
 
@@ -377,17 +392,6 @@ class FlowNavEnv(gym.Env):
     ) -> dict[str, np.ndarray]:
         state = drone_state(self.physics)
         return assemble_observation(self.settings, self.intrinsics, histogram, state, points, counted)
-
-    def _velocity_target(self, action: np.ndarray) -> np.ndarray:
-        """World-frame velocity command: forward speed along the heading, sideways and vertical from the action."""
-        yaw = self.physics.yaw()
-        forward = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-        left = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-        return (
-            self.forward_speed * forward
-            - action[0] * self.settings.max_lateral_speed * left
-            + np.array([0.0, 0.0, action[1] * self.settings.max_vertical_speed])
-        )
 
     def _true_depth(self, pixels: np.ndarray, camera_pose: Pose) -> np.ndarray:
         """True z-depth at ``pixels`` of the frame taken at ``camera_pose`` (NaN where the ray hits nothing)."""

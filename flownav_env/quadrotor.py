@@ -139,3 +139,17 @@ class VelocityController:
         )
         rotor_thrusts = self._mixer @ wrench
         return np.clip(rotor_thrusts, 0.0, self.params.max_rotor_thrust)
+
+
+def velocity_command(
+    yaw: float, action: np.ndarray, forward_speed: float, max_lateral_speed: float, max_vertical_speed: float
+) -> np.ndarray:
+    """World-frame velocity command of an action in [-1, 1]^3: ``forward_speed`` along the heading ``yaw``,
+    sideways (positive to the right) and vertical (positive up) scaled by their largest speeds."""
+    forward = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    left = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    return (
+        forward_speed * forward
+        - action[0] * max_lateral_speed * left
+        + np.array([0.0, 0.0, action[1] * max_vertical_speed])
+    )

@@ -7,6 +7,8 @@ and stepped in another (``SubprocVecEnv``, ``AsyncVectorEnv``). Headless renderi
 
 from __future__ import annotations
 
+import os
+
 import cv2
 import mujoco
 import numpy as np
@@ -15,6 +17,67 @@ from flownav_env.scene import PARKED_GROUP
 
 # Size (width, height) of each half of the env's rgb_array render: the camera panel and the chase view.
 VIEW_PANEL_SIZE = (320, 240)
+
+# The process that made this process's first GL context, and, in a child forked after that, the parent's pid:
+# EGL state does not survive fork(), and a child that renders with it hangs without a word.
+_GL_PROCESS: int | None = None
+_GL_INHERITED_FROM: int | None = None
+
+
+def _remember_inherited_gl() -> None:
+    global _GL_INHERITED_FROM
+    if _GL_PROCESS is not None:
+        _GL_INHERITED_FROM = _GL_PROCESS
+
+
+os.register_at_fork(after_in_child=_remember_inherited_gl)
+
+
+class ForkedGLContextError(RuntimeError):
+    """GL was used in a process forked from one that had already rendered (EGL would hang there)."""
+
+
+def _check_gl_usable() -> None:
+    """Raise instead of hanging when this process was forked after its parent rendered with EGL."""
+    global _GL_PROCESS
+    if _GL_INHERITED_FROM is not None and os.environ.get("MUJOCO_GL") == "egl":
+        raise ForkedGLContextError(
+            f"process {os.getpid()} was forked from process {_GL_INHERITED_FROM} after that one had rendered "
+            "with EGL, which cannot render after fork() (it hangs). Start worker processes with the 'spawn' "
+            "or 'forkserver' method instead: multiprocessing.get_context('forkserver'), "
+            "gymnasium.vector.AsyncVectorEnv(..., context='forkserver'), "
+            "SubprocVecEnv(..., start_method='forkserver')."
+        )
+    if _GL_PROCESS is None:
+        _GL_PROCESS = os.getpid()
+
+
+def new_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    """A MuJoCo offscreen renderer (and its GL context): the one place FlowNav creates GL contexts.
+
+    Raises:
+        ForkedGLContextError: this process was forked after its parent had rendered with EGL.
+    """
+    _check_gl_usable()
+    return mujoco.Renderer(model, height=height, width=width)
+
+
+def gl_renderer_name() -> str:
+    """The OpenGL renderer MuJoCo draws with, as the driver names it (Mesa's ``llvmpipe``, a GPU, ...);
+    ``unknown (...)`` where no context can be made, so a report never fails on it."""
+    try:
+        from OpenGL import GL
+
+        _check_gl_usable()
+        context = mujoco.GLContext(16, 16)
+        context.make_current()
+        try:
+            name = GL.glGetString(GL.GL_RENDERER)
+        finally:
+            context.free()
+    except Exception as error:  # any GL stack failure: the report names it instead of failing
+        return f"unknown ({type(error).__name__})"
+    return name.decode() if isinstance(name, bytes) else str(name)
 
 
 class CameraRenderer:
@@ -31,14 +94,14 @@ class CameraRenderer:
     def render(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
         """RGB image (height, width, 3) uint8 of ``camera``, row 0 at the top."""
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+            self._renderer = new_renderer(self.model, self.width, self.height)
         self._renderer.update_scene(data, camera=camera, scene_option=self._options)
         return self._renderer.render()
 
     def render_depth(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
         """Depth buffer (height, width) float32: z-depth in metres along the camera axis."""
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+            self._renderer = new_renderer(self.model, self.width, self.height)
         self._renderer.enable_depth_rendering()
         try:
             self._renderer.update_scene(data, camera=camera, scene_option=self._options)

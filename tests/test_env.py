@@ -389,3 +389,41 @@ def test_docstring_tables_match_the_spaces_and_the_constructor() -> None:
         documented.update(re.findall(r"``(\w+)``", row[0]))
     parameters = set(inspect.signature(FlowNavEnv.__init__).parameters) - {"self"}
     assert documented == parameters
+
+
+def test_a_closed_env_refuses_to_step_or_reset() -> None:
+    env = FlowNavEnv(**SMALL)
+    env.reset(seed=0)
+    env.close()
+    with pytest.raises(RuntimeError, match=r"step\(\) called on a closed FlowNavEnv"):
+        env.step(np.zeros(3))
+    with pytest.raises(RuntimeError, match=r"reset\(\) called on a closed FlowNavEnv"):
+        env.reset(seed=0)
+
+
+def _make_an_env_in_a_forked_child(queue) -> None:
+    try:
+        FlowNavEnv(**SMALL).reset(seed=0)
+        queue.put("rendered")
+    except Exception as error:  # the child reports whatever it raised
+        queue.put(f"{type(error).__name__}: {error}")
+
+
+@pytest.mark.skipif(__import__("os").environ.get("MUJOCO_GL") != "egl", reason="the EGL fork hang")
+def test_a_child_forked_after_rendering_raises_instead_of_hanging() -> None:
+    import multiprocessing
+
+    parent = FlowNavEnv(**SMALL)
+    parent.reset(seed=0)  # this process has rendered with EGL
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_make_an_env_in_a_forked_child, args=(queue,))
+    child.start()
+    child.join(timeout=60)
+    hung = child.is_alive()
+    if hung:
+        child.kill()
+    parent.close()
+    assert not hung, "the forked child hung instead of raising"
+    message = queue.get(timeout=5)
+    assert message.startswith("ForkedGLContextError") and "'spawn'" in message and "'forkserver'" in message

@@ -165,3 +165,23 @@ def test_bad_paths_and_files(tmp_path) -> None:
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(ValueError, match="not a flownav-camera-path file"):
         load_path(tmp_path / "other.npz")
+
+
+def test_broken_path_files_are_value_errors_that_name_the_file(tmp_path) -> None:
+    good = save_path(random_path(), tmp_path / "good.npz")
+    truncated = tmp_path / "truncated.npz"
+    truncated.write_bytes(good.read_bytes()[: len(good.read_bytes()) // 2])
+    with pytest.raises(ValueError, match=r"truncated.npz: not a readable flownav-camera-path file"):
+        load_path(truncated)
+    with np.load(good) as data:
+        arrays = {key: data[key] for key in data.files if key != "positions"}
+    np.savez(tmp_path / "keyless.npz", **arrays)
+    with pytest.raises(ValueError, match=r"keyless.npz: missing arrays \['positions'\]"):
+        load_path(tmp_path / "keyless.npz")
+    with np.load(good) as data:
+        arrays = {key: data[key] for key in data.files}
+    arrays["obstacles"] = np.array([[np.nan, 1.0]])
+    arrays["materials"] = np.array([0])
+    np.savez(tmp_path / "nan.npz", **arrays)
+    with pytest.raises(ValueError, match=r"nan.npz: obstacles must be finite"):
+        load_path(tmp_path / "nan.npz")

@@ -28,7 +28,10 @@ COMMANDS = {
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from agents import __version__
+
     parser = argparse.ArgumentParser(prog="flownav", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"flownav {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, module_name in COMMANDS.items():
         if importlib.util.find_spec(module_name) is None:
@@ -45,10 +48,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.handler(args) or 0)
-    except (ValueError, FileNotFoundError) as error:
+    except (ValueError, FileNotFoundError, IsADirectoryError) as error:
         # Bad input is the user's to fix: one clear line, not a traceback.
         print(f"flownav {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as interrupt:
+        # What was finished is on disk; the exception says where, when the command knows.
+        print(
+            f"flownav {args.command}: interrupted{f': {interrupt}' if str(interrupt) else ''}",
+            file=sys.stderr,
+        )
+        return 130
+    except Exception as error:
+        if not _is_gymnasium_error(error):
+            raise
+        from flownav_env import ENV_IDS
+
+        print(
+            f"flownav {args.command}: error: {error} (FlowNav's env ids: {', '.join(ENV_IDS)})",
+            file=sys.stderr,
+        )
+        return 2
+
+
+def _is_gymnasium_error(error: Exception) -> bool:
+    """Gymnasium's own errors (an unknown env id, a bad version) are about the user's input, not a bug here."""
+    return type(error).__module__.startswith("gymnasium.error")
 
 
 if __name__ == "__main__":

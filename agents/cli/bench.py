@@ -15,6 +15,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+# Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
+SCRATCH_OUT = Path("runs") / "bench"
+
 HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
 
 
@@ -47,7 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="frame pairs on which the per-point depth loops are timed (default 10; they are slow)",
     )
     estimator.add_argument(
-        "--out", type=Path, default=Path("results"), help="output folder (default results)"
+        "--out",
+        type=Path,
+        default=SCRATCH_OUT,
+        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
     )
     estimator.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
@@ -69,7 +75,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
-    env.add_argument("--out", type=Path, default=Path("results"), help="output folder (default results)")
+    env.add_argument(
+        "--out",
+        type=Path,
+        default=SCRATCH_OUT,
+        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
+    )
     env.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
 

@@ -11,7 +11,8 @@ from agents.common.paths import CONFIGS_DIR, RESULTS_DIR
 HELP = "reproduce the thesis's estimator experiments (record/playback, Tables 2-3, test-sets C-H)"
 
 DEFAULT_CONFIGS = CONFIGS_DIR / "thesis"
-DEFAULT_OUT = RESULTS_DIR / "thesis"
+# Runs land in a scratch folder unless asked: the committed results/thesis/ is replaced only on purpose.
+DEFAULT_OUT = Path("runs") / "thesis"
 # Kept in step with agents.thesis.experiments.EXPERIMENTS (a test checks); listed here so --help stays instant.
 EXPERIMENT_NAMES = ("straight", "rotation", "translation", "random6dof", "three_capsule")
 
@@ -25,7 +26,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--configs", type=Path, default=DEFAULT_CONFIGS, help="folder of the <name>.yaml configs"
     )
     parser.add_argument(
-        "--out", type=Path, default=DEFAULT_OUT, help="output folder (figures, JSON, README.md)"
+        "--out",
+        type=Path,
+        default=DEFAULT_OUT,
+        help=f"output folder of the figures, JSON and README.md (default {DEFAULT_OUT}, a scratch folder; "
+        f"--out {RESULTS_DIR / 'thesis'} replaces the committed results)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 

@@ -29,26 +29,14 @@ SOFTWARE_RASTERISERS = ("llvmpipe", "softpipe", "swrast", "lavapipe", "software"
 
 
 def gl_renderer() -> str:
-    """The OpenGL renderer MuJoCo draws with, as the driver names it (Mesa's ``llvmpipe``, a GPU, ...).
+    """The OpenGL renderer MuJoCo draws with (see :func:`flownav_env.rendering.gl_renderer_name`).
 
     Recorded with every result because rendered pixels, and so the estimator's corners, differ slightly
-    between renderers; ``unknown (...)`` where no context can be made, so a report never fails on it.
+    between renderers.
     """
-    try:
-        import mujoco
-        from OpenGL import GL
+    from flownav_env.rendering import gl_renderer_name
 
-        import flownav_env  # noqa: F401  (picks the GL backend before mujoco is imported)
-
-        context = mujoco.GLContext(16, 16)
-        context.make_current()
-        try:
-            name = GL.glGetString(GL.GL_RENDERER)
-        finally:
-            context.free()
-    except Exception as error:  # any GL stack failure: the report names it instead of failing
-        return f"unknown ({type(error).__name__})"
-    return name.decode() if isinstance(name, bytes) else str(name)
+    return gl_renderer_name()
 
 
 def is_software_renderer(renderer: str) -> bool:

@@ -31,6 +31,7 @@ Plain numpy: nothing here touches MuJoCo.
 from __future__ import annotations
 
 import math
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,6 +42,17 @@ from flownav_env.rotations import matrix_from_quat, quat_from_matrix, slerp
 
 FORMAT_NAME = "flownav-camera-path"
 FORMAT_VERSION = 1
+_PATH_KEYS = (
+    "times",
+    "positions",
+    "quaternions",
+    "frame_rate",
+    "obstacles",
+    "materials",
+    "texture_seed",
+    "obstacle_radius",
+    "obstacle_height",
+)
 _QUAT_NORM_TOLERANCE = 1e-6
 
 
@@ -101,6 +113,8 @@ class CameraPath:
         ):
             raise ValueError(f"frame_rate must be in (0, 1000] Hz, got {self.frame_rate!r}")
         self.frame_rate = float(self.frame_rate)
+        if not np.all(np.isfinite(self.obstacles)):
+            raise ValueError("obstacles must be finite (x, y) positions in metres, got NaN or infinity")
         if len(self.materials) != len(self.obstacles):
             raise ValueError(
                 f"materials must have one entry per obstacle ({len(self.obstacles)}), got {len(self.materials)}"
@@ -253,20 +267,35 @@ def load_path(file: str | Path) -> CameraPath:
     file = Path(file)
     if not file.is_file():
         raise FileNotFoundError(f"camera path file not found: {file}")
-    with np.load(file, allow_pickle=False) as data:
-        if "format" not in data or str(data["format"]) != FORMAT_NAME:
-            raise ValueError(f"{file}: not a {FORMAT_NAME} file")
-        version = int(data["version"])
-        if version != FORMAT_VERSION:
-            raise ValueError(f"{file}: unsupported version {version} (supported: {FORMAT_VERSION})")
+    try:
+        with np.load(file, allow_pickle=False) as data:
+            if "format" not in data or str(data["format"]) != FORMAT_NAME:
+                raise ValueError(f"{file}: not a {FORMAT_NAME} file")
+            version = int(data["version"])
+            if version != FORMAT_VERSION:
+                raise ValueError(f"{file}: unsupported version {version} (supported: {FORMAT_VERSION})")
+            missing = [key for key in _PATH_KEYS if key not in data]
+            if missing:
+                raise ValueError(
+                    f"{file}: missing arrays {missing} (a {FORMAT_NAME} file holds {list(_PATH_KEYS)})"
+                )
+            arrays = {key: data[key] for key in _PATH_KEYS}
+    except (OSError, EOFError, zipfile.BadZipFile) as error:
+        # A truncated or foreign file: np.load's own errors name neither the file nor the format.
+        raise ValueError(
+            f"{file}: not a readable {FORMAT_NAME} file ({type(error).__name__}: {error})"
+        ) from error
+    try:
         return CameraPath(
-            times=data["times"],
-            positions=data["positions"],
-            quaternions=data["quaternions"],
-            frame_rate=float(data["frame_rate"]),
-            obstacles=data["obstacles"],
-            materials=data["materials"],
-            texture_seed=int(data["texture_seed"]),
-            obstacle_radius=float(data["obstacle_radius"]),
-            obstacle_height=float(data["obstacle_height"]),
+            times=arrays["times"],
+            positions=arrays["positions"],
+            quaternions=arrays["quaternions"],
+            frame_rate=float(arrays["frame_rate"]),
+            obstacles=arrays["obstacles"],
+            materials=arrays["materials"],
+            texture_seed=int(arrays["texture_seed"]),
+            obstacle_radius=float(arrays["obstacle_radius"]),
+            obstacle_height=float(arrays["obstacle_height"]),
         )
+    except ValueError as error:
+        raise ValueError(f"{file}: {error}") from error

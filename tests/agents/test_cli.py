@@ -68,3 +68,40 @@ def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path
     assert run_label(Path("runs/ppo_x/evaluations.npz")) == "ppo_x"
     assert main(["curves", str(tmp_path / "none.npz"), "--out", str(out)]) == 2
     assert "evaluations file not found" in capsys.readouterr().err
+
+
+def test_an_unknown_env_id_is_one_line_naming_the_ids(tmp_path: Path, capsys) -> None:
+    from agents.cli import main
+
+    args = ["evaluate", "--agent", "straight", "--episodes", "1", "--env-id", "FlowNav-v9"]
+    assert main([*args, "--out", str(tmp_path / "e.csv")]) == 2
+    error = capsys.readouterr().err
+    last_line = error.strip().splitlines()[-1]
+    assert last_line.startswith("flownav evaluate: error: ") and "FlowNav-v0, FlowNavCorridor-v0" in last_line
+    assert "Traceback" not in error
+
+
+def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
+    from agents.cli import main
+    from agents.cli import tune_bee
+
+    def interrupted(args) -> int:
+        raise KeyboardInterrupt("3 episodes are in x.csv; run the same command again to resume")
+
+    monkeypatch.setattr(tune_bee, "run", interrupted)
+    assert main(["tune-bee"]) == 130
+    assert "flownav tune-bee: interrupted: 3 episodes are in x.csv" in capsys.readouterr().err
+
+
+def test_version_and_scratch_defaults_of_report_writers(capsys) -> None:
+    from agents import __version__
+    from agents.cli import build_parser, main
+
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.strip() == f"flownav {__version__}"
+    parser = build_parser()
+    # Reports land in results/ only when asked: a plain run must not replace the committed ones.
+    assert parser.parse_args(["bench", "env"]).out == Path("runs/bench")
+    assert parser.parse_args(["bench", "estimator"]).out == Path("runs/bench")
+    assert parser.parse_args(["replicate"]).out == Path("runs/thesis")

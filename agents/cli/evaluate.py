@@ -1,7 +1,9 @@
 """Evaluates one agent on held-out seeds and appends one CSV row per episode as it ends.
 
 Seeds start at 1,000,000 (disjoint from every training seed). Re-running the same command resumes: episodes
-already in the CSV are skipped. Prints the collision and success rates with Wilson 95 % intervals.
+already in the CSV with the same settings (env id, env kwargs, policy file content) are skipped. A CSV holding
+these episodes flown with other settings is refused rather than mixed in: pass another --out, or --overwrite
+to move the old file aside. Prints the collision and success rates with Wilson 95 % intervals.
 """
 
 from __future__ import annotations
@@ -38,27 +40,44 @@ def record_label(env_kwargs: dict[str, object]) -> tuple[str, float]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.policies import AGENT_NAMES
 
-    parser.add_argument("--agent", required=True, choices=AGENT_NAMES)
-    parser.add_argument("--policy", help="PPO policy .zip (default results/policies/<agent>.zip)")
-    parser.add_argument("--episodes", type=int, default=20)
-    parser.add_argument("--seed-start", type=int, default=TEST_SEED_START)
-    parser.add_argument("--env-id", default="FlowNav-v0")
+    parser.add_argument("--agent", required=True, choices=AGENT_NAMES, help="who flies")
+    parser.add_argument(
+        "--policy", help="PPO policy .zip (default: results/policies/<agent>.zip of this repository)"
+    )
+    parser.add_argument(
+        "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--seed-start", type=int, default=TEST_SEED_START, help="first seed (default: %(default)s)"
+    )
+    parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
     parser.add_argument(
         "--env",
         type=_env_kwarg,
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="FlowNavEnv kwarg, repeatable (e.g. --env rotation_error=0.05)",
+        help="FlowNavEnv kwarg, repeatable (e.g. --env rotation_error=0.05; default: none, the env's defaults)",
     )
-    parser.add_argument("--out", default="results/evaluations/episodes.csv", help="episodes CSV (appended)")
-    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument(
+        "--out",
+        default="results/evaluations/episodes.csv",
+        help="episodes CSV, appended and resumed (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="move an existing --out to <name>.bak-<time> and start a new file (nothing is deleted)",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=1, help="local worker processes (default: %(default)s)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from agents.common.config import check_env_kwargs
-    from agents.evaluation.records import read_records
-    from agents.evaluation.runner import EpisodeTask, execute
+    from agents.evaluation.records import read_episodes, start_new_file
+    from agents.evaluation.runner import EpisodeTask, execute, rows_of
     from agents.evaluation.statistics import format_summary, summarise
 
     if args.episodes < 1:
@@ -76,8 +95,20 @@ def run(args: argparse.Namespace) -> int:
         for seed in range(args.seed_start, args.seed_start + args.episodes)
     ]
     out = Path(args.out)
-    execute(tasks, out, workers=args.workers, description=f"evaluate {args.agent}")
-    seeds = {t.seed for t in tasks}
-    rows = [r for r in read_records(out) if r["agent"] == args.agent and r["seed"] in seeds]
-    print(format_summary(summarise(rows)))
+    if args.overwrite:
+        moved = start_new_file(out)
+        if moved is not None:
+            print(f"--overwrite: moved {out} to {moved}")
+    # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are) with exit 130.
+    flown = execute(tasks, out, workers=args.workers, description=f"evaluate {args.agent}")
+    episodes = read_episodes(out)
+    print(format_summary(summarise(rows_of(tasks, episodes.rows))))
+    skipped = len(tasks) - flown
+    print(
+        f"flew {flown} episodes" + (f", {skipped} already in {out} (skipped)" if skipped else f" into {out}")
+    )
+    if episodes.skipped:
+        print(
+            f"{episodes.skipped} torn or corrupt rows of {out} were skipped (their episodes were flown again)"
+        )
     return 0

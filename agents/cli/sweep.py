@@ -12,13 +12,23 @@ HELP = "sweep agents × sensor errors (collision rates with 95 %% CIs; resumable
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--config", default="configs/sweep.yaml")
     parser.add_argument(
-        "--out", default="results", help="folder of sweep_episodes.csv, sweep.csv and the figure"
+        "--config", default="configs/sweep.yaml", help="the sweep's YAML (default: %(default)s)"
     )
-    parser.add_argument("--episodes", type=int, help="override the config's episodes per cell")
-    parser.add_argument("--workers", type=int, help="override the config's local worker count")
-    parser.add_argument("--backend", choices=("local", "ray"), help="override the config's backend")
+    parser.add_argument(
+        "--out",
+        default="results",
+        help="folder of sweep_episodes.csv, sweep.csv and the figure (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--episodes", type=int, help="override the config's episodes per cell (default: the config's)"
+    )
+    parser.add_argument(
+        "--workers", type=int, help="override the config's local worker count (default: the config's)"
+    )
+    parser.add_argument(
+        "--backend", choices=("local", "ray"), help="override the config's backend (default: the config's)"
+    )
     parser.add_argument("--address", help="Ray cluster address (default: start a local Ray instance)")
     parser.add_argument(
         "--report-only",
@@ -36,6 +46,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="EPISODES_CSV",
         help="an earlier sweep's sweep_episodes.csv: sweep.md gets a table of each cell beside it",
     )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="move sweep_episodes.csv to sweep_episodes.csv.bak-<time> and start a new one (nothing is deleted): "
+        "for a CSV of episodes flown with other settings, or from before episode identities",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
         for k, v in vars(args).items()
         if v not in (None, False) and k not in ("handler", "command", "report_only")
     }
+    # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are), exit 130.
     run_sweep(
         Path(args.config),
         Path(args.out),
@@ -55,7 +72,9 @@ def run(args: argparse.Namespace) -> int:
         refly=[a.strip() for a in (args.refly or "").split(",") if a.strip()],
         compare_with=Path(args.compare_with) if args.compare_with else None,
         report_only=args.report_only,
+        overwrite=args.overwrite,
         address=args.address,
-        command="flownav sweep " + " ".join(f"--{k.replace('_', '-')} {v}" for k, v in options.items()),
+        command="flownav sweep "
+        + " ".join(f"--{k.replace('_', '-')}" + ("" if v is True else f" {v}") for k, v in options.items()),
     )
     return 0

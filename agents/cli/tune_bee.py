@@ -18,11 +18,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out", default="results/bee_tuning", help="output folder (default results/bee_tuning)"
     )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="move <out>/episodes.csv to episodes.csv.bak-<time> and start a new one (nothing is deleted)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from agents.evaluation.tuning import tune_bee
 
-    lines = tune_bee(args.candidates, args.seeds, Path(args.out), env_id=args.env_id, workers=args.workers)
+    lines = tune_bee(
+        args.candidates,
+        args.seeds,
+        Path(args.out),
+        env_id=args.env_id,
+        workers=args.workers,
+        overwrite=args.overwrite,
+    )
     print("\n".join(lines))
     return 0

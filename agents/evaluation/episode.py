@@ -13,7 +13,14 @@ from agents.policies import Agent
 
 @dataclass
 class EpisodeRecord:
-    """What one episode came to; one CSV row."""
+    """What one episode came to, and what defined it; one CSV row.
+
+    The identity fields (``env_id`` to ``code_version``) are filled in by the runner from the task that flew
+    the episode, so that a resumed run can tell an episode flown with other settings from its own (issue 12).
+    ``env_kwargs`` and ``agent_params`` are canonical JSON; ``policy_sha256`` is the learned policy file's
+    content hash ("" for reactive agents). ``code_version`` is recorded for provenance only: resuming does not
+    compare it, or every commit would fly every episode again.
+    """
 
     agent: str
     factor: str
@@ -31,6 +38,11 @@ class EpisodeRecord:
     mean_points_valid: float
     median_depth_error: float
     episode_return: float
+    env_id: str = ""
+    env_kwargs: str = ""
+    agent_params: str = ""
+    policy_sha256: str = ""
+    code_version: str = ""
 
 
 def run_episode(

@@ -1,82 +1,172 @@
-"""The episodes CSV: one row per finished episode, appended as it ends, so a run can resume where it stopped."""
+"""The episodes CSV: one row per finished episode, appended as it ends, so a run can resume where it stopped.
+
+Each row carries what defined its episode (env id, the full env settings, the agent's parameters and the
+policy file's hash, :data:`IDENTITY_FIELDS`), so a resumed run only counts episodes flown with its own settings,
+and its checksum (see :mod:`agents.evaluation.csv_file`), so a torn row is flown again rather than misread.
+Every value is checked by type on reading; a row that fails is skipped like a torn one. Files from before these
+columns still read: their rows have None for the identity fields (unknown).
+"""
 
 from __future__ import annotations
 
-import csv
-import os
 from collections.abc import Iterable, Mapping
-from dataclasses import asdict, fields
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from agents.evaluation.csv_file import (
+    CHECKSUM_FIELD,
+    LEGACY_FIELDS,
+    append_line,
+    csv_line,
+    move_aside,
+    read_csv_content,
+    rewrite_locked,
+    sealed_line,
+)
 from agents.evaluation.episode import EpisodeRecord
 
-CSV_FIELDS = [f.name for f in fields(EpisodeRecord)]
+RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
+CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
+
+# What a resumed run compares besides (agent, factor, level, seed). The record's code_version is left out on
+# purpose: it changes with every commit, and comparing it would fly every episode again after any change.
+IDENTITY_FIELDS = ("env_id", "env_kwargs", "agent_params", "policy_sha256")
+
+_FIELD_TYPES = {f.name: f.type for f in fields(EpisodeRecord)}
+_REQUIRED_TEXT = ("agent", "factor")
+
+OVERWRITE_HINT = (
+    "write to another file (--out), or start a new one with --overwrite "
+    "(the old file is moved to <name>.bak-<time>, nothing is deleted)"
+)
+
+
+@dataclass
+class EpisodesCsv:
+    """An episodes CSV as read: its typed rows, how many lines were skipped as torn or corrupt, and whether
+    it predates episode identities (``legacy``: its rows cannot be told apart by settings)."""
+
+    path: Path
+    rows: list[dict[str, Any]]
+    skipped: int = 0
+    legacy: bool = False
 
 
 def append_record(path: Path, record: EpisodeRecord) -> None:
-    """Append one row and flush it to disk, so an interrupted run loses at most the episode in flight."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    new_file = not path.exists() or path.stat().st_size == 0
-    torn = False
-    if not new_file:
-        with path.open("rb") as existing:
-            existing.seek(-1, os.SEEK_END)
-            torn = existing.read(1) != b"\n"
-    with path.open("a", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=CSV_FIELDS)
-        if new_file:
-            writer.writeheader()
-        if torn:
-            handle.write("\n")  # end a row cut off by an interruption; reading skips it
-        writer.writerow(asdict(record))
-        handle.flush()
-        os.fsync(handle.fileno())
+    """Append one row (with its checksum) and flush it to disk, so an interrupted run loses at most the
+    episode in flight; safe while other processes append to the same file.
+
+    Raises:
+        ValueError: the file is not an episodes CSV of this format (a foreign or pre-identity header).
+    """
+    path = Path(path)
+    values = [str(value) for value in asdict(record).values()]
+    append_line(
+        path,
+        csv_line(CSV_FIELDS) + "\r\n",
+        sealed_line(values),
+        other_header_error=lambda: f"cannot add episodes to {path}: {_header_problem(path)}",
+    )
+
+
+def _header_problem(path: Path) -> str:
+    header = read_csv_content(path, [CSV_FIELDS, LEGACY_FIELDS]).header  # raises for a foreign file
+    if header == LEGACY_FIELDS:
+        return predates_identities(path)
+    return "its header is not this version's"
+
+
+def predates_identities(path: Path) -> str:
+    """Why nothing can be resumed in or appended to a pre-identity CSV, and what to do instead."""
+    return (
+        f"{path} predates episode identities (no env_id, env_kwargs, agent_params or policy_sha256 "
+        "columns), so its episodes cannot be matched to these settings; reports can still be built from it "
+        f"(flownav sweep --report-only). To fly episodes, {OVERWRITE_HINT}"
+    )
+
+
+def read_episodes(path: Path) -> EpisodesCsv:
+    """The episodes CSV at ``path`` with typed values; a missing file gives no rows. Torn rows and rows with
+    a value of the wrong type (not True/False, not a number, an empty agent or factor) are skipped.
+
+    Raises:
+        ValueError: ``path`` is a directory, binary, or another kind of CSV; the message names it.
+    """
+    path = Path(path)
+    content = read_csv_content(path, [CSV_FIELDS, LEGACY_FIELDS])
+    episodes = EpisodesCsv(path, [], content.skipped, legacy=content.header == LEGACY_FIELDS)
+    for raw in content.rows:
+        row = _typed(raw)
+        if row is None:
+            episodes.skipped += 1
+        else:
+            episodes.rows.append(row)
+    return episodes
 
 
 def read_records(path: Path) -> list[dict[str, Any]]:
-    """Rows of an episodes CSV with typed values; a missing file gives no rows. A torn last line is skipped."""
-    if not path.exists():
-        return []
-    types = {f.name: f.type for f in fields(EpisodeRecord)}
-    rows = []
-    with path.open(newline="") as handle:
-        for raw in csv.DictReader(handle):
-            if None in raw.values() or len(raw) != len(CSV_FIELDS):
-                continue
-            row: dict[str, Any] = {}
-            for key, text in raw.items():
-                kind = types[key]
-                if kind in ("bool", bool):
-                    row[key] = text == "True"
-                elif kind in ("int", int):
-                    row[key] = int(text)
-                elif kind in ("float", float):
-                    row[key] = float(text)
-                else:
-                    row[key] = text
-            rows.append(row)
-    return rows
+    """Rows of an episodes CSV with typed values (see :func:`read_episodes`)."""
+    return read_episodes(path).rows
+
+
+def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
+    row: dict[str, Any] = {}
+    for name, kind in _FIELD_TYPES.items():
+        if name not in raw:  # a column the file's format predates: unknown
+            row[name] = None
+            continue
+        text = raw[name]
+        if kind in ("bool", bool):
+            if text not in ("True", "False"):
+                return None
+            row[name] = text == "True"
+        elif kind in ("int", int, "float", float):
+            try:
+                row[name] = int(text) if kind in ("int", int) else float(text)
+            except ValueError:
+                return None
+        else:
+            if not text and name in _REQUIRED_TEXT:
+                return None
+            row[name] = text
+    return row
+
+
+def row_identity(row: Mapping[str, Any]) -> tuple[str, ...] | None:
+    """The row's :data:`IDENTITY_FIELDS` values; None where the file predates them (unknown)."""
+    values = tuple(row.get(name) for name in IDENTITY_FIELDS)
+    return None if any(value is None for value in values) else values
+
+
+def episode_key(row: Mapping[str, Any]) -> tuple[str, str, float, int]:
+    """(agent, factor, level, seed): which episode of a run a row or task is."""
+    return (row["agent"], row["factor"], float(row["level"]), int(row["seed"]))
+
+
+def completed_keys(rows: Iterable[Mapping[str, Any]]) -> set[tuple[str, str, float, int]]:
+    """(agent, factor, level, seed) of finished episodes, whatever their settings."""
+    return {episode_key(r) for r in rows}
 
 
 def drop_agents(path: Path, agents: Iterable[str]) -> int:
     """Delete every row of ``agents`` from an episodes CSV, so a resumed run flies them again (after a policy
     is retrained, its old episodes no longer describe it). Other rows are kept byte for byte; the file is
-    replaced atomically, so an interruption leaves either the old or the new file. Returns the rows deleted."""
+    replaced atomically under its lock, so an interruption leaves either the old or the new file and no
+    concurrent append is lost. Returns the rows deleted.
+
+    Raises:
+        ValueError: ``path`` is not an episodes CSV.
+    """
+    path = Path(path)
     if not path.exists():
         return 0
+    read_episodes(path)  # refuses a file that is not an episodes CSV before rewriting it
     dropped = set(agents)
-    with path.open(newline="") as handle:
-        lines = handle.read().splitlines(keepends=True)
-    if not lines:
-        return 0
-    kept = [lines[0]] + [line for line in lines[1:] if line.split(",", 1)[0] not in dropped]
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text("".join(kept))
-    os.replace(temporary, path)
-    return len(lines) - len(kept)
+    return rewrite_locked(path, lambda line: line.split(",", 1)[0] not in dropped)
 
 
-def completed_keys(rows: Iterable[Mapping[str, Any]]) -> set[tuple[str, str, float, int]]:
-    """(agent, factor, level, seed) of finished episodes: what a resumed run skips."""
-    return {(r["agent"], r["factor"], float(r["level"]), int(r["seed"])) for r in rows}
+def start_new_file(path: Path) -> Path | None:
+    """For ``--overwrite``: move the episodes CSV at ``path`` to ``<name>.bak-<UTC time>`` so the next run
+    starts a new file there; returns where it went (None if there was none). Nothing is deleted."""
+    return move_aside(Path(path))

@@ -2,20 +2,57 @@
 
 A task names an agent, a sensor factor and its level, and a seed; the worker keeps one env and agent per
 (agent, env settings) so that consecutive tasks of a cell do not rebuild the MuJoCo model or GL context.
+Every record is stamped with its task's identity (env id, full env settings, agent parameters, policy hash)
+and the code version; a resumed run skips only episodes flown with the same identity and refuses a CSV whose
+rows were flown with other settings under the same (agent, factor, level, seed).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import hashlib
 import json
 import math
-from collections.abc import Mapping
+import signal
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agents.common.machine import code_version
+from agents.common.paths import POLICIES_DIR
 from agents.evaluation.episode import EpisodeRecord, run_episode
-from agents.evaluation.records import append_record, completed_keys, read_records
-from agents.policies import agent_env_kwargs, load_agent
+from agents.evaluation.records import (
+    IDENTITY_FIELDS,
+    OVERWRITE_HINT,
+    append_record,
+    episode_key,
+    predates_identities,
+    read_episodes,
+    row_identity,
+)
+from agents.policies import LEARNED_AGENTS, agent_env_kwargs, load_agent, policy_file
+
+
+def canonical_json(value: Any) -> str:
+    """``value`` as JSON with sorted keys and no spaces: equal settings give equal text."""
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), default=str)
+
+
+_HASHES: dict[tuple[str, int, int], str] = {}
+
+
+def file_sha256(path: Path) -> str:
+    """SHA-256 of the file's content ("" if there is none), cached while its size and mtime stay the same."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return ""
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _HASHES:
+        _HASHES[key] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return _HASHES[key]
 
 
 @dataclass(frozen=True)
@@ -28,30 +65,65 @@ class EpisodeTask:
     seed: int
     env_id: str = "FlowNav-v0"
     env_kwargs: tuple[tuple[str, Any], ...] = ()
-    policy: str | None = None  # a learned agent's .zip; None: results/policies/<agent>.zip
+    policy: str | None = None  # a learned agent's .zip; None: <repo>/results/policies/<agent>.zip
     bee_params: tuple[tuple[str, float], ...] = field(default=())
+
+    def policy_path(self) -> Path | None:
+        """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
+        if self.agent not in LEARNED_AGENTS:
+            return None
+        return policy_file(self.agent, self.policy, directory=POLICIES_DIR)
 
     def env_settings(self) -> dict[str, Any]:
         """The env kwargs to fly with: the agent's own (a learned agent keeps what it was trained with, such
         as oracle observations), then this task's on top."""
-        return {**agent_env_kwargs(self.agent, self.policy), **dict(self.env_kwargs)}
+        return {**agent_env_kwargs(self.agent, self.policy_path()), **dict(self.env_kwargs)}
+
+    def identity(self) -> dict[str, str]:
+        """What defines this task's episode beyond its (agent, factor, level, seed): the
+        :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
+        policy = self.policy_path()
+        return {
+            "env_id": self.env_id,
+            "env_kwargs": canonical_json(self.env_settings()),
+            "agent_params": canonical_json(dict(self.bee_params)),
+            "policy_sha256": "" if policy is None else file_sha256(policy),
+        }
+
+
+def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:
+    """Each task's identity as a tuple in IDENTITY_FIELDS order, computed once per distinct setting (a sweep
+    has thousands of tasks but only agents × cells settings, and a learned agent's reads files)."""
+    cache: dict[str, tuple[str, ...]] = {}
+    result = []
+    for task in tasks:
+        setting = canonical_json([task.agent, task.env_id, task.env_kwargs, task.policy, task.bee_params])
+        if setting not in cache:
+            identity = task.identity()
+            cache[setting] = tuple(identity[name] for name in IDENTITY_FIELDS)
+        result.append(cache[setting])
+    return result
 
 
 def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
-    """A time limit that scales with speed: twice the time the course takes at the commanded speed.
+    """A time limit that scales with the course: twice the time it takes at the commanded speed, in frames.
 
-    Registered limits assume the default 0.1 m per frame; slower flights (a sweep's forward-speed levels)
-    would otherwise be cut off before they could reach the goal. None keeps the registered limit.
+    Registered limits assume the default 20 m at 1 m/s and 10 frames/s; a slower flight (a sweep's
+    forward-speed levels), a higher frame rate or a longer field would otherwise be cut off before it could
+    reach the goal. Never below the registered limit; None (keep it) when none of the three is set.
     """
-    if "forward_speed" not in settings:
+    if not {"forward_speed", "frame_rate", "field_length"} & set(settings):
         return None
     import gymnasium as gym
 
+    from flownav_env.settings import EnvSettings
+
     spec = gym.spec(env_id)
-    defaults = {**spec.kwargs, **settings}
-    speed = max(float(defaults["forward_speed"]), 0.1)
-    length = float(defaults.get("field_length", 20.0))
-    frame_rate = float(defaults.get("frame_rate", 10.0))
+    defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
+    merged = {**defaults, **spec.kwargs, **settings}
+    speed = max(float(merged["forward_speed"]), 0.1)
+    length = float(merged["field_length"])
+    frame_rate = float(merged["frame_rate"])
     return max(spec.max_episode_steps or 0, math.ceil(2.0 * length / speed * frame_rate))
 
 
@@ -65,36 +137,105 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
 
     settings = task.env_settings()
     # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
-    key = (
-        task.agent,
-        task.env_id,
-        json.dumps(settings, sort_keys=True, default=str),
-        task.policy,
-        task.bee_params,
-    )
+    key = (task.agent, task.env_id, canonical_json(settings), task.policy, task.bee_params)
     if key not in _CACHE:
         for env, _ in _CACHE.values():
             env.close()
         _CACHE.clear()
         limit = episode_step_limit(task.env_id, settings)
         env = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
-        _CACHE[key] = (env, load_agent(task.agent, task.policy, **dict(task.bee_params)))
+        _CACHE[key] = (env, load_agent(task.agent, task.policy_path(), **dict(task.bee_params)))
     return _CACHE[key]
 
 
+@functools.lru_cache(maxsize=1)
+def _code_version() -> str:
+    return code_version()
+
+
 def run_task(task: EpisodeTask) -> EpisodeRecord:
-    """Fly the task's episode (in whatever process this runs)."""
+    """Fly the task's episode (in whatever process this runs); the record carries the task's identity and
+    the code version of the process that flew it."""
     import torch
 
     torch.set_num_threads(1)
     env, agent = _env_and_agent(task)
-    return run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
+    record = run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
+    return dataclasses.replace(record, **task.identity(), code_version=_code_version())
 
 
 def pending_tasks(tasks: list[EpisodeTask], csv_path: Path) -> list[EpisodeTask]:
-    """The tasks whose episode is not in the CSV yet (what a resumed run still has to fly)."""
-    done = completed_keys(read_records(csv_path))
-    return [t for t in tasks if (t.agent, t.factor, float(t.level), int(t.seed)) not in done]
+    """The tasks whose episode is not in the CSV yet (what a resumed run still has to fly).
+
+    Raises:
+        ValueError: the CSV predates episode identities, or holds an episode of one of the tasks flown with
+            other settings (resuming would mix the two), or two tasks share a key but not their settings.
+    """
+    csv_path = Path(csv_path)
+    episodes = read_episodes(csv_path)
+    if episodes.legacy:
+        raise ValueError(predates_identities(csv_path))
+    identities = _identities(tasks)
+    wanted: dict[tuple, tuple[str, ...]] = {}
+    for task, identity in zip(tasks, identities, strict=True):
+        key = episode_key(vars(task))
+        if wanted.setdefault(key, identity) != identity:
+            raise ValueError(f"two tasks are episode {_describe(key)} but with different settings")
+    flown: dict[tuple, set[tuple[str, ...] | None]] = {}
+    for row in episodes.rows:
+        flown.setdefault(episode_key(row), set()).add(row_identity(row))
+    todo = []
+    for task, identity in zip(tasks, identities, strict=True):
+        found = flown.get(episode_key(vars(task)), set())
+        if identity in found:
+            continue
+        if found:
+            raise ValueError(_conflict(csv_path, episode_key(vars(task)), identity, found))
+        todo.append(task)
+    return todo
+
+
+def _describe(key: tuple[str, str, float, int]) -> str:
+    agent, factor, level, seed = key
+    return f"({agent}, {factor}, level {level:g}, seed {seed})"
+
+
+def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set) -> str:
+    there = next(iter(found))
+    differences = ", ".join(
+        f"{name} {old!r} there, {new!r} now"
+        for name, old, new in zip(IDENTITY_FIELDS, there or (None,) * len(identity), identity, strict=True)
+        if old != new
+    )
+    retrained = "policy_sha256" in differences
+    return (
+        f"{path} already holds episode {_describe(key)} flown with other settings ({differences}); "
+        f"resuming would mix them. To fly these settings, {OVERWRITE_HINT}"
+        + (
+            f"; after retraining, flownav sweep --refly {key[0]} flies just that agent again"
+            if retrained
+            else ""
+        )
+    )
+
+
+def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows that are episodes of ``tasks``: same (agent, factor, level, seed) and the same identity, or
+    an unknown one (a CSV from before identities), so a report never mixes in episodes of other settings."""
+    wanted = {
+        episode_key(vars(task)): identity for task, identity in zip(tasks, _identities(tasks), strict=True)
+    }
+    return [
+        row
+        for row in rows
+        if episode_key(row) in wanted and row_identity(row) in (None, wanted[episode_key(row)])
+    ]
+
+
+class EpisodesInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`execute`: the episodes flown so far are on disk; the message says where and how
+    to resume (``flownav`` prints it as ``interrupted: <message>`` and exits 130). A KeyboardInterrupt, so
+    code that does not know it still stops."""
 
 
 def execute(
@@ -110,7 +251,7 @@ def execute(
 
     Args:
         tasks: the episodes to fly.
-        csv_path: the episodes CSV; finished episodes already in it are skipped (resume).
+        csv_path: the episodes CSV; episodes already in it with the same settings are skipped (resume).
         backend: ``"local"`` (this process when ``workers`` is 1, else a process pool) or ``"ray"``.
         workers: local worker processes.
         address: Ray cluster address (``ray.init(address=...)``); None starts a local Ray instance.
@@ -118,6 +259,11 @@ def execute(
 
     Returns:
         The number of episodes flown in this call.
+
+    Raises:
+        ValueError: a bad backend or worker count, or a CSV that cannot be resumed (see :func:`pending_tasks`).
+        EpisodesInterrupted: Ctrl-C; the workers are stopped, the episodes flown so far are kept, and the
+            message says how many are in the CSV and how to resume.
     """
     from tqdm import tqdm
 
@@ -130,16 +276,35 @@ def execute(
     if not todo:
         return 0
     progress = tqdm(total=len(todo), desc=description, unit="episode")
+    results = _results(todo, backend, workers, address)
+    flown = 0
     try:
-        for record in _results(todo, backend, workers, address):
+        for record in results:
             append_record(csv_path, record)
+            flown += 1
             progress.update()
+    except KeyboardInterrupt:
+        results.close()  # stops the pool or Ray before the message, whichever line Ctrl-C hit
+        progress.close()
+        stored = len(read_episodes(csv_path).rows)
+        raise EpisodesInterrupted(
+            f"{stored} episodes are in {csv_path} ({flown} of {len(todo)} flown in this run); "
+            "run the same command again to resume"
+        ) from None
     finally:
+        results.close()
         progress.close()
     return len(todo)
 
 
-def _results(todo: list[EpisodeTask], backend: str, workers: int, address: str | None):
+def _ignore_interrupts() -> None:
+    """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _results(
+    todo: list[EpisodeTask], backend: str, workers: int, address: str | None
+) -> Iterator[EpisodeRecord]:
     if backend == "ray":
         yield from _ray_results(todo, address, workers)
     elif workers == 1:
@@ -150,12 +315,17 @@ def _results(todo: list[EpisodeTask], backend: str, workers: int, address: str |
 
         # forkserver: a forked child would inherit this process's GL state, which hangs EGL.
         context = multiprocessing.get_context("forkserver")
-        with context.Pool(workers) as pool:
+        pool = context.Pool(workers, initializer=_ignore_interrupts)
+        try:
             # Tasks are ordered by cell, so chunks keep each worker on one env for a while.
             yield from pool.imap_unordered(run_task, todo, chunksize=1)
+            pool.close()
+        finally:
+            pool.terminate()  # also on Ctrl-C or close(): no worker flies on unseen
+            pool.join()
 
 
-def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int):
+def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int) -> Iterator[EpisodeRecord]:
     try:
         import ray
     except ImportError as error:
@@ -166,6 +336,7 @@ def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int):
             ray.init(address=address, log_to_driver=False)
         else:
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    pending: list[Any] = []
     try:
         remote_task = ray.remote(num_cpus=1)(run_task)
         pending = [remote_task.remote(task) for task in todo]
@@ -173,5 +344,7 @@ def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int):
             done, pending = ray.wait(pending, num_returns=1)
             yield ray.get(done[0])
     finally:
+        for reference in pending:  # a cluster we did not start would otherwise fly them on
+            ray.cancel(reference, force=True)
         if started_here:
             ray.shutdown()

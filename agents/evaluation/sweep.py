@@ -6,6 +6,8 @@ the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson
 figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
 
 After a policy is retrained, ``--refly AGENT[,AGENT]`` deletes that agent's episodes so they are flown again;
+``--overwrite`` moves the episodes CSV aside (``sweep_episodes.csv.bak-<time>``) and starts a new one, the way
+out when the CSV holds episodes flown with other settings (resuming refuses to mix them) or predates them;
 ``--compare-with OLD/sweep_episodes.csv`` adds a table to ``sweep.md`` setting each cell beside an earlier sweep.
 
 Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR]``), the same tasks either way.
@@ -19,9 +21,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 from agents.common.config import check_env_kwargs, field_range, load_config
+from agents.common.paths import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
-from agents.evaluation.records import drop_agents, read_records
-from agents.evaluation.runner import EpisodeTask, execute
+from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
+from agents.evaluation.runner import EpisodeTask, execute, pending_tasks, rows_of
 from agents.evaluation.statistics import format_summary
 from agents.evaluation.sweep_report import (
     comparison_markdown,
@@ -30,13 +33,18 @@ from agents.evaluation.sweep_report import (
     write_summary,
 )
 from agents.policies import AGENT_NAMES, LEARNED_AGENTS, policy_file
+from flownav_env.settings import check_setting
 
 SWEEP_FACTORS = ("rotation_error", "translation_error", "attitude_jitter_deg", "brightness", "forward_speed")
 
 
 @dataclass
 class SweepConfig:
-    """A sweep. ``factors`` maps each FlowNavEnv sensor kwarg to its levels beyond the clean setting."""
+    """A sweep. ``factors`` maps each FlowNavEnv sensor kwarg to its levels beyond the clean setting.
+
+    A relative ``policy_dir`` is resolved against the repository root, not the working directory, so the
+    same config finds the shipped policies wherever the command runs from.
+    """
 
     agents: list[str]
     factors: dict[str, list[float]]
@@ -66,6 +74,17 @@ class SweepConfig:
                 raise ValueError(
                     f"key 'factors.{factor}' must be a non-empty list of numbers, got {levels!r}"
                 )
+            for index, level in enumerate(levels):
+                # At load, not when a worker reaches the cell thousands of episodes later.
+                try:
+                    check_setting(factor, level)
+                except ValueError as error:
+                    raise ValueError(f"key 'factors.{factor}[{index}]': {error}") from None
+
+    def policy_folder(self) -> Path:
+        """``policy_dir`` as a path; a relative one is taken from the repository root."""
+        folder = Path(self.policy_dir)
+        return folder if folder.is_absolute() else REPO_ROOT / folder
 
 
 def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
@@ -89,7 +108,7 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
             seed,
             config.env_id,
             tuple(sorted(kwargs.items())),
-            str(policy_file(agent, directory=config.policy_dir)) if agent in LEARNED_AGENTS else None,
+            str(policy_file(agent, directory=config.policy_folder())) if agent in LEARNED_AGENTS else None,
         )
         for seed_pass in passes
         for factor, level, kwargs in cells
@@ -106,6 +125,7 @@ def run_sweep(
     refly: list[str] | None = None,
     compare_with: Path | None = None,
     report_only: bool = False,
+    overwrite: bool = False,
     address: str | None = None,
     command: str = "flownav sweep",
 ) -> list[dict[str, Any]]:
@@ -119,11 +139,14 @@ def run_sweep(
         refly: agents whose episodes are deleted first, so they are flown again.
         compare_with: an earlier sweep's episodes CSV to set each cell beside.
         report_only: fly nothing, rebuild the reports from the episodes flown so far.
+        overwrite: move the episodes CSV to ``sweep_episodes.csv.bak-<time>`` first and start a new one.
         address: Ray cluster address.
         command: the command line, for the report.
 
     Raises:
-        ValueError / FileNotFoundError: bad config, overrides, agents or files; the message says which.
+        ValueError / FileNotFoundError: bad config, overrides, agents or files, or an episodes CSV that cannot
+            be resumed (episodes of other settings, or from before episode identities); the message says which.
+        EpisodesInterrupted: Ctrl-C while flying; the episodes flown so far are kept.
     """
     config = load_config(config_path, SweepConfig)
     for name, value in (overrides or {}).items():
@@ -132,7 +155,9 @@ def run_sweep(
         raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
 
-    files = {a: policy_file(a, directory=config.policy_dir) for a in config.agents if a in LEARNED_AGENTS}
+    files = {
+        a: policy_file(a, directory=config.policy_folder()) for a in config.agents if a in LEARNED_AGENTS
+    }
     missing = {a: path for a, path in files.items() if not path.exists()}
     agents = [a for a in config.agents if a not in missing]
     for skipped, path in sorted(missing.items()):
@@ -150,12 +175,21 @@ def run_sweep(
         raise ValueError(
             "--refly deletes episodes to fly them again; it cannot be combined with --report-only"
         )
+    if overwrite and report_only:
+        raise ValueError("--overwrite starts a new episodes CSV; it cannot be combined with --report-only")
     out.mkdir(parents=True, exist_ok=True)
     episodes_csv = out / "sweep_episodes.csv"
-    if refly:
-        print(f"--refly: deleted {drop_agents(episodes_csv, refly)} episodes of {', '.join(refly)}")
+    if overwrite:
+        moved = start_new_file(episodes_csv)
+        if moved is not None:
+            print(f"--overwrite: moved {episodes_csv} to {moved}")
     started = time.perf_counter()
     tasks = build_tasks(config, agents)
+    if refly:
+        # Refuse before deleting anything what the run itself would refuse (a CSV from before identities,
+        # other agents' episodes of other settings), so --refly never deletes episodes and then stops.
+        pending_tasks([t for t in tasks if t.agent not in refly], episodes_csv)
+        print(f"--refly: deleted {drop_agents(episodes_csv, refly)} episodes of {', '.join(refly)}")
     flown = 0
     if not report_only:
         flown = execute(
@@ -166,10 +200,10 @@ def run_sweep(
             address=address,
             description="sweep",
         )
-    wanted = {(t.agent, t.factor, t.level, t.seed) for t in tasks}
-    rows = [
-        r for r in read_records(episodes_csv) if (r["agent"], r["factor"], r["level"], r["seed"]) in wanted
-    ]
+    episodes = read_episodes(episodes_csv)
+    rows = rows_of(tasks, episodes.rows)
+    if episodes.skipped:
+        print(f"skipped {episodes.skipped} torn or corrupt rows of {episodes_csv}")
     table = write_summary(rows, out / "sweep.csv")
     plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
     minutes = (time.perf_counter() - started) / 60

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from agents.common.seeds import VALIDATION_SEED_START
-from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute
+from agents.evaluation.records import read_records, start_new_file
+from agents.evaluation.runner import EpisodeTask, execute, rows_of
 from agents.evaluation.statistics import summarise
 
 SEARCH_SPACE = {
@@ -44,10 +44,18 @@ def candidates(count: int, seed: int) -> list[dict[str, float]]:
 
 
 def tune_bee(
-    candidate_count: int, seed_count: int, out: Path, *, env_id: str = "FlowNav-v0", workers: int = 2
+    candidate_count: int,
+    seed_count: int,
+    out: Path,
+    *,
+    env_id: str = "FlowNav-v0",
+    workers: int = 2,
+    overwrite: bool = False,
 ) -> list[str]:
     """Fly every candidate on training seeds ``0 .. seed_count - 1``, resumably, and write ``ranking.md`` and
-    ``best.json`` to ``out``; returns the ranking's Markdown lines.
+    ``best.json`` to ``out``; returns the ranking's Markdown lines. ``overwrite`` moves an existing
+    ``episodes.csv`` to ``episodes.csv.bak-<time>`` first (for one of other settings or from before episode
+    identities, which resuming refuses).
 
     Raises:
         ValueError: ``seed_count`` reaches into the validation seeds, or a count is below 1.
@@ -59,6 +67,8 @@ def tune_bee(
             f"--seeds must stay within the training seeds [0, {VALIDATION_SEED_START}), got {seed_count}"
         )
     out.mkdir(parents=True, exist_ok=True)
+    if overwrite and (moved := start_new_file(out / "episodes.csv")) is not None:
+        print(f"--overwrite: moved {out / 'episodes.csv'} to {moved}")
     grid = candidates(candidate_count, seed=0)
     tasks = [
         # The candidate's index is the record's "level", so rows of different gains never share a key.
@@ -67,7 +77,8 @@ def tune_bee(
         for seed in range(seed_count)
     ]
     execute(tasks, out / "episodes.csv", workers=workers, description="tune bee")
-    table = summarise(read_records(out / "episodes.csv"))
+    # Only this run's episodes: a CSV of an earlier, longer run may hold more candidates or seeds.
+    table = summarise(rows_of(tasks, read_records(out / "episodes.csv")))
     ranked = sorted(table, key=lambda r: (-r["success_rate"], r["collision_rate"]))
     lines = [
         f"# Bee gain tuning on training seeds 0-{seed_count - 1} ({env_id})",

@@ -82,8 +82,7 @@ def test_an_unknown_env_id_is_one_line_naming_the_ids(tmp_path: Path, capsys) ->
 
 
 def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
-    from agents.cli import main
-    from agents.cli import tune_bee
+    from agents.cli import main, tune_bee
 
     def interrupted(args) -> int:
         raise KeyboardInterrupt("3 episodes are in x.csv; run the same command again to resume")

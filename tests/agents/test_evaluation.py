@@ -83,3 +83,62 @@ def test_video_writes_an_mp4(tmp_path: Path) -> None:
     record_episode("bee", "FlowNavSingle-v0", TEST_SEED_START, out, max_steps=5)
     frames = [frame for frame in imageio.get_reader(out)]  # list() trips on the reader's infinite len()
     assert len(frames) == 5 and frames[0].shape == (240, 640, 3)
+
+
+@pytest.mark.parametrize(
+    ("command", "defaults"),
+    [
+        (
+            "evaluate",
+            ["(default: 20)", "(default: FlowNav-v0)", "(default: results/evaluations/episodes.csv)"],
+        ),
+        ("sweep", ["(default: configs/sweep.yaml)", "(default: results)", "(default: the config's)"]),
+        ("demo", ["(default: 5)", "(default: 2)"]),
+    ],
+)
+def test_help_pages_show_their_defaults(capsys, command: str, defaults: list[str]) -> None:
+    from agents.cli import main
+
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    page = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+    for default in defaults:
+        assert default in page
+
+
+def test_demo_finds_the_shipped_policies_from_any_folder_and_names_missing_ones(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    from agents.cli import main
+    from agents.common.paths import POLICIES_DIR
+    from agents.evaluation import runner
+    from agents.policies import LEARNED_AGENTS
+
+    flown: list[EpisodeTask] = []
+    monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--episodes", "1"]) == 0
+    assert {t.agent: t.policy for t in flown if t.policy} == {
+        name: str(POLICIES_DIR / f"{name}.zip") for name in LEARNED_AGENTS
+    }
+    assert "skipping" not in capsys.readouterr().out
+    flown.clear()
+    assert main(["demo", "--episodes", "1", "--policy-dir", "elsewhere"]) == 0
+    assert [t.agent for t in flown] == ["straight", "bee"]
+    out = capsys.readouterr().out
+    for name in LEARNED_AGENTS:
+        assert f"skipping {name}: no policy at {Path('elsewhere') / name}.zip" in out
+
+
+def test_evaluate_flies_a_shipped_policy_from_another_folder(tmp_path: Path, monkeypatch) -> None:
+    import hashlib
+
+    from agents.cli import main
+    from agents.common.paths import POLICIES_DIR
+
+    monkeypatch.chdir(tmp_path)
+    args = ["evaluate", "--agent", "ppo_flow", "--episodes", "1", "--env-id", "FlowNavSingle-v0"]
+    assert main([*args, "--env", "camera_width=96", "--env", "camera_height=72", "--out", "e.csv"]) == 0
+    (row,) = read_records(tmp_path / "e.csv")
+    assert row["policy_sha256"] == hashlib.sha256((POLICIES_DIR / "ppo_flow.zip").read_bytes()).hexdigest()
+    assert row["env_kwargs"] == '{"camera_height":72,"camera_width":96,"obs_source":"flow"}'

@@ -43,4 +43,8 @@ def test_same_seeds_give_identical_episode_records(tmp_path: Path) -> None:
         expected, actual = list(csv.DictReader(expected_file)), list(csv.DictReader(flown_file))
     assert len(actual) == len(expected) == len(TASKS)
     for before, now in zip(expected, actual, strict=True):
-        assert now == before, f"episode {before['agent']} seed {before['seed']} changed"
+        # The golden file predates the identity and checksum columns (issue 12): compare what it has.
+        assert {key: now[key] for key in before} == before, (
+            f"episode {before['agent']} seed {before['seed']} changed"
+        )
+        assert now["env_id"] == "FlowNav-v0" and now["row_crc"]

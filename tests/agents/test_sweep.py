@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -138,6 +139,14 @@ def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
         ({"episodes": 0}, r"key 'episodes' must be in \[1, 100000\], got 0"),
         ({"backend": "slurm"}, r"key 'backend' must be one of 'local', 'ray', got 'slurm'"),
         ({"seed_start": 5}, r"key 'seed_start' must be in \[1000000, inf\], got 5"),
+        (
+            {"factors": {"brightness": [0.5, 1.0, 9.0]}},
+            r"key 'factors.brightness\[2\]': brightness must be in \[0.0, 4.0\], got 9.0",
+        ),
+        (
+            {"factors": {"forward_speed": [-1.0]}},
+            r"key 'factors.forward_speed\[0\]': forward_speed must be in",
+        ),
     ],
 )
 def test_sweep_config_errors_name_the_file_and_the_key(tmp_path: Path, overrides: dict, message: str) -> None:
@@ -145,3 +154,52 @@ def test_sweep_config_errors_name_the_file_and_the_key(tmp_path: Path, overrides
     with pytest.raises(ConfigError, match=message) as error:
         load_config(path, SweepConfig)
     assert str(path) in str(error.value)
+
+
+def test_report_only_rebuilds_the_committed_sweep_from_its_pre_identity_csv(tmp_path: Path) -> None:
+    from agents.cli import main
+    from agents.common.paths import CONFIGS_DIR, RESULTS_DIR
+
+    shutil.copy(RESULTS_DIR / "sweep_episodes.csv", tmp_path / "sweep_episodes.csv")
+    config = str(CONFIGS_DIR / "sweep.yaml")
+    assert main(["sweep", "--config", config, "--out", str(tmp_path), "--report-only"]) == 0
+    assert (tmp_path / "sweep.csv").read_text() == (RESULTS_DIR / "sweep.csv").read_text()
+
+
+def test_a_sweep_into_a_pre_identity_csv_is_refused_until_overwrite(tmp_path: Path, capsys) -> None:
+    from agents.cli import main
+    from agents.evaluation.csv_file import LEGACY_FIELDS
+
+    out = tmp_path / "out"
+    out.mkdir()
+    rows = [
+        f"{agent},{factor},{level},{seed},False,True,False,False,20.0,20.0,200,0.5,20.0,100.0,0.05,10.0"
+        for agent in ("straight", "bee")
+        for factor, level in (("clean", 0.0), ("rotation_error", 0.1))
+        for seed in (1_000_000, 1_000_001)
+    ]
+    old = ",".join(LEGACY_FIELDS) + "\r\n" + "".join(row + "\r\n" for row in rows)
+    (out / "sweep_episodes.csv").write_text(old, newline="")
+    args = ["sweep", "--config", str(write_sweep_config(tmp_path, episodes=1)), "--out", str(out)]
+    assert main([*args, "--report-only"]) == 0  # reads: 1 of its 2 seeds per cell
+    assert [line.split(",")[3] for line in (out / "sweep.csv").read_text().splitlines()[1:]] == ["1"] * 4
+    capsys.readouterr()
+    assert main(args) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "sweep_episodes.csv predates episode identities" in error[0]
+    assert "--overwrite" in error[0]
+    assert main([*args, "--refly", "bee"]) == 2  # refused before deleting anything
+    assert (out / "sweep_episodes.csv").read_bytes() == old.encode()
+    assert main([*args, "--overwrite"]) == 0
+    (backup,) = out.glob("sweep_episodes.csv.bak-*")
+    assert backup.read_bytes() == old.encode()
+    assert len(read_records(out / "sweep_episodes.csv")) == 4  # flown again, with their identity
+
+
+def test_relative_policy_dirs_resolve_against_the_repository(tmp_path: Path, monkeypatch) -> None:
+    from agents.common.paths import POLICIES_DIR
+
+    config = load_config(write_sweep_config(tmp_path, agents=["ppo_flow"]), SweepConfig)
+    monkeypatch.chdir(tmp_path)
+    assert config.policy_folder() == POLICIES_DIR
+    assert {Path(t.policy) for t in build_tasks(config, ["ppo_flow"])} == {POLICIES_DIR / "ppo_flow.zip"}

@@ -1,0 +1,213 @@
+"""The episodes CSV as bytes on disk: one header, rows appended under a lock, each row sealed by a checksum.
+
+An interrupted run leaves at most one torn row behind, and several processes may append to one file at once.
+So every row ends with ``row_crc``, the CRC32 of the rest of its line: a row cut anywhere, even inside its
+last field, fails the check and is skipped (its episode is flown again). Appends hold an exclusive
+``flock`` on the file, so the header is written exactly once and rows never interleave. Files written before
+these columns existed (:data:`LEGACY_FIELDS`) are still read; their rows carry no checksum.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import fcntl
+import io
+import os
+import zlib
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+CHECKSUM_FIELD = "row_crc"
+
+# The columns of episodes CSVs written before episodes carried their identity (issue 12).
+LEGACY_FIELDS = [
+    "agent",
+    "factor",
+    "level",
+    "seed",
+    "collision",
+    "success",
+    "out_of_bounds",
+    "truncated",
+    "progress_m",
+    "time_s",
+    "steps",
+    "min_clearance_m",
+    "path_length_m",
+    "mean_points_valid",
+    "median_depth_error",
+    "episode_return",
+]
+
+LINE_END = "\r\n"  # what csv.writer ends lines with, kept so old and new rows look alike
+
+
+def csv_line(values: list[str]) -> str:
+    """``values`` as one CSV line without its line end (quoted as csv.writer quotes)."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow(values)
+    return buffer.getvalue()
+
+
+def row_checksum(values: list[str]) -> str:
+    """CRC32 of the row's line as written, hex: what ``row_crc`` holds for ``values``."""
+    return f"{zlib.crc32(csv_line(values).encode()):08x}"
+
+
+def sealed_line(values: list[str]) -> str:
+    """The line to append for a row: its values, then their checksum, then the line end."""
+    return csv_line([*values, row_checksum(values)]) + LINE_END
+
+
+@dataclass
+class CsvContent:
+    """What an episodes CSV holds: its header (empty for a missing or empty file), the rows that parsed
+    whole (as text, keyed by column), and how many lines were skipped as torn or corrupt."""
+
+    header: list[str] = field(default_factory=list)
+    rows: list[dict[str, str]] = field(default_factory=list)
+    skipped: int = 0
+
+
+def check_is_file_target(path: Path) -> None:
+    """Refuse a path that cannot be an episodes CSV before anything is read or written there.
+
+    Raises:
+        ValueError: ``path`` is a directory, or a folder on its way is a file.
+    """
+    if path.is_dir():
+        raise ValueError(f"{path} is a directory, not an episodes CSV: give the path of a .csv file")
+    for parent in path.parents:
+        if parent.exists() and not parent.is_dir():
+            raise ValueError(f"cannot write the episodes CSV {path}: {parent} is a file, not a folder")
+
+
+def read_csv_content(path: Path, expected_headers: list[list[str]]) -> CsvContent:
+    """The header and whole rows of the CSV at ``path``; a missing or empty file has neither.
+
+    Each physical line is parsed on its own (no field holds a line break), so a torn row cannot swallow the
+    rows after it. A row is kept if it has the header's field count and, where the header ends with
+    ``row_crc``, its checksum matches.
+
+    Raises:
+        ValueError: ``path`` is a directory, not UTF-8 text, or its header is none of ``expected_headers``;
+            the message names the file.
+    """
+    check_is_file_target(path)
+    if not path.exists():
+        return CsvContent()
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(
+            f"{path} is not an episodes CSV (not UTF-8 text: {error.reason} at byte {error.start}); "
+            "give another file"
+        ) from None
+    lines = [line.rstrip("\r") for line in text.split("\n")]
+    lines = [line for line in lines if line]
+    if not lines:
+        return CsvContent()
+    header = _parse_line(lines[0])
+    if header not in expected_headers:
+        raise ValueError(
+            f"{path} is not a FlowNav episodes CSV: its header starts {lines[0][:60]!r}, expected "
+            f"'{','.join(LEGACY_FIELDS[:4])},...'; give another file"
+        )
+    sealed = header[-1] == CHECKSUM_FIELD
+    content = CsvContent(header=header)
+    for line in lines[1:]:
+        values = _parse_line(line)
+        whole = values is not None and len(values) == len(header)
+        if whole and sealed:
+            whole = values[-1] == row_checksum(values[:-1])
+        if whole:
+            content.rows.append(dict(zip(header, values, strict=True)))
+        else:
+            content.skipped += 1
+    return content
+
+
+def _parse_line(line: str) -> list[str] | None:
+    try:
+        return next(csv.reader([line], strict=True))
+    except (csv.Error, StopIteration):
+        return None
+
+
+@contextmanager
+def locked(path: Path) -> Iterator[io.BufferedRandom]:
+    """The file at ``path`` (created empty if missing), open for reading and appending under an exclusive
+    ``flock``. If another process replaced the file while this one waited, the new file is locked instead,
+    so nothing is appended to a file no longer at ``path``."""
+    check_is_file_target(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    while True:
+        handle = path.open("a+b")
+        try:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+            if path.exists() and os.stat(path).st_ino == os.fstat(handle.fileno()).st_ino:
+                yield handle
+                return
+        finally:
+            handle.close()  # closing releases the lock
+
+
+def append_line(path: Path, header_line: str, line: str, other_header_error: Callable[[], str]) -> None:
+    """Append ``line`` to the CSV at ``path`` under its lock, writing ``header_line`` first if the file is new
+    or empty, and ending a torn last row first so it stays a line of its own (reading skips it). Flushed to
+    disk before the lock is released, so an interrupted run loses at most the episode in flight.
+
+    Raises:
+        ValueError: the file holds another header; ``other_header_error()`` says why that is refused.
+    """
+    with locked(path) as handle:
+        size = handle.seek(0, os.SEEK_END)
+        prefix = b""
+        if size == 0:
+            prefix = header_line.encode()
+        else:
+            handle.seek(0)
+            if handle.readline().rstrip(b"\r\n") != header_line.rstrip(LINE_END).encode():
+                raise ValueError(other_header_error())
+            handle.seek(size - 1)
+            if handle.read(1) != b"\n":
+                prefix = b"\n"
+        handle.write(prefix + line.encode())  # one write: a reader sees whole rows or a torn last one
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
+def rewrite_locked(path: Path, keep_line: Callable[[str], bool]) -> int:
+    """Replace the file at ``path`` atomically by its header and the lines ``keep_line(line)`` accepts,
+    holding its lock meanwhile so no append is lost to the old file. Returns the lines dropped."""
+    with locked(path) as handle:
+        handle.seek(0)
+        lines = handle.read().decode("utf-8").splitlines(keepends=True)
+        if not lines:
+            return 0
+        kept = [lines[0]] + [line for line in lines[1:] if keep_line(line)]
+        temporary = path.with_name(path.name + ".tmp")
+        temporary.write_text("".join(kept), newline="")
+        os.replace(temporary, path)
+        return len(lines) - len(kept)
+
+
+def move_aside(path: Path) -> Path | None:
+    """Rename the file at ``path`` to ``<name>.bak-<UTC time>`` (never over an existing file), so a new
+    file can start there without deleting anything. Returns the new name; None if there was no file."""
+    check_is_file_target(path)
+    if not path.exists():
+        return None
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    for attempt in range(1000):
+        backup = path.with_name(f"{path.name}.bak-{stamp}" + (f"-{attempt}" if attempt else ""))
+        try:
+            os.link(path, backup)  # fails if the name is taken: nothing is overwritten
+        except FileExistsError:
+            continue
+        os.unlink(path)
+        return backup
+    raise ValueError(f"cannot move {path} aside: too many backups named {path.name}.bak-{stamp}*")

@@ -1,0 +1,182 @@
+"""The episodes CSV on disk: typed and checksummed rows, one header under concurrent appends, refused targets."""
+
+from __future__ import annotations
+
+import multiprocessing
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from agents.evaluation.csv_file import LEGACY_FIELDS
+from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.records import (
+    CSV_FIELDS,
+    append_record,
+    drop_agents,
+    read_episodes,
+    read_records,
+    start_new_file,
+)
+
+RECORD = EpisodeRecord(
+    agent="straight",
+    factor="clean",
+    level=0.0,
+    seed=1_000_000,
+    collision=True,
+    success=False,
+    out_of_bounds=False,
+    truncated=False,
+    progress_m=3.87,
+    time_s=3.9,
+    steps=39,
+    min_clearance_m=0.19,
+    path_length_m=3.77,
+    mean_points_valid=127.9,
+    median_depth_error=0.046,
+    episode_return=-6.125,
+    env_id="FlowNavSingle-v0",
+    env_kwargs='{"camera_height":72,"camera_width":96}',
+    agent_params="{}",
+    policy_sha256="",
+    code_version="commit `abc1234`",
+)
+LEGACY_ROW = "straight,clean,0.0,1000000,True,False,False,False,3.87,3.9,39,0.19,3.77,127.9,0.046,-6.125"
+
+
+def write_legacy(path: Path, *rows: str) -> None:
+    path.write_text("\r\n".join([",".join(LEGACY_FIELDS), *rows]) + "\r\n")
+
+
+def test_rows_round_trip_with_their_identity_and_checksum(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    append_record(path, RECORD)
+    append_record(path, replace(RECORD, seed=1_000_001, median_depth_error=float("nan")))
+    lines = path.read_text().splitlines()
+    assert lines[0] == ",".join(CSV_FIELDS) and CSV_FIELDS[-1] == "row_crc"
+    rows = read_records(path)
+    assert [r["seed"] for r in rows] == [1_000_000, 1_000_001]
+    assert rows[0]["env_kwargs"] == RECORD.env_kwargs and rows[0]["collision"] is True
+    assert rows[1]["median_depth_error"] != rows[1]["median_depth_error"]  # nan survives
+
+
+def test_a_torn_last_row_is_skipped_wherever_it_was_cut(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    append_record(path, RECORD)
+    whole = path.read_text().splitlines()[1]
+    cut_after_last_comma = whole[: whole.rindex(",") + 1]
+    cut_inside_last_field = whole[:-3]
+    tampered = whole.replace("3.87", "9.87")
+    for torn in (cut_after_last_comma, cut_inside_last_field, tampered):
+        with path.open("a", newline="") as handle:
+            handle.write(torn)  # an interrupted write: no line end
+        append_record(path, replace(RECORD, seed=RECORD.seed + 1))  # ends the torn line, adds a whole row
+    episodes = read_episodes(path)
+    assert [r["seed"] for r in episodes.rows] == [RECORD.seed] + [RECORD.seed + 1] * 3
+    assert episodes.skipped == 3
+
+
+def test_legacy_rows_are_checked_by_type_and_have_unknown_identity(tmp_path: Path) -> None:
+    path = tmp_path / "old.csv"
+    write_legacy(
+        path,
+        LEGACY_ROW,
+        LEGACY_ROW.rsplit(",", 1)[0] + ",",  # cut right after its last comma: was `could not convert ''`
+        LEGACY_ROW.replace("True", "Tru", 1),  # not a bool
+        LEGACY_ROW.replace(",39,", ",3.9,"),  # not an int
+        LEGACY_ROW.replace("straight", "", 1),  # no agent
+    )
+    episodes = read_episodes(path)
+    assert episodes.legacy and episodes.skipped == 4
+    (row,) = episodes.rows
+    assert row["episode_return"] == -6.125 and row["steps"] == 39
+    assert row["env_id"] is None and row["policy_sha256"] is None  # unknown, not "reactive"
+
+
+def test_appending_to_a_legacy_csv_is_refused_with_the_way_out(tmp_path: Path) -> None:
+    path = tmp_path / "old.csv"
+    write_legacy(path, LEGACY_ROW)
+    with pytest.raises(ValueError, match=r"old.csv predates episode identities .*--overwrite"):
+        append_record(path, RECORD)
+
+
+def _append_many(path: str, worker: int, start: multiprocessing.synchronize.Barrier, count: int) -> None:
+    start.wait()  # every process finds the file missing at once
+    for index in range(count):
+        append_record(Path(path), replace(RECORD, seed=1_000_000 + 1000 * worker + index))
+
+
+def test_processes_appending_to_a_new_csv_at_once_write_one_header_and_whole_rows(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    workers, count = 6, 15
+    context = multiprocessing.get_context("spawn")
+    start = context.Barrier(workers)
+    processes = [
+        context.Process(target=_append_many, args=(str(path), worker, start, count))
+        for worker in range(workers)
+    ]
+    for process in processes:
+        process.start()
+    for process in processes:
+        process.join(timeout=120)
+        assert process.exitcode == 0
+    lines = path.read_text().splitlines()
+    assert sum(line.startswith("agent,") for line in lines) == 1 and lines[0].startswith("agent,")
+    episodes = read_episodes(path)
+    assert episodes.skipped == 0 and len(episodes.rows) == workers * count
+    assert len({r["seed"] for r in episodes.rows}) == workers * count
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (
+            b"name,score\r\nalice,3\r\n",
+            r"foreign.csv is not a FlowNav episodes CSV: its header starts 'name,score'",
+        ),
+        (b"\x89PNG\r\n\x1a\n\x00\xff\xfe", r"foreign.csv is not an episodes CSV \(not UTF-8 text"),
+        (None, r"foreign.csv is a directory, not an episodes CSV"),
+    ],
+)
+def test_a_foreign_binary_or_directory_out_is_one_error_naming_it(
+    tmp_path: Path, capsys, content: bytes | None, message: str
+) -> None:
+    from agents.cli import main
+
+    target = tmp_path / "foreign.csv"
+    if content is None:
+        target.mkdir()
+    else:
+        target.write_bytes(content)
+    with pytest.raises(ValueError, match=message):
+        read_records(target)
+    with pytest.raises(ValueError, match=message):
+        append_record(target, RECORD)
+    args = ["evaluate", "--agent", "straight", "--episodes", "1", "--env-id", "FlowNavSingle-v0"]
+    assert main([*args, "--out", str(target)]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and error[0].startswith("flownav evaluate: error: ") and str(target) in error[0]
+    if content is not None:
+        assert target.read_bytes() == content  # nothing appended under a foreign header
+
+
+def test_overwrite_moves_the_old_file_aside_and_never_over_a_backup(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    assert start_new_file(path) is None  # nothing to move
+    append_record(path, RECORD)
+    first_bytes = path.read_bytes()
+    first = start_new_file(path)
+    append_record(path, replace(RECORD, seed=2))
+    second = start_new_file(path)
+    assert first != second and not path.exists()
+    assert first.read_bytes() == first_bytes and first.name.startswith("episodes.csv.bak-")
+    assert read_records(second)[0]["seed"] == 2
+
+
+def test_drop_agents_keeps_checksummed_rows_readable(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    append_record(path, RECORD)
+    append_record(path, replace(RECORD, agent="bee"))
+    assert drop_agents(path, ["bee"]) == 1
+    assert [r["agent"] for r in read_records(path)] == ["straight"]

@@ -38,12 +38,10 @@ def record_label(env_kwargs: dict[str, object]) -> tuple[str, float]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES
+    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
 
     parser.add_argument("--agent", required=True, choices=AGENT_NAMES, help="who flies")
-    parser.add_argument(
-        "--policy", help="PPO policy .zip (default: results/policies/<agent>.zip of this repository)"
-    )
+    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument(
         "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
     )

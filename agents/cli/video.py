@@ -1,8 +1,15 @@
-"""``flownav video``: an mp4 of one episode of an agent, with the flow overlay."""
+"""``flownav video``: an mp4 of one episode of an agent, with the flow overlay.
+
+Encoded with imageio's ffmpeg plugin (``imageio-ffmpeg``, a declared dependency), not gymnasium's
+``RecordVideo``, which needs moviepy. A learned policy flies with the env settings of the config beside its
+zip.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import warnings
 from pathlib import Path
 
 from agents.common.seeds import TEST_SEED_START
@@ -11,10 +18,10 @@ HELP = "record an mp4 of an agent's episode with the flow overlay"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES
+    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
 
     parser.add_argument("--agent", required=True, choices=AGENT_NAMES)
-    parser.add_argument("--policy", help="PPO policy .zip (default results/policies/<agent>.zip)")
+    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--env-id", default="FlowNav-v0")
     parser.add_argument("--seed", type=int, default=TEST_SEED_START)
     parser.add_argument("--out", help="mp4 path (default results/videos/<agent>_<env-id>_<seed>.mp4)")
@@ -25,9 +32,13 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out or f"results/videos/{args.agent}_{args.env_id}_{args.seed}.mp4")
     from agents.evaluation.video import record_episode
 
-    info = record_episode(
-        args.agent, args.env_id, args.seed, out, policy=args.policy, max_steps=args.max_steps
-    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        info = record_episode(
+            args.agent, args.env_id, args.seed, out, policy=args.policy, max_steps=args.max_steps
+        )
+    for warning in caught:
+        print(f"flownav video: warning: {warning.message}", file=sys.stderr)
     outcome = "collision" if info["collision"] else "success" if info["success"] else "no collision, no goal"
     print(f"wrote {out}: {outcome} after {info['progress']:.1f} m")
     return 0

@@ -1,5 +1,6 @@
 """One episode on video: the camera view with tracked points, flow vectors and depth-coloured circles beside a
-chase view (the env's ``rgb_array`` render), encoded by imageio's ffmpeg plugin."""
+chase view (the env's ``rgb_array`` render), encoded by imageio's ffmpeg plugin (``imageio-ffmpeg`` is a
+declared dependency; gymnasium's ``RecordVideo`` is not used, since it needs moviepy, which is not)."""
 
 from __future__ import annotations
 

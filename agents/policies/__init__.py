@@ -1,19 +1,31 @@
 """The agents behind one ``predict`` interface: reactive rules and learned (PPO) policies."""
 
 from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, REACTIVE_AGENTS, Agent
-from agents.policies.learned import agent_env_kwargs, load_agent, policy_file
+from agents.policies.learned import (
+    POLICY_OPTION_HELP,
+    LoadedPolicy,
+    agent_env_kwargs,
+    load_agent,
+    load_policy,
+    policy_file,
+)
+from agents.policies.loading import UnverifiedPolicyWarning
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
 
 __all__ = [
     "AGENT_NAMES",
     "LEARNED_AGENTS",
+    "POLICY_OPTION_HELP",
     "REACTIVE_AGENTS",
     "Agent",
     "BeeAgent",
+    "LoadedPolicy",
     "StraightAgent",
+    "UnverifiedPolicyWarning",
     "agent_env_kwargs",
     "bin_nearness",
     "load_agent",
+    "load_policy",
     "policy_file",
     "sector_nearness",
 ]

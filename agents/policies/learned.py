@@ -1,21 +1,32 @@
 """Learned agents: where a trained policy is stored, the env settings it was trained with, and loading any
-agent by name (a reactive one is built, a learned one is loaded from its ``.zip``)."""
+agent by name (a reactive one is built, a learned one is loaded from its ``.zip``, see
+:mod:`agents.policies.loading`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from agents.common.config import load_config
+from agents.common.paths import POLICIES_DIR
 from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, Agent
+from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.training.config import TrainConfig
 
+POLICY_OPTION_HELP = (
+    "PPO policy .zip (default results/policies/<agent>.zip in the repository). Only load policies you "
+    "trust: a zip without its training config (.yaml) beside it is loaded with PPO.load, which unpickles it "
+    "and can run code; with the config, only its parameters are read. A policy not listed with its hash in "
+    "its folder's MANIFEST.sha256 loads with a warning"
+)
+"""The ``--policy`` help of every command that loads a policy, so each says what loading one risks."""
 
-def policy_file(
-    name: str, path: str | Path | None = None, directory: str | Path = "results/policies"
-) -> Path:
-    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``."""
+
+def policy_file(name: str, path: str | Path | None = None, directory: str | Path = POLICIES_DIR) -> Path:
+    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``; the
+    default directory is the repository's ``results/policies/``, whatever the current directory."""
     return Path(path) if path else Path(directory) / f"{name}.zip"
 
 
@@ -39,20 +50,60 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
     Args:
         name: agent name.
         policy_path: for PPO agents, the ``.zip`` to load; defaults to ``results/policies/<name>.zip``.
+            Only its parameters are read when its training config lies beside it; a policy its folder's
+            ``MANIFEST.sha256`` does not vouch for loads with an :class:`UnverifiedPolicyWarning`.
         bee_params: overrides of :class:`BeeAgent` gains.
 
     Raises:
-        ValueError: unknown name. FileNotFoundError: a PPO policy file is missing.
+        ValueError: unknown name, or a policy file that is not a readable policy (the message names it).
+        FileNotFoundError: a PPO policy file is missing.
     """
     if name == "straight":
         return StraightAgent()
     if name == "bee":
         return BeeAgent(**bee_params)
     if name in LEARNED_AGENTS:
-        from stable_baselines3 import PPO
-
         path = policy_file(name, policy_path)
         if not path.is_file():
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
-        return PPO.load(path, device="cpu")
+        return load_policy_file(path)
     raise ValueError(f"agent must be one of {', '.join(AGENT_NAMES)}, got {name!r}")
+
+
+@dataclass(frozen=True)
+class LoadedPolicy:
+    """A trained policy with the env it was trained for: build that env with :meth:`make_env` (or
+    ``gym.make(env_id, **env_kwargs)``); ``gym.make("FlowNav-v0")`` alone would miss settings such as an
+    oracle policy's ``obs_source``."""
+
+    agent: Agent
+    env_id: str
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    path: Path | None = None
+
+    def make_env(self, **overrides: Any) -> Any:
+        """The env the policy was trained for, with ``overrides`` (a sensor error, ``render_mode``) on top."""
+        import gymnasium as gym
+
+        import flownav_env  # noqa: F401  (registers the env ids)
+
+        return gym.make(self.env_id, **{**self.env_kwargs, **overrides})
+
+
+def load_policy(path: str | Path) -> LoadedPolicy:
+    """The policy in ``path`` with its env id and env settings, from the training config saved beside it.
+
+    Raises:
+        FileNotFoundError: no such file, or no training config beside it (its env would be unknown).
+        ValueError: not a readable policy, or an invalid config; the message names the file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"policy file not found: {path}")
+    config = training_config_beside(path)
+    if config is None:
+        raise FileNotFoundError(
+            f"no training config beside {path} (expected {path.with_suffix('.yaml')}): the env it was "
+            "trained for is unknown"
+        )
+    return LoadedPolicy(load_policy_file(path), config.env_id, dict(config.env), path)

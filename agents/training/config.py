@@ -3,10 +3,10 @@ randomisation and the run itself (``configs/ppo_*.yaml``)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
-from agents.common.config import env_setting_field, field_range
+from agents.common.config import env_setting_field, field_range, from_mapping
 
 
 @dataclass
@@ -58,3 +58,33 @@ class TrainConfig:
     eval_every: int = field_range(1, 100_000_000, default=20_000)
     eval_episodes: int = field_range(1, 1000, default=10)
     ppo: PPOParams = field(default_factory=PPOParams)
+
+
+def checked_config(config: TrainConfig, source: str) -> TrainConfig:
+    """``config`` validated again as if loaded from a file, for values set after loading (command-line
+    overrides, code); returns the validated copy.
+
+    Raises:
+        ConfigError (a ValueError): a value outside its field's range, naming ``source`` and the key.
+    """
+    return from_mapping(asdict(config), TrainConfig, source=source)
+
+
+def field_bounds(name: str) -> tuple[float | None, float | None]:
+    """The [low, high] range declared on the TrainConfig field ``name``, for messages about overrides."""
+    (match,) = [f for f in fields(TrainConfig) if f.name == name]
+    return match.metadata["range"]
+
+
+def override(config: TrainConfig, name: str, value: float | None, option: str) -> None:
+    """Set ``config.<name>`` from the command-line ``option`` when given, checked against the field's range.
+
+    Raises:
+        ValueError: ``value`` outside the range; the message names the option and the range.
+    """
+    if value is None:
+        return
+    low, high = field_bounds(name)
+    if (low is not None and value < low) or (high is not None and value > high):
+        raise ValueError(f"{option} must be in [{low}, {high}] (the config's {name} range), got {value}")
+    setattr(config, name, value)

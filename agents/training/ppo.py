@@ -1,204 +1,215 @@
 """Trains a PPO policy on FlowNav from a YAML config (``flownav train --config configs/ppo_flow.yaml``).
 
-Read top to bottom: load and validate the config; build ``n_envs`` environments in subprocesses (with sensor
-errors randomised per episode for a robust policy); build PPO, or resume it from the newest checkpoint; learn
-with a progress bar, TensorBoard logs, periodic checkpoints, an evaluation on held-out seeds and a wall-clock
-budget; save the policy with its config, learning curve and the hardware and time it took.
+Read top to bottom: check the config; build ``n_envs`` environments in subprocesses (with sensor errors
+randomised per episode for a robust policy); build PPO, or resume it from the newest readable checkpoint; learn
+with a progress bar, TensorBoard logs, atomic checkpoints, an evaluation on held-out seeds that carries over
+resumes, and a wall-clock budget; then, Ctrl-C or not, select the policy and write it with its config, record
+and learning curve.
 
-Outputs: ``runs/<name>/`` (TensorBoard logs, checkpoints, evaluations) and ``results/policies/<name>.zip``
-(+ ``.yaml`` config copy, ``_learning_curve.png``, ``.json`` training record).
+Everything goes to ``runs/<name>/`` (see :class:`agents.training.outputs.RunFiles`). Shipping to
+``results/policies/`` is a separate step (``--ship``, ``--ship-only``; :mod:`agents.training.shipping`).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import time
 from dataclasses import asdict
 from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 from agents.common.machine import available_cores, code_version, cpu_model, gl_renderer
-from agents.common.seeds import VALIDATION_SEED_START
-from agents.training.config import TrainConfig
+from agents.training.config import TrainConfig, checked_config
 from agents.training.curves import plot_learning_curves
+from agents.training.envs import build_envs, close_quietly
+from agents.training.outputs import RunFiles
+from agents.training.saved_models import latest_checkpoint, save_atomically
+from agents.training.shipping import ship_run
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 
-def make_env_factory(config: TrainConfig, rank: int):
-    """A picklable-by-closure factory for SubprocVecEnv workers."""
-
-    def factory():
-        import gymnasium as gym
-        from stable_baselines3.common.monitor import Monitor
-
-        import flownav_env  # noqa: F401  (registers the ids in the worker)
-        from agents.training.wrappers import SensorRandomization
-
-        env = gym.make(config.env_id, **config.env)
-        if any(asdict(config.randomize).values()):
-            env = SensorRandomization(env, asdict(config.randomize))
-        return Monitor(env)
-
-    return factory
-
-
-def latest_checkpoint(directory: Path) -> Path | None:
-    checkpoints = sorted(directory.glob("*_steps.zip"), key=lambda p: int(p.stem.split("_")[-2]))
-    return checkpoints[-1] if checkpoints else None
-
-
 def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
-    plot_learning_curves({"mean return (held-out seeds)": evaluations}, output, title)
+    """The run's learning curve: mean held-out return (and its min–max band) against steps."""
+    temporary = output.with_name(f"{output.stem}.tmp.png")
+    plot_learning_curves({"mean return (held-out seeds)": evaluations}, temporary, title)
+    os.replace(temporary, output)
 
 
-def select_policy(model, run_dir: Path, policy_path: Path) -> str:
-    """Ship the checkpoint with the best mean return on the held-out training-eval seeds (SB3's EvalCallback
-    keeps it as ``best/best_model.zip``), else the last one; returns which, for the training record.
+def select_policy(model: Any, files: RunFiles) -> str:
+    """Write the run's policy: the model with the best mean return on the held-out training-eval seeds over
+    all sessions (kept as ``best/best_model.zip``), else the last one; returns which, for the record.
 
     PPO's return on a fresh batch of layouts swings a lot between updates, so the last update is often not
     the best policy seen. The selection uses the eval callback's seeds (from 500,000), never the
     benchmark's evaluation seeds (from 1,000,000).
     """
-    best = run_dir / "best" / "best_model.zip"
-    evaluations = run_dir / "evaluations.npz"
-    if best.exists() and evaluations.exists():
-        data = np.load(evaluations)
-        means = data["results"].mean(axis=1)
-        index = int(np.argmax(means))
-        shutil.copyfile(best, policy_path)
-        return f"best held-out eval: mean return {means[index]:.2f} at {int(data['timesteps'][index])} steps"
-    model.save(policy_path)
+    if files.best_model.is_file() and files.best_info.is_file():
+        best = json.loads(files.best_info.read_text())
+        temporary = files.policy.with_name(f"{files.policy.stem}.tmp.zip")
+        shutil.copyfile(files.best_model, temporary)
+        os.replace(temporary, files.policy)
+        return f"best held-out eval: mean return {best['mean_return']:.2f} at {best['timesteps']} steps"
+    save_atomically(model, files.policy)
     return f"last: {model.num_timesteps} steps"
 
 
-def train(
-    config: TrainConfig, *, config_path: Path, resume: bool, runs_dir: Path, policies_dir: Path
-) -> Path:
-    """Run the training described by ``config``; returns the saved policy's path."""
-    import torch
+def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) -> tuple[Any, int | None]:
+    """PPO resumed from the newest readable checkpoint, or a fresh one; the resumed step count or None.
+
+    Raises:
+        ValueError: a fresh start in a folder that holds an earlier run's evaluations, best model or
+            checkpoints, which would otherwise mix with this run's.
+    """
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import (
-        BaseCallback,
-        CallbackList,
-        CheckpointCallback,
-        EvalCallback,
-    )
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
-    run_dir = runs_dir / config.name
-    checkpoint_dir = run_dir / "checkpoints"
-    factories = [make_env_factory(config, i) for i in range(config.n_envs)]
-    vec_cls = SubprocVecEnv if config.n_envs > 1 else DummyVecEnv
-    envs = vec_cls(factories, **({"start_method": "forkserver"} if vec_cls is SubprocVecEnv else {}))
-    envs.seed(config.seed)
-    eval_env = DummyVecEnv([make_env_factory(config, 0)])
-    eval_env.seed(VALIDATION_SEED_START + config.seed)
-
-    checkpoint = latest_checkpoint(checkpoint_dir) if resume else None
+    checkpoint = latest_checkpoint(files.checkpoints) if resume else None
     if checkpoint is not None:
-        model = PPO.load(checkpoint, env=envs, device="cpu", tensorboard_log=str(run_dir / "tb"))
+        model = PPO.load(checkpoint, env=envs, device="cpu", tensorboard_log=str(files.tensorboard))
         print(f"resuming from {checkpoint} at {model.num_timesteps} steps")
-    else:
-        if resume:
-            print(f"no checkpoint in {checkpoint_dir}: starting fresh")
-        params = asdict(config.ppo)
-        net_arch = params.pop("net_arch")
-        log_std_init = params.pop("log_std_init")
-        model = PPO(
-            "MultiInputPolicy",
-            envs,
-            policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
-            tensorboard_log=str(run_dir / "tb"),
-            seed=config.seed,
-            device="cpu",
-            verbose=0,
-            **params,
+        return model, model.num_timesteps
+    leftovers = [p for p in (files.evaluations, files.best_model) if p.exists()]
+    leftovers += sorted(files.checkpoints.glob("*.zip")) if files.checkpoints.is_dir() else []
+    if leftovers:
+        why = "has no readable checkpoint" if resume else "already holds a run"
+        raise ValueError(
+            f"{files.run_dir} {why} ({leftovers[0].name}, ...): continue it with --resume, or move the "
+            "folder away (or pick another --runs-dir) to start afresh"
         )
-
-    class WallClockBudget(BaseCallback):
-        """Stops learning once the run has used ``max_minutes`` (this session's share)."""
-
-        def __init__(self, minutes: float) -> None:
-            super().__init__()
-            self.deadline = time.monotonic() + 60.0 * minutes
-
-        def _on_step(self) -> bool:
-            return time.monotonic() < self.deadline
-
-    per_env = max(1, config.n_envs)
-    callbacks = CallbackList(
-        [
-            CheckpointCallback(
-                max(1, config.checkpoint_every // per_env), str(checkpoint_dir), name_prefix=config.name
-            ),
-            EvalCallback(
-                eval_env,
-                n_eval_episodes=config.eval_episodes,
-                eval_freq=max(1, config.eval_every // per_env),
-                log_path=str(run_dir),
-                best_model_save_path=str(run_dir / "best"),
-                deterministic=True,
-                verbose=0,
-            ),
-            WallClockBudget(config.max_minutes),
-        ]
+    if resume:
+        print(f"no checkpoint in {files.checkpoints}: starting fresh")
+    params = asdict(config.ppo)
+    net_arch = params.pop("net_arch")
+    log_std_init = params.pop("log_std_init")
+    model = PPO(
+        "MultiInputPolicy",
+        envs,
+        policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
+        tensorboard_log=str(files.tensorboard),
+        seed=config.seed,
+        device="cpu",
+        verbose=0,
+        **params,
     )
+    return model, None
+
+
+def train(
+    config: TrainConfig,
+    *,
+    config_path: Path,
+    resume: bool,
+    runs_dir: Path,
+    ship_to: Path | None = None,
+) -> Path:
+    """Run the training described by ``config`` into ``runs_dir/<name>/``; returns the run's policy path.
+
+    Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
+    shipped deliberately later, with :func:`agents.training.shipping.ship_run`).
+
+    Raises:
+        ValueError: a config value outside its range (``total_timesteps`` 0, say), or a fresh start in a
+            folder holding an earlier run (see :func:`_build_model`).
+    """
+    import torch
+    from stable_baselines3.common.callbacks import CallbackList
+
+    from agents.training.callbacks import AtomicCheckpointCallback, ResumableEvalCallback, WallClockBudget
+
+    config = checked_config(config, source=str(config_path))
+    torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
+    files = RunFiles.of(runs_dir, config.name)
+    envs, eval_env = build_envs(config)
+    try:
+        model, resume_step = _build_model(config, envs, files, resume)
+        per_env = max(1, config.n_envs)
+        callbacks = CallbackList(
+            [
+                AtomicCheckpointCallback(
+                    max(1, config.checkpoint_every // per_env),
+                    str(files.checkpoints),
+                    name_prefix=config.name,
+                ),
+                ResumableEvalCallback(
+                    eval_env,
+                    files,
+                    resume_step,
+                    n_eval_episodes=config.eval_episodes,
+                    eval_freq=max(1, config.eval_every // per_env),
+                    deterministic=True,
+                    verbose=0,
+                ),
+                WallClockBudget(config.max_minutes),
+            ]
+        )
+    except BaseException:
+        close_quietly(envs)
+        close_quietly(eval_env)
+        raise
     started = time.perf_counter()
     steps_before = model.num_timesteps
-    remaining = max(0, config.total_timesteps - model.num_timesteps)
+    interrupted = False
     try:
         model.learn(
-            remaining,
+            max(0, config.total_timesteps - model.num_timesteps),
             callback=callbacks,
             progress_bar=True,
-            reset_num_timesteps=checkpoint is None,
+            reset_num_timesteps=resume_step is None,
             tb_log_name=config.name,
         )
     except KeyboardInterrupt:
-        # Ctrl-C ends this session's share early; what was learned is still saved and shipped below.
+        # Ctrl-C ends this session early; what was learned is still saved below.
+        interrupted = True
         print(f"interrupted at {model.num_timesteps} steps: saving; --resume continues from here")
     finally:
         # Interrupted or not, keep what was learned: the checkpoint is the resume point.
-        model.save(checkpoint_dir / f"{config.name}_{model.num_timesteps}_steps.zip")
-        envs.close()
-        eval_env.close()
+        save_atomically(model, files.checkpoints / f"{config.name}_{model.num_timesteps}_steps.zip")
+        close_quietly(envs)
+        close_quietly(eval_env)
     wall_minutes = (time.perf_counter() - started) / 60.0
 
-    policies_dir.mkdir(parents=True, exist_ok=True)
-    policy_path = policies_dir / f"{config.name}.zip"
-    selected = select_policy(model, run_dir, policy_path)
-    shutil.copyfile(config_path, policies_dir / f"{config.name}.yaml")
-    evaluations = run_dir / "evaluations.npz"
-    if evaluations.exists():
-        plot_learning_curve(evaluations, policies_dir / f"{config.name}_learning_curve.png", config.name)
-        shutil.copyfile(evaluations, policies_dir / f"{config.name}_evaluations.npz")
-    record_path = policies_dir / f"{config.name}.json"
-    record = (
-        json.loads(record_path.read_text())
-        if record_path.exists() and checkpoint is not None
-        else {"sessions": []}
-    )
-    record["sessions"].append(
-        {
-            "steps_this_session": int(model.num_timesteps - steps_before),
-            "wall_minutes": round(wall_minutes, 1),
-            "steps_per_second": round((model.num_timesteps - steps_before) / max(wall_minutes * 60, 1e-9), 1),
-            "cpu": cpu_model(),
-            "cores": available_cores(),
-            "n_envs": config.n_envs,
-            # What the policy saw depends on these as much as on the config: record them per session.
-            "code": code_version(),
-            "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
-            "gl_renderer": gl_renderer(),
-        }
-    )
-    record["total_timesteps"] = int(model.num_timesteps)
+    selected = select_policy(model, files)
+    if Path(config_path).resolve() != files.config.resolve():
+        shutil.copyfile(config_path, files.config)
+    if files.evaluations.exists():
+        plot_learning_curve(files.evaluations, files.curve, config.name)
+    session = {
+        "steps_this_session": int(model.num_timesteps - steps_before),
+        "wall_minutes": round(wall_minutes, 1),
+        "steps_per_second": round((model.num_timesteps - steps_before) / max(wall_minutes * 60, 1e-9), 1),
+        "interrupted": interrupted,
+        "total_timesteps_asked": config.total_timesteps,
+        "max_minutes": config.max_minutes,
+        "cpu": cpu_model(),
+        "cores": available_cores(),
+        "n_envs": config.n_envs,
+        # What the policy saw depends on these as much as on the config: record them per session.
+        "code": code_version(),
+        "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
+        "gl_renderer": gl_renderer(),
+    }
+    write_record(files, session, selected, model.num_timesteps, config_path, resumed=resume_step is not None)
+    print(f"saved {files.policy} after {model.num_timesteps} steps ({wall_minutes:.1f} min this session)")
+    if ship_to is not None:
+        if interrupted:
+            print(f"interrupted: not shipping; ship it later with --ship-only --config {config_path}")
+        else:
+            ship_run(files, ship_to)
+    return files.policy
+
+
+def write_record(
+    files: RunFiles, session: dict, selected: str, total_timesteps: int, config_path: Path, *, resumed: bool
+) -> None:
+    """Append ``session`` to the run's record (a resumed run keeps its earlier sessions) and update the
+    totals over all sessions; written atomically."""
+    record = json.loads(files.record.read_text()) if resumed and files.record.is_file() else {"sessions": []}
+    record["sessions"].append(session)
+    record["total_timesteps"] = int(total_timesteps)
     record["selected"] = selected
     record["total_wall_minutes"] = round(sum(s["wall_minutes"] for s in record["sessions"]), 1)
-    record["command"] = f"flownav train --config {config_path}" + (" --resume" if resume else "")
-    record_path.write_text(json.dumps(record, indent=2))
-    print(f"saved {policy_path} after {model.num_timesteps} steps ({wall_minutes:.1f} min this session)")
-    return policy_path
+    record["command"] = f"flownav train --config {config_path}" + (" --resume" if resumed else "")
+    temporary = files.record.with_suffix(".tmp")
+    temporary.write_text(json.dumps(record, indent=2))
+    os.replace(temporary, files.record)

@@ -1,16 +1,33 @@
-"""Reactive and learned agents behind one predict interface."""
+"""Reactive and learned agents behind one predict interface; loading trained policies safely."""
 
 from __future__ import annotations
 
+import shutil
+import warnings
+import zipfile
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+import yaml
 
 import flownav_env  # noqa: F401
+from agents.common.paths import POLICIES_DIR
+from agents.common.seeds import TEST_SEED_START
 from agents.evaluation.episode import run_episode
-from agents.policies import BeeAgent, StraightAgent, load_agent, sector_nearness
+from agents.policies import (
+    BeeAgent,
+    LoadedPolicy,
+    StraightAgent,
+    UnverifiedPolicyWarning,
+    agent_env_kwargs,
+    load_agent,
+    load_policy,
+    policy_file,
+    sector_nearness,
+)
+from agents.training.manifest import MANIFEST_NAME, file_sha256, read_manifest
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 
@@ -54,3 +71,142 @@ def test_unknown_agent_and_missing_policy_errors(tmp_path: Path) -> None:
         load_agent("wasp")
     with pytest.raises(FileNotFoundError, match=r"policy file for agent 'ppo_flow' not found"):
         load_agent("ppo_flow", tmp_path / "none.zip")
+
+
+SHIPPED = ("ppo_flow", "ppo_oracle", "ppo_robust")
+
+
+def test_shipped_policies_load_only_their_parameters_and_act_as_ppo_load(monkeypatch) -> None:
+    from stable_baselines3 import PPO
+    from stable_baselines3.common import save_util
+
+    def unpickling_forbidden(*args, **kwargs):
+        raise AssertionError("the policy's pickled data was read")
+
+    for name in SHIPPED:
+        with monkeypatch.context() as patch, warnings.catch_warnings():
+            warnings.simplefilter("error", UnverifiedPolicyWarning)  # listed in the manifest with its hash
+            patch.setattr(save_util, "json_to_data", unpickling_forbidden)
+            agent = load_agent(name)
+        reference = PPO.load(POLICIES_DIR / f"{name}.zip", device="cpu")
+        env = gym.make("FlowNav-v0", **agent_env_kwargs(name))
+        observation, _ = env.reset(seed=TEST_SEED_START)
+        observations = [observation, env.step(np.zeros(3))[0]]
+        env.observation_space.seed(0)
+        observations += [env.observation_space.sample() for _ in range(3)]
+        env.close()
+        for observation in observations:
+            ours, _ = agent.predict(observation, deterministic=True)
+            theirs, _ = reference.predict(observation, deterministic=True)
+            np.testing.assert_array_equal(ours, theirs)
+
+
+def test_the_manifest_lists_every_shipped_policy_with_its_hash() -> None:
+    manifest = read_manifest(POLICIES_DIR / MANIFEST_NAME)
+    assert sorted(manifest) == sorted(p.name for p in POLICIES_DIR.glob("*.zip"))
+    assert all(file_sha256(POLICIES_DIR / name) == digest for name, digest in manifest.items())
+
+
+def copy_policy(name: str, directory: Path, with_config: bool = True) -> Path:
+    policy = directory / f"{name}.zip"
+    shutil.copyfile(POLICIES_DIR / f"{name}.zip", policy)
+    if with_config:
+        shutil.copyfile(POLICIES_DIR / f"{name}.yaml", policy.with_suffix(".yaml"))
+    return policy
+
+
+def test_policies_the_manifest_does_not_vouch_for_load_with_a_warning(tmp_path: Path) -> None:
+    policy = copy_policy("ppo_flow", tmp_path)
+    with pytest.warns(UnverifiedPolicyWarning, match=r"ppo_flow.zip is not beside a MANIFEST.sha256"):
+        load_agent("ppo_flow", policy)
+    (tmp_path / MANIFEST_NAME).write_text(f"{'0' * 64}  ppo_flow.zip\n")
+    with pytest.warns(UnverifiedPolicyWarning, match=r"does not match its SHA-256 in .*MANIFEST.sha256"):
+        load_agent("ppo_flow", policy)
+    (tmp_path / MANIFEST_NAME).write_text(f"{file_sha256(policy)}  ppo_flow.zip\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnverifiedPolicyWarning)
+        load_agent("ppo_flow", policy)
+    bare = copy_policy("ppo_robust", tmp_path, with_config=False)
+    with pytest.warns(UnverifiedPolicyWarning, match=r"no training config beside it .*unpickles it"):
+        load_agent("ppo_robust", bare)
+
+
+def rewrite_zip(source: Path, target: Path, replace: dict[str, bytes | None]) -> None:
+    with zipfile.ZipFile(source) as original, zipfile.ZipFile(target, "w") as copy:
+        for entry in original.namelist():
+            content = replace.get(entry, original.read(entry))
+            if content is not None:
+                copy.writestr(entry, content)
+
+
+@pytest.mark.parametrize(
+    ("damage", "message"),
+    [
+        ("not a zip", r"broken.zip is not a readable zip file \(cut short or not a model\)"),
+        ("cut short", r"broken.zip is not a readable zip file \(cut short or not a model\)"),
+        ("other zip", r"broken.zip is not a stable-baselines3 model: it lacks data, policy.pth"),
+        ("cut JSON", r"broken.zip: its 'data' entry is not valid JSON \(file cut or edited\)"),
+        ("bad weights", r"broken.zip: its policy.pth is not a weights-only parameter file"),
+        ("other network", r"broken.zip: its parameters do not fit the network of the config beside it"),
+    ],
+)
+def test_bad_policy_files_raise_value_errors_naming_the_file(
+    tmp_path: Path, damage: str, message: str
+) -> None:
+    source, broken = POLICIES_DIR / "ppo_flow.zip", tmp_path / "broken.zip"
+    shutil.copyfile(POLICIES_DIR / "ppo_flow.yaml", broken.with_suffix(".yaml"))
+    if damage == "not a zip":
+        broken.write_text("hello")
+    elif damage == "cut short":
+        broken.write_bytes(source.read_bytes()[:5000])
+    elif damage == "other zip":
+        with zipfile.ZipFile(broken, "w") as archive:
+            archive.writestr("notes.txt", "not a policy")
+    elif damage == "cut JSON":
+        with zipfile.ZipFile(source) as archive:
+            data = archive.read("data")
+        rewrite_zip(source, broken, {"data": data[: len(data) // 2]})
+    elif damage == "bad weights":
+        rewrite_zip(source, broken, {"policy.pth": b"not weights"})
+    else:
+        shutil.copyfile(source, broken)
+        config = yaml.safe_load((POLICIES_DIR / "ppo_flow.yaml").read_text())
+        config["ppo"]["net_arch"] = [16]
+        rewrite_zip(source, broken, {"data": None})
+        with zipfile.ZipFile(broken, "a") as archive:
+            archive.writestr("data", "{}")
+        broken.with_suffix(".yaml").write_text(yaml.safe_dump(config))
+    with pytest.raises(ValueError, match=message):
+        load_agent("ppo_flow", broken)
+
+
+def test_policies_resolve_against_the_repository_not_the_current_directory(
+    tmp_path: Path, monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert policy_file("ppo_flow") == POLICIES_DIR / "ppo_flow.zip" and policy_file("ppo_flow").is_absolute()
+    assert agent_env_kwargs("ppo_oracle") == {"obs_source": "oracle"}
+    assert hasattr(load_agent("ppo_flow"), "predict")
+
+
+def test_load_policy_gives_the_env_the_policy_was_trained_for() -> None:
+    loaded = load_policy(POLICIES_DIR / "ppo_oracle.zip")
+    assert isinstance(loaded, LoadedPolicy)
+    assert (loaded.env_id, loaded.env_kwargs) == ("FlowNav-v0", {"obs_source": "oracle"})
+    env = gym.make(loaded.env_id, **loaded.env_kwargs, **SMALL)
+    assert env.unwrapped.obs_source == "oracle"
+    observation, _ = env.reset(seed=TEST_SEED_START)
+    action, _ = loaded.agent.predict(observation, deterministic=True)
+    env.close()
+    assert action.shape == (3,)
+    made = loaded.make_env(brightness=0.5)
+    assert made.unwrapped.obs_source == "oracle" and made.unwrapped.brightness == 0.5
+    made.close()
+
+
+def test_load_policy_needs_the_config_beside_the_zip(tmp_path: Path) -> None:
+    bare = copy_policy("ppo_oracle", tmp_path, with_config=False)
+    with pytest.raises(FileNotFoundError, match=r"no training config beside .*ppo_oracle.zip"):
+        load_policy(bare)
+    with pytest.raises(FileNotFoundError, match=r"policy file not found: .*none.zip"):
+        load_policy(tmp_path / "none.zip")

@@ -1,0 +1,119 @@
+"""Loading a trained policy's parameters without running code from its file.
+
+``PPO.load`` unpickles the zip's ``data`` entry, and unpickling runs whatever code the file names: a crafted
+policy zip can run a shell command. A FlowNav policy is a ``MultiInputPolicy`` whose network is fixed by the
+training config saved beside its zip (``<name>.yaml``) and whose spaces are those of the env that config
+names, so the policy is rebuilt from those and only its parameters are read from the zip (``policy.pth``,
+with ``torch.load(weights_only=True)``). Only a zip without a config beside it falls back to ``PPO.load``,
+with a warning. Every load is checked against the checksum manifest of the zip's folder.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Any
+
+from agents.common.config import ConfigError, load_config
+from agents.policies.base import Agent
+from agents.training.config import TrainConfig
+from agents.training.manifest import manifest_problem
+from agents.training.saved_models import SavedModel, read_saved_model
+
+
+class UnverifiedPolicyWarning(UserWarning):
+    """A policy file was loaded that its folder's MANIFEST.sha256 does not vouch for."""
+
+
+def training_config_beside(path: Path) -> TrainConfig | None:
+    """The training config saved beside the policy ``path`` (``<stem>.yaml``), or None when there is none.
+
+    Raises:
+        ConfigError (a ValueError): the config exists but does not validate; the message names it.
+    """
+    config_path = Path(path).with_suffix(".yaml")
+    return load_config(config_path, TrainConfig) if config_path.is_file() else None
+
+
+def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
+    """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, its ``net_arch`` and
+    ``log_std_init``; spaces from ``config``'s env) holding the parameters of ``saved``. Its ``predict``
+    gives the same actions as ``PPO.load(path).predict``.
+
+    Raises:
+        ValueError: the zip's network does not match the config's; the message names the file.
+    """
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    import flownav_env  # noqa: F401  (registers the env ids)
+
+    network = {"net_arch": list(config.ppo.net_arch), "log_std_init": config.ppo.log_std_init}
+    saved_network = saved.data.get("policy_kwargs")
+    if isinstance(saved_network, dict) and ":serialized:" not in saved_network and saved_network != network:
+        raise ValueError(
+            f"{saved.path}: its network {saved_network} differs from the config beside it ({network}): "
+            "the config belongs to another run"
+        )
+    env = gym.make(config.env_id, **config.env)
+    try:
+        observation_space, action_space = env.observation_space, env.action_space
+    finally:
+        env.close()
+    policy_class = PPO.policy_aliases["MultiInputPolicy"]
+    policy = policy_class(
+        observation_space, action_space, lambda _: config.ppo.learning_rate, use_sde=False, **network
+    )
+    try:
+        policy.load_state_dict(saved.policy_state)
+    except RuntimeError as error:
+        raise ValueError(
+            f"{saved.path}: its parameters do not fit the network of the config beside it: {error}"
+        ) from error
+    policy.set_training_mode(False)
+    return policy
+
+
+def load_policy_file(path: Path) -> Agent:
+    """The policy stored in ``path``, loaded without unpickling when its training config lies beside it;
+    warns (:class:`UnverifiedPolicyWarning`) when its folder's manifest does not list it with this hash.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: not a readable stable-baselines3 policy, a bad config beside it, or parameters that do
+            not fit; the message names the file and what is wrong.
+    """
+    path = Path(path)
+    saved = read_saved_model(path)
+    try:
+        config = training_config_beside(path)
+    except ConfigError as error:
+        raise ValueError(f"{path}: the training config beside it is invalid: {error}") from error
+    problem = manifest_problem(path)
+    if config is None:
+        warnings.warn(
+            UnverifiedPolicyWarning(
+                f"{path} has no training config beside it ({path.with_suffix('.yaml').name}): loading the "
+                "whole model with PPO.load, which unpickles it and so runs any code the file holds"
+                + (f"; {problem}" if problem else "")
+            ),
+            stacklevel=3,
+        )
+        return _load_pickled(path)
+    if problem:
+        warnings.warn(
+            UnverifiedPolicyWarning(f"{problem} (only its parameters are read, no code from it runs)"),
+            stacklevel=3,
+        )
+    return policy_from_parameters(saved, config)
+
+
+def _load_pickled(path: Path) -> Agent:
+    from stable_baselines3 import PPO
+
+    try:
+        return PPO.load(path, device="cpu")
+    except Exception as error:  # SB3 raises assertion, key and value errors for files it cannot use
+        raise ValueError(
+            f"{path} could not be loaded as a PPO model: {type(error).__name__}: {error}"
+        ) from error

@@ -1,0 +1,86 @@
+"""The training and evaluation environments of a run: built from its config, in worker processes that a
+Ctrl-C does not kill, and closed without raising.
+
+Ctrl-C sends SIGINT to the whole process group. Workers that die of it break their pipes, and closing the
+vector env then raises (``EOFError``, ``ConnectionResetError``) before the run's outputs are written. The
+workers ignore SIGINT; only the main process handles it, ends learning and saves.
+"""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Callable
+from dataclasses import asdict
+from typing import Any
+
+from agents.common.seeds import VALIDATION_SEED_START
+from agents.training.config import TrainConfig
+
+
+def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
+    """A picklable-by-closure factory for SubprocVecEnv workers (``rank`` is kept for callers that number
+    their workers; the env's seed comes from the vector env)."""
+
+    def factory():
+        import gymnasium as gym
+        from stable_baselines3.common.monitor import Monitor
+
+        import flownav_env  # noqa: F401  (registers the ids in the worker)
+        from agents.training.wrappers import SensorRandomization
+
+        env = gym.make(config.env_id, **config.env)
+        if any(asdict(config.randomize).values()):
+            env = SensorRandomization(env, asdict(config.randomize))
+        return Monitor(env)
+
+    return factory
+
+
+class IgnoringInterrupts:
+    """Wraps an env factory so that the worker process it runs in ignores SIGINT (Ctrl-C) from then on.
+
+    Only for factories called in a worker process: called in the main process it would disable Ctrl-C there.
+    """
+
+    def __init__(self, factory: Callable[[], Any]) -> None:
+        self.factory = factory
+
+    def __call__(self) -> Any:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        return self.factory()
+
+
+def build_envs(config: TrainConfig) -> tuple[Any, Any]:
+    """The training vector env (``n_envs`` workers, seeded from ``config.seed``) and a one-env evaluation
+    vector env of the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two
+    classes differ. With one env, both run in this process (DummyVecEnv); else in forkserver subprocesses
+    (a forked EGL context hangs) that ignore Ctrl-C."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    factories = [make_env_factory(config, i) for i in range(config.n_envs)]
+    if config.n_envs > 1:
+        envs = SubprocVecEnv([IgnoringInterrupts(f) for f in factories], start_method="forkserver")
+        eval_env = SubprocVecEnv([IgnoringInterrupts(make_env_factory(config, 0))], start_method="forkserver")
+    else:
+        envs = DummyVecEnv(factories)
+        eval_env = DummyVecEnv([make_env_factory(config, 0)])
+    envs.seed(config.seed)
+    eval_env.seed(VALIDATION_SEED_START + config.seed)
+    return envs, eval_env
+
+
+def close_quietly(envs: Any) -> None:
+    """Close a vector env whose workers may already be gone (killed, or interrupted by an older SB3): a
+    broken pipe is reported in one line and the remaining workers are terminated, instead of raising and
+    losing the run's outputs."""
+    try:
+        envs.close()
+    except (EOFError, OSError) as error:  # OSError covers ConnectionResetError and BrokenPipeError
+        print(f"warning: an env worker had already stopped ({type(error).__name__}); terminating the rest")
+        for process in getattr(envs, "processes", []):
+            if process.is_alive():
+                process.terminate()
+            process.join(timeout=5)
+        for remote in getattr(envs, "remotes", []):
+            remote.close()
+        envs.closed = True

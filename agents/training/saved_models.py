@@ -1,0 +1,113 @@
+"""stable-baselines3 model files (``.zip``): written atomically, read without unpickling, and the newest
+checkpoint that reads.
+
+A ``kill -9`` or a full disk during ``model.save`` leaves a truncated zip; written under a temporary name and
+renamed, a file is either the old one or the complete new one. Reading uses only ``zipfile``, ``json`` and
+``torch.load(weights_only=True)``: the ``data`` entry's pickled objects (spaces, schedules, the policy class)
+are never unpickled, since unpickling runs whatever code the file names.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+CHECKPOINT_NAME = re.compile(r"_(\d+)_steps$")
+REQUIRED_ENTRIES = ("data", "policy.pth")
+
+
+@dataclass(frozen=True)
+class SavedModel:
+    """What a model zip holds that can be read safely: its ``data`` as plain JSON (pickled values stay
+    base64 strings) and the policy's parameters."""
+
+    path: Path
+    data: dict[str, Any]
+    policy_state: dict[str, Any]
+
+    @property
+    def num_timesteps(self) -> int:
+        """Environment steps the model had learned from when saved."""
+        return int(self.data.get("num_timesteps", 0))
+
+
+def read_saved_model(path: Path) -> SavedModel:
+    """Read a stable-baselines3 model zip without running code from it.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: not a zip (or cut short), no ``data``/``policy.pth`` entries (not an SB3 model), ``data``
+            not JSON, or ``policy.pth`` not a weights-only state dict; the message names the file.
+    """
+    import torch
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"model file not found: {path}")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            names = archive.namelist()
+            missing = [entry for entry in REQUIRED_ENTRIES if entry not in names]
+            if missing:
+                raise ValueError(
+                    f"{path} is not a stable-baselines3 model: it lacks {', '.join(missing)} "
+                    f"(entries: {', '.join(names[:8]) or 'none'})"
+                )
+            raw_data = archive.read("data")
+            raw_policy = archive.read("policy.pth")
+    except (zipfile.BadZipFile, EOFError, OSError) as error:
+        raise ValueError(f"{path} is not a readable zip file (cut short or not a model): {error}") from error
+    try:
+        data = json.loads(raw_data.decode())
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(
+            f"{path}: its 'data' entry is not valid JSON (file cut or edited): {error}"
+        ) from error
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: its 'data' entry is not a JSON object")
+    try:
+        state = torch.load(io.BytesIO(raw_policy), map_location="cpu", weights_only=True)
+    except Exception as error:  # torch raises many types for a bad or unsafe file; all mean "not weights"
+        raise ValueError(
+            f"{path}: its policy.pth is not a weights-only parameter file: {type(error).__name__}: {error}"
+        ) from error
+    if not isinstance(state, dict):
+        raise ValueError(f"{path}: its policy.pth holds a {type(state).__name__}, not a parameter dict")
+    return SavedModel(path, data, state)
+
+
+def save_atomically(model: Any, path: Path) -> Path:
+    """``model.save(path)`` through a temporary ``<stem>.tmp.zip`` and a rename, so an interrupted save never
+    leaves a truncated ``path``; returns ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(f"{path.stem}.tmp.zip")
+    model.save(temporary)
+    os.replace(temporary, path)
+    return path
+
+
+def checkpoint_steps(path: Path) -> int | None:
+    """The step count in a checkpoint's name (``ppo_flow_4096_steps.zip`` → 4096), None for other names."""
+    match = CHECKPOINT_NAME.search(Path(path).stem)
+    return int(match.group(1)) if match else None
+
+
+def latest_checkpoint(directory: Path) -> Path | None:
+    """The newest checkpoint in ``directory`` that reads; newer ones that do not (cut short by a crash) are
+    skipped with a printed warning. None when there is none."""
+    candidates = [(checkpoint_steps(p), p) for p in Path(directory).glob("*_steps.zip")]
+    for _, path in sorted(((s, p) for s, p in candidates if s is not None), reverse=True):
+        try:
+            read_saved_model(path)
+        except ValueError as error:
+            print(f"warning: skipping checkpoint {path}: {error}")
+            continue
+        return path
+    return None

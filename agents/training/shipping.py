@@ -1,0 +1,55 @@
+"""Shipping a finished run to the policies folder (``results/policies/``): a deliberate step, never a side
+effect of training.
+
+The policy, its config, record, evaluations and learning curve go together, all or nothing: each is copied
+under a temporary name first, and only when every copy succeeded are they renamed into place, so a shipped
+policy never sits beside another run's curve or record. The folder's checksum manifest is updated with the
+new policy's hash.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+from agents.training.manifest import record_in_manifest
+from agents.training.outputs import RunFiles
+
+
+def ship_run(files: RunFiles, ship_to: Path) -> list[Path]:
+    """Copy the run's policy, config, record, evaluations and learning curve into ``ship_to`` and record the
+    policy in its ``MANIFEST.sha256``; returns the shipped paths.
+
+    A run without evaluations (stopped before the first) ships without them, and removes the earlier
+    evaluations and curve of the same name from ``ship_to``, which would describe another policy.
+
+    Raises:
+        FileNotFoundError: the run has no policy, config or record (train it first).
+    """
+    for required in (files.policy, files.config, files.record):
+        if not required.is_file():
+            raise FileNotFoundError(
+                f"run {files.run_dir} has no {required.name}: train it first (flownav train --config ...)"
+            )
+    ship_to = Path(ship_to)
+    ship_to.mkdir(parents=True, exist_ok=True)
+    copies = {source: ship_to / name for source, name in files.shipped_names().items() if source.is_file()}
+    stale = [ship_to / name for source, name in files.shipped_names().items() if not source.is_file()]
+    temporaries: dict[Path, Path] = {}
+    try:
+        for source, target in copies.items():
+            temporary = target.with_name(f".{target.name}.shipping")
+            shutil.copyfile(source, temporary)
+            temporaries[temporary] = target
+    except BaseException:
+        for temporary in temporaries:
+            temporary.unlink(missing_ok=True)
+        raise
+    for temporary, target in temporaries.items():
+        os.replace(temporary, target)
+    for path in stale:
+        path.unlink(missing_ok=True)
+    manifest = record_in_manifest(ship_to, [files.policy.name])
+    print(f"shipped {files.run_dir} to {ship_to} ({', '.join(t.name for t in copies.values())}); {manifest}")
+    return list(copies.values())

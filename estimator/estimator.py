@@ -200,6 +200,7 @@ class FlowDepthEstimator:
         spread_grid: tuple[int, int] = (6, 8),
         forward_backward: bool = True,
         fb_max_error_px: float = 0.5,
+        fb_max_level: int | None = 0,
         normalize_brightness: bool | str = "off",
         min_parallax_px: float = 1.0,
         max_epipolar_error_px: float = 1.0,
@@ -219,6 +220,9 @@ class FlowDepthEstimator:
         self.spread_grid = _as_grid("spread_grid", spread_grid)
         self.forward_backward = require_bool("forward_backward", forward_backward)
         self.fb_max_error_px = require_positive_finite("fb_max_error_px", fb_max_error_px)
+        self.fb_max_level = (
+            None if fb_max_level is None else require_int_in_range("fb_max_level", fb_max_level, 0, 8)
+        )
         if isinstance(normalize_brightness, (bool, np.bool_)):
             normalize_brightness = "pair" if normalize_brightness else "off"
         if normalize_brightness not in BRIGHTNESS_MODES:
@@ -329,6 +333,7 @@ class FlowDepthEstimator:
             self.win_size,
             self.max_level,
             self.forward_backward,
+            self.fb_max_level,
         )
         timings["flow"] = time.perf_counter() - stage_start
 

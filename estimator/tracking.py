@@ -199,6 +199,7 @@ def track_points(
     win_size: int,
     max_level: int,
     forward_backward: bool,
+    backward_max_level: int | None = None,
 ) -> Tracks:
     """Pyramidal Lucas-Kanade from the previous into the next frame, optionally checked backwards.
 
@@ -227,15 +228,29 @@ def track_points(
     lk_error = lk_error.reshape(count).astype(np.float32)
     fb_error = np.zeros(count, dtype=np.float32)
     if forward_backward:
-        back_points, back_status, _ = cv2.calcOpticalFlowPyrLK(
-            next_image,
-            prev_image,
-            next_points,
-            None,
-            winSize=window,
-            maxLevel=max_level,
-            criteria=_LK_CRITERIA,
-        )
+        if backward_max_level is None:
+            back_points, back_status, _ = cv2.calcOpticalFlowPyrLK(
+                next_image,
+                prev_image,
+                next_points,
+                None,
+                winSize=window,
+                maxLevel=max_level,
+                criteria=_LK_CRITERIA,
+            )
+        else:
+            # A correct forward track leads straight back to where it started: search the backward match
+            # from there, on few pyramid levels, instead of repeating the forward search from scratch.
+            back_points, back_status, _ = cv2.calcOpticalFlowPyrLK(
+                next_image,
+                prev_image,
+                next_points,
+                points.copy(),
+                winSize=window,
+                maxLevel=backward_max_level,
+                criteria=_LK_CRITERIA,
+                flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
+            )
         distance = np.linalg.norm((back_points - points).reshape(count, 2), axis=1).astype(np.float32)
         fb_error = np.where(back_status.reshape(count).astype(bool), distance, np.float32(np.inf))
     return Tracks(next_points.reshape(count, 2), status, lk_error, fb_error)

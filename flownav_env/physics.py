@@ -131,16 +131,18 @@ class FlowNavPhysics:
         """
         data, model = self.data, self.model
         drag = self.quad.drag_coefficient
+        thrusts = self.controller.thrusts
+        target = [float(value) for value in velocity_target_world]
+        yaw_rate = float(yaw_rate)
+        body_rotation = data.xmat[self.drone_body]
+        body_force = data.xfrc_applied[self.drone_body]
         collided = False
         for _ in range(substeps):
-            rotation = data.xmat[self.drone_body].reshape(3, 3)
-            velocity = data.qvel[:3]
-            data.ctrl[:] = self.controller(
-                rotation, velocity.copy(), data.qvel[3:6], velocity_target_world, yaw_rate
-            )
-            data.xfrc_applied[self.drone_body, :3] = -drag * velocity
+            velocity = data.qvel[:6].tolist()
+            data.ctrl[:] = thrusts(body_rotation.tolist(), velocity[:3], velocity[3:], target, yaw_rate)
+            body_force[:3] = (-drag * velocity[0], -drag * velocity[1], -drag * velocity[2])
             mujoco.mj_step(model, data)
-            if self.in_contact():
+            if data.ncon and self.in_contact():
                 collided = True
                 break
         if camera_disturbance is not None:

@@ -68,13 +68,19 @@ class VelocityController:
     gains: ControllerGains = field(default_factory=ControllerGains)
 
     def __post_init__(self) -> None:
-        self._mixer = np.linalg.inv(allocation_matrix(self.params))
+        mixer = np.linalg.inv(allocation_matrix(self.params))
         inertia = np.asarray(self.params.inertia)
         omega, zeta = self.gains.attitude_frequency, self.gains.attitude_damping
-        self._k_rotation = inertia * np.array([omega**2, omega**2, self.gains.yaw_frequency**2])
-        self._k_rate = inertia * 2 * zeta * np.array([omega, omega, self.gains.yaw_frequency])
-        self._k_velocity = tuple(self.gains.velocity)
-        self._max_horizontal = GRAVITY * np.tan(self.gains.max_tilt_rad)
+        k_rotation = inertia * np.array([omega**2, omega**2, self.gains.yaw_frequency**2])
+        k_rate = inertia * 2 * zeta * np.array([omega, omega, self.gains.yaw_frequency])
+        # Plain Python floats: the controller runs at every physics step, where numpy's per-call overhead on
+        # 3-vectors costs more than the arithmetic (and more than MuJoCo's own step).
+        self._mixer = tuple(tuple(float(value) for value in row) for row in mixer)
+        self._k_rotation = tuple(float(value) for value in k_rotation)
+        self._k_rate = tuple(float(value) for value in k_rate)
+        self._k_velocity = tuple(float(value) for value in self.gains.velocity)
+        self._max_horizontal = float(GRAVITY * np.tan(self.gains.max_tilt_rad))
+        self._drag_per_mass = self.params.drag_coefficient / self.params.mass
 
     def __call__(
         self,
@@ -96,10 +102,28 @@ class VelocityController:
         Returns:
             (4,) rotor thrusts in N.
         """
-        # Scalar arithmetic on purpose: this runs every physics step, and numpy's per-call overhead on
-        # 3-vectors made it 10× slower than the physics itself.
+        return np.array(
+            self.thrusts(
+                np.asarray(rotation, np.float64).reshape(9).tolist(),
+                np.asarray(velocity_world, np.float64).tolist(),
+                np.asarray(angular_velocity_body, np.float64).tolist(),
+                np.asarray(velocity_target_world, np.float64).tolist(),
+                float(yaw_rate_target),
+            )
+        )
+
+    def thrusts(
+        self,
+        rotation: list[float],
+        velocity_world: list[float],
+        angular_velocity_body: list[float],
+        velocity_target_world: list[float],
+        yaw_rate_target: float,
+    ) -> tuple[float, float, float, float]:
+        """:meth:`__call__` on plain floats: ``rotation`` row-major (9 values, MuJoCo's ``xmat``), vectors
+        as 3 values; returns the four thrusts. The physics loop calls this form."""
         kvx, kvy, kvz = self._k_velocity
-        drag_per_mass = self.params.drag_coefficient / self.params.mass
+        drag_per_mass = self._drag_per_mass
         vx, vy, vz = velocity_world
         tx, ty, tz = velocity_target_world
         ax = kvx * (tx - vx) + drag_per_mass * tx
@@ -112,33 +136,35 @@ class VelocityController:
         az = min(max(kvz * (tz - vz) + drag_per_mass * tz, -limit), limit) + GRAVITY
 
         # Desired body z along the acceleration, keeping the current heading (yaw is rate-controlled).
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation
         norm = math.sqrt(ax * ax + ay * ay + az * az)
         zx, zy, zz = ax / norm, ay / norm, az / norm
-        yaw = math.atan2(rotation[1, 0], rotation[0, 0])
+        yaw = math.atan2(r10, r00)
         hx, hy = math.cos(yaw), math.sin(yaw)
         yx, yy, yz = -zz * hy, zz * hx, zx * hy - zy * hx  # z_desired × heading
         norm = math.sqrt(yx * yx + yy * yy + yz * yz)
         yx, yy, yz = yx / norm, yy / norm, yz / norm
         xx, xy, xz = yy * zz - yz * zy, yz * zx - yx * zz, yx * zy - yy * zx  # y_desired × z_desired
-        rotation_desired = np.array([[xx, yx, zx], [xy, yy, zy], [xz, yz, zz]])
 
-        # Geometric attitude error e_R = ½ vee(R_dᵀR − RᵀR_d), then a PD law per body axis.
-        error_matrix = rotation_desired.T @ rotation
-        ex = 0.5 * (error_matrix[2, 1] - error_matrix[1, 2])
-        ey = 0.5 * (error_matrix[0, 2] - error_matrix[2, 0])
-        ez = 0.5 * (error_matrix[1, 0] - error_matrix[0, 1])
+        # Geometric attitude error e_R = ½ vee(R_dᵀR − RᵀR_d), then a PD law per body axis. Only the six
+        # off-diagonal entries of R_dᵀR are needed: (R_dᵀR)[i, j] = (column i of R_d) · (column j of R).
+        ex = 0.5 * ((zx * r01 + zy * r11 + zz * r21) - (yx * r02 + yy * r12 + yz * r22))
+        ey = 0.5 * ((xx * r02 + xy * r12 + xz * r22) - (zx * r00 + zy * r10 + zz * r20))
+        ez = 0.5 * ((yx * r00 + yy * r10 + yz * r20) - (xx * r01 + xy * r11 + xz * r21))
         wx, wy, wz = angular_velocity_body
         kr, kw = self._k_rotation, self._k_rate
-        wrench = np.array(
-            [
-                self.params.mass * (ax * rotation[0, 2] + ay * rotation[1, 2] + az * rotation[2, 2]),
-                -kr[0] * ex - kw[0] * wx,
-                -kr[1] * ey - kw[1] * wy,
-                -kr[2] * ez - kw[2] * (wz - yaw_rate_target),
-            ]
+        wrench = (
+            self.params.mass * (ax * r02 + ay * r12 + az * r22),
+            -kr[0] * ex - kw[0] * wx,
+            -kr[1] * ey - kw[1] * wy,
+            -kr[2] * ez - kw[2] * (wz - yaw_rate_target),
         )
-        rotor_thrusts = self._mixer @ wrench
-        return np.clip(rotor_thrusts, 0.0, self.params.max_rotor_thrust)
+        top = self.params.max_rotor_thrust
+        t0, t1, t2, t3 = (
+            min(max(m0 * wrench[0] + m1 * wrench[1] + m2 * wrench[2] + m3 * wrench[3], 0.0), top)
+            for m0, m1, m2, m3 in self._mixer
+        )
+        return t0, t1, t2, t3
 
 
 def velocity_command(

@@ -300,7 +300,7 @@ def test_ray_cast_truth_matches_the_renderers_depth_buffer() -> None:
     depth_buffer = env._camera.render_depth(env.physics.data, env.physics.camera_id)
     rows, cols = np.mgrid[4:120:8, 4:160:8]
     pixels = np.column_stack([cols.ravel(), rows.ravel()]).astype(np.float64)
-    truth = env._true_depth(pixels, env.physics.camera_pose())
+    truth = env.physics.ray_depths(env.intrinsics.rays(pixels), *env.physics.camera_pose())
     buffer = depth_buffer[rows.ravel(), cols.ravel()]
     near = np.isfinite(truth) & (truth < 30)
     env.close()
@@ -427,3 +427,21 @@ def test_a_child_forked_after_rendering_raises_instead_of_hanging() -> None:
     assert not hung, "the forked child hung instead of raising"
     message = queue.get(timeout=5)
     assert message.startswith("ForkedGLContextError") and "'spawn'" in message and "'forkserver'" in message
+
+
+def test_depth_error_info_can_be_skipped_where_only_flow_is_observed() -> None:
+    def last_info(**kwargs) -> dict:
+        env = FlowNavEnv(**SMALL, **kwargs)
+        env.reset(seed=0)
+        for _ in range(5):
+            _, _, _, _, info = env.step(np.zeros(3))
+        env.close()
+        return info
+
+    assert "depth_error_median" in last_info()
+    skipped = last_info(depth_error_info=False)
+    assert "depth_error_median" not in skipped and skipped["points_valid"] == last_info()["points_valid"]
+    # Oracle observations need the true depths whatever the flag says.
+    assert "depth_error_median" in last_info(depth_error_info=False, obs_source="oracle")
+    with pytest.raises(ValueError, match="depth_error_info must be True or False"):
+        FlowNavEnv(**SMALL, depth_error_info=1)

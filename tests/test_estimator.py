@@ -183,6 +183,7 @@ def test_empty_depth_points():
         ({"max_points": 0}, r"max_points must be an integer with 1 <= max_points, got 0"),
         ({"win_size": 2}, r"win_size must be an integer with 3 <= win_size <= 101, got 2"),
         ({"max_level": 9}, r"max_level must be an integer with 0 <= max_level <= 8, got 9"),
+        ({"fb_max_level": -1}, r"fb_max_level must be an integer with 0 <= fb_max_level <= 8, got -1"),
         ({"max_lk_error": 0.0}, r"max_lk_error must be a positive finite number"),
         ({"max_lk_error": float("nan")}, r"max_lk_error must be a positive finite number"),
         ({"spread_keypoints": 1}, r"spread_keypoints must be True or False, got 1"),

@@ -29,7 +29,10 @@ def _textured_image(seed: int = 0, size: tuple[int, int] = (480, 640)) -> np.nda
     return cv2.resize(noise, (size[1], size[0]), interpolation=cv2.INTER_CUBIC)
 
 
-def test_rubberwhale_lk_endpoint_error():
+# None: the backward check repeats the forward search; 0: it starts at the forward track's origin on the
+# full-resolution level only (the estimator's default since issue 13), which must not let more mistracks through.
+@pytest.mark.parametrize("backward_max_level", [None, 0])
+def test_rubberwhale_lk_endpoint_error(backward_max_level):
     if not RUBBERWHALE.is_dir():
         pytest.skip(f"third-party test data not found at {RUBBERWHALE}")
     first = cv2.imread(str(RUBBERWHALE / "RubberWhale1.png"), cv2.IMREAD_GRAYSCALE)
@@ -40,7 +43,13 @@ def test_rubberwhale_lk_endpoint_error():
     detector = cv2.FastFeatureDetector_create(20, True)
     points = tracking.detect_keypoints(first, detector, 1000, (6, 8))
     tracks = tracking.track_points(
-        tracking.normalize_brightness(first), tracking.normalize_brightness(second), points, 10, 3, True
+        tracking.normalize_brightness(first),
+        tracking.normalize_brightness(second),
+        points,
+        10,
+        3,
+        True,
+        backward_max_level,
     )
     tracked = tracks.status & (tracks.lk_error <= 5.0) & (tracks.fb_error_px <= 0.5)
     pixel = points.astype(np.intp)
@@ -134,7 +143,10 @@ def test_track_points_follows_a_known_shift():
     detector = cv2.FastFeatureDetector_create(20, True)
     points = tracking.detect_keypoints(gray, detector, 300, (6, 8))
     points = points[(points[:, 0] > 20) & (points[:, 1] > 20)]
-    tracks = tracking.track_points(gray, shifted, points, 10, 3, True)
+    for backward_max_level in (None, 0):
+        tracks = tracking.track_points(gray, shifted, points, 10, 3, True, backward_max_level)
+        ok = tracks.status & (tracks.fb_error_px < 0.5)
+        assert ok.mean() > 0.9
     ok = tracks.status & (tracks.fb_error_px < 0.5)
     assert ok.mean() > 0.9
     np.testing.assert_allclose(np.median(tracks.next_points[ok] - points[ok], axis=0), [3.0, 2.0], atol=0.05)

@@ -1,7 +1,10 @@
 """Same seeds, same episodes: records flown now equal those flown before the restructure (issue 11).
 
-``tests/data/same_seed_episodes.csv`` was flown by commit 1f10a6b (before ``agents/`` was cut into
-subpackages and the env's settings and sensor pipeline got one owner each) with the same tasks as below.
+``tests/data/same_seed_episodes.csv`` was first flown by commit 1f10a6b, before ``agents/`` was cut into
+subpackages and the env's settings and sensor pipeline got one owner each; the restructure (issue 11) and the
+trust fixes (issue 12) left every record identical. The throughput work (issue 13) changed episodes on
+purpose (the controller on plain floats rounds differently, and the backward LK check starts from the forward
+track's origin), so the file was flown again then, with the same tasks as below (see CHANGELOG.md).
 Every field must match to the last digit: the physics, rendering, estimator and policies are deterministic
 for a seed, so any difference is a change of behaviour. A deliberate change of behaviour regenerates the file
 (``record_same_seed_episodes`` below) and says so in CHANGELOG.md.

@@ -4,6 +4,7 @@
 FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop).
 ``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
 render loop of the same scene, with the per-stage breakdown of a step.
+``flownav bench train``: PPO training steps per second against the number of env workers.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -15,10 +16,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.common.paths import CONFIGS_DIR
+
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
 
-HELP = "performance benchmarks: `bench estimator` (thesis Table 3) and `bench env` (steps/s per resolution)"
+HELP = (
+    "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution) and "
+    "`bench train` (training steps/s per n_envs)"
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -83,6 +89,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     env.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
+    train = targets.add_parser("train", help="PPO training steps/s against the number of env workers")
+    train.add_argument(
+        "--config",
+        type=Path,
+        default=CONFIGS_DIR / "ppo_flow.yaml",
+        help="training config whose PPO and env settings are timed (default configs/ppo_flow.yaml)",
+    )
+    train.add_argument(
+        "--n-envs",
+        type=_int_list,
+        default=(1, 2, 3, 4),
+        help="comma-separated worker counts (default 1,2,3,4)",
+    )
+    train.add_argument("--rollouts", type=int, default=2, help="timed rollouts per run (default 2)")
+    train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
+    train.add_argument(
+        "--out",
+        type=Path,
+        default=SCRATCH_OUT,
+        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
+    )
+    train.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
@@ -99,6 +128,20 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             loop_frames=args.loop_frames,
             out_dir=args.out,
+            progress=not args.no_progress,
+        )
+    elif args.target == "train":
+        from agents.benchmarks.training import run_training_benchmark
+        from agents.common.config import load_config
+        from agents.training.config import TrainConfig
+
+        paths = run_training_benchmark(
+            load_config(args.config, TrainConfig),
+            args.config,
+            args.n_envs,
+            args.rollouts,
+            args.repeats,
+            args.out,
             progress=not args.no_progress,
         )
     else:

@@ -28,7 +28,9 @@ def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
         import flownav_env  # noqa: F401  (registers the ids in the worker)
         from agents.training.wrappers import SensorRandomization
 
-        env = gym.make(config.env_id, **config.env)
+        # Training reads rewards, not the depth-error diagnostics: skip their per-step ray cast unless the
+        # config asks (oracle observations get true depths regardless).
+        env = gym.make(config.env_id, **{"depth_error_info": False, **config.env})
         if any(asdict(config.randomize).values()):
             env = SensorRandomization(env, asdict(config.randomize))
         return Monitor(env)

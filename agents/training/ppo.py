@@ -55,6 +55,25 @@ def select_policy(model: Any, files: RunFiles) -> str:
     return f"last: {model.num_timesteps} steps"
 
 
+def new_model(config: TrainConfig, envs: Any, tensorboard_log: str | None = None) -> Any:
+    """A fresh PPO model of ``config`` (``MultiInputPolicy``, its network and hyperparameters) on ``envs``."""
+    from stable_baselines3 import PPO
+
+    params = asdict(config.ppo)
+    net_arch = params.pop("net_arch")
+    log_std_init = params.pop("log_std_init")
+    return PPO(
+        "MultiInputPolicy",
+        envs,
+        policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
+        tensorboard_log=tensorboard_log,
+        seed=config.seed,
+        device="cpu",
+        verbose=0,
+        **params,
+    )
+
+
 def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) -> tuple[Any, int | None]:
     """PPO resumed from the newest readable checkpoint, or a fresh one; the resumed step count or None.
 
@@ -79,19 +98,7 @@ def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) 
         )
     if resume:
         print(f"no checkpoint in {files.checkpoints}: starting fresh")
-    params = asdict(config.ppo)
-    net_arch = params.pop("net_arch")
-    log_std_init = params.pop("log_std_init")
-    model = PPO(
-        "MultiInputPolicy",
-        envs,
-        policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
-        tensorboard_log=str(files.tensorboard),
-        seed=config.seed,
-        device="cpu",
-        verbose=0,
-        **params,
-    )
+    model = new_model(config, envs, tensorboard_log=str(files.tensorboard))
     return model, None
 
 

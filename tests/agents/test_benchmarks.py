@@ -134,3 +134,25 @@ def test_record_flight_rejects_bad_frame_counts() -> None:
 def test_markdown_table_shape() -> None:
     table = tables.markdown_table(["a", "b"], [[1, math.pi]])
     assert table.splitlines()[0] == "| a | b |" and len(table.splitlines()) == 3
+
+
+def test_training_benchmark_times_each_worker_count(tmp_path) -> None:
+    from agents.benchmarks.training import run_training_benchmark
+    from agents.training.config import PPOParams, TrainConfig
+
+    config = TrainConfig(
+        name="tiny",
+        env_id="FlowNavSingle-v0",
+        env={"camera_width": 64, "camera_height": 48},
+        ppo=PPOParams(n_steps=32, batch_size=32, n_epochs=1, net_arch=[8]),
+    )
+    md, csv_path = run_training_benchmark(
+        config, tmp_path / "tiny.yaml", (1, 2), rollouts=1, repeats=1, out_dir=tmp_path, progress=False
+    )
+    rows = list(csv.DictReader(csv_path.open()))
+    assert [int(r["n_envs"]) for r in rows] == [1, 2]
+    assert [int(r["rollout_steps"]) for r in rows] == [32, 64]
+    assert all(float(r["steps_per_s_median"]) > 0 and float(r["collect_ms_per_step"]) > 0 for r in rows)
+    assert "flownav bench train" in md.read_text()
+    with pytest.raises(ValueError, match=r"--rollouts, --repeats and every --n-envs must be >= 1"):
+        run_training_benchmark(config, tmp_path / "tiny.yaml", (0,), 1, 1, tmp_path)

@@ -55,13 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=10,
         help="frame pairs on which the per-point depth loops are timed (default 10; they are slow)",
     )
-    estimator.add_argument(
-        "--out",
-        type=Path,
-        default=SCRATCH_OUT,
-        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
-    )
-    estimator.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    _add_output_options(estimator)
 
     env = targets.add_parser(
         "env", help="steps/s per camera resolution vs a bare MuJoCo render + physics loop"
@@ -81,13 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
-    env.add_argument(
-        "--out",
-        type=Path,
-        default=SCRATCH_OUT,
-        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
-    )
-    env.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    _add_output_options(env)
 
     train = targets.add_parser("train", help="PPO training steps/s against the number of env workers")
     train.add_argument(
@@ -104,13 +92,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     train.add_argument("--rollouts", type=int, default=2, help="timed rollouts per run (default 2)")
     train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
-    train.add_argument(
-        "--out",
-        type=Path,
-        default=SCRATCH_OUT,
-        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
-    )
-    train.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    _add_output_options(train)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -159,6 +141,16 @@ def run(args: argparse.Namespace) -> int:
     for path in paths:
         print(f"wrote {path}")
     return 0
+
+
+def _add_output_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=SCRATCH_OUT,
+        help=f"output folder (default {SCRATCH_OUT}, a scratch folder; --out results replaces the committed report)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
 
 def _int_list(text: str) -> tuple[int, ...]:

@@ -22,7 +22,13 @@ def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[f
 
 def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
-    success rate with its interval, and medians of progress and clearance."""
+    success rate with its interval, failure rate with its interval, episodes out of bounds, and medians of
+    progress and clearance.
+
+    A failure is every episode that did not reach the goal: a collision, leaving the course (out of bounds)
+    or the time limit. Collisions alone can fall while failures rise (a drone that leaves the course sideways
+    collides with nothing), so the failure rate is the headline and the collision rate one of its causes.
+    """
     groups: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
@@ -31,8 +37,10 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
         n = len(members)
         collisions = sum(bool(m["collision"]) for m in members)
         successes = sum(bool(m["success"]) for m in members)
+        out_of_bounds = sum(bool(m["out_of_bounds"]) for m in members)
         low, high = wilson_interval(collisions, n)
         success_low, success_high = wilson_interval(successes, n)
+        failure_low, failure_high = wilson_interval(n - successes, n)
         table.append(
             {
                 "agent": agent,
@@ -48,6 +56,10 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
                 "success_ci_high": success_high,
                 "median_progress_m": float(np.median([m["progress_m"] for m in members])),
                 "median_min_clearance_m": float(np.median([m["min_clearance_m"] for m in members])),
+                "out_of_bounds": out_of_bounds,
+                "failure_rate": (n - successes) / n,
+                "failure_ci_low": failure_low,
+                "failure_ci_high": failure_high,
             }
         )
     return table
@@ -55,13 +67,17 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 def format_summary(table: list[Mapping[str, Any]]) -> str:
     """The summary as a Markdown table."""
-    header = "| agent | factor | level | episodes | collision rate [95 % CI] | success rate [95 % CI] | median progress (m) |"
-    lines = [header, "|---|---|---|---|---|---|---|"]
+    header = (
+        "| agent | factor | level | episodes | failure rate [95 % CI] | success rate [95 % CI] | "
+        "collision rate [95 % CI] | out of bounds | median progress (m) |"
+    )
+    lines = [header, "|---|---|---|---|---|---|---|---|---|"]
     for r in table:
         lines.append(
             f"| {r['agent']} | {r['factor']} | {r['level']:g} | {r['episodes']} | "
-            f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
+            f"{r['failure_rate']:.2f} [{r['failure_ci_low']:.2f}, {r['failure_ci_high']:.2f}] | "
             f"{r['success_rate']:.2f} [{r['success_ci_low']:.2f}, {r['success_ci_high']:.2f}] | "
-            f"{r['median_progress_m']:.1f} |"
+            f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
+            f"{r['out_of_bounds'] / r['episodes']:.2f} | {r['median_progress_m']:.1f} |"
         )
     return "\n".join(lines)

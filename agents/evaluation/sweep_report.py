@@ -25,6 +25,11 @@ SUMMARY_FIELDS = [
     "success_ci_high",
     "median_progress_m",
     "median_min_clearance_m",
+    # Added after the first sweeps: appended, so readers of the columns above keep working.
+    "out_of_bounds",
+    "failure_rate",
+    "failure_ci_low",
+    "failure_ci_high",
 ]
 
 

@@ -54,8 +54,13 @@ def run_episode(
     path_length, total_return, steps = 0.0, 0.0, 0
     valid_points, depth_errors = [], []
     terminated = truncated = False
+    # As SB3's evaluate_policy: an agent with memory gets its state back and is told where an episode starts.
+    agent_state, episode_start = None, np.ones(1, bool)
     while not (terminated or truncated):
-        action, _ = agent.predict(observation, deterministic=True)
+        action, agent_state = agent.predict(
+            observation, state=agent_state, episode_start=episode_start, deterministic=True
+        )
+        episode_start = np.zeros(1, bool)
         observation, reward, terminated, truncated, info = env.step(action)
         steps += 1
         total_return += reward

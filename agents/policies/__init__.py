@@ -11,6 +11,7 @@ from agents.policies.learned import (
 )
 from agents.policies.loading import UnverifiedPolicyWarning
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
+from agents.policies.robust import BeeRobustAgent, VFHAgent, quantile_nearness
 
 __all__ = [
     "AGENT_NAMES",
@@ -19,13 +20,16 @@ __all__ = [
     "REACTIVE_AGENTS",
     "Agent",
     "BeeAgent",
+    "BeeRobustAgent",
     "LoadedPolicy",
     "StraightAgent",
     "UnverifiedPolicyWarning",
+    "VFHAgent",
     "agent_env_kwargs",
     "bin_nearness",
     "load_agent",
     "load_policy",
     "policy_file",
+    "quantile_nearness",
     "sector_nearness",
 ]

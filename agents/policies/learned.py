@@ -13,6 +13,7 @@ from agents.common.paths import POLICIES_DIR
 from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, Agent
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
+from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, VFHAgent
 from agents.training.config import TrainConfig
 
 POLICY_OPTION_HELP = (
@@ -33,11 +34,11 @@ def policy_file(name: str, path: str | Path | None = None, directory: str | Path
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
     """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
     ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle
-    observations, a policy trained at another resolution keeps it); empty for hand-written agents or when
-    no config copy exists. A sweep cell's own kwargs go on top of these.
+    observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
+    the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
     """
     if name not in LEARNED_AGENTS:
-        return {}
+        return dict(REACTIVE_ENV_KWARGS.get(name, {}))
     config_path = policy_file(name, path).with_suffix(".yaml")
     if not config_path.is_file():
         return {}
@@ -52,7 +53,7 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
         policy_path: for PPO agents, the ``.zip`` to load; defaults to ``results/policies/<name>.zip``.
             Only its parameters are read when its training config lies beside it; a policy its folder's
             ``MANIFEST.sha256`` does not vouch for loads with an :class:`UnverifiedPolicyWarning`.
-        bee_params: overrides of :class:`BeeAgent` gains.
+        bee_params: overrides of a reactive agent's gains (its dataclass fields).
 
     Raises:
         ValueError: unknown name, or a policy file that is not a readable policy (the message names it).
@@ -62,6 +63,10 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
         return StraightAgent()
     if name == "bee":
         return BeeAgent(**bee_params)
+    if name == "bee_robust":
+        return BeeRobustAgent(**bee_params)
+    if name == "vfh":
+        return VFHAgent(**bee_params)
     if name in LEARNED_AGENTS:
         path = policy_file(name, policy_path)
         if not path.is_file():

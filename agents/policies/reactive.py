@@ -34,7 +34,7 @@ def sector_nearness(histogram: np.ndarray, bin_edges: np.ndarray) -> np.ndarray:
     return np.asarray(histogram, np.float64) @ bin_nearness(bin_edges)
 
 
-def _heights_and_headings(observation: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, bool]:
+def heights_and_headings(observation: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, bool]:
     state = np.asarray(observation["state"], np.float64)
     batched = state.ndim == 2
     state = state.reshape(-1, state.shape[-1])
@@ -50,7 +50,7 @@ class StraightAgent:
     heading_gain: float = 1.5
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
-        heights, headings, batched = _heights_and_headings(observation)
+        heights, headings, batched = heights_and_headings(observation)
         actions = np.zeros((len(heights), 3), np.float32)
         actions[:, 1] = np.clip(self.height_gain * (self.flight_height - heights), -1, 1)
         # Heading error is positive to the left; a positive yaw action turns right.
@@ -88,8 +88,13 @@ class BeeAgent:
         histogram = np.asarray(observation["depth_histogram"], np.float64)
         batched = histogram.ndim == 4
         histogram = histogram.reshape((-1, *histogram.shape[-3:]))
-        heights, headings, _ = _heights_and_headings(observation)
         nearness = sector_nearness(histogram[:, : self.obstacle_rows], np.asarray(self.bin_edges))
+        actions = self.centring_actions(nearness, observation)
+        return (actions if batched else actions[0]), state
+
+    def centring_actions(self, nearness: np.ndarray, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """The bee's steering law on a nearness per sector (batch, obstacle rows, cols): (batch, 3) actions."""
+        heights, headings, _ = heights_and_headings(observation)
         per_column = nearness.max(axis=1)  # (batch, cols): the nearest thing in each column
         cols = per_column.shape[1]
         half = cols // 2
@@ -108,4 +113,4 @@ class BeeAgent:
         actions[:, 0] = np.clip(lateral, -1, 1)
         actions[:, 1] = np.clip(self.height_gain * (self.flight_height - heights), -1, 1)
         actions[:, 2] = np.clip(self.heading_gain * headings + self.yaw_gain * looming * side, -1, 1)
-        return (actions if batched else actions[0]), state
+        return actions

@@ -210,3 +210,68 @@ def test_load_policy_needs_the_config_beside_the_zip(tmp_path: Path) -> None:
         load_policy(bare)
     with pytest.raises(FileNotFoundError, match=r"policy file not found: .*none.zip"):
         load_policy(tmp_path / "none.zip")
+
+
+def _observation(near_columns: slice, *, heading: float = 0.0, unresolved: float = 0.0) -> dict:
+    histogram = np.zeros((3, 5, 6), np.float32)
+    histogram[:2, :, 5] = 1.0  # far everywhere...
+    histogram[:2, near_columns] = 0.0
+    histogram[:2, near_columns, 0] = 1.0  # ...but within 1 m in these columns
+    state = np.array([1.0, 0, 0, 0, 0, 1.0, heading], np.float32)
+    return {
+        "depth_histogram": histogram,
+        "state": state,
+        "unresolved": np.full((3, 5), unresolved, np.float32),
+    }
+
+
+@pytest.mark.parametrize("name", ["bee_robust", "vfh"])
+def test_strong_reactive_agents_steer_away_from_the_near_side(name: str) -> None:
+    agent = load_agent(name)
+    left_blocked, _ = agent.predict(_observation(slice(0, 3)))
+    right_blocked, _ = agent.predict(_observation(slice(2, 5)))
+    assert left_blocked[0] > 0.3 and right_blocked[0] < -0.3  # positive lateral is to the right
+    batch = {k: np.stack([v, v]) for k, v in _observation(slice(0, 3)).items()}
+    assert agent.predict(batch)[0].shape == (2, 3)
+
+
+def test_vfh_heads_for_the_goal_when_the_way_is_free() -> None:
+    # Heading error +0.5 rad: the drone points left of the goal, which lies to its right.
+    action, _ = load_agent("vfh").predict(_observation(slice(0, 0), heading=0.5))
+    assert action[0] > 0 and action[2] > 0  # slide and turn right
+
+
+def test_robust_nearness_ignores_a_lone_outlier_and_counts_unresolved_points_as_far() -> None:
+    from agents.policies import quantile_nearness, sector_nearness
+
+    edges = np.asarray(BeeAgent().bin_edges)
+    histogram = np.zeros((1, 6))
+    histogram[0, 0], histogram[0, 5] = 0.1, 0.9  # one near outlier among far points
+    far_only = np.zeros((1, 6))
+    far_only[0, 5] = 1.0
+    robust = quantile_nearness(histogram, np.zeros(1), edges, 0.5)[0]
+    assert robust == quantile_nearness(far_only, np.zeros(1), edges, 0.5)[0]  # the outlier changes nothing
+    assert sector_nearness(histogram, edges)[0] > 4 * robust  # while it quadruples the mean
+    near = np.zeros((1, 6))
+    near[0, 0] = 1.0
+    assert quantile_nearness(near, np.zeros(1), edges, 0.5)[0] > 1.0
+    assert quantile_nearness(near, np.full(1, 0.8), edges, 0.5)[0] == 0.0  # mostly unresolved: far
+
+
+def test_robust_bee_smooths_over_frames_and_restarts_each_episode() -> None:
+    agent = load_agent("bee_robust", smoothing=0.5)
+    _, memory = agent.predict(_observation(slice(0, 3)), episode_start=np.ones(1, bool))
+    _, blended = agent.predict(_observation(slice(0, 0)), state=memory, episode_start=np.zeros(1, bool))
+    _, fresh = agent.predict(_observation(slice(0, 0)), state=memory, episode_start=np.ones(1, bool))
+    np.testing.assert_allclose(blended, 0.5 * memory + 0.5 * fresh)
+    with pytest.raises(ValueError, match=r"smoothing must be in \(0, 1\], got 0"):
+        load_agent("bee_robust", smoothing=0)
+    assert agent_env_kwargs("vfh") == {"observe_unresolved": True}
+
+
+def test_strong_reactive_agents_fly_a_real_episode() -> None:
+    for name in ("bee_robust", "vfh"):
+        env = gym.make("FlowNavSingle-v0", observe_unresolved=True, **SMALL)
+        record = run_episode(env, load_agent(name), seed=0, label=name)
+        env.close()
+        assert record.steps > 5 and record.agent == name

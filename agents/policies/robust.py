@@ -1,0 +1,153 @@
+"""Strong reactive baselines: rules that do not collapse on the estimator's outliers.
+
+* ``bee_robust``: the bee's centring law on a robust nearness per sector: the nearness at a depth quantile of
+  the sector's points (a single wrong near depth moves a quantile little, a mean a lot), points the
+  estimator tracked but could not range counted as far (the ``unresolved`` observation), smoothed over
+  frames.
+* ``vfh``: a Vector Field Histogram planner (Borenstein & Koren, 1991) on the sector histogram: obstacle
+  density per image column, smoothed across columns, thresholded into free and blocked columns, steering to
+  the free column nearest the goal.
+
+Both read ``unresolved`` when the observation has it: :data:`REACTIVE_ENV_KWARGS` asks the env for it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from agents.policies.reactive import BeeAgent, bin_nearness, heights_and_headings
+from estimator import DEFAULT_BIN_EDGES
+
+# What these agents need the env to observe, beyond its defaults (the runner adds it to every cell).
+REACTIVE_ENV_KWARGS: dict[str, dict[str, bool]] = {
+    "bee_robust": {"observe_unresolved": True},
+    "vfh": {"observe_unresolved": True},
+}
+
+
+def _histograms(observation: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The histogram as (batch, rows, cols, bins) and the unresolved share as (batch, rows, cols), zeros
+    when the observation has none; and whether the input was batched."""
+    histogram = np.asarray(observation["depth_histogram"], np.float64)
+    batched = histogram.ndim == 4
+    histogram = histogram.reshape((-1, *histogram.shape[-3:]))
+    unresolved = observation.get("unresolved")
+    unresolved = (
+        np.zeros(histogram.shape[:-1])
+        if unresolved is None
+        else np.asarray(unresolved, np.float64).reshape(histogram.shape[:-1])
+    )
+    return histogram, unresolved, batched
+
+
+def quantile_nearness(
+    histogram: np.ndarray, unresolved: np.ndarray, bin_edges: np.ndarray, quantile: float
+) -> np.ndarray:
+    """Per sector, the nearness (1/m) of the depth bin holding the ``quantile`` of its points, nearest first.
+
+    The resolved points are spread over the bins by the histogram's fractions scaled by ``1 - unresolved``;
+    the unresolved ones count as farther than every bin. A sector whose quantile falls among those, or that
+    is empty, has nearness 0.
+
+    Args:
+        histogram: (..., bins) fractions per depth bin (each sector sums to 1, or 0 when empty).
+        unresolved: (...) share of the sector's tracked points that got no depth.
+        bin_edges: the histogram's depth bin edges (m).
+        quantile: in (0, 1]; 0.5 is the median depth.
+    """
+    resolved = histogram * (1.0 - unresolved)[..., None]
+    reached = np.cumsum(resolved, axis=-1) >= quantile - 1e-9
+    nearness = bin_nearness(bin_edges)
+    first = np.argmax(reached, axis=-1)
+    return np.where(reached.any(axis=-1), nearness[first], 0.0)
+
+
+@dataclass
+class BeeRobustAgent(BeeAgent):
+    """The bee's steering law (:class:`BeeAgent`) on a robust nearness per sector.
+
+    ``quantile`` picks the depth quantile a sector's nearness is read at (lower = more cautious), and
+    ``smoothing`` the weight of the newest frame in an exponential average over frames (1 = no memory); the
+    average is the ``state`` that ``predict`` returns and takes back, reset at ``episode_start``. Its gains
+    start at the bee's; tune them on training seeds (``flownav tune-bee``'s search is the bee's).
+    """
+
+    quantile: float = 0.5
+    smoothing: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.quantile <= 1.0:
+            raise ValueError(f"quantile must be in (0, 1], got {self.quantile!r}")
+        if not 0.0 < self.smoothing <= 1.0:
+            raise ValueError(f"smoothing must be in (0, 1], got {self.smoothing!r}")
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        histogram, unresolved, batched = _histograms(observation)
+        rows = slice(0, self.obstacle_rows)
+        nearness = quantile_nearness(
+            histogram[:, rows], unresolved[:, rows], np.asarray(self.bin_edges), self.quantile
+        )
+        if state is not None and state.shape == nearness.shape:
+            starting = (
+                np.zeros(len(nearness), bool) if episode_start is None else np.asarray(episode_start, bool)
+            )
+            blended = self.smoothing * nearness + (1.0 - self.smoothing) * state
+            nearness = np.where(starting.reshape(-1, 1, 1), nearness, blended)
+        actions = self.centring_actions(nearness, observation)
+        return (actions if batched else actions[0]), nearness
+
+
+@dataclass
+class VFHAgent:
+    """Vector Field Histogram steering on the sector histogram.
+
+    Per image column, the obstacle density is the largest over the obstacle rows of ``Σ_bins fraction ·
+    max(0, 1 − depth / safe_distance_m)²`` (resolved points only: unresolved ones are far). The densities are
+    smoothed with a [¼, ½, ¼] kernel across columns; a column below ``threshold`` is free. The target is the
+    free column whose direction is nearest the goal's (minus the state's ``heading_error``, mapped onto the
+    columns through ``horizontal_fov_deg``; a goal out of view maps to the edge column), or the least dense
+    column when none is free. The drone slides and turns toward the target's direction and holds its height.
+    """
+
+    bin_edges: tuple[float, ...] = tuple(DEFAULT_BIN_EDGES)
+    obstacle_rows: int = 2
+    safe_distance_m: float = 4.0
+    threshold: float = 0.1
+    horizontal_fov_deg: float = 2.0 * math.degrees(math.atan(math.tan(math.radians(30.0)) * 4.0 / 3.0))
+    lateral_gain: float = 1.5
+    yaw_gain: float = 1.0
+    flight_height: float = 1.0
+    height_gain: float = 2.0
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        histogram, unresolved, batched = _histograms(observation)
+        heights, headings, _ = heights_and_headings(observation)
+        rows = slice(0, self.obstacle_rows)
+        edges = np.asarray(self.bin_edges, np.float64)
+        depths = 1.0 / bin_nearness(edges)
+        magnitude = np.clip(1.0 - depths / self.safe_distance_m, 0.0, 1.0) ** 2
+        resolved = histogram[:, rows] * (1.0 - unresolved[:, rows])[..., None]
+        density = (resolved @ magnitude).max(axis=1)  # (batch, cols)
+        padded = np.pad(density, ((0, 0), (1, 1)), mode="edge")
+        smoothed = 0.25 * padded[:, :-2] + 0.5 * padded[:, 1:-1] + 0.25 * padded[:, 2:]
+        cols = smoothed.shape[1]
+        half_fov = math.radians(self.horizontal_fov_deg) / 2.0
+        # Column centres as directions, positive to the left like the heading error.
+        directions = half_fov * (1.0 - (2.0 * np.arange(cols) + 1.0) / cols)
+        # The state's heading error is the drone's yaw off the goal direction (positive: pointing left of it),
+        # so the goal lies at minus that in the camera's view.
+        goal = np.clip(-headings, directions[-1], directions[0])
+        distance_to_goal = np.abs(directions[None, :] - goal[:, None])
+        free = smoothed < self.threshold
+        score = np.where(free, distance_to_goal, np.inf)
+        target = np.where(free.any(axis=1), np.argmin(score, axis=1), np.argmin(smoothed, axis=1))
+        target_direction = directions[target]
+        actions = np.zeros((len(heights), 3), np.float32)
+        # Positive lateral and yaw actions go right; a target on the left (positive direction) goes left.
+        actions[:, 0] = np.clip(-self.lateral_gain * target_direction / half_fov, -1, 1)
+        actions[:, 1] = np.clip(self.height_gain * (self.flight_height - heights), -1, 1)
+        actions[:, 2] = np.clip(-self.yaw_gain * target_direction / half_fov, -1, 1)
+        return (actions if batched else actions[0]), state

@@ -44,8 +44,10 @@ def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]
 
 
 def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
-    """A panel per factor: collision rate against level, a line per agent, its Wilson 95 % band shaded.
-    The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per agent."""
+    """A panel per factor: failure rate against level, a line per agent with its Wilson 95 % band shaded, and
+    the collision rate dashed in the same colour (the gap between them is leaving the course or the time
+    limit). The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per
+    agent (failure, with the collision rate marked)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -63,14 +65,17 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     if not factors:  # a clean-only sweep: one bar per agent
         clean = [r for r in table if r["factor"] == "clean"]
         fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
-        rates = [r["collision_rate"] for r in clean]
+        rates = [r["failure_rate"] for r in clean]
         errors = [
-            [r["collision_rate"] - r["ci_low"] for r in clean],
-            [r["ci_high"] - r["collision_rate"] for r in clean],
+            [r["failure_rate"] - r["failure_ci_low"] for r in clean],
+            [r["failure_ci_high"] - r["failure_rate"] for r in clean],
         ]
-        ax.bar([r["agent"] for r in clean], rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7)
+        names = [r["agent"] for r in clean]
+        ax.bar(names, rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7, label="failure")
+        ax.plot(names, [r["collision_rate"] for r in clean], "k_", markersize=18, label="collision")
+        ax.legend(fontsize=8)
         ax.set_ylim(0, 1)
-        ax.set_ylabel("collision rate (95 % CI)")
+        ax.set_ylabel("failure rate (95 % CI)")
         ax.set_title("clean sensors", fontsize=9)
         ax.grid(alpha=0.3, axis="y")
         fig.tight_layout()
@@ -88,18 +93,19 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
             if not points:
                 continue
             xs = [p[0] for p in points]
-            line = ax.plot(xs, [p[1]["collision_rate"] for p in points], marker="o", label=agent)[0]
+            line = ax.plot(xs, [p[1]["failure_rate"] for p in points], marker="o", label=agent)[0]
             ax.fill_between(
                 xs,
-                [p[1]["ci_low"] for p in points],
-                [p[1]["ci_high"] for p in points],
+                [p[1]["failure_ci_low"] for p in points],
+                [p[1]["failure_ci_high"] for p in points],
                 color=line.get_color(),
                 alpha=0.15,
             )
+            ax.plot(xs, [p[1]["collision_rate"] for p in points], linestyle="--", color=line.get_color())
         ax.set_xlabel(units.get(factor, factor))
         ax.set_ylim(0, 1)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("collision rate (95 % CI)")
+    axes[0][0].set_ylabel("failure rate (95 % CI)\ndashed: collision rate")
     axes[0][-1].legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

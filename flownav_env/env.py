@@ -228,7 +228,9 @@ class FlowNavEnv(gym.Env):
             texture_seed=settings.texture_seed,
         )
         self.physics.set_brightness(settings.brightness)
-        self._camera = CameraRenderer(self.physics.model, settings.camera_width, settings.camera_height)
+        self._camera = CameraRenderer(
+            self.physics.model, settings.camera_width, settings.camera_height, onboard=True
+        )
         self._view: CameraRenderer | None = None
         self._closed = False
         self._materials = len(material_names())

@@ -13,7 +13,7 @@ import cv2
 import mujoco
 import numpy as np
 
-from flownav_env.scene import PARKED_GROUP
+from flownav_env.scene import DRONE_GROUP, PARKED_GROUP
 
 # Size (width, height) of each half of the env's rgb_array render: the camera panel and the chase view.
 VIEW_PANEL_SIZE = (320, 240)
@@ -81,15 +81,22 @@ def gl_renderer_name() -> str:
 
 
 class CameraRenderer:
-    """Renders one named camera of a model at a fixed size, creating the GL context on first use."""
+    """Renders one named camera of a model at a fixed size, creating the GL context on first use.
 
-    def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
+    ``onboard=True`` is for the drone's own camera: it leaves out the drone's geoms and sites, which that camera
+    cannot see from inside the hull but a software rasteriser would still draw.
+    """
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, *, onboard: bool = False) -> None:
         self.model = model
         self.width = width
         self.height = height
         self._renderer: mujoco.Renderer | None = None
         self._options = mujoco.MjvOption()
         self._options.geomgroup[PARKED_GROUP] = 0
+        if onboard:
+            self._options.geomgroup[DRONE_GROUP] = 0
+            self._options.sitegroup[DRONE_GROUP] = 0
 
     def render(self, data: mujoco.MjData, camera: str | int) -> np.ndarray:
         """RGB image (height, width, 3) uint8 of ``camera``, row 0 at the top."""

@@ -90,7 +90,9 @@ def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _
         frame_rate=inner.frame_rate,
         bare_data=mujoco.MjData(inner_physics.model),
         # The env's own renderer class, so the bare loop draws exactly what the env draws.
-        bare_renderer=CameraRenderer(inner_physics.model, inner.intrinsics.width, inner.intrinsics.height),
+        bare_renderer=CameraRenderer(
+            inner_physics.model, inner.intrinsics.width, inner.intrinsics.height, onboard=True
+        ),
         camera_id=inner_physics.camera_id,
     )
     # Instance attributes shadow the methods: env.step calls these wrappers, which add ~1 µs per call.

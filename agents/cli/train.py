@@ -40,6 +40,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--ship-to", default=str(POLICIES_DIR), help=f"policies folder to ship to (default {POLICIES_DIR})"
     )
+    parser.add_argument(
+        "--seeds",
+        help="train several independent seeds of the config, e.g. 0-4 or 0,2,5: each into "
+        "RUNS_DIR/<name>/seed_<k>/ (shipped as <ship-to>/<name>/seed_<k>.zip), resuming unfinished seeds and "
+        "skipping finished ones",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="with --seeds: train the seeds in turn here (local) or as parallel Ray tasks of n_envs CPUs each",
+    )
+    parser.add_argument(
+        "--address", help="with --backend ray: the Ray cluster's address (default: start one)"
+    )
     parser.add_argument("--total-timesteps", type=int, help="override the config's total_timesteps")
     parser.add_argument("--max-minutes", type=float, help="override the config's wall-clock budget")
 
@@ -53,6 +68,16 @@ def run(args: argparse.Namespace) -> int:
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)
+    if args.seeds is not None and args.resume:
+        raise ValueError("--seeds always resumes unfinished seeds: drop --resume")
+    if args.ship_only and args.seeds is not None:
+        from agents.training.multiseed import parse_seeds
+
+        for seed in parse_seeds(args.seeds):
+            ship_run(
+                RunFiles.of_seed(Path(args.runs_dir), config.name, seed), Path(args.ship_to) / config.name
+            )
+        return 0
     if args.ship_only:
         if args.resume or args.ship or args.total_timesteps is not None or args.max_minutes is not None:
             raise ValueError("--ship-only ships a finished run: it takes no training options")
@@ -61,6 +86,10 @@ def run(args: argparse.Namespace) -> int:
     override(config, "total_timesteps", args.total_timesteps, "--total-timesteps")
     override(config, "max_minutes", args.max_minutes, "--max-minutes")
     check_env_kwargs(config.env, str(config_path))
+    if args.seeds is not None:
+        return _train_seeds(args, config, config_path)
+    if args.backend != "local" or args.address is not None:
+        raise ValueError("--backend and --address apply to --seeds runs only")
     train(
         config,
         config_path=config_path,
@@ -68,4 +97,19 @@ def run(args: argparse.Namespace) -> int:
         runs_dir=Path(args.runs_dir),
         ship_to=Path(args.ship_to) if args.ship else None,
     )
+    return 0
+
+
+def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
+    from agents.training.multiseed import parse_seeds, seed_jobs, train_seeds
+
+    jobs = seed_jobs(
+        config,
+        parse_seeds(args.seeds),
+        config_path=config_path,
+        runs_dir=Path(args.runs_dir),
+        ship_to=Path(args.ship_to) if args.ship else None,
+    )
+    policies = train_seeds(jobs, backend=args.backend, address=args.address)
+    print("\n".join(f"seed {job.config.seed}: {policy}" for job, policy in zip(jobs, policies, strict=True)))
     return 0

@@ -15,6 +15,22 @@ from __future__ import annotations
 VALIDATION_SEED_START = 500_000
 TEST_SEED_START = 1_000_000
 
+# A training run's own seed k (its config's ``seed``, one of ``flownav train --seeds``) sets where its env workers
+# start: worker i first resets on layout k * RUN_SEED_STRIDE + i. With consecutive starts instead, run k's
+# second worker would replay run k + 1's first worker layout for layout, and the runs would not be independent.
+RUN_SEED_STRIDE = 1_000
+MAX_RUN_SEED = VALIDATION_SEED_START // RUN_SEED_STRIDE - 1
+
+
+def training_env_seed(run_seed: int) -> int:
+    """The first layout seed of training run ``run_seed``'s env workers (worker i adds i)."""
+    return run_seed * RUN_SEED_STRIDE
+
+
+def checkpoint_selection_seed(run_seed: int) -> int:
+    """The first layout seed of training run ``run_seed``'s held-out evaluation env (a validation seed)."""
+    return VALIDATION_SEED_START + run_seed * RUN_SEED_STRIDE
+
 
 def seed_range(seed: int) -> str:
     """``"training"``, ``"validation"`` or ``"test"``: the range ``seed`` belongs to.

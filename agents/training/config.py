@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 from agents.common.config import env_setting_field, field_range, from_mapping
+from agents.common.seeds import MAX_RUN_SEED
 
 
 @dataclass
@@ -52,7 +53,7 @@ class TrainConfig:
     randomize: Randomization = field(default_factory=Randomization)
     total_timesteps: int = field_range(1, 100_000_000, default=400_000)
     n_envs: int = field_range(1, 64, default=2)
-    seed: int = field_range(0, 2**31 - 1, default=0)
+    seed: int = field_range(0, MAX_RUN_SEED, default=0)  # the run's seed: PPO's and its env workers'
     max_minutes: float = field_range(0.1, 10_000.0, default=60.0)
     checkpoint_every: int = field_range(1, 100_000_000, default=20_000)
     eval_every: int = field_range(1, 100_000_000, default=20_000)

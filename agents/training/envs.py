@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
-from agents.common.seeds import VALIDATION_SEED_START
+from agents.common.seeds import checkpoint_selection_seed, training_env_seed
 from agents.training.config import TrainConfig
 
 
@@ -52,22 +52,27 @@ class IgnoringInterrupts:
         return self.factory()
 
 
+EVAL_WORKERS = 2
+
+
 def build_envs(config: TrainConfig) -> tuple[Any, Any]:
-    """The training vector env (``n_envs`` workers, seeded from ``config.seed``) and a one-env evaluation
-    vector env of the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two
-    classes differ. With one env, both run in this process (DummyVecEnv); else in forkserver subprocesses
-    (a forked EGL context hangs) that ignore Ctrl-C."""
+    """The training vector env (``n_envs`` workers, seeded from ``config.seed``) and the evaluation vector
+    env of the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two classes
+    differ. With one env, both run in this process (DummyVecEnv, one evaluation env); else in forkserver
+    subprocesses (a forked EGL context hangs) that ignore Ctrl-C, with ``EVAL_WORKERS`` evaluation workers."""
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     factories = [make_env_factory(config, i) for i in range(config.n_envs)]
     if config.n_envs > 1:
         envs = SubprocVecEnv([IgnoringInterrupts(f) for f in factories], start_method="forkserver")
-        eval_env = SubprocVecEnv([IgnoringInterrupts(make_env_factory(config, 0))], start_method="forkserver")
+        # Two evaluation workers halve the time the training workers sit idle during an evaluation.
+        eval_factories = [IgnoringInterrupts(make_env_factory(config, i)) for i in range(EVAL_WORKERS)]
+        eval_env = SubprocVecEnv(eval_factories, start_method="forkserver")
     else:
         envs = DummyVecEnv(factories)
         eval_env = DummyVecEnv([make_env_factory(config, 0)])
-    envs.seed(config.seed)
-    eval_env.seed(VALIDATION_SEED_START + config.seed)
+    envs.seed(training_env_seed(config.seed))
+    eval_env.seed(checkpoint_selection_seed(config.seed))
     return envs, eval_env
 
 

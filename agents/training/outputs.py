@@ -23,6 +23,12 @@ class RunFiles:
         """The run ``name`` under ``runs_dir``."""
         return cls(Path(runs_dir) / name, name)
 
+    @classmethod
+    def of_seed(cls, runs_dir: Path, name: str, seed: int) -> RunFiles:
+        """Training seed ``seed`` of the run ``name``: ``runs_dir/<name>/seed_<seed>/seed_<seed>.zip`` etc.,
+        shipped to ``<policies>/<name>/seed_<seed>.zip``."""
+        return cls(Path(runs_dir) / name / f"seed_{seed}", f"seed_{seed}")
+
     @property
     def policy(self) -> Path:
         """The selected policy (best held-out evaluation, else the last model)."""

@@ -109,8 +109,10 @@ def train(
     resume: bool,
     runs_dir: Path,
     ship_to: Path | None = None,
+    files: RunFiles | None = None,
 ) -> Path:
-    """Run the training described by ``config`` into ``runs_dir/<name>/``; returns the run's policy path.
+    """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
+    training seeds); returns the run's policy path.
 
     Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
     shipped deliberately later, with :func:`agents.training.shipping.ship_run`).
@@ -126,7 +128,7 @@ def train(
 
     config = checked_config(config, source=str(config_path))
     torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
-    files = RunFiles.of(runs_dir, config.name)
+    files = files or RunFiles.of(runs_dir, config.name)
     envs, eval_env = build_envs(config)
     try:
         model, resume_step = _build_model(config, envs, files, resume)

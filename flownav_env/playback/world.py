@@ -56,7 +56,7 @@ class PlaybackWorld:
         self.physics.place_obstacles(path.obstacles, path.materials)
         self.physics.reset_drone(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(3))
         self.obstacles = path.obstacles.copy()
-        self.renderer = CameraRenderer(self.physics.model, self.width, self.height)
+        self.renderer = CameraRenderer(self.physics.model, self.width, self.height, onboard=True)
         model, camera = self.physics.model, self.physics.camera_id
         mount = np.empty(9)
         mujoco.mju_quat2Mat(mount, model.cam_quat[camera])

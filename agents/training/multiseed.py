@@ -1,0 +1,152 @@
+"""Several independent training runs of one config, one per training seed (``flownav train --seeds 0-4``).
+
+Seed k is the config with ``seed: k``: PPO's seed and the start of its env workers' layouts
+(:func:`agents.common.seeds.training_env_seed`). Its outputs go to ``runs/<name>/seed_<k>/`` and ship to
+``results/policies/<name>/seed_<k>.zip`` with config, record, evaluations and curve.
+
+The seeds are independent jobs. The local backend trains them in turn in this process (each with its own env
+workers); the Ray backend submits each as a task asking for ``n_envs`` CPUs, so a cluster trains them side by side.
+Every job resumes: a seed whose record shows its full budget is skipped, one with checkpoints continues from the
+newest, and one without starts fresh. Re-running the same command after an interruption picks up where it
+stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import yaml
+
+from agents.common.seeds import MAX_RUN_SEED
+from agents.training.config import TrainConfig
+from agents.training.outputs import RunFiles
+
+_SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
+
+
+def parse_seeds(text: str) -> list[int]:
+    """Training seeds from ``"0-4"``, ``"0,2,7"`` or ``"0-2,5"``, in the order given, without repeats.
+
+    Raises:
+        ValueError: an item that is neither ``N`` nor ``N-M`` with N <= M, or a seed outside
+            [0, MAX_RUN_SEED].
+    """
+    seeds: list[int] = []
+    for item in str(text).replace(" ", "").split(","):
+        match = _SEED_ITEM.match(item)
+        if match is None or (match.group(2) is not None and int(match.group(2)) < int(match.group(1))):
+            raise ValueError(f"--seeds takes N, N-M (N <= M) or a comma-separated list of them, got {text!r}")
+        low = int(match.group(1))
+        high = int(match.group(2)) if match.group(2) is not None else low
+        if high > MAX_RUN_SEED:
+            raise ValueError(
+                f"training seeds must lie in [0, {MAX_RUN_SEED}], got {high} in --seeds {text!r}"
+            )
+        seeds += [seed for seed in range(low, high + 1) if seed not in seeds]
+    return seeds
+
+
+@dataclass(frozen=True)
+class SeedJob:
+    """One training seed of a config: everything a worker (local or Ray) needs to train it."""
+
+    config: TrainConfig
+    source_config: Path
+    runs_dir: Path
+    ship_to: Path | None
+
+    @property
+    def files(self) -> RunFiles:
+        return RunFiles.of_seed(self.runs_dir, self.config.name, self.config.seed)
+
+
+def seed_jobs(
+    config: TrainConfig, seeds: list[int], *, config_path: Path, runs_dir: Path, ship_to: Path | None
+) -> list[SeedJob]:
+    """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds."""
+    seed_ship_to = Path(ship_to) / config.name if ship_to is not None else None
+    return [
+        SeedJob(replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to) for seed in seeds
+    ]
+
+
+def finished(job: SeedJob) -> bool:
+    """Whether the seed's record shows its whole ``total_timesteps`` trained, with its policy written."""
+    files = job.files
+    if not (files.record.is_file() and files.policy.is_file()):
+        return False
+    record = json.loads(files.record.read_text())
+    return int(record.get("total_timesteps", 0)) >= job.config.total_timesteps
+
+
+def write_seed_config(job: SeedJob) -> Path:
+    """The seed's own config file in its run folder: the source YAML with ``seed`` set, so that the shipped
+    ``seed_<k>.yaml`` says which seed it is."""
+    files = job.files
+    files.run_dir.mkdir(parents=True, exist_ok=True)
+    mapping = yaml.safe_load(job.source_config.read_text())
+    mapping["seed"] = job.config.seed
+    header = (
+        f"# {job.source_config.name} with seed {job.config.seed}, written by\n"
+        f"# flownav train --config {job.source_config} --seeds {job.config.seed}\n"
+    )
+    temporary = files.config.with_suffix(".tmp")
+    temporary.write_text(header + yaml.safe_dump(mapping, sort_keys=False))
+    os.replace(temporary, files.config)
+    return files.config
+
+
+def train_seed(job: SeedJob) -> Path:
+    """Train (or resume, or skip as finished) one seed; returns its policy path."""
+    from agents.training.ppo import train
+    from agents.training.shipping import ship_run
+
+    if finished(job):
+        print(f"seed {job.config.seed}: finished ({job.files.policy}); skipping")
+        if job.ship_to is not None and not (job.ship_to / job.files.policy.name).is_file():
+            ship_run(job.files, job.ship_to)
+        return job.files.policy
+    config_path = write_seed_config(job)
+    return train(
+        job.config,
+        config_path=config_path,
+        resume=True,
+        runs_dir=job.runs_dir,
+        ship_to=job.ship_to,
+        files=job.files,
+    )
+
+
+def train_seeds(jobs: list[SeedJob], *, backend: str = "local", address: str | None = None) -> list[Path]:
+    """Train every job: in turn here (``"local"``), or as parallel Ray tasks (``"ray"``); returns the policy
+    paths in job order.
+
+    Raises:
+        ValueError: an unknown backend, or Ray not installed.
+    """
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if backend == "local":
+        return [train_seed(job) for job in jobs]
+    return list(_ray_train(jobs, address))
+
+
+def _ray_train(jobs: list[SeedJob], address: str | None) -> Iterator[Path]:
+    try:
+        import ray
+    except ImportError as error:
+        raise ValueError("backend 'ray' needs Ray: pip install 'flownav[ray]'") from error
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=True)
+    try:
+        references = [ray.remote(num_cpus=job.config.n_envs)(train_seed).remote(job) for job in jobs]
+        yield from ray.get(references)
+    finally:
+        if started_here:
+            ray.shutdown()

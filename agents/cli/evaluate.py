@@ -40,7 +40,12 @@ def record_label(env_kwargs: dict[str, object]) -> tuple[str, float]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
 
-    parser.add_argument("--agent", required=True, choices=AGENT_NAMES, help="who flies")
+    parser.add_argument(
+        "--agent",
+        required=True,
+        help=f"who flies: {', '.join(AGENT_NAMES)}, or a training seed of a learned one (ppo_flow@3 flies "
+        "results/policies/ppo_flow/seed_3.zip)",
+    )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument(
         "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
@@ -77,7 +82,9 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_episodes, start_new_file
     from agents.evaluation.runner import EpisodeTask, execute, rows_of
     from agents.evaluation.statistics import format_summary, summarise
+    from agents.policies import split_agent_name
 
+    split_agent_name(args.agent)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seed_start < TEST_SEED_START:

@@ -20,7 +20,9 @@ HELP = "record an mp4 of an agent's episode with the flow overlay"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
 
-    parser.add_argument("--agent", required=True, choices=AGENT_NAMES)
+    parser.add_argument(
+        "--agent", required=True, help=f"{', '.join(AGENT_NAMES)}, or a training seed such as ppo_flow@0"
+    )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--env-id", default="FlowNav-v0")
     parser.add_argument("--seed", type=int, default=TEST_SEED_START)
@@ -29,6 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from agents.policies import split_agent_name
+
+    split_agent_name(args.agent)
     out = Path(args.out or f"results/videos/{args.agent}_{args.env_id}_{args.seed}.mp4")
     from agents.evaluation.video import record_episode
 

@@ -32,7 +32,7 @@ from agents.evaluation.records import (
     read_episodes,
     row_identity,
 )
-from agents.policies import LEARNED_AGENTS, agent_env_kwargs, load_agent, policy_file
+from agents.policies import agent_env_kwargs, is_learned, load_agent, policy_file
 
 
 def canonical_json(value: Any) -> str:
@@ -65,12 +65,12 @@ class EpisodeTask:
     seed: int
     env_id: str = "FlowNav-v0"
     env_kwargs: tuple[tuple[str, Any], ...] = ()
-    policy: str | None = None  # a learned agent's .zip; None: <repo>/results/policies/<agent>.zip
+    policy: str | None = None  # a learned agent's .zip; None: its file in <repo>/results/policies/
     bee_params: tuple[tuple[str, float], ...] = field(default=())
 
     def policy_path(self) -> Path | None:
         """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
-        if self.agent not in LEARNED_AGENTS:
+        if not is_learned(self.agent):
             return None
         return policy_file(self.agent, self.policy, directory=POLICIES_DIR)
 

@@ -32,7 +32,7 @@ from agents.evaluation.sweep_report import (
     write_report,
     write_summary,
 )
-from agents.policies import AGENT_NAMES, LEARNED_AGENTS, policy_file
+from agents.policies import is_learned, policy_file, split_agent_name
 from flownav_env.settings import check_setting
 
 SWEEP_FACTORS = ("rotation_error", "translation_error", "attitude_jitter_deg", "brightness", "forward_speed")
@@ -59,8 +59,10 @@ class SweepConfig:
 
     def validate(self) -> None:
         for agent in self.agents:
-            if agent not in AGENT_NAMES:
-                raise ValueError(f"key 'agents': unknown agent {agent!r} (allowed: {', '.join(AGENT_NAMES)})")
+            try:
+                split_agent_name(agent)
+            except ValueError as error:
+                raise ValueError(f"key 'agents': {error}") from None
         for factor, levels in self.factors.items():
             if factor not in SWEEP_FACTORS:
                 raise ValueError(
@@ -108,7 +110,7 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
             seed,
             config.env_id,
             tuple(sorted(kwargs.items())),
-            str(policy_file(agent, directory=config.policy_folder())) if agent in LEARNED_AGENTS else None,
+            str(policy_file(agent, directory=config.policy_folder())) if is_learned(agent) else None,
         )
         for seed_pass in passes
         for factor, level, kwargs in cells
@@ -155,9 +157,7 @@ def run_sweep(
         raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
 
-    files = {
-        a: policy_file(a, directory=config.policy_folder()) for a in config.agents if a in LEARNED_AGENTS
-    }
+    files = {a: policy_file(a, directory=config.policy_folder()) for a in config.agents if is_learned(a)}
     missing = {a: path for a, path in files.items() if not path.exists()}
     agents = [a for a in config.agents if a not in missing]
     for skipped, path in sorted(missing.items()):

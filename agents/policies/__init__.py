@@ -1,6 +1,14 @@
 """The agents behind one ``predict`` interface: reactive rules and learned (PPO) policies."""
 
-from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, REACTIVE_AGENTS, Agent
+from agents.policies.base import (
+    AGENT_NAMES,
+    LEARNED_AGENTS,
+    REACTIVE_AGENTS,
+    Agent,
+    is_learned,
+    seeded_agent_name,
+    split_agent_name,
+)
 from agents.policies.learned import (
     POLICY_OPTION_HELP,
     LoadedPolicy,
@@ -27,9 +35,12 @@ __all__ = [
     "VFHAgent",
     "agent_env_kwargs",
     "bin_nearness",
+    "is_learned",
     "load_agent",
     "load_policy",
     "policy_file",
     "quantile_nearness",
     "sector_nearness",
+    "seeded_agent_name",
+    "split_agent_name",
 ]

@@ -9,6 +9,40 @@ import numpy as np
 REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "vfh")
 LEARNED_AGENTS = ("ppo_flow", "ppo_robust", "ppo_oracle")
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS
+# A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
+# results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.
+TRAIN_SEED_MARK = "@"
+
+
+def split_agent_name(name: str) -> tuple[str, int | None]:
+    """``"ppo_flow@3"`` → ``("ppo_flow", 3)``; ``"bee"`` → ``("bee", None)``.
+
+    Raises:
+        ValueError: an unknown agent, a training seed on a reactive agent, or a seed that is not an integer >= 0.
+    """
+    base, mark, seed_text = str(name).partition(TRAIN_SEED_MARK)
+    allowed = f"one of {', '.join(AGENT_NAMES)}, or <learned agent>@<training seed> such as ppo_flow@0"
+    if base not in AGENT_NAMES:
+        raise ValueError(f"agent must be {allowed}, got {name!r}")
+    if not mark:
+        return base, None
+    if base not in LEARNED_AGENTS:
+        raise ValueError(
+            f"only learned agents have training seeds ({', '.join(LEARNED_AGENTS)}), got {name!r}"
+        )
+    if not seed_text.isdigit():
+        raise ValueError(f"a training seed must be an integer >= 0, got {name!r}")
+    return base, int(seed_text)
+
+
+def seeded_agent_name(agent: str, train_seed: int) -> str:
+    """The name of training seed ``train_seed`` of the learned ``agent``: ``ppo_flow@3``."""
+    return f"{agent}{TRAIN_SEED_MARK}{train_seed}"
+
+
+def is_learned(name: str) -> bool:
+    """Whether ``name`` (with or without a training seed) is a learned agent."""
+    return split_agent_name(name)[0] in LEARNED_AGENTS
 
 
 class Agent(Protocol):

@@ -10,7 +10,7 @@ from typing import Any
 
 from agents.common.config import load_config
 from agents.common.paths import POLICIES_DIR
-from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, Agent
+from agents.policies.base import Agent, is_learned, split_agent_name
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, VFHAgent
@@ -26,9 +26,15 @@ POLICY_OPTION_HELP = (
 
 
 def policy_file(name: str, path: str | Path | None = None, directory: str | Path = POLICIES_DIR) -> Path:
-    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``; the
-    default directory is the repository's ``results/policies/``, whatever the current directory."""
-    return Path(path) if path else Path(directory) / f"{name}.zip"
+    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``, or
+    ``<directory>/<agent>/seed_<k>.zip`` for a training seed ``<agent>@<k>``; the default directory is the
+    repository's ``results/policies/``, whatever the current directory."""
+    if path:
+        return Path(path)
+    agent, train_seed = split_agent_name(name)
+    if train_seed is None:
+        return Path(directory) / f"{agent}.zip"
+    return Path(directory) / agent / f"seed_{train_seed}.zip"
 
 
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
@@ -37,8 +43,8 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
     the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
     """
-    if name not in LEARNED_AGENTS:
-        return dict(REACTIVE_ENV_KWARGS.get(name, {}))
+    if not is_learned(name):
+        return dict(REACTIVE_ENV_KWARGS.get(split_agent_name(name)[0], {}))
     config_path = policy_file(name, path).with_suffix(".yaml")
     if not config_path.is_file():
         return {}
@@ -46,10 +52,10 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
 
 
 def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: float) -> Agent:
-    """The agent called ``name`` (see :data:`AGENT_NAMES`).
+    """The agent called ``name`` (see :data:`~agents.policies.base.AGENT_NAMES`).
 
     Args:
-        name: agent name.
+        name: agent name; ``<learned agent>@<k>`` for training seed k.
         policy_path: for PPO agents, the ``.zip`` to load; defaults to ``results/policies/<name>.zip``.
             Only its parameters are read when its training config lies beside it; a policy its folder's
             ``MANIFEST.sha256`` does not vouch for loads with an :class:`UnverifiedPolicyWarning`.
@@ -59,6 +65,7 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
         ValueError: unknown name, or a policy file that is not a readable policy (the message names it).
         FileNotFoundError: a PPO policy file is missing.
     """
+    base, _ = split_agent_name(name)
     if name == "straight":
         return StraightAgent()
     if name == "bee":
@@ -67,12 +74,12 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
         return BeeRobustAgent(**bee_params)
     if name == "vfh":
         return VFHAgent(**bee_params)
-    if name in LEARNED_AGENTS:
+    if is_learned(name):
         path = policy_file(name, policy_path)
         if not path.is_file():
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
         return load_policy_file(path)
-    raise ValueError(f"agent must be one of {', '.join(AGENT_NAMES)}, got {name!r}")
+    raise AssertionError(f"agent {base!r} is in AGENT_NAMES but has no constructor here")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,328 @@
+"""The benchmark's leading table: every agent on the same clean test layouts, learned agents over all their
+training seeds (``flownav leaderboard``).
+
+Writes, to the output folder:
+
+- ``leaderboard_episodes.csv``: every episode (resumable; one agent name per run: ``ppo_flow@3``);
+- ``training_seeds.csv``: one row per (agent, training seed) with its episodes and rates;
+- ``leaderboard.md``: the table (failure and success rates with 95 % intervals: over layouts for a
+  reactive agent, over runs × layouts for a learned one), the interquartile mean over runs, and the
+  probability that each learned agent improves on each reactive one (:mod:`agents.evaluation.over_seeds`);
+- ``leaderboard.png``: failure rates with their intervals, a dot per training seed.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary queries GL)
+from agents.common.machine import code_version, machine_summary
+from agents.common.paths import POLICIES_DIR
+from agents.common.seeds import TEST_SEED_START
+from agents.common.tables import markdown_table, today, write_csv
+from agents.evaluation.over_seeds import (
+    LAYOUT_BLOCK,
+    block_scores,
+    interval_estimates,
+    probability_of_improvement,
+    run_rates,
+    runs_and_layouts_interval,
+    success_outcomes,
+)
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import EpisodeTask, execute, rows_of
+from agents.evaluation.statistics import wilson_interval
+from agents.policies import LEARNED_AGENTS, REACTIVE_AGENTS, is_learned, policy_file, seeded_agent_name
+
+MIN_EPISODES = 300
+_SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
+
+
+def trained_seeds(agent: str, policies_dir: Path = POLICIES_DIR) -> list[int]:
+    """The training seeds shipped for the learned ``agent``: ``<policies_dir>/<agent>/seed_<k>.zip``."""
+    folder = Path(policies_dir) / agent
+    if not folder.is_dir():
+        return []
+    return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _SEED_FILE.match(p.name)))
+
+
+def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -> dict[str, list[str]]:
+    """Each agent's runs: a reactive agent is its own single run; a learned one is every shipped training
+    seed (``ppo_flow@0``, ...). A learned agent without any is left out, with a message.
+
+    Raises:
+        ValueError: an unknown agent name.
+    """
+    runs: dict[str, list[str]] = {}
+    for agent in agents:
+        if agent in REACTIVE_AGENTS:
+            runs[agent] = [agent]
+        elif agent in LEARNED_AGENTS:
+            seeds = trained_seeds(agent, policies_dir)
+            if not seeds:
+                print(
+                    f"leaving out {agent}: no {Path(policies_dir) / agent}/seed_<k>.zip (flownav train --seeds)"
+                )
+                continue
+            runs[agent] = [seeded_agent_name(agent, seed) for seed in seeds]
+        else:
+            raise ValueError(
+                f"agent must be one of {', '.join(REACTIVE_AGENTS + LEARNED_AGENTS)}, got {agent!r}"
+            )
+    return runs
+
+
+def leaderboard_tasks(
+    runs: dict[str, list[str]], episodes: int, policies_dir: Path = POLICIES_DIR
+) -> list[EpisodeTask]:
+    """Every run on the clean test layouts ``TEST_SEED_START ..``, layout by layout (so an interrupted
+    flight leaves every agent with about the same layouts)."""
+    names = [name for names in runs.values() for name in names]
+    return [
+        EpisodeTask(
+            name,
+            "clean",
+            0.0,
+            seed,
+            policy=str(policy_file(name, directory=policies_dir)) if is_learned(name) else None,
+        )
+        for seed in range(TEST_SEED_START, TEST_SEED_START + episodes)
+        for name in names
+    ]
+
+
+def summarise_runs(
+    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+) -> list[dict]:
+    """Per agent: runs, episodes, mean rates over runs with their 95 % intervals, and the IQM of the success
+    rate over runs × layout blocks with its stratified-bootstrap interval."""
+    outcomes = {agent: success_outcomes(rows, names, layouts) for agent, names in runs.items()}
+    estimates = interval_estimates({agent: block_scores(o, block) for agent, o in outcomes.items()})
+    table = []
+    for agent, names in runs.items():
+        mine = [row for row in rows if row["agent"] in names and int(row["seed"]) in set(layouts)]
+        n = outcomes[agent].size
+        success = float(outcomes[agent].mean())
+        if len(names) == 1:
+            low, high = wilson_interval(int(outcomes[agent].sum()), n)
+            interval = "layouts (Wilson)"
+        else:
+            low, high = runs_and_layouts_interval(outcomes[agent])
+            interval = "runs × layouts (bootstrap)"
+        table.append(
+            {
+                "agent": agent,
+                "runs": len(names),
+                "episodes": n,
+                "success_rate": success,
+                "success_low": low,
+                "success_high": high,
+                "failure_rate": 1.0 - success,
+                "failure_low": 1.0 - high,
+                "failure_high": 1.0 - low,
+                "collision_rate": float(np.mean([bool(r["collision"]) for r in mine])),
+                "out_of_bounds_rate": float(np.mean([bool(r["out_of_bounds"]) for r in mine])),
+                "iqm_failure": 1.0 - estimates[agent]["iqm"],
+                "iqm_failure_low": 1.0 - estimates[agent]["iqm_high"],
+                "iqm_failure_high": 1.0 - estimates[agent]["iqm_low"],
+                "interval_over": interval,
+            }
+        )
+    return table
+
+
+def improvements(
+    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+) -> list[dict[str, Any]]:
+    """P(learned run beats reactive agent) for every learned × reactive pair (straight left out), with its
+    stratified-bootstrap interval."""
+    learned = [agent for agent in runs if agent in LEARNED_AGENTS]
+    reactive = [agent for agent in runs if agent in REACTIVE_AGENTS and agent != "straight"]
+    scores = {
+        agent: block_scores(success_outcomes(rows, runs[agent], layouts), block)
+        for agent in learned + reactive
+    }
+    result = []
+    for x in learned:
+        for y in reactive:
+            point, low, high = probability_of_improvement(scores[x], scores[y])
+            result.append({"learned": x, "reactive": y, "probability": point, "low": low, "high": high})
+    return result
+
+
+def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> None:
+    """Failure rate per agent with its 95 % interval, and a dot per training seed of a learned agent."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(7.5, 0.55 * len(table) + 1.4))
+    for y, row in enumerate(table):
+        colour = "tab:blue" if row["agent"] in LEARNED_AGENTS else "tab:gray"
+        axis.errorbar(
+            row["failure_rate"],
+            y,
+            xerr=[[row["failure_rate"] - row["failure_low"]], [row["failure_high"] - row["failure_rate"]]],
+            fmt="o",
+            color=colour,
+            capsize=4,
+        )
+        seeds = [r["failure_rate"] for r in seed_rows if r["agent"] == row["agent"] and r["train_seed"] != ""]
+        axis.scatter(seeds, [y + 0.22] * len(seeds), marker="|", s=120, color=colour, alpha=0.8)
+    axis.set_yticks(
+        range(len(table)), [f"{r['agent']} ({r['runs']} run{'s' * (r['runs'] > 1)})" for r in table]
+    )
+    axis.invert_yaxis()
+    axis.set_xlim(0, 1)
+    axis.set_xlabel("failure rate on the clean test layouts (collision, out of bounds or time limit)")
+    axis.set_title("Agents on the same test layouts: 95 % intervals; ticks = training seeds", fontsize=10)
+    axis.grid(axis="x", alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+
+
+def _rate(row: dict, name: str) -> str:
+    return (
+        f"{row[name]:.2f} [{row[name.replace('rate', 'low')]:.2f}, {row[name.replace('rate', 'high')]:.2f}]"
+    )
+
+
+def report_lines(
+    table: list[dict], gains: list[dict], layouts: list[int], command: str, block: int = LAYOUT_BLOCK
+) -> list[str]:
+    """``leaderboard.md``: set-up, the leading table, the probabilities of improvement and the gap the
+    strongest reactive agent leaves to learning."""
+    rows = [
+        [
+            r["agent"],
+            r["runs"],
+            r["episodes"],
+            _rate(r, "failure_rate"),
+            _rate(r, "success_rate"),
+            f"{r['collision_rate']:.2f}",
+            f"{r['out_of_bounds_rate']:.2f}",
+            f"{r['iqm_failure']:.2f} [{r['iqm_failure_low']:.2f}, {r['iqm_failure_high']:.2f}]",
+            r["interval_over"],
+        ]
+        for r in table
+    ]
+    lines = [
+        "# Leaderboard: every agent on the same clean test layouts",
+        "",
+        f"Generated {today()} by `{command}` (code `{code_version()}`), on {len(layouts)} test layouts "
+        f"(seeds {layouts[0]:,}–{layouts[-1]:,}). {machine_summary()}",
+        "",
+        "A learned agent is every training seed shipped in `results/policies/<agent>/seed_<k>.zip`, each flying "
+        "every layout; its rates are means over runs, with a 95 % interval from a two-level bootstrap (runs, "
+        "then layouts within each run). A reactive agent is deterministic: one run, Wilson interval over "
+        "layouts. A failure is any episode that does not reach the goal (collision, out of bounds, time limit). "
+        f"IQM: interquartile mean of the failure rate over runs × blocks of {block} layouts, with "
+        "rliable's stratified-bootstrap interval over runs.",
+        "",
+        markdown_table(
+            [
+                "agent",
+                "runs",
+                "episodes",
+                "failure rate [95 % CI]",
+                "success rate [95 % CI]",
+                "collision",
+                "out of bounds",
+                "IQM failure [95 % CI]",
+                "interval over",
+            ],
+            rows,
+        ),
+        "",
+        "![failure rates](leaderboard.png)",
+    ]
+    if gains:
+        lines += [
+            "",
+            "## Probability of improvement",
+            "",
+            "P(X > Y): the chance that a training run of the learned agent X has a higher success rate than the "
+            f"reactive agent Y on a random block of {block} test layouts (ties count half), with "
+            "rliable's stratified-bootstrap 95 % interval over runs. Above 0.5 with the interval clear of it: X "
+            "reliably improves on Y.",
+            "",
+            markdown_table(
+                ["learned X", "reactive Y", "P(X > Y) [95 % CI]"],
+                [
+                    [g["learned"], g["reactive"], f"{g['probability']:.2f} [{g['low']:.2f}, {g['high']:.2f}]"]
+                    for g in gains
+                ],
+            ),
+        ]
+    reactive = [r for r in table if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
+    learned = [r for r in table if r["agent"] in LEARNED_AGENTS]
+    if reactive and learned:
+        best = min(reactive, key=lambda r: r["failure_rate"])
+        lines += ["", "## What the strongest reactive agent leaves to learning", ""]
+        for r in learned:
+            apart = r["failure_high"] < best["failure_low"]
+            worse = r["failure_low"] > best["failure_high"]
+            verdict = (
+                "lower, intervals apart"
+                if apart
+                else "higher, intervals apart"
+                if worse
+                else "intervals overlap"
+            )
+            lines.append(
+                f"- `{r['agent']}` fails in {r['failure_rate']:.2f} against `{best['agent']}`'s "
+                f"{best['failure_rate']:.2f} ({verdict}; difference {best['failure_rate'] - r['failure_rate']:+.2f})."
+            )
+        lines.append(
+            f"- `{best['agent']}` is the reactive agent with the lowest failure rate here; its success rate "
+            f"({best['success_rate']:.2f}) is what a hand-written rule reaches on the same observations."
+        )
+    return lines
+
+
+def run_leaderboard(
+    agents: Sequence[str],
+    out: Path,
+    *,
+    episodes: int = MIN_EPISODES,
+    workers: int = 2,
+    policies_dir: Path = POLICIES_DIR,
+    report_only: bool = False,
+    command: str = "flownav leaderboard",
+    block: int = LAYOUT_BLOCK,
+) -> list[str]:
+    """Fly (unless ``report_only``) and report the leaderboard into ``out``; returns the report's lines.
+
+    Raises:
+        ValueError: ``episodes`` or ``workers`` below 1, an unknown agent, or a report with runs that have
+            not flown every layout.
+    """
+    if episodes < 1 or workers < 1:
+        raise ValueError(f"--episodes and --workers must be >= 1, got {episodes} and {workers}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / "leaderboard_episodes.csv"
+    runs = leaderboard_runs(agents, policies_dir)
+    tasks = leaderboard_tasks(runs, episodes, policies_dir)
+    if not report_only:
+        execute(tasks, csv_path, workers=workers, description="leaderboard")
+    rows = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+    layouts = list(range(TEST_SEED_START, TEST_SEED_START + episodes))
+    table = summarise_runs(rows, runs, layouts, block)
+    seed_rows = run_rates(rows)
+    write_csv(
+        out / "training_seeds.csv",
+        [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()} for r in seed_rows],
+    )
+    gains = improvements(rows, runs, layouts, block)
+    plot_leaderboard(table, seed_rows, out / "leaderboard.png")
+    lines = report_lines(table, gains, layouts, command, block)
+    (out / "leaderboard.md").write_text("\n".join(lines) + "\n")
+    return lines

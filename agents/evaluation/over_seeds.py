@@ -1,0 +1,164 @@
+"""Agents over training seeds: per-run rates, interval estimates over runs and layouts, and the probability
+that a learned agent improves on a reactive one.
+
+A learned agent is several independent training runs (``ppo_flow@0`` ... ``ppo_flow@4``), each flown on the
+same test layouts; a reactive agent is one deterministic "run". Following Agarwal et al. (2021, "Deep RL at
+the Edge of the Statistical Precipice") and their ``rliable`` library, scores form a matrix of runs × tasks.
+FlowNav's clean cell is one task, so its layouts are cut into blocks of :data:`LAYOUT_BLOCK` consecutive test
+layouts, each block a task: the stratified bootstrap resamples runs within each block, and the probability
+of improvement compares runs block by block.
+
+Scores are success rates (higher is better, as rliable expects); a failure rate is one minus a success rate,
+since an episode fails exactly when it does not reach the goal.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from agents.policies import split_agent_name
+
+LAYOUT_BLOCK = 30
+BOOTSTRAP_REPS = 2000
+# rliable's probability of improvement runs a Mann-Whitney test per block in every replicate: fewer of them.
+IMPROVEMENT_REPS = 1000
+CONFIDENCE = 0.95
+
+
+def run_rates(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """One row per run (agent name, with its training seed for a learned agent): episodes and the success,
+    failure, collision and out-of-bounds rates over them; sorted by agent, then training seed."""
+    groups: dict[str, list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault(row["agent"], []).append(row)
+    table = []
+    for name, members in groups.items():
+        agent, train_seed = split_agent_name(name)
+        n = len(members)
+        successes = sum(bool(m["success"]) for m in members)
+        table.append(
+            {
+                "agent": agent,
+                "train_seed": "" if train_seed is None else train_seed,
+                "episodes": n,
+                "success_rate": successes / n,
+                "failure_rate": (n - successes) / n,
+                "collision_rate": sum(bool(m["collision"]) for m in members) / n,
+                "out_of_bounds_rate": sum(bool(m["out_of_bounds"]) for m in members) / n,
+            }
+        )
+    return sorted(table, key=lambda r: (r["agent"], -1 if r["train_seed"] == "" else r["train_seed"]))
+
+
+def success_outcomes(
+    rows: Iterable[Mapping[str, Any]], runs: Sequence[str], layouts: Sequence[int]
+) -> np.ndarray:
+    """Success (1) or failure (0) of every run on every layout: (runs, layouts).
+
+    Raises:
+        ValueError: a run that has not flown one of the layouts (its name and the first missing seed).
+    """
+    flown = {(row["agent"], int(row["seed"])): bool(row["success"]) for row in rows}
+    outcomes = np.zeros((len(runs), len(layouts)))
+    for i, run in enumerate(runs):
+        for j, seed in enumerate(layouts):
+            if (run, seed) not in flown:
+                raise ValueError(
+                    f"run {run!r} has not flown layout {seed}: fly every run on the same layouts"
+                )
+            outcomes[i, j] = flown[(run, seed)]
+    return outcomes
+
+
+def block_scores(outcomes: np.ndarray, block: int = LAYOUT_BLOCK) -> np.ndarray:
+    """Success rate of each run on each block of ``block`` consecutive layouts: (runs, blocks); a last
+    incomplete block is dropped, so that every task weighs the same.
+
+    Raises:
+        ValueError: fewer layouts than one block.
+    """
+    runs, layouts = outcomes.shape
+    blocks = layouts // block
+    if blocks == 0:
+        raise ValueError(f"need at least one block of {block} layouts, got {layouts}")
+    return outcomes[:, : blocks * block].reshape(runs, blocks, block).mean(axis=2)
+
+
+def _iqm(scores: np.ndarray) -> float:
+    from rliable import metrics
+
+    return float(metrics.aggregate_iqm(scores))
+
+
+def interval_estimates(
+    scores: Mapping[str, np.ndarray], seed: int = 0, reps: int = BOOTSTRAP_REPS
+) -> dict[str, dict[str, float]]:
+    """Mean and interquartile mean (IQM) of each agent's block scores with their stratified-bootstrap 95 %
+    intervals over runs (rliable); an agent of one run gets a zero-width interval (nothing to resample)."""
+    from rliable import library
+
+    def aggregates(matrix: np.ndarray) -> np.ndarray:
+        return np.array([float(np.mean(matrix)), _iqm(matrix)])
+
+    with warnings.catch_warnings():
+        # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
+        warnings.simplefilter("ignore", FutureWarning)
+        points, intervals = library.get_interval_estimates(
+            dict(scores),
+            aggregates,
+            reps=reps,
+            confidence_interval_size=CONFIDENCE,
+            random_state=np.random.RandomState(seed),
+        )
+    return {
+        name: {
+            "mean": float(points[name][0]),
+            "mean_low": float(intervals[name][0, 0]),
+            "mean_high": float(intervals[name][1, 0]),
+            "iqm": float(points[name][1]),
+            "iqm_low": float(intervals[name][0, 1]),
+            "iqm_high": float(intervals[name][1, 1]),
+        }
+        for name in scores
+    }
+
+
+def runs_and_layouts_interval(
+    outcomes: np.ndarray, seed: int = 0, reps: int = BOOTSTRAP_REPS
+) -> tuple[float, float]:
+    """95 % interval of the success rate over runs and layouts: a two-level bootstrap that resamples runs,
+    then layouts within each resampled run, so that it carries both the spread between training runs and
+    the layouts' sampling noise."""
+    rng = np.random.default_rng(seed)
+    runs, layouts = outcomes.shape
+    chosen_runs = rng.integers(runs, size=(reps, runs, 1))
+    chosen_layouts = rng.integers(layouts, size=(reps, runs, layouts))
+    rates = outcomes[chosen_runs, chosen_layouts].mean(axis=(1, 2))
+    tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
+    low, high = np.percentile(rates, [tail, 100.0 - tail])
+    return float(low), float(high)
+
+
+def probability_of_improvement(
+    scores_x: np.ndarray, scores_y: np.ndarray, seed: int = 0, reps: int = IMPROVEMENT_REPS
+) -> tuple[float, float, float]:
+    """P(X > Y): the chance that a run of X beats a run of Y on a random block of layouts (ties count half),
+    with its stratified-bootstrap 95 % interval (rliable)."""
+    from rliable import library, metrics
+
+    with warnings.catch_warnings():
+        # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
+        warnings.simplefilter("ignore", FutureWarning)
+        points, intervals = library.get_interval_estimates(
+            {"pair": (scores_x, scores_y)},
+            metrics.probability_of_improvement,
+            reps=reps,
+            confidence_interval_size=CONFIDENCE,
+            random_state=np.random.RandomState(seed),
+        )
+    low, high = np.ravel(intervals["pair"])
+    return float(points["pair"]), float(low), float(high)

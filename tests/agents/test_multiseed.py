@@ -1,0 +1,107 @@
+"""Several training seeds of one config: seed lists, disjoint worker layouts, the per-seed folders and
+configs, skipping finished seeds and resuming the rest, and the command line's refusals."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from agents.cli import main
+from agents.common.seeds import (
+    MAX_RUN_SEED,
+    VALIDATION_SEED_START,
+    checkpoint_selection_seed,
+    training_env_seed,
+)
+from agents.training.multiseed import finished, parse_seeds, seed_jobs, train_seeds
+from agents.training.outputs import RunFiles
+from tests.agents.test_training import tiny_train_config
+
+
+def test_seed_lists_take_ranges_and_lists_in_order_without_repeats() -> None:
+    assert parse_seeds("0-4") == [0, 1, 2, 3, 4]
+    assert parse_seeds("3, 0-1,3") == [3, 0, 1]
+    assert parse_seeds("7") == [7]
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("4-2", "--seeds takes N, N-M (N <= M) or a comma-separated list of them, got '4-2'"),
+        ("a", "--seeds takes N, N-M"),
+        ("0,,1", "--seeds takes N, N-M"),
+        (f"0-{MAX_RUN_SEED + 1}", f"training seeds must lie in [0, {MAX_RUN_SEED}], got {MAX_RUN_SEED + 1}"),
+    ],
+)
+def test_bad_seed_lists_are_refused(text: str, message: str) -> None:
+    with pytest.raises(ValueError) as caught:
+        parse_seeds(text)
+    assert message in str(caught.value)
+
+
+def test_runs_start_their_workers_on_disjoint_training_layouts() -> None:
+    starts = [training_env_seed(seed) for seed in range(MAX_RUN_SEED + 1)]
+    # Up to 64 workers per run (TrainConfig.n_envs) never reach the next run's first layout.
+    assert all(b - a >= 64 for a, b in zip(starts, starts[1:], strict=False))
+    assert starts[-1] + 64 < VALIDATION_SEED_START
+    assert VALIDATION_SEED_START <= checkpoint_selection_seed(MAX_RUN_SEED) < 1_000_000
+
+
+def test_each_seed_trains_into_its_own_folder_and_a_finished_one_is_skipped(tmp_path: Path, capsys) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="multi")
+    runs_dir, ship_to = tmp_path / "runs", tmp_path / "policies"
+    jobs = seed_jobs(config, [0, 3], config_path=config_path, runs_dir=runs_dir, ship_to=ship_to)
+    policies = train_seeds(jobs)
+    assert policies == [runs_dir / "multi" / "seed_0" / "seed_0.zip", runs_dir / "multi" / "seed_3" / "seed_3.zip"]
+    for seed in (0, 3):
+        files = RunFiles.of_seed(runs_dir, "multi", seed)
+        assert yaml.safe_load(files.config.read_text())["seed"] == seed
+        assert f"--seeds {seed}" in files.config.read_text().splitlines()[1]
+        assert (ship_to / "multi" / f"seed_{seed}.zip").is_file()
+        assert (ship_to / "multi" / f"seed_{seed}.yaml").is_file()
+    assert all(finished(job) for job in jobs)
+    record = RunFiles.of_seed(runs_dir, "multi", 3).record
+    before = json.loads(record.read_text())
+    capsys.readouterr()
+    train_seeds(jobs)
+    assert "seed 0: finished" in capsys.readouterr().out
+    assert json.loads(record.read_text()) == before  # nothing trained again
+    # A larger budget resumes each seed from its checkpoint instead of starting over.
+    longer = seed_jobs(
+        config.__class__(**{**config.__dict__, "total_timesteps": 128}),
+        [3],
+        config_path=config_path,
+        runs_dir=runs_dir,
+        ship_to=None,
+    )
+    assert not finished(longer[0])
+    train_seeds(longer)
+    assert "resuming from" in capsys.readouterr().out
+    resumed = json.loads(record.read_text())
+    assert resumed["total_timesteps"] == 128 and len(resumed["sessions"]) == 2
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--seeds", "0", "--resume"], "--seeds always resumes unfinished seeds: drop --resume"),
+        (["--backend", "ray"], "--backend and --address apply to --seeds runs only"),
+        (["--seeds", "2-1"], "--seeds takes N, N-M (N <= M)"),
+    ],
+)
+def test_the_train_command_refuses_mixed_options(tmp_path: Path, capsys, extra: list[str], message: str) -> None:
+    _, config_path = tiny_train_config(tmp_path, total=64, name="refused")
+    code = main(["train", "--config", str(config_path), "--runs-dir", str(tmp_path / "runs"), *extra])
+    assert code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "runs" / "refused").exists()
+
+
+def test_an_unknown_backend_is_refused(tmp_path: Path) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="backend")
+    jobs = seed_jobs(config, [0], config_path=config_path, runs_dir=tmp_path, ship_to=None)
+    with pytest.raises(ValueError, match="backend must be 'local' or 'ray', got 'slurm'"):
+        train_seeds(jobs, backend="slurm")

@@ -21,7 +21,8 @@ COMMANDS = {
     "curves": "agents.cli.curves",
     "evaluate": "agents.cli.evaluate",
     "sweep": "agents.cli.sweep",
-    "tune-bee": "agents.cli.tune_bee",
+    "leaderboard": "agents.cli.leaderboard",
+    "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",
 }

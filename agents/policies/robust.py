@@ -72,7 +72,7 @@ class BeeRobustAgent(BeeAgent):
     ``quantile`` picks the depth quantile a sector's nearness is read at (lower = more cautious), and
     ``smoothing`` the weight of the newest frame in an exponential average over frames (1 = no memory); the
     average is the ``state`` that ``predict`` returns and takes back, reset at ``episode_start``. Its gains
-    start at the bee's; tune them on training seeds (``flownav tune-bee``'s search is the bee's).
+    start at the bee's; tune them on training seeds with ``flownav tune --agent bee_robust``.
     """
 
     quantile: float = 0.5

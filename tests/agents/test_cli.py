@@ -82,14 +82,14 @@ def test_an_unknown_env_id_is_one_line_naming_the_ids(tmp_path: Path, capsys) ->
 
 
 def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, capsys) -> None:
-    from agents.cli import main, tune_bee
+    from agents.cli import main, tune
 
     def interrupted(args) -> int:
         raise KeyboardInterrupt("3 episodes are in x.csv; run the same command again to resume")
 
-    monkeypatch.setattr(tune_bee, "run", interrupted)
-    assert main(["tune-bee"]) == 130
-    assert "flownav tune-bee: interrupted: 3 episodes are in x.csv" in capsys.readouterr().err
+    monkeypatch.setattr(tune, "run", interrupted)
+    assert main(["tune", "--agent", "bee"]) == 130
+    assert "flownav tune: interrupted: 3 episodes are in x.csv" in capsys.readouterr().err
 
 
 def test_version_and_scratch_defaults_of_report_writers(capsys) -> None:

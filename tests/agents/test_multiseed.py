@@ -3,6 +3,7 @@ configs, skipping finished seeds and resuming the rest, and the command line's r
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 
@@ -45,7 +46,7 @@ def test_bad_seed_lists_are_refused(text: str, message: str) -> None:
 def test_runs_start_their_workers_on_disjoint_training_layouts() -> None:
     starts = [training_env_seed(seed) for seed in range(MAX_RUN_SEED + 1)]
     # Up to 64 workers per run (TrainConfig.n_envs) never reach the next run's first layout.
-    assert all(b - a >= 64 for a, b in zip(starts, starts[1:], strict=False))
+    assert all(b - a >= 64 for a, b in itertools.pairwise(starts))
     assert starts[-1] + 64 < VALIDATION_SEED_START
     assert VALIDATION_SEED_START <= checkpoint_selection_seed(MAX_RUN_SEED) < 1_000_000
 
@@ -55,7 +56,10 @@ def test_each_seed_trains_into_its_own_folder_and_a_finished_one_is_skipped(tmp_
     runs_dir, ship_to = tmp_path / "runs", tmp_path / "policies"
     jobs = seed_jobs(config, [0, 3], config_path=config_path, runs_dir=runs_dir, ship_to=ship_to)
     policies = train_seeds(jobs)
-    assert policies == [runs_dir / "multi" / "seed_0" / "seed_0.zip", runs_dir / "multi" / "seed_3" / "seed_3.zip"]
+    assert policies == [
+        runs_dir / "multi" / "seed_0" / "seed_0.zip",
+        runs_dir / "multi" / "seed_3" / "seed_3.zip",
+    ]
     for seed in (0, 3):
         files = RunFiles.of_seed(runs_dir, "multi", seed)
         assert yaml.safe_load(files.config.read_text())["seed"] == seed
@@ -92,7 +96,9 @@ def test_each_seed_trains_into_its_own_folder_and_a_finished_one_is_skipped(tmp_
         (["--seeds", "2-1"], "--seeds takes N, N-M (N <= M)"),
     ],
 )
-def test_the_train_command_refuses_mixed_options(tmp_path: Path, capsys, extra: list[str], message: str) -> None:
+def test_the_train_command_refuses_mixed_options(
+    tmp_path: Path, capsys, extra: list[str], message: str
+) -> None:
     _, config_path = tiny_train_config(tmp_path, total=64, name="refused")
     code = main(["train", "--config", str(config_path), "--runs-dir", str(tmp_path / "runs"), *extra])
     assert code == 2

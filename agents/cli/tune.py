@@ -1,0 +1,67 @@
+"""``flownav tune``: tune a reactive agent's parameters on training seeds only.
+
+An optuna TPE search (every trial on the same training layouts, trial 0 the agent's defaults), then the best
+trials and the defaults on fresh training layouts, where the winner is chosen. Resumable: every episode is
+appended to ``<out>/episodes.csv`` as it ends, and the same command continues where it stopped. Writes
+``tuning.md``, ``best.json`` and ``tuning_curve.png`` beside it.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "tune a reactive agent on training seeds (TPE search, then finalists on fresh layouts; resumable)"
+
+# Kept in step with agents.evaluation.tuning_study.TUNABLE_AGENTS (a test checks), without importing optuna
+# and the agents for `flownav --help`.
+TUNABLE_AGENTS = ("bee", "bee_robust", "vfh")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--agent", required=True, choices=TUNABLE_AGENTS, help="the agent to tune")
+    parser.add_argument("--trials", type=int, default=40, help="search trials (default: %(default)s)")
+    parser.add_argument(
+        "--search-episodes",
+        type=int,
+        default=30,
+        help="training layouts every search trial flies, the same for all (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--finalists",
+        type=int,
+        default=4,
+        help="best search trials flown again on fresh layouts, plus the defaults (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--final-episodes",
+        type=int,
+        default=150,
+        help="fresh training layouts per finalist, at least 100 (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
+    )
+    parser.add_argument("--env-id", default="FlowNav-v0", help="env id (default: %(default)s)")
+    parser.add_argument("--out", type=Path, help="output folder (default: results/tuning/<agent>)")
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="move <out>/episodes.csv to episodes.csv.bak-<time> and start a new one (nothing is deleted)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.tuning import Budget, tune
+
+    budget = Budget(args.trials, args.search_episodes, args.finalists, args.final_episodes)
+    result = tune(
+        args.agent,
+        args.out or Path("results/tuning") / args.agent,
+        budget,
+        env_id=args.env_id,
+        workers=args.workers,
+        overwrite=args.overwrite,
+    )
+    print("\n".join(result.lines))
+    return 0

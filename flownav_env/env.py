@@ -26,16 +26,10 @@ from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_com
 from flownav_env.rendering import VIEW_PANEL_SIZE, CameraRenderer, camera_panel
 from flownav_env.scene import LAYOUT_FUNCTIONS, material_names
 from flownav_env.sensor import Pose, SensorPipeline
-from flownav_env.settings import Choice, EnvSettings
+from flownav_env.settings import Choice, EnvSettings, settings_property, with_sensor_settings
 
 
-def _from_settings(name: str, sensor: bool = False) -> property:
-    """An attribute that reads ``settings.<name>``, so the settings stay its one owner; a sensor variable's
-    attribute can be assigned, which goes through :meth:`FlowNavEnv.set_sensor` (checked, applied)."""
-    setter = (lambda env, value: env.set_sensor(**{name: value})) if sensor else None
-    return property(lambda env: getattr(env.settings, name), setter, doc=f"``settings.{name}``")
-
-
+@with_sensor_settings
 class FlowNavEnv(gym.Env):
     r"""
     ## Description
@@ -51,7 +45,9 @@ class FlowNavEnv(gym.Env):
 
     The sensor model carries the thesis's test variables: camera attitude jitter (known to the system),
     distance per frame (``forward_speed`` / ``frame_rate``), scene brightness, and relative errors on the
-    rotation and translation the estimator is told. ``obs_source="oracle"`` replaces the estimated depths by
+    rotation and translation the estimator is told; beside them, real sensors' errors on the told motion and on
+    the estimated depths (bias, drift, noise floor, outliers, dropout: :mod:`flownav_env.settings`).
+    ``obs_source="oracle"`` replaces the estimated depths by
     the true depths at the same tracked points (ray-cast in the scene), separating estimator error from
     policy error; ``"oracle_valid"`` keeps only the points the estimator gave a valid depth but uses their
     true depth, separating *which* points the estimator delivers from *how well* it measures them.
@@ -127,10 +123,7 @@ class FlowNavEnv(gym.Env):
     | ``lateral_bound`` | 6.0 | out of bounds beyond this sideways distance from the course axis (m), in (0, 100] |
     | ``camera_width``, ``camera_height`` | 160, 120 | camera resolution (px), each in [16, 1280] |
     | ``camera_fov_deg`` | 60 | vertical field of view (deg), in [10, 150] |
-    | ``attitude_jitter_deg`` | 0 | camera attitude disturbance per frame, uniform ± per axis (deg), in [0, 10] |
-    | ``brightness`` | 1.0 | scene light level (1 = daylight), in [0, 4] |
-    | ``rotation_error`` | 0 | relative error of the rotation told to the estimator, in [0, 1] |
-    | ``translation_error`` | 0 | relative error of the translation told to the estimator, in [0, 1] |
+    {sensor_rows}
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
     | ``observe_unresolved`` | False | add the ``unresolved`` key: where the estimator tracks points it cannot range (a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall) |
@@ -157,17 +150,13 @@ class FlowNavEnv(gym.Env):
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    layout = _from_settings("layout")
-    obs_source = _from_settings("obs_source")
-    observe_unresolved = _from_settings("observe_unresolved")
-    forward_speed = _from_settings("forward_speed")
-    frame_rate = _from_settings("frame_rate")
-    histogram_sectors = _from_settings("histogram_sectors")
-    substeps = _from_settings("substeps")
-    attitude_jitter_deg = _from_settings("attitude_jitter_deg", sensor=True)
-    brightness = _from_settings("brightness", sensor=True)
-    rotation_error = _from_settings("rotation_error", sensor=True)
-    translation_error = _from_settings("translation_error", sensor=True)
+    layout = settings_property("layout")
+    obs_source = settings_property("obs_source")
+    observe_unresolved = settings_property("observe_unresolved")
+    forward_speed = settings_property("forward_speed")
+    frame_rate = settings_property("frame_rate")
+    histogram_sectors = settings_property("histogram_sectors")
+    substeps = settings_property("substeps")
 
     def __init__(
         self,
@@ -191,6 +180,15 @@ class FlowNavEnv(gym.Env):
         brightness: float = 1.0,
         rotation_error: float = 0.0,
         translation_error: float = 0.0,
+        rotation_bias: float = 0.0,
+        translation_bias: float = 0.0,
+        rotation_drift: float = 0.0,
+        translation_drift: float = 0.0,
+        rotation_noise_deg: float = 0.0,
+        translation_noise_m: float = 0.0,
+        depth_noise: float = 0.0,
+        depth_outliers: float = 0.0,
+        depth_dropout: float = 0.0,
         obs_source: str = "flow",
         histogram_sectors: Sequence[int] = (3, 5),
         observe_unresolved: bool = False,
@@ -234,7 +232,7 @@ class FlowNavEnv(gym.Env):
         self._view: CameraRenderer | None = None
         self._closed = False
         self._materials = len(material_names())
-        self._sensor = SensorPipeline()
+        self._sensor = SensorPipeline(settings.frame_rate)
 
         self.observation_space = observation_space(settings)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
@@ -250,8 +248,8 @@ class FlowNavEnv(gym.Env):
         return np.asarray(self.settings.depth_bin_edges, np.float64)
 
     def set_sensor(self, **values: float) -> None:
-        """Change sensor variables (``attitude_jitter_deg``, ``brightness``, ``rotation_error``,
-        ``translation_error``) between episodes, as training randomisation does; the next frame uses them.
+        """Change sensor variables (:data:`~flownav_env.settings.SENSOR_FIELDS`) between episodes, as training
+        randomisation does; the next frame uses them (a new bias is applied with the walk so far).
 
         Raises:
             ValueError: A name is not a sensor variable, or a value is outside its range (the message names
@@ -321,6 +319,7 @@ class FlowNavEnv(gym.Env):
         frame = self._sensor.capture(settings.sensor, self.np_random, fly, self._render_camera, first=False)
         self._frame = frame.image
         points = self.estimator.update(frame.gray, *frame.told_motion)
+        points = self._sensor.corrupt_points(settings, self.np_random, points)  # the depth errors
         self._depth_points = points
         # True depth at the tracked points of the previous frame (NaN where a ray hits nothing).
         needs_truth = settings.depth_error_info or settings.obs_source != "flow"
@@ -362,7 +361,7 @@ class FlowNavEnv(gym.Env):
 
     def render(self) -> np.ndarray | None:
         """With ``render_mode="rgb_array"``: the camera frame with tracked points, flow vectors and depth-coloured
-        circles (thesis Figs. 25–27), beside a chase view; (240, 640, 3) uint8."""
+        circles (thesis Figs. 25–27; depths after the depth errors), beside a chase view; (240, 640, 3) uint8."""
         if self.render_mode != "rgb_array" or self._frame is None:
             return None
         if self._view is None:

@@ -3,19 +3,30 @@ sensing order that the env and playback share.
 
 These are the thesis's test variables (§5.2.1, §5.2.4–5.2.5): attitude jitter is a real disturbance of the
 camera that the system knows about; rotation and translation errors corrupt only what the estimator is told.
+Beside them, the error models of real sensors (:mod:`flownav_env.errors`; defined in
+:mod:`flownav_env.settings`): a constant or drifting scale bias and an absolute noise floor on the told
+motion, and noise, outliers and dropout on the estimated depths.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
+from estimator import DepthPoints
 from flownav_env.camera import camera_motion_between
+from flownav_env.errors import (
+    add_motion_noise,
+    corrupt_depths,
+    outlier_depth_range,
+    scale_motion,
+    walk_bias,
+)
 from flownav_env.rotations import rotation_from_vector, vector_from_rotation
-from flownav_env.settings import SensorSettings
+from flownav_env.settings import BIAS_LIMIT, EnvSettings, SensorSettings
 
 Pose = tuple[np.ndarray, np.ndarray]
 
@@ -69,7 +80,9 @@ class SensorFrame:
         previous_pose: The pose of the frame before (``pose`` itself on a first frame).
         true_motion: ``(R, t)`` from the previous camera to this one (``X_this = R X_prev + t``); identity
             and zero on a first frame.
-        told_motion: What the estimator is told: ``true_motion`` with the rotation and translation errors.
+        told_motion: What the estimator is told: ``true_motion`` with the relative errors, the bias and the
+            noise floor.
+        bias: The ``(rotation, translation)`` scale bias applied to ``told_motion`` (0 on a first frame).
     """
 
     image: np.ndarray
@@ -78,19 +91,37 @@ class SensorFrame:
     previous_pose: Pose
     true_motion: Pose
     told_motion: Pose
+    bias: tuple[float, float] = (0.0, 0.0)
 
 
 class SensorPipeline:
     """The per-frame sensing order, written once for the env and for playback.
 
     Per frame: draw the attitude jitter, move the camera (the caller decides how: fly the drone or place it),
-    render, take the true motion since the previous captured frame, corrupt it into the told motion. The
-    random draws (jitter, then the errors) come in this order from the caller's generator, so a seed fixes
-    them. Feeding the estimator stays with the caller, which may run several estimators on one frame.
+    render, take the true motion since the previous captured frame, and corrupt it into the told motion
+    (:meth:`capture`); the caller feeds the estimator (it may run several on one frame), and the env then
+    passes the estimated depths through the depth errors (:meth:`corrupt_points`) before the histogram. The
+    random draws come in this order from the caller's generator, so a seed fixes them: jitter, relative
+    errors, bias walk (rotation, translation), noise floor (rotation, translation), then depth noise,
+    outliers and dropout; each only when its setting is non-zero.
+
+    The one per-episode state is the random walk of the biases (:mod:`flownav_env.settings`), restarted at 0
+    by every first frame; the applied bias is the current ``rotation_bias``/``translation_bias`` setting plus
+    the walk, clipped to ±:data:`~flownav_env.settings.BIAS_LIMIT`.
+
+    Args:
+        frame_rate: Frames per second of the captured sequence, Hz: a bias's walk steps every 1/frame_rate s.
+
+    Raises:
+        ValueError: ``frame_rate`` is not positive.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, frame_rate: float = 10.0) -> None:
+        if not frame_rate > 0:
+            raise ValueError(f"frame_rate must be > 0 Hz, got {frame_rate!r}")
+        self.frame_interval = 1.0 / frame_rate
         self._previous_pose: Pose | None = None
+        self._walk = (0.0, 0.0)
 
     def capture(
         self,
@@ -108,7 +139,8 @@ class SensorPipeline:
             move_camera: Moves the camera for this frame with the given (3, 3) jitter rotation (in the
                 camera's own axes) and returns the camera's resulting world pose ``(R, p)``.
             render: Renders the RGB frame from the camera's current pose.
-            first: Whether this frame starts a sequence (no previous frame: no motion, no error draws).
+            first: Whether this frame starts a sequence (no previous frame: no motion, no error draws; the
+                bias walk restarts).
 
         Raises:
             ValueError: ``first`` is False but no frame was captured before.
@@ -117,13 +149,65 @@ class SensorPipeline:
             raise ValueError("the first frame of a sequence must be captured with first=True")
         pose = move_camera(jitter_rotation(sensor.attitude_jitter_deg, rng))
         image = render()
+        bias = (0.0, 0.0)
         if first:
             previous = pose
             true_motion = told_motion = (np.eye(3), np.zeros(3))
+            self._walk = (0.0, 0.0)
         else:
             previous = self._previous_pose
             true_motion = camera_motion_between(*previous, *pose)
             told_motion = corrupt_motion(*true_motion, sensor.rotation_error, sensor.translation_error, rng)
+            bias = self._step_bias(sensor, rng)
+            told_motion = scale_motion(*told_motion, 1.0 + bias[0], 1.0 + bias[1])
+            told_motion = add_motion_noise(
+                *told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng
+            )
         self._previous_pose = pose
         gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
-        return SensorFrame(image, gray, pose, previous, true_motion, told_motion)
+        return SensorFrame(image, gray, pose, previous, true_motion, told_motion, bias)
+
+    def _step_bias(self, sensor: SensorSettings, rng: np.random.Generator) -> tuple[float, float]:
+        """Walk the biases one frame on and return the applied ``(rotation, translation)`` bias."""
+        interval = self.frame_interval
+        self._walk = (
+            walk_bias(self._walk[0], sensor.rotation_drift, interval, rng),
+            walk_bias(self._walk[1], sensor.translation_drift, interval, rng),
+        )
+        rotation = min(max(sensor.rotation_bias + self._walk[0], -BIAS_LIMIT), BIAS_LIMIT)
+        translation = min(max(sensor.translation_bias + self._walk[1], -BIAS_LIMIT), BIAS_LIMIT)
+        return rotation, translation
+
+    def corrupt_points(
+        self, settings: EnvSettings, rng: np.random.Generator, points: DepthPoints
+    ) -> DepthPoints:
+        """The estimator's points with the depth errors on their valid depths, as the observation sees them.
+
+        Only flow observations (``settings.obs_source == "flow"``) get them: the oracles observe true depths.
+        The valid depths get :func:`~flownav_env.errors.corrupt_depths`, the outliers drawn over the range of
+        the histogram's bin edges (:func:`~flownav_env.errors.outlier_depth_range`); a dropped point's row is
+        removed altogether, so it is neither counted nor left as a tracked point without a depth.
+
+        Returns:
+            ``points`` itself when no depth error applies (nothing drawn); else a new :class:`DepthPoints`.
+        """
+        sensor = settings.sensor
+        if settings.obs_source != "flow" or not sensor.depth_errors:
+            return points
+        valid = np.flatnonzero(points.valid)
+        low, high = outlier_depth_range(settings.depth_bin_edges)
+        noise, outliers, dropout = sensor.depth_noise, sensor.depth_outliers, sensor.depth_dropout
+        depths, keep = corrupt_depths(points.depth[valid], noise, outliers, dropout, low, high, rng)
+        depth = points.depth.copy()
+        depth[valid] = depths
+        rows = np.ones(len(depth), bool)
+        rows[valid[~keep]] = False
+        return replace(
+            points,
+            points=points.points[rows],
+            next_points=points.next_points[rows],
+            depth=depth[rows],
+            valid=points.valid[rows],
+            tracked=points.tracked[rows],
+            parallax_px=points.parallax_px[rows],
+        )

@@ -1,202 +1,150 @@
 """The one owner of every FlowNav env and sensor parameter, its default and its allowed range.
 
-Each :class:`EnvSettings` field carries its rule (:class:`Range`, :class:`Choice`, ...) in its dataclass
-metadata, and ``__post_init__`` checks every field against it, so a range is written here once and read by
-the env, the playback, sweeps and training randomisation through :func:`check_setting` and
-:func:`setting_range`. Error messages name the parameter, the value received and the allowed values.
+Each :class:`EnvSettings` field carries its rule (:class:`Range`, :class:`Choice`, ..., from
+:mod:`flownav_env.rules`) in its dataclass metadata, and ``__post_init__`` checks every field against it, so a
+range is written here once and read by the env, the playback, sweeps and training randomisation through
+:func:`check_setting` and :func:`setting_range`. Error messages name the parameter, the value received and
+the allowed values.
+
+The sensor settings (:data:`SENSOR_RULES`, changeable per episode through ``FlowNavEnv.set_sensor``) model
+what the drone senses wrongly. Their ``meaning`` strings are the rows of FlowNavEnv's Arguments table
+(:func:`sensor_argument_rows`); :mod:`flownav_env.errors` holds the maths and
+:class:`flownav_env.sensor.SensorPipeline` the per-frame order. Four kinds of error:
+
+* **Per-frame relative error** (the thesis's): ``rotation_error``, ``translation_error``.
+* **Constant bias** (a mis-calibrated gyro or odometry: a scale error): the told rotation angle (axis
+  unchanged) is scaled by ``1 + b_r``, the told translation by ``1 + b_t``, where ``b`` starts at
+  ``rotation_bias``/``translation_bias`` at every reset. With ``rotation_drift``/``translation_drift`` > 0
+  the bias walks: ``b_k = b + w_k`` with ``w_0 = 0`` at reset and ``w_k = w_{k-1} + N(0, drift² · Δt)``
+  drawn before frame k's told motion (Δt = 1/frame_rate s), so ``drift`` is the bias's standard deviation
+  after one second of flight. The applied bias is held inside [-0.9, 0.9] (a scale never vanishes or flips
+  sign); the walk itself is not.
+* **Absolute noise floor** (a gyro is noisy even when the drone does not turn): per frame, a rotation whose
+  axis-angle vector is N(0, ``rotation_noise_deg``²) per axis is composed onto the told rotation (on the
+  left: in the new camera's axes), and N(0, ``translation_noise_m``²) per axis is added to the told
+  translation. Order: relative error, bias, then noise.
+* **Depth errors**, independent of their cause, on the estimator's valid depths before the histogram (flow
+  observations only; the oracles' true depths are left alone): log-normal noise ``depth · exp(N(0,
+  depth_noise²))``, then a fraction ``depth_outliers`` replaced by depths drawn log-uniformly over the
+  histogram's range (:func:`flownav_env.errors.outlier_depth_range`), then a fraction ``depth_dropout``
+  removed: those points are simply gone (from the histogram, the ``unresolved`` share and ``info``), not
+  counted as tracked points without a depth. ``info["points_tracked"]``, ``["points_valid"]`` and
+  ``["depth_error_median"]`` then describe the corrupted depths, what the agent sees, so that a sweep's
+  depth error says how wrong the observation was (with the errors at 0 they are the estimator's own).
+
+Every error draws from the episode's generator only when its setting is non-zero, so at the defaults no
+draw and no arithmetic is added and an episode is the same as before these settings existed.
 """
 
 from __future__ import annotations
 
-import inspect
 import math
-import types
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
 from functools import cached_property
-from typing import Any, Protocol
+from typing import Any
 
-import numpy as np
-
-from estimator import DEFAULT_BIN_EDGES, CameraIntrinsics, FlowDepthEstimator
+from estimator import DEFAULT_BIN_EDGES, CameraIntrinsics
+from flownav_env.rules import (
+    AnyInteger,
+    BinEdges,
+    Choice,
+    EstimatorArguments,
+    Flag,
+    Range,
+    Rule,
+    Sectors,
+    check_fields,
+)
+from flownav_env.rules import setting_field as _setting
 from flownav_env.scene import LAYOUTS, LayoutParams
 
 OBS_SOURCES = ("flow", "oracle", "oracle_valid")
-SENSOR_FIELDS = ("attitude_jitter_deg", "brightness", "rotation_error", "translation_error")
 # The estimator's own FAST threshold (20) was chosen on 640×480 frames. The env's 160×120 frames hold a
 # sixteenth of the pixels, and at 20 only about a third of the tracked points get a depth: too sparse a
 # histogram to steer by. See results/env_performance.md ("Default resolution and FAST threshold").
 ENV_ESTIMATOR_DEFAULTS: dict[str, Any] = {"fast_threshold": 10}
-
-
-class Rule(Protocol):
-    """What a setting's metadata holds: a check that returns the value in its stored form."""
-
-    def check(self, name: str, value: Any) -> Any: ...
-
-
-@dataclass(frozen=True)
-class Range:
-    """A numeric interval, the one validator for numbers in :mod:`flownav_env`.
-
-    ``low`` may instead come from another setting (``low_from``, times ``low_scale``), for the rules that tie
-    two settings (``max_height`` above ``flight_height``); :meth:`resolved` fills it in.
-    """
-
-    low: float | None
-    high: float
-    low_open: bool = False
-    high_open: bool = False
-    integer: bool = False
-    unit: str = ""
-    meaning: str = ""
-    low_from: str | None = None
-    low_scale: float = 1.0
-
-    @property
-    def interval(self) -> str:
-        """The interval as the error messages and the docs write it, e.g. ``(0.0, 5.0]``."""
-        return f"{'(' if self.low_open else '['}{self.low}, {self.high}{')' if self.high_open else ']'}"
-
-    def resolved(self, other: float) -> Range:
-        """This range with its low end taken from the setting it depends on, whose value is ``other``."""
-        return replace(self, low=self.low_scale * other, low_from=None)
-
-    def contains(self, number: float) -> bool:
-        """Whether a finite ``number`` lies inside (the ends open or closed as declared)."""
-        too_low = number <= self.low if self.low_open else number < self.low
-        too_high = number >= self.high if self.high_open else number > self.high
-        return math.isfinite(number) and not too_low and not too_high
-
-    def check(self, name: str, value: Any) -> float | int:
-        """``value`` as a float (or int) inside the range, else a ValueError naming ``name``, value and range."""
-        if self.low is None:
-            raise TypeError(f"{name}'s range depends on {self.low_from}; resolve it first")
-        if self.integer:
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, (int, np.integer))
-                or not self.contains(value)
-            ):
-                raise ValueError(f"{name} must be an integer in {self.interval}, got {value!r}")
-            return int(value)
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise ValueError(f"{name} must be a number in {self.interval}, got {value!r}")
-        if not self.contains(float(value)):
-            raise ValueError(f"{name} must be in {self.interval}, got {value!r}")
-        return float(value)
-
-
-@dataclass(frozen=True)
-class Choice:
-    """One of a fixed set of values."""
-
-    options: tuple[Any, ...]
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> Any:
-        if value not in self.options:
-            raise ValueError(f"{name} must be one of {', '.join(map(repr, self.options))}, got {value!r}")
-        return value
-
-
-@dataclass(frozen=True)
-class Flag:
-    """True or False (NumPy booleans too, stored as ``bool``)."""
-
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> bool:
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"{name} must be True or False, got {value!r}")
-        return bool(value)
-
-
-@dataclass(frozen=True)
-class AnyInteger:
-    """Any integer, e.g. a seed."""
-
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> int:
-        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
-            raise ValueError(f"{name} must be an integer, got {value!r}")
-        return int(value)
-
-
-@dataclass(frozen=True)
-class Sectors:
-    """A (rows, cols) pair, each inside ``each``."""
-
-    each: Range
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> tuple[int, int]:
-        if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
-            raise ValueError(f"{name} must be (rows, cols), got {value!r}")
-        return (self.each.check(f"{name}[0]", value[0]), self.each.check(f"{name}[1]", value[1]))
-
-
-@dataclass(frozen=True)
-class BinEdges:
-    """Increasing finite depths >= 0 m, at least two, stored as a tuple of floats."""
-
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> tuple[float, ...]:
-        edges = np.asarray(value, np.float64)
-        if (
-            edges.ndim != 1
-            or len(edges) < 2
-            or not np.all(np.isfinite(edges))
-            or np.any(np.diff(edges) <= 0)
-            or edges[0] < 0
-        ):
-            raise ValueError(f"{name} must be >= 2 increasing finite depths >= 0 m, got {value!r}")
-        return tuple(float(edge) for edge in edges)
-
-
-@dataclass(frozen=True)
-class EstimatorArguments:
-    """None or a mapping of :class:`estimator.FlowDepthEstimator` keyword arguments (their values the
-    estimator checks itself), stored read-only."""
-
-    meaning: str = ""
-
-    def check(self, name: str, value: Any) -> Mapping[str, Any]:
-        if value is None:
-            return types.MappingProxyType({})
-        if not isinstance(value, Mapping):
-            raise ValueError(f"{name} must be a mapping of FlowDepthEstimator arguments, got {value!r}")
-        allowed = [key for key in inspect.signature(FlowDepthEstimator).parameters if key != "intrinsics"]
-        unknown = sorted(set(value) - set(allowed))
-        if unknown:
-            raise ValueError(f"{name} has unknown keys {unknown}; allowed: {', '.join(allowed)}")
-        return types.MappingProxyType(dict(value))
-
-
-def _setting(default: Any, rule: Rule) -> Any:
-    return field(default=default, metadata={"rule": rule})
-
-
-def _check_fields(settings: Any) -> None:
-    """Check and normalise every field of a frozen settings dataclass in declaration order."""
-    for item in fields(settings):
-        rule = item.metadata["rule"]
-        if isinstance(rule, Range) and rule.low_from is not None:
-            rule = rule.resolved(getattr(settings, rule.low_from))
-        object.__setattr__(settings, item.name, rule.check(item.name, getattr(settings, item.name)))
+# A biased scale factor 1 + b stays inside [0.1, 1.9]: the bias settings' range and the drifting bias's.
+BIAS_LIMIT = 0.9
+_BIAS = Range(-BIAS_LIMIT, BIAS_LIMIT)
+_DRIFT = Range(0.0, 1.0, unit="1/√s")
+_FRACTION = Range(0.0, 1.0)
 
 
 # The sensor's test variables: SensorSettings and EnvSettings both take their rules from here.
+# Their meanings are the rows of FlowNavEnv's Arguments table (see the module docstring for the full models).
 SENSOR_RULES: dict[str, Range] = {
     "attitude_jitter_deg": Range(
-        0.0, 10.0, unit="deg", meaning="camera attitude disturbance per frame, ± per axis"
+        0.0,
+        10.0,
+        unit="deg",
+        meaning="camera attitude disturbance per frame, uniform ± per axis: real, and known to the system",
     ),
     "brightness": Range(0.0, 4.0, meaning="scene light level, 1 = daylight"),
-    "rotation_error": Range(0.0, 1.0, meaning="relative error of the rotation told to the estimator"),
-    "translation_error": Range(0.0, 1.0, meaning="relative error of the translation told to the estimator"),
+    "rotation_error": Range(
+        0.0,
+        1.0,
+        meaning="per-frame relative error of the rotation told to the estimator: each axis-angle component "
+        "times a factor uniform in 1 ± this",
+    ),
+    "translation_error": Range(
+        0.0,
+        1.0,
+        meaning="per-frame relative error of the translation told to the estimator: each component times a "
+        "factor uniform in 1 ± this",
+    ),
+    "rotation_bias": replace(
+        _BIAS,
+        meaning="constant scale error of the told rotation (a mis-calibrated gyro): every frame's told "
+        "rotation angle times 1 + this, its axis unchanged",
+    ),
+    "translation_bias": replace(
+        _BIAS,
+        meaning="constant scale error of the told translation (mis-calibrated odometry): every frame's told "
+        "translation times 1 + this",
+    ),
+    "rotation_drift": replace(
+        _DRIFT,
+        meaning="random walk of the rotation bias: from ``rotation_bias`` at reset it changes by N(0, "
+        "drift² · Δt) per frame (Δt = 1/``frame_rate``), so this is its standard deviation after 1 s; the "
+        "applied bias is clipped to ±0.9",
+    ),
+    "translation_drift": replace(
+        _DRIFT,
+        meaning="random walk of the translation bias, as ``rotation_drift`` from ``translation_bias``",
+    ),
+    "rotation_noise_deg": Range(
+        0.0,
+        10.0,
+        unit="deg",
+        meaning="absolute noise floor of the told rotation: a rotation of N(0, this²) per axis composed "
+        "onto it every frame, turning or not",
+    ),
+    "translation_noise_m": Range(
+        0.0,
+        0.5,
+        unit="m",
+        meaning="absolute noise floor of the told translation: N(0, this²) per axis added every frame",
+    ),
+    "depth_noise": Range(
+        0.0,
+        2.0,
+        meaning="σ of log-normal noise on the estimated depths: depth · exp(N(0, σ²)); flow observations "
+        "only, as the two below",
+    ),
+    "depth_outliers": replace(
+        _FRACTION,
+        meaning="share of the estimated depths replaced by depths drawn log-uniformly over the histogram's "
+        "range: from the first bin edge (half the second if the first is 0) to the last",
+    ),
+    "depth_dropout": replace(
+        _FRACTION,
+        meaning="share of the estimated depths removed: those points are gone, from the histogram, "
+        "``unresolved`` and ``info`` alike; ``info`` measures the depths the agent sees",
+    ),
 }
+SENSOR_FIELDS = tuple(SENSOR_RULES)
+DEPTH_ERROR_FIELDS = ("depth_noise", "depth_outliers", "depth_dropout")
 _SPEED = Range(0.0, 5.0, low_open=True, unit="m/s", meaning="speed at action 1")
 _WEIGHT = Range(0.0, math.inf, high_open=True, meaning="reward weight")
 _PIXELS = Range(16, 1280, integer=True, unit="px", meaning="camera resolution")
@@ -210,9 +158,23 @@ class SensorSettings:
     brightness: float = _setting(1.0, SENSOR_RULES["brightness"])
     rotation_error: float = _setting(0.0, SENSOR_RULES["rotation_error"])
     translation_error: float = _setting(0.0, SENSOR_RULES["translation_error"])
+    rotation_bias: float = _setting(0.0, SENSOR_RULES["rotation_bias"])
+    translation_bias: float = _setting(0.0, SENSOR_RULES["translation_bias"])
+    rotation_drift: float = _setting(0.0, SENSOR_RULES["rotation_drift"])
+    translation_drift: float = _setting(0.0, SENSOR_RULES["translation_drift"])
+    rotation_noise_deg: float = _setting(0.0, SENSOR_RULES["rotation_noise_deg"])
+    translation_noise_m: float = _setting(0.0, SENSOR_RULES["translation_noise_m"])
+    depth_noise: float = _setting(0.0, SENSOR_RULES["depth_noise"])
+    depth_outliers: float = _setting(0.0, SENSOR_RULES["depth_outliers"])
+    depth_dropout: float = _setting(0.0, SENSOR_RULES["depth_dropout"])
 
     def __post_init__(self) -> None:
-        _check_fields(self)
+        check_fields(self)
+
+    @property
+    def depth_errors(self) -> bool:
+        """Whether any depth error is on (else the estimated depths go to the histogram untouched)."""
+        return any(getattr(self, name) > 0 for name in DEPTH_ERROR_FIELDS)
 
 
 @dataclass(frozen=True)
@@ -274,6 +236,15 @@ class EnvSettings:
     brightness: float = _setting(1.0, SENSOR_RULES["brightness"])
     rotation_error: float = _setting(0.0, SENSOR_RULES["rotation_error"])
     translation_error: float = _setting(0.0, SENSOR_RULES["translation_error"])
+    rotation_bias: float = _setting(0.0, SENSOR_RULES["rotation_bias"])
+    translation_bias: float = _setting(0.0, SENSOR_RULES["translation_bias"])
+    rotation_drift: float = _setting(0.0, SENSOR_RULES["rotation_drift"])
+    translation_drift: float = _setting(0.0, SENSOR_RULES["translation_drift"])
+    rotation_noise_deg: float = _setting(0.0, SENSOR_RULES["rotation_noise_deg"])
+    translation_noise_m: float = _setting(0.0, SENSOR_RULES["translation_noise_m"])
+    depth_noise: float = _setting(0.0, SENSOR_RULES["depth_noise"])
+    depth_outliers: float = _setting(0.0, SENSOR_RULES["depth_outliers"])
+    depth_dropout: float = _setting(0.0, SENSOR_RULES["depth_dropout"])
     histogram_sectors: tuple[int, int] = _setting(
         (3, 5), Sectors(Range(1, 32, integer=True, meaning="sector rows or columns"))
     )
@@ -293,7 +264,7 @@ class EnvSettings:
     estimator_kwargs: Mapping[str, Any] = _setting(None, EstimatorArguments())
 
     def __post_init__(self) -> None:
-        _check_fields(self)
+        check_fields(self)
 
     @cached_property
     def sensor(self) -> SensorSettings:
@@ -342,6 +313,24 @@ class EnvSettings:
         return math.radians(self.max_yaw_rate_deg)
 
 
+def settings_property(name: str, sensor: bool = False) -> property:
+    """An env attribute that reads ``env.settings.<name>``, so the settings stay its one owner; a sensor
+    variable's attribute can be assigned, which goes through ``env.set_sensor`` (checked, applied)."""
+    setter = (lambda env, value: env.set_sensor(**{name: value})) if sensor else None
+    return property(lambda env: getattr(env.settings, name), setter, doc=f"``settings.{name}``")
+
+
+def with_sensor_settings(env_class: type) -> type:
+    """Class decorator for FlowNavEnv: each sensor setting becomes an attribute that reads the settings and
+    assigns through ``set_sensor``, and the docstring's ``{sensor_rows}`` marker becomes the sensor rows of
+    its Arguments table (:func:`sensor_argument_rows`)."""
+    for name in SENSOR_FIELDS:
+        setattr(env_class, name, settings_property(name, sensor=True))
+    if env_class.__doc__:  # None under python -OO
+        env_class.__doc__ = env_class.__doc__.replace("{sensor_rows}", sensor_argument_rows())
+    return env_class
+
+
 def _rule(name: str) -> Rule:
     rules = {item.name: item.metadata["rule"] for item in fields(EnvSettings)}
     if name not in rules:
@@ -380,3 +369,19 @@ def check_setting(name: str, value: Any, **others: float) -> Any:
     if isinstance(rule, Range):
         rule = setting_range(name, **others)
     return rule.check(name, value)
+
+
+def sensor_argument_rows(indent: str = "    ") -> str:
+    """FlowNavEnv's Arguments table rows of the sensor settings, from their rules' meanings (one owner).
+
+    Each row reads ``| ``name`` | default | meaning; in [low, high] unit |``; rows after the first start
+    with ``indent``, so the result can replace a marker indented like the table.
+    """
+    defaults = {item.name: item.default for item in fields(SensorSettings)}
+    rows = []
+    for name, rule in SENSOR_RULES.items():
+        opened, closed = "(" if rule.low_open else "[", ")" if rule.high_open else "]"
+        unit = f" {rule.unit}" if rule.unit else ""
+        interval = f"{opened}{rule.low:g}, {rule.high:g}{closed}{unit}"
+        rows.append(f"| ``{name}`` | {defaults[name]:g} | {rule.meaning}; in {interval} |")
+    return f"\n{indent}".join(rows)

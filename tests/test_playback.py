@@ -1,4 +1,5 @@
-"""flownav_env.playback: file round trip, resampling, slerp, playback exactness and determinism, bad input."""
+"""flownav_env.playback: file round trip, resampling, slerp, playback exactness and determinism, the sensor
+error models it takes (motion) and refuses (depth), bad input."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from flownav_env.playback import (
     resample_by_distance,
     save_path,
 )
-from flownav_env.rotations import camera_rotation, rotation_from_vector
+from flownav_env.rotations import camera_rotation, rotation_from_vector, vector_from_rotation
 
 SIZE = (48, 36)
 
@@ -113,6 +114,9 @@ def test_labels_capsule_ground_and_sky() -> None:
         ({"attitude_jitter_deg": -1}, "attitude_jitter_deg must be in [0.0, 10.0], got -1"),
         ({"rotation_error": "x"}, "rotation_error must be a number in [0.0, 1.0], got 'x'"),
         ({"max_frames": 1}, "max_frames must be an integer >= 2 or None, got 1"),
+        ({"rotation_bias": 1.0}, "rotation_bias must be in [-0.9, 0.9], got 1.0"),
+        ({"translation_drift": -1}, "translation_drift must be in [0.0, 1.0], got -1"),
+        ({"depth_noise": 3.0}, "depth_noise must be in [0.0, 2.0], got 3.0"),
     ],
 )
 def test_bad_playback_settings_name_value_and_range(kwargs, message) -> None:
@@ -185,3 +189,39 @@ def test_broken_path_files_are_value_errors_that_name_the_file(tmp_path) -> None
     np.savez(tmp_path / "nan.npz", **arrays)
     with pytest.raises(ValueError, match=r"nan.npz: obstacles must be finite"):
         load_path(tmp_path / "nan.npz")
+
+
+def test_playback_tells_the_motion_with_bias_drift_and_noise_floor() -> None:
+    path = random_path(frames=4)
+    world = PlaybackWorld(path, *SIZE)
+    try:
+        biased = list(play_back(path, world, PlaybackSettings(rotation_bias=0.2, translation_bias=-0.5)))
+        settings = PlaybackSettings(rotation_drift=0.5, translation_noise_m=0.01, seed=3)
+        noisy = list(play_back(path, world, settings))
+    finally:
+        world.close()
+    for frame in biased[1:]:
+        true_vector, told_vector = (
+            vector_from_rotation(m[0]) for m in (frame.true_motion, frame.told_motion)
+        )
+        np.testing.assert_allclose(told_vector, 1.2 * true_vector, rtol=1e-9)
+        np.testing.assert_allclose(frame.told_motion[1], 0.5 * frame.true_motion[1], rtol=1e-12)
+    # The drift steps at the path's frame rate, one normal per frame before the translation noise.
+    replay = np.random.default_rng(3)
+    walk = 0.0
+    for frame in noisy[1:]:
+        walk += replay.normal(0.0, 0.5 * np.sqrt(1.0 / path.frame_rate))
+        angle = np.linalg.norm(vector_from_rotation(frame.told_motion[0]))
+        true_angle = np.linalg.norm(vector_from_rotation(frame.true_motion[0]))
+        assert angle == pytest.approx((1.0 + walk) * true_angle, rel=1e-9)
+        noise = replay.normal(0.0, 0.01, 3)
+        np.testing.assert_allclose(frame.told_motion[1], frame.true_motion[1] + noise, rtol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["depth_noise", "depth_outliers", "depth_dropout"])
+def test_playback_refuses_depth_errors_it_cannot_apply(name: str) -> None:
+    with pytest.raises(
+        ValueError, match=rf"^{name} must be 0 in playback, got 0.1: playback runs no estimator"
+    ):
+        PlaybackSettings(**{name: 0.1})
+    assert getattr(PlaybackSettings(**{name: 0.0}).sensor, name) == 0.0

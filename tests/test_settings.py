@@ -13,14 +13,29 @@ import pytest
 
 from flownav_env import FlowNavEnv
 from flownav_env.settings import (
+    DEPTH_ERROR_FIELDS,
     ENV_ESTIMATOR_DEFAULTS,
     SENSOR_FIELDS,
     EnvSettings,
     Range,
     SensorSettings,
     check_setting,
+    sensor_argument_rows,
     setting_range,
 )
+
+# The sensor error models beside the thesis's variables (issue 15): each one's range and a value outside it.
+ERROR_MODELS = {
+    "rotation_bias": ("[-0.9, 0.9]", 0.95),
+    "translation_bias": ("[-0.9, 0.9]", -1.0),
+    "rotation_drift": ("[0.0, 1.0]", -0.1),
+    "translation_drift": ("[0.0, 1.0]", 1.5),
+    "rotation_noise_deg": ("[0.0, 10.0]", 12.0),
+    "translation_noise_m": ("[0.0, 0.5]", 0.6),
+    "depth_noise": ("[0.0, 2.0]", 2.5),
+    "depth_outliers": ("[0.0, 1.0]", 1.01),
+    "depth_dropout": ("[0.0, 1.0]", -0.5),
+}
 
 
 @pytest.mark.parametrize(
@@ -131,7 +146,7 @@ def test_every_range_appears_in_the_arguments_table() -> None:
         elif math.isinf(rule.high):
             assert f"≥ {rule.low:g}" in row, item.name
         else:
-            match = re.search(r"in ([\[(])([\d.]+), ([\d.]+)([\])])", row)
+            match = re.search(r"in ([\[(])(-?[\d.]+), (-?[\d.]+)([\])])", row)
             assert match, item.name
             opened, low, high, closed = match.groups()
             assert (opened == "(", float(low), float(high), closed == ")") == (
@@ -140,3 +155,29 @@ def test_every_range_appears_in_the_arguments_table() -> None:
                 rule.high,
                 rule.high_open,
             ), item.name
+
+
+@pytest.mark.parametrize("name", list(ERROR_MODELS))
+def test_each_error_model_is_a_checked_neutral_sensor_setting(name: str) -> None:
+    interval, bad = ERROR_MODELS[name]
+    assert name in SENSOR_FIELDS and getattr(EnvSettings(), name) == 0.0
+    for build in (EnvSettings, SensorSettings, lambda **value: check_setting(name, value[name])):
+        with pytest.raises(ValueError) as error:
+            build(**{name: bad})
+        assert str(error.value) == f"{name} must be in {interval}, got {bad!r}"
+    with pytest.raises(ValueError, match=rf"^{name} must be a number in "):
+        EnvSettings().with_sensor(**{name: "0.1"})
+    assert EnvSettings().with_sensor(**{name: 0.5}).sensor == SensorSettings(**{name: 0.5})
+
+
+def test_depth_errors_are_on_only_when_one_is_set() -> None:
+    assert not SensorSettings().depth_errors
+    assert all(SensorSettings(**{name: 0.1}).depth_errors for name in DEPTH_ERROR_FIELDS)
+    assert not SensorSettings(rotation_bias=0.5, rotation_noise_deg=1.0).depth_errors
+
+
+def test_the_sensor_rows_of_the_arguments_table_come_from_the_rules() -> None:
+    rows = sensor_argument_rows().split("\n    ")
+    assert [re.match(r"\| ``(\w+)`` \|", row).group(1) for row in rows] == list(SENSOR_FIELDS)
+    assert "{sensor_rows}" not in FlowNavEnv.__doc__
+    assert all(row in FlowNavEnv.__doc__ for row in rows)

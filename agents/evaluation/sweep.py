@@ -35,7 +35,22 @@ from agents.evaluation.sweep_report import (
 from agents.policies import is_learned, policy_file, split_agent_name
 from flownav_env.settings import check_setting
 
-SWEEP_FACTORS = ("rotation_error", "translation_error", "attitude_jitter_deg", "brightness", "forward_speed")
+SWEEP_FACTORS = (
+    "rotation_error",
+    "translation_error",
+    "attitude_jitter_deg",
+    "brightness",
+    "forward_speed",
+    "rotation_bias",
+    "translation_bias",
+    "rotation_drift",
+    "translation_drift",
+    "rotation_noise_deg",
+    "translation_noise_m",
+    "depth_noise",
+    "depth_outliers",
+    "depth_dropout",
+)
 
 
 @dataclass

@@ -60,6 +60,15 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         "attitude_jitter_deg": "attitude jitter (deg)",
         "brightness": "brightness (1 = daylight)",
         "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
+        "rotation_bias": "rotation bias (relative scale error)",
+        "translation_bias": "translation bias (relative scale error)",
+        "rotation_drift": "rotation bias drift (std after 1 s)",
+        "translation_drift": "translation bias drift (std after 1 s)",
+        "rotation_noise_deg": "rotation noise floor (deg per frame, std)",
+        "translation_noise_m": "translation noise floor (m per frame, std)",
+        "depth_noise": "depth noise (σ of log depth)",
+        "depth_outliers": "depth outliers (fraction)",
+        "depth_dropout": "depth dropout (fraction)",
     }
     agents = sorted({r["agent"] for r in table})
     if not factors:  # a clean-only sweep: one bar per agent

@@ -36,6 +36,15 @@ class Randomization:
     translation_error: list[float] = env_setting_field("translation_error", default_factory=list)
     attitude_jitter_deg: list[float] = env_setting_field("attitude_jitter_deg", default_factory=list)
     brightness: list[float] = env_setting_field("brightness", default_factory=list)
+    rotation_bias: list[float] = env_setting_field("rotation_bias", default_factory=list)
+    translation_bias: list[float] = env_setting_field("translation_bias", default_factory=list)
+    rotation_drift: list[float] = env_setting_field("rotation_drift", default_factory=list)
+    translation_drift: list[float] = env_setting_field("translation_drift", default_factory=list)
+    rotation_noise_deg: list[float] = env_setting_field("rotation_noise_deg", default_factory=list)
+    translation_noise_m: list[float] = env_setting_field("translation_noise_m", default_factory=list)
+    depth_noise: list[float] = env_setting_field("depth_noise", default_factory=list)
+    depth_outliers: list[float] = env_setting_field("depth_outliers", default_factory=list)
+    depth_dropout: list[float] = env_setting_field("depth_dropout", default_factory=list)
 
     def validate(self) -> None:
         for name, bounds in asdict(self).items():

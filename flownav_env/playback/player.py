@@ -10,7 +10,7 @@ import numpy as np
 from flownav_env.playback.path import CameraPath, resample_by_distance
 from flownav_env.playback.world import PlaybackWorld
 from flownav_env.sensor import Pose, SensorPipeline
-from flownav_env.settings import Range, SensorSettings, check_setting
+from flownav_env.settings import DEPTH_ERROR_FIELDS, SENSOR_FIELDS, Range, SensorSettings, check_setting
 
 # Metres per frame a path may be resampled to.
 DISTANCE_PER_FRAME = Range(0.0, 10.0, low_open=True, unit="m", meaning="distance travelled per frame")
@@ -28,6 +28,12 @@ class PlaybackSettings:
             disturbance is real (the camera turns) and known (the estimator is told the true motion).
         rotation_error: Relative error of each rotation component told to the estimator.
         translation_error: Relative error of each translation component told to the estimator.
+        rotation_bias, translation_bias, rotation_drift, translation_drift, rotation_noise_deg,
+            translation_noise_m: The told motion's bias, its drift (stepping every 1/``frame_rate`` of the
+            played path) and its noise floor, as the env's settings of the same names define them.
+        depth_noise, depth_outliers, depth_dropout: Refused unless 0: playback runs no estimator (its
+            callers do), so it has no depths to corrupt; apply :func:`flownav_env.errors.corrupt_depths`
+            to the estimates, or fly the env.
         max_frames: Most frames to play (from the start), an integer >= 2, or None for all.
         seed: Seed of the jitter and motion errors; the same seed gives the same playback.
 
@@ -40,15 +46,30 @@ class PlaybackSettings:
     attitude_jitter_deg: float = 0.0
     rotation_error: float = 0.0
     translation_error: float = 0.0
+    rotation_bias: float = 0.0
+    translation_bias: float = 0.0
+    rotation_drift: float = 0.0
+    translation_drift: float = 0.0
+    rotation_noise_deg: float = 0.0
+    translation_noise_m: float = 0.0
+    depth_noise: float = 0.0
+    depth_outliers: float = 0.0
+    depth_dropout: float = 0.0
     max_frames: int | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
-        check_setting("brightness", self.brightness)
         if self.distance_per_frame is not None:
             DISTANCE_PER_FRAME.check("distance_per_frame", self.distance_per_frame)
-        for name in ("attitude_jitter_deg", "rotation_error", "translation_error"):
+        for name in SENSOR_FIELDS:
             check_setting(name, getattr(self, name))
+        for name in DEPTH_ERROR_FIELDS:
+            if getattr(self, name) != 0:
+                raise ValueError(
+                    f"{name} must be 0 in playback, got {getattr(self, name)!r}: playback runs no estimator, "
+                    "so it has no depths to corrupt (apply flownav_env.errors.corrupt_depths to the "
+                    "estimates, or fly the env)"
+                )
         if self.max_frames is not None and (
             isinstance(self.max_frames, bool) or not isinstance(self.max_frames, int) or self.max_frames < 2
         ):
@@ -59,12 +80,7 @@ class PlaybackSettings:
     @property
     def sensor(self) -> SensorSettings:
         """The sensor variables of this playback."""
-        return SensorSettings(
-            attitude_jitter_deg=self.attitude_jitter_deg,
-            brightness=self.brightness,
-            rotation_error=self.rotation_error,
-            translation_error=self.translation_error,
-        )
+        return SensorSettings(**{name: getattr(self, name) for name in SENSOR_FIELDS})
 
 
 @dataclass
@@ -116,7 +132,7 @@ def play_back(path: CameraPath, world: PlaybackWorld, settings: PlaybackSettings
         path = path.with_poses(path.times[:count], path.positions[:count], path.quaternions[:count])
     rng = np.random.default_rng(settings.seed)
     world.set_brightness(settings.brightness)
-    sensor, pipeline = settings.sensor, SensorPipeline()
+    sensor, pipeline = settings.sensor, SensorPipeline(path.frame_rate)
     for index, (rotation, position) in enumerate(zip(path.rotations(), path.positions, strict=True)):
 
         def place_camera(jitter: np.ndarray, rotation=rotation, position=position) -> Pose:

@@ -134,7 +134,7 @@ def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ({"agents": ["wasp"]}, r"key 'agents': unknown agent 'wasp'"),
+        ({"agents": ["wasp"]}, r"key 'agents': agent must be one of straight, .*, got 'wasp'"),
         ({"factors": {"wind": [1.0]}}, r"key 'factors.wind': not a sweep factor"),
         ({"episodes": 0}, r"key 'episodes' must be in \[1, 100000\], got 0"),
         ({"backend": "slurm"}, r"key 'backend' must be one of 'local', 'ray', got 'slurm'"),
@@ -146,6 +146,10 @@ def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
         (
             {"factors": {"forward_speed": [-1.0]}},
             r"key 'factors.forward_speed\[0\]': forward_speed must be in",
+        ),
+        (
+            {"factors": {"depth_noise": [0.1], "rotation_bias": [-0.2, 1.5]}},
+            r"key 'factors.rotation_bias\[1\]': rotation_bias must be in \[-0.9, 0.9\], got 1.5",
         ),
     ],
 )

@@ -1,0 +1,131 @@
+"""Sensor error models as pure functions on arrays: what the drone is told about its motion, and what the
+estimator's depths become before the observation counts them.
+
+The settings that drive them, with their ranges, are :data:`flownav_env.settings.SENSOR_RULES` (whose module
+docstring defines each model); :class:`flownav_env.sensor.SensorPipeline` applies them in the per-frame
+order and keeps the one piece of per-episode state, the drifting bias. Every function takes the episode's
+generator and draws from it only when its error is non-zero: at zero the inputs come back unchanged (the same
+objects) and the generator is untouched.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from flownav_env.rotations import rotation_from_vector, vector_from_rotation
+
+
+def scale_motion(
+    rotation: np.ndarray, translation: np.ndarray, rotation_scale: float, translation_scale: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A motion with its rotation angle and its translation scaled (a bias: ``scale = 1 + bias``).
+
+    The rotation keeps its axis; its angle (the axis-angle vector's length) is multiplied by
+    ``rotation_scale``. A scale of exactly 1 leaves its part unchanged (no arithmetic).
+    """
+    if rotation_scale != 1.0:
+        rotation = rotation_from_vector(vector_from_rotation(rotation) * rotation_scale)
+    if translation_scale != 1.0:
+        translation = translation * translation_scale
+    return rotation, translation
+
+
+def walk_bias(walk: float, drift: float, interval: float, rng: np.random.Generator) -> float:
+    """One frame's step of a bias's random walk: ``walk + N(0, drift² · interval)``.
+
+    Args:
+        walk: The walk so far (0 at reset).
+        drift: Standard deviation after one second, 1/√s; 0 returns ``walk`` without a draw.
+        interval: Seconds per frame.
+        rng: The episode's generator.
+    """
+    if drift <= 0:
+        return walk
+    return walk + float(rng.normal(0.0, drift * math.sqrt(interval)))
+
+
+def add_motion_noise(
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    rotation_noise_deg: float,
+    translation_noise_m: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A motion with an absolute noise floor: a small random rotation composed onto it, noise added to the
+    translation.
+
+    Args:
+        rotation: (3, 3) relative rotation.
+        translation: (3,) relative translation, m.
+        rotation_noise_deg: Standard deviation of each component of the noise rotation's axis-angle vector,
+            degrees; the noise rotation is applied after (on the left of) ``rotation``.
+        translation_noise_m: Standard deviation of the noise added to each translation component, m.
+        rng: The episode's generator (three normal draws per non-zero noise: rotation first).
+    """
+    if rotation_noise_deg > 0:
+        rotation = rotation_from_vector(np.deg2rad(rng.normal(0.0, rotation_noise_deg, 3))) @ rotation
+    if translation_noise_m > 0:
+        translation = translation + rng.normal(0.0, translation_noise_m, 3)
+    return rotation, translation
+
+
+def outlier_depth_range(bin_edges: tuple[float, ...] | np.ndarray) -> tuple[float, float]:
+    """The depths outliers are drawn from (log-uniformly): the histogram's range, from the first bin edge to
+    the last.
+
+    A log-uniform draw needs a positive low end; when the first edge is 0 (as in
+    :data:`estimator.DEFAULT_BIN_EDGES`) it is half the second edge, so that the first bin still gets its
+    share: with the default edges the range is [0.5, 13] m and every bin gets 12–21 % of the outliers.
+    """
+    edges = np.asarray(bin_edges, np.float64)
+    low = float(edges[0]) if edges[0] > 0 else float(edges[1]) / 2.0
+    return low, float(edges[-1])
+
+
+def corrupt_depths(
+    depths: np.ndarray,
+    noise: float,
+    outliers: float,
+    dropout: float,
+    low: float,
+    high: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Depth errors independent of their cause, on valid depth estimates, in this order:
+
+    1. log-normal noise: each depth times ``exp(N(0, noise²))`` (the log-ratio's standard deviation is
+       ``noise``);
+    2. outliers: each depth, with probability ``outliers``, replaced by one drawn log-uniformly from
+       [``low``, ``high``];
+    3. dropout: each point, with probability ``dropout``, dropped (``keep`` False).
+
+    Args:
+        depths: (N,) positive depths, m.
+        noise: Standard deviation of the log-normal factor's logarithm, >= 0.
+        outliers: Probability that a depth is replaced, in [0, 1].
+        dropout: Probability that a point is dropped, in [0, 1].
+        low: Smallest outlier depth, m, > 0.
+        high: Largest outlier depth, m, > ``low``.
+        rng: The episode's generator.
+
+    Returns:
+        ``(depths, keep)``: the corrupted (N,) depths (``depths`` itself when noise and outliers are 0) and the
+        (N,) mask of the points kept. With all three errors 0 nothing is drawn.
+
+    Raises:
+        ValueError: ``low`` or ``high`` cannot bound a log-uniform draw.
+    """
+    if not 0.0 < low < high:
+        raise ValueError(f"outlier depths need 0 < low < high, got low={low!r}, high={high!r}")
+    depths = np.asarray(depths, np.float64)
+    count = len(depths)
+    if noise > 0:
+        depths = depths * np.exp(rng.normal(0.0, noise, count))
+    if outliers > 0:
+        replaced = rng.random(count) < outliers
+        depths = depths.copy() if noise <= 0 else depths
+        depths[replaced] = np.exp(rng.uniform(math.log(low), math.log(high), int(replaced.sum())))
+    keep = rng.random(count) >= dropout if dropout > 0 else np.ones(count, bool)
+    return depths, keep

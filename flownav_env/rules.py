@@ -1,0 +1,179 @@
+"""The rules a FlowNav setting obeys: each checks a value, normalises it and names what is wrong.
+
+:mod:`flownav_env.settings` attaches one rule to every setting (in the dataclass field's metadata) and checks
+them all on construction; the rules live here so that the settings module holds only the settings. Error
+messages name the parameter, the value received and the allowed values.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import types
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Protocol
+
+import numpy as np
+
+from estimator import FlowDepthEstimator
+
+
+class Rule(Protocol):
+    """What a setting's metadata holds: a check that returns the value in its stored form."""
+
+    def check(self, name: str, value: Any) -> Any: ...
+
+
+@dataclass(frozen=True)
+class Range:
+    """A numeric interval, the one validator for numbers in :mod:`flownav_env`.
+
+    ``low`` may instead come from another setting (``low_from``, times ``low_scale``), for the rules that tie
+    two settings (``max_height`` above ``flight_height``); :meth:`resolved` fills it in.
+    """
+
+    low: float | None
+    high: float
+    low_open: bool = False
+    high_open: bool = False
+    integer: bool = False
+    unit: str = ""
+    meaning: str = ""
+    low_from: str | None = None
+    low_scale: float = 1.0
+
+    @property
+    def interval(self) -> str:
+        """The interval as the error messages and the docs write it, e.g. ``(0.0, 5.0]``."""
+        return f"{'(' if self.low_open else '['}{self.low}, {self.high}{')' if self.high_open else ']'}"
+
+    def resolved(self, other: float) -> Range:
+        """This range with its low end taken from the setting it depends on, whose value is ``other``."""
+        return replace(self, low=self.low_scale * other, low_from=None)
+
+    def contains(self, number: float) -> bool:
+        """Whether a finite ``number`` lies inside (the ends open or closed as declared)."""
+        too_low = number <= self.low if self.low_open else number < self.low
+        too_high = number >= self.high if self.high_open else number > self.high
+        return math.isfinite(number) and not too_low and not too_high
+
+    def check(self, name: str, value: Any) -> float | int:
+        """``value`` as a float (or int) inside the range, else a ValueError naming ``name``, value and range."""
+        if self.low is None:
+            raise TypeError(f"{name}'s range depends on {self.low_from}; resolve it first")
+        if self.integer:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, np.integer))
+                or not self.contains(value)
+            ):
+                raise ValueError(f"{name} must be an integer in {self.interval}, got {value!r}")
+            return int(value)
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"{name} must be a number in {self.interval}, got {value!r}")
+        if not self.contains(float(value)):
+            raise ValueError(f"{name} must be in {self.interval}, got {value!r}")
+        return float(value)
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One of a fixed set of values."""
+
+    options: tuple[Any, ...]
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> Any:
+        if value not in self.options:
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, self.options))}, got {value!r}")
+        return value
+
+
+@dataclass(frozen=True)
+class Flag:
+    """True or False (NumPy booleans too, stored as ``bool``)."""
+
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> bool:
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False, got {value!r}")
+        return bool(value)
+
+
+@dataclass(frozen=True)
+class AnyInteger:
+    """Any integer, e.g. a seed."""
+
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> int:
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+            raise ValueError(f"{name} must be an integer, got {value!r}")
+        return int(value)
+
+
+@dataclass(frozen=True)
+class Sectors:
+    """A (rows, cols) pair, each inside ``each``."""
+
+    each: Range
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> tuple[int, int]:
+        if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+            raise ValueError(f"{name} must be (rows, cols), got {value!r}")
+        return (self.each.check(f"{name}[0]", value[0]), self.each.check(f"{name}[1]", value[1]))
+
+
+@dataclass(frozen=True)
+class BinEdges:
+    """Increasing finite depths >= 0 m, at least two, stored as a tuple of floats."""
+
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> tuple[float, ...]:
+        edges = np.asarray(value, np.float64)
+        if (
+            edges.ndim != 1
+            or len(edges) < 2
+            or not np.all(np.isfinite(edges))
+            or np.any(np.diff(edges) <= 0)
+            or edges[0] < 0
+        ):
+            raise ValueError(f"{name} must be >= 2 increasing finite depths >= 0 m, got {value!r}")
+        return tuple(float(edge) for edge in edges)
+
+
+@dataclass(frozen=True)
+class EstimatorArguments:
+    """None or a mapping of :class:`estimator.FlowDepthEstimator` keyword arguments (their values the
+    estimator checks itself), stored read-only."""
+
+    meaning: str = ""
+
+    def check(self, name: str, value: Any) -> Mapping[str, Any]:
+        if value is None:
+            return types.MappingProxyType({})
+        if not isinstance(value, Mapping):
+            raise ValueError(f"{name} must be a mapping of FlowDepthEstimator arguments, got {value!r}")
+        allowed = [key for key in inspect.signature(FlowDepthEstimator).parameters if key != "intrinsics"]
+        unknown = sorted(set(value) - set(allowed))
+        if unknown:
+            raise ValueError(f"{name} has unknown keys {unknown}; allowed: {', '.join(allowed)}")
+        return types.MappingProxyType(dict(value))
+
+
+def setting_field(default: Any, rule: Rule) -> Any:
+    """A settings dataclass field with its default and the rule that checks it."""
+    return field(default=default, metadata={"rule": rule})
+
+
+def check_fields(settings: Any) -> None:
+    """Check and normalise every field of a frozen settings dataclass in declaration order."""
+    for item in fields(settings):
+        rule = item.metadata["rule"]
+        if isinstance(rule, Range) and rule.low_from is not None:
+            rule = rule.resolved(getattr(settings, rule.low_from))
+        object.__setattr__(settings, item.name, rule.check(item.name, getattr(settings, item.name)))

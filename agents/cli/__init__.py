@@ -22,6 +22,7 @@ COMMANDS = {
     "evaluate": "agents.cli.evaluate",
     "sweep": "agents.cli.sweep",
     "leaderboard": "agents.cli.leaderboard",
+    "error-analysis": "agents.cli.error_analysis",
     "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",

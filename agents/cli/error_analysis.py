@@ -1,0 +1,41 @@
+"""``flownav error-analysis``: how estimation errors cause failures, from a sweep's episodes: the tolerance table
+per agent and factor and the dose-response fits (see :mod:`agents.evaluation.error_analysis`)."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+HELP = (
+    "tolerance table and dose-response fits from a sweep's episodes -> error_analysis.md, dose_response.png"
+)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--episodes",
+        default="results/sweep_episodes.csv",
+        help="the sweep's episodes CSV (default results/sweep_episodes.csv)",
+    )
+    parser.add_argument(
+        "--out",
+        default="runs/error_analysis",
+        help="output folder (default runs/error_analysis; results to publish)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.error_analysis_report import write_error_analysis
+    from agents.evaluation.records import read_records
+
+    episodes = Path(args.episodes)
+    if not episodes.is_file():
+        raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
+    rows = read_records(episodes)
+    if not rows:
+        raise ValueError(f"--episodes {episodes} holds no readable episode")
+    command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    print("\n".join(write_error_analysis(rows, Path(args.out), command.strip())))
+    return 0

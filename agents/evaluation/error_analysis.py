@@ -1,0 +1,210 @@
+"""How estimation errors cause failures (``flownav sweep --analysis``): a tolerance table per agent and factor,
+and one dose-response model per agent that pools every factor and level.
+
+- **Tolerance.** Per agent and factor, on each side of the factor's neutral level: the largest level whose
+  failure rate stays inside the clean cell's Wilson 95 % interval, and the first level at which the failure
+  rate reaches twice the clean one (none when twice the clean rate would exceed 1).
+- **Dose-response.** Episode failure against the measured depth quality of that episode (its median relative
+  depth error and its mean number of valid depths per frame), pooled over every factor and level, fitted as a
+  logistic regression (statsmodels). A second fit adds one indicator per factor: if the factors improve the fit
+  beyond depth quality (likelihood-ratio test), they act on failures through something else too, e.g. the
+  drone's motion or what the estimator cannot measure.
+
+Agents on oracle observations are left out of the dose-response: their observation is not the estimate.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation.statistics import wilson_interval
+from flownav_env.settings import EnvSettings
+
+# What the thesis concluded for each factor it varied (../shared/thesis-figures.md), for the tolerance table.
+THESIS_VERDICTS = {
+    "attitude_jitter_deg": "excessively inaccurate from 1.5°; acceptable at 0.5°",
+    "forward_speed": "accurate at 0.05–0.15 m per frame; fewer matches beyond, little data below 0.02",
+    "brightness": "accuracy falls from the 4th of six light levels",
+    "rotation_error": "at 8 % the depths no longer give accurate information: a strong threat",
+    "translation_error": "a band close to a direct 2–10 % variation",
+}
+NOT_TESTED = "not tested"
+DOSE_FEATURES = ("log_depth_error", "valid_points_per_100")
+
+
+def neutral_level(factor: str) -> float:
+    """The level at which ``factor`` does nothing: its env default (1 for brightness, the default speed...)."""
+    defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
+    if factor not in defaults:
+        raise ValueError(f"{factor!r} is not an env setting, so it has no neutral level")
+    return float(defaults[factor])
+
+
+def _failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
+    n = len(rows)
+    failures = sum(not bool(r["success"]) for r in rows)
+    low, high = wilson_interval(failures, n)
+    return failures / n, low, high, n
+
+
+def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
+    inside the clean interval, the first level at which the failure rate doubles, and the thesis's verdict.
+
+    A level is tolerated while its failure rate stays at or below the clean interval's upper end (a level
+    that fails less than clean is no harm); scanning outward from the neutral level, the tolerated level is
+    the last one before the first level above it.
+    """
+    cells: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        cells.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
+    table = []
+    for agent in sorted({key[0] for key in cells}):
+        if (agent, "clean", 0.0) not in cells:
+            continue
+        clean, clean_low, clean_high, _ = _failure(cells[(agent, "clean", 0.0)])
+        factors = sorted({key[1] for key in cells if key[0] == agent and key[1] != "clean"})
+        for factor in factors:
+            neutral = neutral_level(factor)
+            levels = sorted(level for (a, f, level) in cells if a == agent and f == factor)
+            for side, chosen in (
+                ("above", [x for x in levels if x > neutral]),
+                ("below", [x for x in levels if x < neutral][::-1]),
+            ):
+                if not chosen:
+                    continue
+                tolerated, doubled, broke = neutral, None, False
+                rates = []
+                for level in chosen:
+                    rate, low, high, n = _failure(cells[(agent, factor, level)])
+                    rates.append((level, rate, low, high, n))
+                    if not broke and rate <= clean_high:
+                        tolerated = level
+                    else:
+                        broke = True
+                    if doubled is None and 2.0 * clean <= 1.0 and rate >= 2.0 * clean and rate > clean_high:
+                        doubled = level
+                worst = max(rates, key=lambda r: r[1])
+                table.append(
+                    {
+                        "agent": agent,
+                        "factor": factor,
+                        "side": side,
+                        "clean_failure": clean,
+                        "clean_low": clean_low,
+                        "clean_high": clean_high,
+                        "levels": [r[0] for r in rates],
+                        "tolerated_level": tolerated,
+                        "doubling_level": doubled,
+                        "worst_level": worst[0],
+                        "worst_failure": worst[1],
+                        "worst_low": worst[2],
+                        "breaks": worst[2] > clean_high,
+                        "thesis": THESIS_VERDICTS.get(factor, NOT_TESTED),
+                    }
+                )
+    return table
+
+
+# Agents that never read the depth histogram: their failures cannot respond to depth quality.
+BLIND_AGENTS = ("straight",)
+
+
+def is_flow_agent(row: Mapping[str, Any]) -> bool:
+    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not
+    an agent blind to the histogram)."""
+    if str(row["agent"]).partition("@")[0] in BLIND_AGENTS:
+        return False
+    settings = row.get("env_kwargs") or ""
+    if settings:
+        return json.loads(settings).get("obs_source", "flow") == "flow"
+    return "oracle" not in str(row["agent"])
+
+
+def dose_features(
+    rows: Sequence[Mapping[str, Any]],
+) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+    """Design matrix (episodes, 2) of :data:`DOSE_FEATURES`, failures (episodes,), and the rows used: episodes
+    with a finite, positive median depth error."""
+    used = [
+        r
+        for r in rows
+        if math.isfinite(float(r["median_depth_error"])) and float(r["median_depth_error"]) > 0.0
+    ]
+    features = np.array(
+        [[math.log(float(r["median_depth_error"])), float(r["mean_points_valid"]) / 100.0] for r in used]
+    ).reshape(-1, len(DOSE_FEATURES))
+    failures = np.array([0.0 if bool(r["success"]) else 1.0 for r in used])
+    return features, failures, used
+
+
+def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """Logistic regression of failure on depth quality (one agent's episodes, every factor and level), and
+    the likelihood-ratio test of adding one indicator per factor.
+
+    Returns:
+        ``{"episodes", "params", "bse", "pvalues", "conf_int", "model", "lr_statistic", "lr_df",
+        "lr_pvalue"}``; the model is the fitted statsmodels result of depth quality alone.
+
+    Raises:
+        ValueError: fewer than 20 usable episodes, failures that are all equal, or a feature without spread
+            (nothing to fit).
+    """
+    import statsmodels.api as sm
+
+    features, failures, used = dose_features(rows)
+    if len(used) < 20 or failures.min() == failures.max():
+        raise ValueError(
+            f"a dose-response fit needs >= 20 episodes with a depth error and both outcomes, got {len(used)} "
+            f"episodes with {int(failures.sum())} failures"
+        )
+    flat = [name for name, column in zip(DOSE_FEATURES, features.T, strict=True) if np.ptp(column) == 0.0]
+    if flat:
+        raise ValueError(f"a dose-response fit needs spread in every feature; {', '.join(flat)} is constant")
+    design = sm.add_constant(features)
+    model = sm.Logit(failures, design).fit(disp=0, maxiter=200)
+    factors = sorted({r["factor"] for r in used} - {"clean"})
+    indicators = np.array([[1.0 if r["factor"] == f else 0.0 for f in factors] for r in used]).reshape(
+        len(used), -1
+    )
+    lr_statistic, lr_df, lr_pvalue = math.nan, 0, math.nan
+    if factors:
+        full = sm.Logit(failures, np.hstack([design, indicators])).fit(disp=0, maxiter=200, method="bfgs")
+        from scipy import stats
+
+        lr_statistic = max(0.0, 2.0 * (full.llf - model.llf))
+        lr_df = len(factors)
+        lr_pvalue = float(stats.chi2.sf(lr_statistic, lr_df))
+    names = ["const", *DOSE_FEATURES]
+    interval = np.asarray(model.conf_int())
+    return {
+        "episodes": len(used),
+        "params": dict(zip(names, map(float, model.params), strict=True)),
+        "bse": dict(zip(names, map(float, model.bse), strict=True)),
+        "pvalues": dict(zip(names, map(float, model.pvalues), strict=True)),
+        "conf_int": {name: (float(lo), float(hi)) for name, (lo, hi) in zip(names, interval, strict=True)},
+        "model": model,
+        "lr_statistic": float(lr_statistic),
+        "lr_df": lr_df,
+        "lr_pvalue": lr_pvalue,
+    }
+
+
+def dose_curve(fit: Mapping[str, Any], errors: np.ndarray, valid_points: float) -> tuple[np.ndarray, ...]:
+    """Predicted failure probability and its 95 % band against median depth error ``errors`` (relative),
+    at ``valid_points`` valid depths per frame."""
+    design = np.column_stack(
+        [np.ones(len(errors)), np.log(errors), np.full(len(errors), valid_points / 100.0)]
+    )
+    frame = fit["model"].get_prediction(design).summary_frame()
+    return (
+        np.asarray(frame["predicted"]),
+        np.asarray(frame["ci_lower"]),
+        np.asarray(frame["ci_upper"]),
+    )

@@ -1,0 +1,143 @@
+"""The error analysis on synthetic sweeps with known answers: tolerance levels, the dose-response fit, which
+agents it covers, the report and the command line's refusals."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents.cli import main
+from agents.evaluation.error_analysis import (
+    fit_dose_response,
+    is_flow_agent,
+    neutral_level,
+    tolerance_table,
+)
+from agents.evaluation.error_analysis_report import write_error_analysis
+
+
+def _cell(
+    agent: str, factor: str, level: float, failures: int, n: int = 100, error: float = 0.04
+) -> list[dict]:
+    return [
+        {
+            "agent": agent,
+            "factor": factor,
+            "level": level,
+            "seed": 1_000_000 + i,
+            "success": i >= failures,
+            "median_depth_error": error,
+            "mean_points_valid": 120.0,
+            "env_kwargs": json.dumps({"obs_source": "flow"}),
+        }
+        for i in range(n)
+    ]
+
+
+def _sweep() -> list[dict]:
+    rows = _cell("bee", "clean", 0.0, 20)
+    # Rotation error: harmless up to 0.1, then worse, doubling at 0.5.
+    for level, failures in ((0.05, 22), (0.1, 25), (0.3, 33), (0.5, 45), (1.0, 70)):
+        rows += _cell("bee", "rotation_error", level, failures)
+    # Speed on both sides of its neutral 1 m/s: slower is harmless, faster breaks at once.
+    for level, failures in ((0.5, 10), (0.25, 18), (2.0, 60)):
+        rows += _cell("bee", "forward_speed", level, failures)
+    return rows
+
+
+def test_neutral_levels_are_the_env_defaults() -> None:
+    assert neutral_level("rotation_error") == 0.0
+    assert neutral_level("brightness") == 1.0
+    assert neutral_level("forward_speed") == 1.0
+    with pytest.raises(ValueError, match="'wind' is not an env setting, so it has no neutral level"):
+        neutral_level("wind")
+
+
+def test_tolerance_scans_outward_from_neutral_on_each_side() -> None:
+    table = {(r["factor"], r["side"]): r for r in tolerance_table(_sweep())}
+    rotation = table[("rotation_error", "above")]
+    assert rotation["clean_failure"] == pytest.approx(0.2)
+    assert rotation["tolerated_level"] == 0.1  # 0.25 is inside [0.13, 0.29]; 0.33 is not
+    assert rotation["doubling_level"] == 0.5  # 0.45 >= 2 x 0.2 and above the interval
+    assert rotation["breaks"] and rotation["worst_level"] == 1.0
+    assert rotation["thesis"].startswith("at 8 %")
+    slower = table[("forward_speed", "below")]
+    assert slower["levels"] == [0.5, 0.25] and slower["tolerated_level"] == 0.25 and not slower["breaks"]
+    faster = table[("forward_speed", "above")]
+    assert faster["tolerated_level"] == 1.0 and faster["doubling_level"] == 2.0
+
+
+def test_doubling_is_undefined_when_twice_clean_exceeds_one() -> None:
+    rows = _cell("bee", "clean", 0.0, 60) + _cell("bee", "brightness", 0.3, 95)
+    (row,) = tolerance_table(rows)
+    assert row["side"] == "below" and row["doubling_level"] is None and row["breaks"]
+
+
+def test_oracle_and_blind_agents_are_left_out_of_the_dose_response() -> None:
+    flow, oracle = _cell("ppo_flow@2", "clean", 0.0, 1, n=1), _cell("ppo_oracle", "clean", 0.0, 1, n=1)
+    oracle[0]["env_kwargs"] = json.dumps({"obs_source": "oracle"})
+    assert is_flow_agent(flow[0]) and not is_flow_agent(oracle[0])
+    assert not is_flow_agent(_cell("straight", "clean", 0.0, 1, n=1)[0])
+
+
+def test_the_dose_response_recovers_a_known_logistic_law() -> None:
+    rng = np.random.default_rng(1)
+    rows = []
+    for i in range(3000):
+        error = float(np.exp(rng.uniform(np.log(0.02), np.log(0.5))))
+        probability = 1.0 / (1.0 + math.exp(-(2.0 + 1.5 * math.log(error))))
+        rows.append(
+            {
+                "agent": "bee",
+                "factor": ("clean", "depth_noise", "rotation_error")[i % 3],
+                "level": 0.0,
+                "success": rng.random() >= probability,
+                "median_depth_error": error,
+                "mean_points_valid": float(rng.uniform(50, 200)),
+            }
+        )
+    fit = fit_dose_response(rows)
+    assert fit["episodes"] == 3000
+    low, high = fit["conf_int"]["log_depth_error"]
+    assert low < 1.5 < high
+    low, high = fit["conf_int"]["valid_points_per_100"]
+    assert low < 0.0 < high  # points do not matter in this law
+    assert fit["lr_df"] == 2 and fit["lr_pvalue"] > 0.001  # the factors act only through the error
+
+
+def test_a_fit_needs_both_outcomes_and_spread() -> None:
+    with pytest.raises(
+        ValueError, match="needs >= 20 episodes with a depth error and both outcomes, got 100"
+    ):
+        fit_dose_response(_cell("bee", "clean", 0.0, 0))
+    with pytest.raises(
+        ValueError, match="needs spread in every feature; log_depth_error, valid_points_per_100"
+    ):
+        fit_dose_response(_cell("bee", "clean", 0.0, 50))
+
+
+def test_the_report_and_figure_are_written(tmp_path: Path) -> None:
+    rows = _sweep()
+    rng = np.random.default_rng(1)
+    for row in rows:
+        row["median_depth_error"] = float(rng.uniform(0.02, 0.3)) if not row["success"] else 0.03
+        row["mean_points_valid"] = float(rng.uniform(50, 200))
+    lines = write_error_analysis(rows, tmp_path, "flownav error-analysis --episodes x.csv")
+    text = (tmp_path / "error_analysis.md").read_text()
+    assert text == "\n".join(lines) + "\n"
+    assert "| bee | rotation_error | above | 0.20 [0.13, 0.29] |" in text
+    assert "log_depth_error" in text and (tmp_path / "dose_response.png").stat().st_size > 10_000
+
+
+def test_the_command_refuses_a_missing_or_empty_file(tmp_path: Path, capsys) -> None:
+    missing = tmp_path / "none.csv"
+    assert main(["error-analysis", "--episodes", str(missing), "--out", str(tmp_path)]) == 2
+    assert f"--episodes {missing}: no such file" in capsys.readouterr().err
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    assert main(["error-analysis", "--episodes", str(empty), "--out", str(tmp_path)]) == 2
+    assert "holds no readable episode" in capsys.readouterr().err

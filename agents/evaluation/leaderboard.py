@@ -13,7 +13,6 @@ Writes, to the output folder:
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -37,18 +36,16 @@ from agents.evaluation.over_seeds import (
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import EpisodeTask, execute, rows_of
 from agents.evaluation.statistics import wilson_interval
-from agents.policies import LEARNED_AGENTS, REACTIVE_AGENTS, is_learned, policy_file, seeded_agent_name
+from agents.policies import (
+    LEARNED_AGENTS,
+    REACTIVE_AGENTS,
+    is_learned,
+    policy_file,
+    seeded_agent_name,
+    trained_seeds,
+)
 
 MIN_EPISODES = 300
-_SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
-
-
-def trained_seeds(agent: str, policies_dir: Path = POLICIES_DIR) -> list[int]:
-    """The training seeds shipped for the learned ``agent``: ``<policies_dir>/<agent>/seed_<k>.zip``."""
-    folder = Path(policies_dir) / agent
-    if not folder.is_dir():
-        return []
-    return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _SEED_FILE.match(p.name)))
 
 
 def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -> dict[str, list[str]]:

@@ -32,9 +32,18 @@ from agents.evaluation.sweep_report import (
     write_report,
     write_summary,
 )
-from agents.policies import is_learned, policy_file, split_agent_name
+from agents.policies import (
+    LEARNED_AGENTS,
+    is_learned,
+    policy_file,
+    seeded_agent_name,
+    split_agent_name,
+    trained_seeds,
+)
 from flownav_env.settings import check_setting
 
+# ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
+ALL_SEEDS = "@all"
 SWEEP_FACTORS = (
     "rotation_error",
     "translation_error",
@@ -74,8 +83,13 @@ class SweepConfig:
 
     def validate(self) -> None:
         for agent in self.agents:
+            base, _, suffix = agent.partition(ALL_SEEDS)
+            if suffix or (agent.endswith(ALL_SEEDS) and base not in LEARNED_AGENTS):
+                raise ValueError(
+                    f"key 'agents': {agent!r}: '{ALL_SEEDS}' follows a learned agent's name, e.g. ppo_flow{ALL_SEEDS}"
+                )
             try:
-                split_agent_name(agent)
+                split_agent_name(base)
             except ValueError as error:
                 raise ValueError(f"key 'agents': {error}") from None
         for factor, levels in self.factors.items():
@@ -104,8 +118,32 @@ class SweepConfig:
         return folder if folder.is_absolute() else REPO_ROOT / folder
 
 
+def seed_rotation(config: SweepConfig, agent: str) -> list[str]:
+    """The runs that fly an agent's episodes: the agent itself, or for ``<learned>@all`` each of its shipped
+    training seeds in turn (``ppo_flow@0``, ``ppo_flow@1``, ...); empty when it has none."""
+    if not agent.endswith(ALL_SEEDS):
+        return [agent]
+    base = agent[: -len(ALL_SEEDS)]
+    return [seeded_agent_name(base, seed) for seed in trained_seeds(base, config.policy_folder())]
+
+
+def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, Any]]:
+    """Rows with each training seed of a ``<learned>@all`` agent relabelled as that agent, so that a cell's
+    rate pools its seeds."""
+    pooled = {agent[: -len(ALL_SEEDS)] for agent in agents if agent.endswith(ALL_SEEDS)}
+    relabelled = []
+    for row in rows:
+        base, seed = split_agent_name(row["agent"])
+        relabelled.append({**row, "agent": base + ALL_SEEDS} if seed is not None and base in pooled else row)
+    return relabelled
+
+
 def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     """Every (agent, factor, level, seed) episode, in passes of ``config.seed_block`` seeds.
+
+    A ``<learned>@all`` agent flies layout i of every cell with its training seed number i modulo the seed
+    count: each cell still has ``episodes`` distinct layouts, every training seed flies an equal share of them,
+    and the pooled rate estimates the agent over both its training runs and the layouts.
 
     Each pass flies its seeds in every cell (the clean setting first, then the factors in config order) and,
     within a cell, for every agent. A sweep cut short therefore has every cell at nearly the same count and
@@ -117,16 +155,16 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
     for factor, levels in config.factors.items():
         cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
+    rotations = {agent: seed_rotation(config, agent) for agent in agents}
+
+    def task(agent: str, factor: str, level: float, kwargs: dict[str, Any], seed: int) -> EpisodeTask:
+        runs = rotations[agent]
+        name = runs[(seed - config.seed_start) % len(runs)]
+        policy = str(policy_file(name, directory=config.policy_folder())) if is_learned(name) else None
+        return EpisodeTask(name, factor, level, seed, config.env_id, tuple(sorted(kwargs.items())), policy)
+
     return [
-        EpisodeTask(
-            agent,
-            factor,
-            level,
-            seed,
-            config.env_id,
-            tuple(sorted(kwargs.items())),
-            str(policy_file(agent, directory=config.policy_folder())) if is_learned(agent) else None,
-        )
+        task(agent, factor, level, kwargs, seed)
         for seed_pass in passes
         for factor, level, kwargs in cells
         for agent in agents
@@ -172,8 +210,15 @@ def run_sweep(
         raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
 
-    files = {a: policy_file(a, directory=config.policy_folder()) for a in config.agents if is_learned(a)}
+    files = {
+        a: policy_file(a, directory=config.policy_folder())
+        for a in config.agents
+        if is_learned(a.removesuffix(ALL_SEEDS)) and not a.endswith(ALL_SEEDS)
+    }
     missing = {a: path for a, path in files.items() if not path.exists()}
+    for agent in config.agents:
+        if agent.endswith(ALL_SEEDS) and not seed_rotation(config, agent):
+            missing[agent] = config.policy_folder() / agent.removesuffix(ALL_SEEDS) / "seed_<k>.zip"
     agents = [a for a in config.agents if a not in missing]
     for skipped, path in sorted(missing.items()):
         print(f"skipping {skipped}: no policy at {path}")
@@ -201,10 +246,11 @@ def run_sweep(
     started = time.perf_counter()
     tasks = build_tasks(config, agents)
     if refly:
+        runs = [run for agent in refly for run in seed_rotation(config, agent)]
         # Refuse before deleting anything what the run itself would refuse (a CSV from before identities,
         # other agents' episodes of other settings), so --refly never deletes episodes and then stops.
-        pending_tasks([t for t in tasks if t.agent not in refly], episodes_csv)
-        print(f"--refly: deleted {drop_agents(episodes_csv, refly)} episodes of {', '.join(refly)}")
+        pending_tasks([t for t in tasks if t.agent not in runs], episodes_csv)
+        print(f"--refly: deleted {drop_agents(episodes_csv, runs)} episodes of {', '.join(refly)}")
     flown = 0
     if not report_only:
         flown = execute(
@@ -216,7 +262,7 @@ def run_sweep(
             description="sweep",
         )
     episodes = read_episodes(episodes_csv)
-    rows = rows_of(tasks, episodes.rows)
+    rows = pool_seeds(rows_of(tasks, episodes.rows), agents)
     if episodes.skipped:
         print(f"skipped {episodes.skipped} torn or corrupt rows of {episodes_csv}")
     table = write_summary(rows, out / "sweep.csv")

@@ -16,6 +16,7 @@ from agents.policies.learned import (
     load_agent,
     load_policy,
     policy_file,
+    trained_seeds,
 )
 from agents.policies.loading import UnverifiedPolicyWarning
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
@@ -43,4 +44,5 @@ __all__ = [
     "sector_nearness",
     "seeded_agent_name",
     "split_agent_name",
+    "trained_seeds",
 ]

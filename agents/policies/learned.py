@@ -4,6 +4,7 @@ agent by name (a reactive one is built, a learned one is loaded from its ``.zip`
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,8 @@ from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, VFHAgent
 from agents.training.config import TrainConfig
+
+_SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
 
 POLICY_OPTION_HELP = (
     "PPO policy .zip (default results/policies/<agent>.zip in the repository). Only load policies you "
@@ -35,6 +38,14 @@ def policy_file(name: str, path: str | Path | None = None, directory: str | Path
     if train_seed is None:
         return Path(directory) / f"{agent}.zip"
     return Path(directory) / agent / f"seed_{train_seed}.zip"
+
+
+def trained_seeds(agent: str, policies_dir: str | Path = POLICIES_DIR) -> list[int]:
+    """The training seeds shipped for the learned ``agent``: ``<policies_dir>/<agent>/seed_<k>.zip``."""
+    folder = Path(policies_dir) / agent
+    if not folder.is_dir():
+        return []
+    return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _SEED_FILE.match(p.name)))
 
 
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:

@@ -13,7 +13,7 @@ from agents.common.config import ConfigError, load_config
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import summarise
-from agents.evaluation.sweep import SweepConfig, build_tasks
+from agents.evaluation.sweep import SweepConfig, build_tasks, pool_seeds
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 
@@ -136,6 +136,9 @@ def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
     [
         ({"agents": ["wasp"]}, r"key 'agents': agent must be one of straight, .*, got 'wasp'"),
         ({"factors": {"wind": [1.0]}}, r"key 'factors.wind': not a sweep factor"),
+        ({"agents": ["bee@all"]}, r"key 'agents': 'bee@all': '@all' follows a learned agent's name"),
+        ({"agents": ["ppo_flow@allx"]}, r"key 'agents': 'ppo_flow@allx': '@all' follows"),
+        ({"agents": ["ppo_flow@x"]}, r"key 'agents': a training seed must be an integer >= 0"),
         ({"episodes": 0}, r"key 'episodes' must be in \[1, 100000\], got 0"),
         ({"backend": "slurm"}, r"key 'backend' must be one of 'local', 'ray', got 'slurm'"),
         ({"seed_start": 5}, r"key 'seed_start' must be in \[1000000, inf\], got 5"),
@@ -207,3 +210,20 @@ def test_relative_policy_dirs_resolve_against_the_repository(tmp_path: Path, mon
     monkeypatch.chdir(tmp_path)
     assert config.policy_folder() == POLICIES_DIR
     assert {Path(t.policy) for t in build_tasks(config, ["ppo_flow"])} == {POLICIES_DIR / "ppo_flow.zip"}
+
+
+def test_all_seeds_of_a_learned_agent_share_each_cells_layouts_in_turn(tmp_path: Path) -> None:
+    policies = tmp_path / "policies"
+    (policies / "ppo_flow").mkdir(parents=True)
+    for seed in (0, 1, 4):
+        (policies / "ppo_flow" / f"seed_{seed}.zip").write_bytes(b"")
+    config = load_config(
+        write_sweep_config(tmp_path, agents=["bee", "ppo_flow@all"], policy_dir=str(policies), episodes=7),
+        SweepConfig,
+    )
+    tasks = [t for t in build_tasks(config, config.agents) if t.factor == "clean"]
+    learned = [(t.seed - config.seed_start, t.agent) for t in tasks if t.agent != "bee"]
+    assert learned == [(i, f"ppo_flow@{(0, 1, 4)[i % 3]}") for i in range(7)]
+    assert {t.policy for t in tasks if t.agent == "ppo_flow@4"} == {str(policies / "ppo_flow" / "seed_4.zip")}
+    rows = [{"agent": t.agent, "seed": t.seed} for t in tasks]
+    assert {r["agent"] for r in pool_seeds(rows, config.agents)} == {"bee", "ppo_flow@all"}

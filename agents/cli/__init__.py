@@ -23,6 +23,7 @@ COMMANDS = {
     "sweep": "agents.cli.sweep",
     "leaderboard": "agents.cli.leaderboard",
     "error-analysis": "agents.cli.error_analysis",
+    "ablation": "agents.cli.ablation",
     "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",

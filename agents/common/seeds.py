@@ -3,7 +3,7 @@
 | range | seeds | used for |
 |---|---|---|
 | training | ``[0, VALIDATION_SEED_START)`` | the layouts policies learn on, and tuning reactive gains |
-| validation | ``[VALIDATION_SEED_START, TEST_SEED_START)`` | every decision: checkpoint choice during training, thresholds, ablations |
+| validation | ``[VALIDATION_SEED_START, TEST_SEED_START)`` | every decision: checkpoint choice during training, thresholds, ablations (from ``ABLATION_SEED_START``) |
 | test | ``[TEST_SEED_START, ...)`` | only the reported tables (evaluation, sweeps, the demo) |
 
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
@@ -20,6 +20,11 @@ TEST_SEED_START = 1_000_000
 # second worker would replay run k + 1's first worker layout for layout, and the runs would not be independent.
 RUN_SEED_STRIDE = 1_000
 MAX_RUN_SEED = VALIDATION_SEED_START // RUN_SEED_STRIDE - 1
+
+
+# Validation layouts for comparing training runs and ablations (``flownav ablation``): past the starts of the
+# checkpoint-selection streams of run seeds below 400 (checkpoint_selection_seed), and before the test range.
+ABLATION_SEED_START = 900_000
 
 
 def training_env_seed(run_seed: int) -> int:

@@ -16,6 +16,7 @@ from typing import Any
 
 from agents.common.config import ConfigError, load_config
 from agents.policies.base import Agent
+from agents.policies.stacked import FrameStackedAgent, stacked_space
 from agents.training.config import TrainConfig
 from agents.training.manifest import manifest_problem
 from agents.training.saved_models import SavedModel, read_saved_model
@@ -38,7 +39,8 @@ def training_config_beside(path: Path) -> TrainConfig | None:
 def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
     """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, its ``net_arch`` and
     ``log_std_init``; spaces from ``config``'s env) holding the parameters of ``saved``. Its ``predict``
-    gives the same actions as ``PPO.load(path).predict``.
+    gives the same actions as ``PPO.load(path).predict``; a policy trained on stacked frames comes wrapped
+    in a :class:`~agents.policies.stacked.FrameStackedAgent` that keeps the stack.
 
     Raises:
         ValueError: the zip's network does not match the config's; the message names the file.
@@ -61,8 +63,11 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
     finally:
         env.close()
     policy_class = PPO.policy_aliases["MultiInputPolicy"]
+    policy_space = (
+        stacked_space(observation_space, config.frame_stack) if config.frame_stack > 1 else observation_space
+    )
     policy = policy_class(
-        observation_space, action_space, lambda _: config.ppo.learning_rate, use_sde=False, **network
+        policy_space, action_space, lambda _: config.ppo.learning_rate, use_sde=False, **network
     )
     try:
         policy.load_state_dict(saved.policy_state)
@@ -71,6 +76,8 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
             f"{saved.path}: its parameters do not fit the network of the config beside it: {error}"
         ) from error
     policy.set_training_mode(False)
+    if config.frame_stack > 1:
+        return FrameStackedAgent(policy, config.frame_stack, observation_space)
     return policy
 
 

@@ -67,6 +67,9 @@ class TrainConfig:
     checkpoint_every: int = field_range(1, 100_000_000, default=20_000)
     eval_every: int = field_range(1, 100_000_000, default=20_000)
     eval_episodes: int = field_range(1, 1000, default=10)
+    # Memory by frame stacking (SB3's VecFrameStack): the policy sees the observations of the last
+    # ``frame_stack`` frames, each array stacked along its last axis; 1 = the current frame only.
+    frame_stack: int = field_range(1, 16, default=1)
     ppo: PPOParams = field(default_factory=PPOParams)
 
 

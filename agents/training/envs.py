@@ -73,6 +73,10 @@ def build_envs(config: TrainConfig) -> tuple[Any, Any]:
         eval_env = DummyVecEnv([make_env_factory(config, 0)])
     envs.seed(training_env_seed(config.seed))
     eval_env.seed(checkpoint_selection_seed(config.seed))
+    if config.frame_stack > 1:
+        from stable_baselines3.common.vec_env import VecFrameStack
+
+        envs, eval_env = VecFrameStack(envs, config.frame_stack), VecFrameStack(eval_env, config.frame_stack)
     return envs, eval_env
 
 

@@ -1,0 +1,50 @@
+"""``flownav ablation``: training configs compared over their seeds on validation layouts (issue 16's levers),
+see :mod:`agents.evaluation.ablation`."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--configs", nargs="+", required=True, help="training config YAMLs, e.g. configs/ppo_flow.yaml"
+    )
+    parser.add_argument(
+        "--seeds", default="0-2", help="training seeds, e.g. 0-2 or 0,3 (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--episodes", type=int, default=100, help="validation layouts per run (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
+    )
+    parser.add_argument("--runs-dir", default="runs", help="where the seeds' runs are (default: %(default)s)")
+    parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
+    parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.ablation import compare_configs
+    from agents.training.multiseed import parse_seeds
+
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    command = "flownav ablation " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    lines = compare_configs(
+        [Path(path) for path in args.configs],
+        parse_seeds(args.seeds),
+        Path(args.out),
+        runs_dir=Path(args.runs_dir),
+        episodes=args.episodes,
+        workers=args.workers,
+        report_only=args.report_only,
+        command=command.strip(),
+    )
+    print("\n".join(lines))
+    return 0

@@ -1,0 +1,148 @@
+"""Training configs compared over their seeds on validation layouts (``flownav ablation``): the issue-16 table of
+what each lever buys, decided without touching a test layout.
+
+Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``; every run
+flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEED_START`) into its own CSV,
+``<out>/<name>/seed_<k>.csv`` (resumable). Per config: the failure rate over runs × layouts with a two-level
+bootstrap interval, each seed's failure rate, and the learning curves of its seeds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common.config import load_config
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
+from agents.common.tables import markdown_table, today
+from agents.evaluation.over_seeds import runs_and_layouts_interval
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import EpisodeTask, execute, rows_of
+from agents.training.config import TrainConfig
+from agents.training.curves import plot_learning_curves
+from agents.training.outputs import RunFiles
+
+# Any learned agent name loads a policy file with the env settings of the config beside it; the name only
+# labels the rows, and each run has its own CSV, so one name serves every config.
+RUN_LABEL = "ppo_flow"
+
+
+def ablation_tasks(policy: Path, episodes: int) -> list[EpisodeTask]:
+    """One run's episodes: the clean cell on validation layouts ``ABLATION_SEED_START ..``.
+
+    Raises:
+        ValueError: so many episodes that they would reach the test layouts.
+    """
+    if episodes < 1 or ABLATION_SEED_START + episodes > TEST_SEED_START:
+        raise ValueError(
+            f"--episodes must be in [1, {TEST_SEED_START - ABLATION_SEED_START}] (validation layouts from "
+            f"{ABLATION_SEED_START:,}), got {episodes}"
+        )
+    seeds = range(ABLATION_SEED_START, ABLATION_SEED_START + episodes)
+    return [EpisodeTask(RUN_LABEL, "clean", 0.0, seed, policy=str(policy)) for seed in seeds]
+
+
+def compare_configs(
+    config_paths: Sequence[Path],
+    seeds: Sequence[int],
+    out: Path,
+    *,
+    runs_dir: Path = Path("runs"),
+    episodes: int = 100,
+    workers: int = 2,
+    report_only: bool = False,
+    command: str = "flownav ablation",
+) -> list[str]:
+    """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
+    ``ablation_curves.png`` into ``out``; returns the report's lines. A run not trained yet is listed as
+    missing, not flown.
+
+    Raises:
+        ValueError: a bad config, episode count or worker count.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows, missing, curves = [], [], {}
+    for config_path in config_paths:
+        name = load_config(Path(config_path), TrainConfig).name
+        outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
+        for seed in seeds:
+            files = RunFiles.of_seed(runs_dir, name, seed)
+            if not files.policy.is_file():
+                missing.append(f"{name} seed {seed}")
+                continue
+            tasks = ablation_tasks(files.policy, episodes)
+            csv_path = out / name / f"seed_{seed}.csv"
+            csv_path.parent.mkdir(parents=True, exist_ok=True)
+            if not report_only:
+                execute(tasks, csv_path, workers=workers, description=f"{name} seed {seed}")
+            flown = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+            if len(flown) < episodes:
+                missing.append(f"{name} seed {seed} ({len(flown)} of {episodes} episodes)")
+                continue
+            by_seed = {int(r["seed"]): r for r in flown}
+            outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
+            per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
+            for key in counts:
+                counts[key] += sum(bool(r[key]) for r in flown)
+            if files.evaluations.is_file():
+                curves[f"{name} seed {seed}"] = files.evaluations
+        if outcomes:
+            rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
+    lines = _report(rows, missing, seeds, episodes, command)
+    if curves:
+        plot_learning_curves(curves, out / "ablation_curves.png", "held-out evaluation return, per seed")
+        lines += ["", "![learning curves](ablation_curves.png)"]
+    (out / "ablation.md").write_text("\n".join(lines) + "\n")
+    return lines
+
+
+def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:
+    success = float(outcomes.mean())
+    if len(outcomes) > 1:
+        low, high = runs_and_layouts_interval(outcomes)
+        interval = f"[{1 - high:.2f}, {1 - low:.2f}]"
+    else:
+        interval = "(one seed)"
+    total = outcomes.size
+    return [
+        name,
+        len(outcomes),
+        total,
+        f"{1 - success:.2f} {interval}",
+        f"{success:.2f}",
+        f"{counts['collision'] / total:.2f}",
+        f"{counts['out_of_bounds'] / total:.2f}",
+        ", ".join(f"{seed}: {rate:.2f}" for seed, rate in per_seed),
+    ]
+
+
+def _report(rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str) -> list[str]:
+    lines = [
+        "# Ablations on validation layouts",
+        "",
+        f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
+        f"{ABLATION_SEED_START + episodes - 1:,} (clean sensors), never a test layout; seeds asked: "
+        f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
+        "two-level bootstrap (runs, then layouts within each run).",
+        "",
+        markdown_table(
+            [
+                "config",
+                "seeds",
+                "episodes",
+                "failure rate [95 % CI]",
+                "success",
+                "collision",
+                "out of bounds",
+                "failure per seed",
+            ],
+            rows,
+        ),
+    ]
+    if missing:
+        lines += ["", "Not flown (not trained, or cut short): " + "; ".join(missing) + "."]
+    return lines

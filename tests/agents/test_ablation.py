@@ -1,0 +1,51 @@
+"""Ablations: every trained seed of each config flies the same validation layouts into its own CSV; missing
+seeds are listed, not flown; the episode budget never reaches the test layouts."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from agents.cli import main
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.evaluation.ablation import ablation_tasks, compare_configs
+from agents.evaluation.records import read_records
+from agents.training.multiseed import seed_jobs, train_seeds
+from tests.agents.test_training import tiny_train_config
+
+
+def test_ablation_layouts_are_validation_layouts() -> None:
+    tasks = ablation_tasks(Path("p.zip"), 3)
+    assert [t.seed for t in tasks] == [ABLATION_SEED_START + i for i in range(3)]
+    assert VALIDATION_SEED_START <= ABLATION_SEED_START and tasks[-1].seed < TEST_SEED_START
+    with pytest.raises(
+        ValueError,
+        match=r"--episodes must be in \[1, 100000\] \(validation layouts from 900,000\), got 100001",
+    ):
+        ablation_tasks(Path("p.zip"), 100_001)
+
+
+def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tmp_path: Path) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir = tmp_path / "runs"
+    train_seeds(seed_jobs(config, [0, 2], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    out = tmp_path / "ablation"
+    lines = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, workers=1)
+    text = "\n".join(lines)
+    assert "| lever | 2 | 4 |" in text and "Not flown (not trained, or cut short): lever seed 1." in text
+    for seed in (0, 2):
+        rows = read_records(out / "lever" / f"seed_{seed}.csv")
+        assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]
+    assert (out / "ablation.md").read_text() == "\n".join(lines) + "\n"
+    # Reporting again flies nothing and says the same.
+    again = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, report_only=True)
+    assert again[4:] == lines[4:]
+
+
+def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) -> None:
+    _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    assert main(["ablation", "--configs", str(config_path), "--workers", "0", "--out", str(tmp_path)]) == 2
+    assert "--workers must be >= 1, got 0" in capsys.readouterr().err
+    assert main(["ablation", "--configs", str(config_path), "--seeds", "3-1", "--out", str(tmp_path)]) == 2
+    assert "--seeds takes N, N-M (N <= M)" in capsys.readouterr().err

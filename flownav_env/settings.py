@@ -178,10 +178,11 @@ class SensorSettings:
 
 
 @dataclass(frozen=True)
-class EnvSettings:
+class EnvSettings(SensorSettings):
     """Every :class:`flownav_env.FlowNavEnv` constructor argument that shapes the world, the flight or the
     sensor, checked on construction (fields are checked in this order, so a range tied to another setting
-    comes after it). Each rule carries a one-line meaning; FlowNavEnv's Arguments table explains them.
+    comes after it: the sensor fields, inherited from :class:`SensorSettings`, come first and depend on
+    nothing). Each rule carries a one-line meaning; FlowNavEnv's Arguments table explains them.
 
     Raises:
         ValueError: A value is outside its rule; the message names the setting, the value and the rule.
@@ -232,19 +233,6 @@ class EnvSettings:
     camera_width: int = _setting(160, _PIXELS)
     camera_height: int = _setting(120, _PIXELS)
     camera_fov_deg: float = _setting(60.0, Range(10.0, 150.0, unit="deg", meaning="vertical field of view"))
-    attitude_jitter_deg: float = _setting(0.0, SENSOR_RULES["attitude_jitter_deg"])
-    brightness: float = _setting(1.0, SENSOR_RULES["brightness"])
-    rotation_error: float = _setting(0.0, SENSOR_RULES["rotation_error"])
-    translation_error: float = _setting(0.0, SENSOR_RULES["translation_error"])
-    rotation_bias: float = _setting(0.0, SENSOR_RULES["rotation_bias"])
-    translation_bias: float = _setting(0.0, SENSOR_RULES["translation_bias"])
-    rotation_drift: float = _setting(0.0, SENSOR_RULES["rotation_drift"])
-    translation_drift: float = _setting(0.0, SENSOR_RULES["translation_drift"])
-    rotation_noise_deg: float = _setting(0.0, SENSOR_RULES["rotation_noise_deg"])
-    translation_noise_m: float = _setting(0.0, SENSOR_RULES["translation_noise_m"])
-    depth_noise: float = _setting(0.0, SENSOR_RULES["depth_noise"])
-    depth_outliers: float = _setting(0.0, SENSOR_RULES["depth_outliers"])
-    depth_dropout: float = _setting(0.0, SENSOR_RULES["depth_dropout"])
     histogram_sectors: tuple[int, int] = _setting(
         (3, 5), Sectors(Range(1, 32, integer=True, meaning="sector rows or columns"))
     )

@@ -19,7 +19,14 @@ from agents.training.config import TrainConfig
 
 def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
     """A picklable-by-closure factory for SubprocVecEnv workers (``rank`` is kept for callers that number
-    their workers; the env's seed comes from the vector env)."""
+    their workers; the env's seed comes from the vector env).
+
+    The closure holds plain values, not the config object: a worker unpickles it with the code on disk when
+    it starts, which in a long multi-seed run may be newer than the main process's (a config class that
+    gained a field would otherwise break every later seed).
+    """
+    env_id, env_kwargs = config.env_id, {"depth_error_info": False, **config.env}
+    ranges = {name: list(bounds) for name, bounds in asdict(config.randomize).items() if bounds}
 
     def factory():
         import gymnasium as gym
@@ -30,9 +37,9 @@ def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
 
         # Training reads rewards, not the depth-error diagnostics: skip their per-step ray cast unless the
         # config asks (oracle observations get true depths regardless).
-        env = gym.make(config.env_id, **{"depth_error_info": False, **config.env})
-        if any(asdict(config.randomize).values()):
-            env = SensorRandomization(env, asdict(config.randomize))
+        env = gym.make(env_id, **env_kwargs)
+        if ranges:
+            env = SensorRandomization(env, ranges)
         return Monitor(env)
 
     return factory

@@ -78,7 +78,9 @@ def test_check_setting_and_setting_range() -> None:
         check_setting("max_height", 1.5, flight_height=2.0)
     with pytest.raises(ValueError, match=r"^forward_speed must be in \[0.0, 5.0\], got 7$"):
         check_setting("forward_speed", 7)
-    with pytest.raises(ValueError, match=r"^unknown setting 'speed'; known: attitude_jitter_deg, .*, layout, "):
+    with pytest.raises(
+        ValueError, match=r"^unknown setting 'speed'; known: attitude_jitter_deg, .*, layout, "
+    ):
         check_setting("speed", 1.0)
     with pytest.raises(ValueError, match=r"^layout is not a numeric setting \(its rule is Choice\)$"):
         setting_range("layout")

@@ -8,13 +8,13 @@ workers ignore SIGINT; only the main process handles it, ends learning and saves
 
 from __future__ import annotations
 
-import signal
 from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
 from agents.common.seeds import checkpoint_selection_seed, training_env_seed
 from agents.training.config import TrainConfig
+from agents.training.interrupts import ignore_stop_signals
 
 
 def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
@@ -46,7 +46,8 @@ def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
 
 
 class IgnoringInterrupts:
-    """Wraps an env factory so that the worker process it runs in ignores SIGINT (Ctrl-C) from then on.
+    """Wraps an env factory so that the worker process it runs in ignores SIGINT (Ctrl-C) and SIGTERM from then
+    on.
 
     Only for factories called in a worker process: called in the main process it would disable Ctrl-C there.
     """
@@ -55,7 +56,7 @@ class IgnoringInterrupts:
         self.factory = factory
 
     def __call__(self) -> Any:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        ignore_stop_signals()
         return self.factory()
 
 

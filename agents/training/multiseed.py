@@ -112,7 +112,7 @@ def train_seed(job: SeedJob) -> Path:
             ship_run(job.files, job.ship_to)
         return job.files.policy
     config_path = write_seed_config(job)
-    return train(
+    policy = train(
         job.config,
         config_path=config_path,
         resume=True,
@@ -120,6 +120,12 @@ def train_seed(job: SeedJob) -> Path:
         ship_to=job.ship_to,
         files=job.files,
     )
+    if json.loads(job.files.record.read_text())["sessions"][-1]["interrupted"]:
+        # Stop here rather than start the next seed: the same command resumes this one.
+        raise KeyboardInterrupt(
+            f"seed {job.config.seed} saved at its last step; run the same command to resume"
+        )
+    return policy
 
 
 def train_seeds(jobs: list[SeedJob], *, backend: str = "local", address: str | None = None) -> list[Path]:

@@ -24,6 +24,7 @@ from agents.common.machine import available_cores, code_version, cpu_model, gl_r
 from agents.training.config import TrainConfig, checked_config
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
+from agents.training.interrupts import stop_signals_interrupt
 from agents.training.outputs import RunFiles
 from agents.training.saved_models import latest_checkpoint, save_atomically
 from agents.training.shipping import ship_run
@@ -160,15 +161,16 @@ def train(
     steps_before = model.num_timesteps
     interrupted = False
     try:
-        model.learn(
-            max(0, config.total_timesteps - model.num_timesteps),
-            callback=callbacks,
-            progress_bar=True,
-            reset_num_timesteps=resume_step is None,
-            tb_log_name=config.name,
-        )
+        with stop_signals_interrupt():
+            model.learn(
+                max(0, config.total_timesteps - model.num_timesteps),
+                callback=callbacks,
+                progress_bar=True,
+                reset_num_timesteps=resume_step is None,
+                tb_log_name=config.name,
+            )
     except KeyboardInterrupt:
-        # Ctrl-C ends this session early; what was learned is still saved below.
+        # Ctrl-C or SIGTERM ends this session early; what was learned is still saved below.
         interrupted = True
         print(f"interrupted at {model.num_timesteps} steps: saving; --resume continues from here")
     finally:

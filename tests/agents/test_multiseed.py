@@ -111,3 +111,36 @@ def test_an_unknown_backend_is_refused(tmp_path: Path) -> None:
     jobs = seed_jobs(config, [0], config_path=config_path, runs_dir=tmp_path, ship_to=None)
     with pytest.raises(ValueError, match="backend must be 'local' or 'ray', got 'slurm'"):
         train_seeds(jobs, backend="slurm")
+
+
+def test_sigterm_saves_the_seed_and_stops_before_the_next_even_in_the_background(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    _, config_path = tiny_train_config(tmp_path, total=100_000, name="stopped")
+    runs_dir = tmp_path / "runs"
+    # As `cmd &` in a script starts it: SIGINT ignored, so only SIGTERM (or an explicit handler) can stop it.
+    process = subprocess.Popen(
+        [sys.executable, "-c", "from agents.cli import main; raise SystemExit(main())", "train", "--config",
+         str(config_path), "--seeds", "0-1",
+         "--runs-dir", str(runs_dir)],
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )  # fmt: skip
+    files = RunFiles.of_seed(runs_dir, "stopped", 0)
+    deadline = time.monotonic() + 120
+    while (
+        not (files.checkpoints.is_dir() and any(files.checkpoints.iterdir())) and time.monotonic() < deadline
+    ):
+        time.sleep(0.5)
+    process.send_signal(signal.SIGTERM)
+    output, _ = process.communicate(timeout=120)
+    assert process.returncode == 130, output
+    assert "seed 0 saved at its last step; run the same command to resume" in output
+    record = json.loads(files.record.read_text())
+    assert record["sessions"][-1]["interrupted"] is True
+    assert not (runs_dir / "stopped" / "seed_1").exists()

@@ -24,7 +24,7 @@ from flownav_env.observation import (
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_command
 from flownav_env.rendering import VIEW_PANEL_SIZE, CameraRenderer, camera_panel
-from flownav_env.scene import LAYOUT_FUNCTIONS, material_names
+from flownav_env.scene import LAYOUT_FUNCTIONS, LayoutParams, material_names
 from flownav_env.sensor import Pose, SensorPipeline
 from flownav_env.settings import Choice, EnvSettings, settings_property, with_sensor_settings
 
@@ -47,10 +47,9 @@ class FlowNavEnv(gym.Env):
     distance per frame (``forward_speed`` / ``frame_rate``), scene brightness, and relative errors on the
     rotation and translation the estimator is told; beside them, real sensors' errors on the told motion and on
     the estimated depths (bias, drift, noise floor, outliers, dropout: :mod:`flownav_env.settings`).
-    ``obs_source="oracle"`` replaces the estimated depths by
-    the true depths at the same tracked points (ray-cast in the scene), separating estimator error from
-    policy error; ``"oracle_valid"`` keeps only the points the estimator gave a valid depth but uses their
-    true depth, separating *which* points the estimator delivers from *how well* it measures them.
+    ``obs_source="oracle"`` replaces the estimated depths by the true depths at the same tracked points
+    (ray-cast), separating estimator error from policy error; ``"oracle_valid"`` keeps only the points with a
+    valid estimate but uses their true depth: *which* points the estimator delivers vs *how well* it measures.
 
     ## Action Space
     ``Box(-1, 1, (3,), float32)``; values outside [-1, 1] are clipped. Positive values steer toward the right
@@ -141,8 +140,8 @@ class FlowNavEnv(gym.Env):
     | ``physics_timestep`` | 0.004 | MuJoCo timestep (s), in [0.0005, 0.005] (physics ≥ 200 Hz) |
     | ``render_mode`` | None | ``"rgb_array"``: camera view with the flow overlay beside a chase view |
 
-    Rendering is offscreen through MuJoCo's ``MUJOCO_GL`` backend (``egl`` unless set). The default resolution
-    (160×120) and FAST threshold (10) were measured: ``results/env_performance.md``.
+    Between episodes, :meth:`set_sensor` and :meth:`set_course` change what training randomises. The default
+    resolution (160×120) and FAST threshold (10) were measured: ``results/env_performance.md``.
 
     ## Version History
     * v0: initial version (FAST threshold 10 since the benchmark's second sweep; 20 before).
@@ -213,7 +212,6 @@ class FlowNavEnv(gym.Env):
         self.render_mode = render_mode
         self.settings = EnvSettings(**{item.name: arguments[item.name] for item in fields(EnvSettings)})
         settings = self.settings
-        self.layout_params = settings.layout_params()
         self.intrinsics = settings.intrinsics()
         self.estimator = FlowDepthEstimator(self.intrinsics, **settings.estimator_arguments())
         self.physics = FlowNavPhysics(
@@ -243,8 +241,7 @@ class FlowNavEnv(gym.Env):
         self._min_clearance = math.inf
 
     @property
-    def depth_bin_edges(self) -> np.ndarray:
-        """The histogram's depth bin edges (m) as a float64 array."""
+    def depth_bin_edges(self) -> np.ndarray:  # as a float64 array (m)
         return np.asarray(self.settings.depth_bin_edges, np.float64)
 
     def set_sensor(self, **values: float) -> None:
@@ -257,6 +254,14 @@ class FlowNavEnv(gym.Env):
         """
         self.settings = self.settings.with_sensor(**values)
         self.physics.set_brightness(self.settings.brightness)
+
+    def set_course(self, **values: float) -> None:
+        """Change ``forward_speed`` or ``obstacle_density`` from the next reset on; checked as set_sensor."""
+        self.settings = self.settings.with_course(**values)
+
+    @property
+    def layout_params(self) -> LayoutParams:  # of the current settings
+        return self.settings.layout_params()
 
     # --- Gymnasium API ----------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -323,11 +328,9 @@ class FlowNavEnv(gym.Env):
         self._depth_points = points
         # True depth at the tracked points of the previous frame (NaN where a ray hits nothing).
         needs_truth = settings.depth_error_info or settings.obs_source != "flow"
-        true_depth = (
-            self.physics.ray_depths(self.intrinsics.rays(points.points), *frame.previous_pose)
-            if needs_truth
-            else np.zeros(0)
-        )
+        true_depth = np.zeros(0)
+        if needs_truth:
+            true_depth = self.physics.ray_depths(self.intrinsics.rays(points.points), *frame.previous_pose)
         depth, valid = observed_depths(settings.obs_source, points, true_depth)
         histogram = depth_histogram(settings, self.intrinsics, points, depth, valid)
 
@@ -384,7 +387,6 @@ class FlowNavEnv(gym.Env):
             self._view.close()
             self._view = None
 
-    # --- helpers ----------------------------------------------------------------------------------------------
     def _require_open(self, method: str) -> None:
         # A closed env would quietly make a new GL context; a closed env is a bug in the caller.
         if self._closed:
@@ -393,8 +395,6 @@ class FlowNavEnv(gym.Env):
     def _render_camera(self) -> np.ndarray:
         return self._camera.render(self.physics.data, self.physics.camera_id)
 
-    def _observation(
-        self, histogram: np.ndarray, points: DepthPoints, counted: np.ndarray
-    ) -> dict[str, np.ndarray]:
+    def _observation(self, histogram: np.ndarray, points: DepthPoints, counted: np.ndarray) -> dict:
         state = drone_state(self.physics)
         return assemble_observation(self.settings, self.intrinsics, histogram, state, points, counted)

@@ -144,6 +144,8 @@ SENSOR_RULES: dict[str, Range] = {
     ),
 }
 SENSOR_FIELDS = tuple(SENSOR_RULES)
+# What training may vary between episodes besides the sensor (FlowNavEnv.set_course; from the next reset).
+COURSE_FIELDS = ("forward_speed", "obstacle_density")
 DEPTH_ERROR_FIELDS = ("depth_noise", "depth_outliers", "depth_dropout")
 _SPEED = Range(0.0, 5.0, low_open=True, unit="m/s", meaning="speed at action 1")
 _WEIGHT = Range(0.0, math.inf, high_open=True, meaning="reward weight")
@@ -265,9 +267,20 @@ class EnvSettings(SensorSettings):
         Raises:
             ValueError: A name is not a sensor variable, or a value is outside its range.
         """
-        unknown = sorted(set(values) - set(SENSOR_FIELDS))
+        return self._with_some(SENSOR_FIELDS, "sensor settings", values)
+
+    def with_course(self, **values: Any) -> EnvSettings:
+        """These settings with the course's speed or obstacle density changed (and checked).
+
+        Raises:
+            ValueError: A name is not one of :data:`COURSE_FIELDS`, or a value is outside its range.
+        """
+        return self._with_some(COURSE_FIELDS, "course settings", values)
+
+    def _with_some(self, allowed: tuple[str, ...], kind: str, values: dict[str, Any]) -> EnvSettings:
+        unknown = sorted(set(values) - set(allowed))
         if unknown:
-            raise ValueError(f"not sensor settings: {unknown}; allowed: {', '.join(SENSOR_FIELDS)}")
+            raise ValueError(f"not {kind}: {unknown}; allowed: {', '.join(allowed)}")
         return replace(self, **values)
 
     def layout_params(self) -> LayoutParams:

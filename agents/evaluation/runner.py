@@ -13,9 +13,8 @@ import dataclasses
 import functools
 import hashlib
 import json
-import math
 import signal
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,6 +32,7 @@ from agents.evaluation.records import (
     row_identity,
 )
 from agents.policies import agent_env_kwargs, is_learned, load_agent, policy_file
+from flownav_env.limits import episode_step_limit
 
 
 def canonical_json(value: Any) -> str:
@@ -103,28 +103,6 @@ def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:
             cache[setting] = tuple(identity[name] for name in IDENTITY_FIELDS)
         result.append(cache[setting])
     return result
-
-
-def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
-    """A time limit that scales with the course: twice the time it takes at the commanded speed, in frames.
-
-    Registered limits assume the default 20 m at 1 m/s and 10 frames/s; a slower flight (a sweep's
-    forward-speed levels), a higher frame rate or a longer field would otherwise be cut off before it could
-    reach the goal. Never below the registered limit; None (keep it) when none of the three is set.
-    """
-    if not {"forward_speed", "frame_rate", "field_length"} & set(settings):
-        return None
-    import gymnasium as gym
-
-    from flownav_env.settings import EnvSettings
-
-    spec = gym.spec(env_id)
-    defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
-    merged = {**defaults, **spec.kwargs, **settings}
-    speed = max(float(merged["forward_speed"]), 0.1)
-    length = float(merged["field_length"])
-    frame_rate = float(merged["frame_rate"])
-    return max(spec.max_episode_steps or 0, math.ceil(2.0 * length / speed * frame_rate))
 
 
 _CACHE: dict[tuple, tuple[Any, Any]] = {}

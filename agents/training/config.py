@@ -30,7 +30,7 @@ class PPOParams:
 
 @dataclass
 class Randomization:
-    """Per-episode uniform ranges [low, high] of the sensor variables (for ``ppo_robust``); empty = fixed."""
+    """Per-episode uniform ranges [low, high] of the sensor and course variables; empty = fixed."""
 
     rotation_error: list[float] = env_setting_field("rotation_error", default_factory=list)
     translation_error: list[float] = env_setting_field("translation_error", default_factory=list)
@@ -45,6 +45,9 @@ class Randomization:
     depth_noise: list[float] = env_setting_field("depth_noise", default_factory=list)
     depth_outliers: list[float] = env_setting_field("depth_outliers", default_factory=list)
     depth_dropout: list[float] = env_setting_field("depth_dropout", default_factory=list)
+    # The course, drawn before each reset (the time limit is set for the slowest speed).
+    forward_speed: list[float] = env_setting_field("forward_speed", default_factory=list)
+    obstacle_density: list[float] = env_setting_field("obstacle_density", default_factory=list)
 
     def validate(self) -> None:
         for name, bounds in asdict(self).items():

@@ -15,6 +15,7 @@ from typing import Any
 from agents.common.seeds import checkpoint_selection_seed, training_env_seed
 from agents.training.config import TrainConfig
 from agents.training.interrupts import ignore_stop_signals
+from flownav_env.limits import episode_step_limit
 
 
 def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
@@ -27,6 +28,9 @@ def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
     """
     env_id, env_kwargs = config.env_id, {"depth_error_info": False, **config.env}
     ranges = {name: list(bounds) for name, bounds in asdict(config.randomize).items() if bounds}
+    # Slow episodes need the time to reach the goal: the limit of the slowest speed drawn.
+    slowest = {"forward_speed": min(ranges["forward_speed"])} if "forward_speed" in ranges else {}
+    limit = episode_step_limit(env_id, {**config.env, **slowest}) if slowest else None
 
     def factory():
         import gymnasium as gym
@@ -37,7 +41,7 @@ def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
 
         # Training reads rewards, not the depth-error diagnostics: skip their per-step ray cast unless the
         # config asks (oracle observations get true depths regardless).
-        env = gym.make(env_id, **env_kwargs)
+        env = gym.make(env_id, **env_kwargs, **({"max_episode_steps": limit} if limit else {}))
         if ranges:
             env = SensorRandomization(env, ranges)
         return Monitor(env)

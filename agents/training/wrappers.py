@@ -8,36 +8,51 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from flownav_env.settings import SENSOR_FIELDS, check_setting
+from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS, check_setting
 
 
 class SensorRandomization(gym.Wrapper):
-    """Draws the sensor variables of each episode uniformly from ``ranges`` (name → [low, high]).
+    """Draws the sensor and course variables of each episode uniformly from ``ranges`` (name → [low, high]).
 
-    Names are FlowNavEnv's sensor settings (:data:`flownav_env.settings.SENSOR_FIELDS`), set through
-    ``FlowNavEnv.set_sensor``, which checks them against their ranges. The draw uses the wrapped env's own
-    generator, so it is reproducible from ``reset(seed=...)``; the reset frame itself carries no depth, so
-    nothing is lost by changing the settings right after it.
+    Sensor names (:data:`flownav_env.settings.SENSOR_FIELDS`) are set through ``FlowNavEnv.set_sensor`` right
+    after the reset, drawn from the wrapped env's own generator, so they are reproducible from
+    ``reset(seed=...)``; the reset frame carries no depth, so nothing is lost by changing them after it. Course
+    names (``forward_speed``, ``obstacle_density``: :data:`~flownav_env.settings.COURSE_FIELDS`) shape the
+    layout and the start, so they are drawn before each reset, from this wrapper's generator (seeded by the
+    first ``reset(seed=...)``), and set through ``FlowNavEnv.set_course``. Both setters check the ranges.
 
     Raises:
-        ValueError: a name that is not a sensor setting, or an end outside the setting's range.
+        ValueError: a name that is neither, or an end outside the setting's range.
     """
 
     def __init__(self, env: gym.Env, ranges: Mapping[str, Sequence[float]]) -> None:
         super().__init__(env)
-        unknown = set(ranges) - set(SENSOR_FIELDS)
+        allowed = SENSOR_FIELDS + COURSE_FIELDS
+        unknown = set(ranges) - set(allowed)
         if unknown:
-            raise ValueError(f"ranges may only name {', '.join(SENSOR_FIELDS)}, got {sorted(unknown)}")
-        self.ranges = {name: tuple(bounds) for name, bounds in ranges.items() if bounds}
-        for name, bounds in self.ranges.items():
+            raise ValueError(f"ranges may only name {', '.join(allowed)}, got {sorted(unknown)}")
+        ranges = {name: tuple(bounds) for name, bounds in ranges.items() if bounds}
+        for name, bounds in ranges.items():
             for end in bounds:
                 check_setting(name, end)
+        self.ranges = {name: bounds for name, bounds in ranges.items() if name in SENSOR_FIELDS}
+        self.course_ranges = {name: bounds for name, bounds in ranges.items() if name in COURSE_FIELDS}
+        self._course_rng: np.random.Generator | None = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        if self.course_ranges:
+            if seed is not None or self._course_rng is None:
+                self._course_rng = np.random.default_rng(seed)
+            course = {
+                name: float(self._course_rng.uniform(*bounds)) for name, bounds in self.course_ranges.items()
+            }
+            self.env.unwrapped.set_course(**course)
         observation, info = self.env.reset(seed=seed, options=options)
         base = self.env.unwrapped
         rng = np.random.default_rng(int(base.np_random.integers(2**63)))
         drawn = {name: float(rng.uniform(low, high)) for name, (low, high) in self.ranges.items()}
         base.set_sensor(**drawn)
+        if self.course_ranges:
+            drawn = {**drawn, **course}
         info = {**info, **{f"sensor_{name}": value for name, value in drawn.items()}}
         return observation, info

@@ -19,10 +19,10 @@ from agents.evaluation.records import append_record, read_episodes, read_records
 from agents.evaluation.runner import (
     EpisodesInterrupted,
     EpisodeTask,
-    episode_step_limit,
     execute,
     pending_tasks,
 )
+from flownav_env.limits import episode_step_limit
 
 SMALL = (("camera_height", 72), ("camera_width", 96))
 TASK = EpisodeTask("straight", "clean", 0.0, TEST_SEED_START, "FlowNavSingle-v0", SMALL)

@@ -152,3 +152,21 @@ def test_the_report_leads_with_every_agent_and_compares_learned_with_reactive() 
     text = "\n".join(report_lines(table, gains, LAYOUTS, "flownav leaderboard --episodes 40", block=10))
     assert "| ppo_flow | 3 | 120 |" in text and "| bee | 1 | 40 |" in text
     assert "`ppo_flow` fails in" in text and "lower, intervals apart" in text
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--episodes", "0"], "--episodes and --workers must be >= 1, got 0 and 2"),
+        (["--workers", "0"], "--episodes and --workers must be >= 1, got 300 and 0"),
+        (["--agents", "bee,hawk"], "agent must be one of straight, bee, bee_robust, vfh, ppo_flow"),
+    ],
+)
+def test_the_command_refuses_bad_input_before_flying(
+    tmp_path: Path, capsys, extra: list[str], message: str
+) -> None:
+    from agents.cli import main
+
+    assert main(["leaderboard", "--out", str(tmp_path / "lb"), *extra]) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "lb" / "leaderboard_episodes.csv").exists()

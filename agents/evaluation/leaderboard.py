@@ -303,10 +303,10 @@ def run_leaderboard(
     """
     if episodes < 1 or workers < 1:
         raise ValueError(f"--episodes and --workers must be >= 1, got {episodes} and {workers}")
+    runs = leaderboard_runs(agents, policies_dir)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / "leaderboard_episodes.csv"
-    runs = leaderboard_runs(agents, policies_dir)
     tasks = leaderboard_tasks(runs, episodes, policies_dir)
     if not report_only:
         execute(tasks, csv_path, workers=workers, description="leaderboard")

@@ -169,4 +169,4 @@ def test_the_command_refuses_bad_input_before_flying(
 
     assert main(["leaderboard", "--out", str(tmp_path / "lb"), *extra]) == 2
     assert message in capsys.readouterr().err
-    assert not (tmp_path / "lb" / "leaderboard_episodes.csv").exists()
+    assert not (tmp_path / "lb").exists()

@@ -13,7 +13,13 @@ from importlib.metadata import PackageNotFoundError, version
 
 from estimator.camera import CameraIntrinsics
 from estimator.estimator import DepthPoints, FlowDepthEstimator
-from estimator.histogram import DEFAULT_BIN_EDGES, DEFAULT_SECTORS, sector_fraction, sector_histogram
+from estimator.histogram import (
+    DEFAULT_BIN_EDGES,
+    DEFAULT_SECTORS,
+    sector_counts,
+    sector_fraction,
+    sector_histogram,
+)
 
 try:
     # The one version of the flownav distribution (estimator, flownav_env and agents), from pyproject.toml.
@@ -28,6 +34,7 @@ __all__ = [
     "DepthPoints",
     "FlowDepthEstimator",
     "__version__",
+    "sector_counts",
     "sector_fraction",
     "sector_histogram",
 ]

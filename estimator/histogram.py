@@ -114,6 +114,28 @@ def sector_fraction(
     return fraction.reshape(rows, cols)
 
 
+def sector_counts(
+    points: Any,
+    counted: Any,
+    image_size: tuple[int, int],
+    sectors: tuple[int, int] = DEFAULT_SECTORS,
+) -> np.ndarray:
+    """Per image sector, how many of the ``counted`` points lie in it (sectors as :func:`sector_histogram`).
+
+    Returns:
+        float32 array of shape (rows, cols) of non-negative counts.
+
+    Raises:
+        ValueError: A shape, dtype or length does not match, a counted point has a non-finite position, or
+            ``image_size`` or ``sectors`` is malformed.
+    """
+    width, height = _as_pair("image_size", image_size, "(width, height)")
+    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    points, _, counted = _as_point_arrays(points, None, counted, mask_name="counted")
+    sector, _ = _sector_index(points[counted], (width, height), (rows, cols))
+    return np.bincount(sector, minlength=rows * cols).astype(np.float32).reshape(rows, cols)
+
+
 def _sector_index(
     points: np.ndarray, image_size: tuple[int, int], sectors: tuple[int, int]
 ) -> tuple[np.ndarray, np.ndarray]:

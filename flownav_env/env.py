@@ -53,7 +53,7 @@ class FlowNavEnv(gym.Env):
 
     ## Action Space
     ``Box(-1, 1, (3,), float32)``; values outside [-1, 1] are clipped. Positive values steer toward the right
-    and top of the camera image.
+    and top of the camera image. Forward speed is not an action: the drone holds ``forward_speed``.
 
     | Num | Action                  | Min | Max | Scaled to                        | Unit  |
     |-----|-------------------------|-----|-----|----------------------------------|-------|
@@ -61,16 +61,15 @@ class FlowNavEnv(gym.Env):
     | 1   | vertical velocity (up)  | -1  | 1   | ± ``max_vertical_speed``         | m/s   |
     | 2   | yaw rate (to the right) | -1  | 1   | ± ``max_yaw_rate_deg``           | deg/s |
 
-    Forward speed is not an action: the drone holds ``forward_speed`` along its heading.
-
     ## Observation Space
-    ``Dict`` of float32 boxes (two, or three with ``observe_unresolved=True``):
+    ``Dict`` of float32 boxes (two, plus one per ``observe_unresolved=True`` and ``observe_counts=True``):
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
     | ``depth_histogram``| (rows, cols, bins)     | [0, 1]               | per image sector (``histogram_sectors``, row 0 at the top, column 0 at the left), the fraction of its valid depth points in each depth bin (``depth_bin_edges``, m; beyond the last edge counts in the last bin); an empty sector is all zeros |
     | ``state``         | (7,)                    | see below            | what a real drone knows of itself         |
     | ``unresolved``    | (rows, cols)            | [0, 1]               | only with ``observe_unresolved=True``: per sector, the share of the tracked points that got no depth to count (too little parallax: far away, or near the focus of expansion); 0 where nothing was tracked |
+    | ``point_counts``  | (rows, cols)            | [0, 1]               | only with ``observe_counts=True``: per sector, the confidence 1 − exp(−n/10) of the n points its histogram counts |
 
     ``state`` (clipped to the bounds of the space):
 
@@ -125,7 +124,7 @@ class FlowNavEnv(gym.Env):
     {sensor_rows}
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
-    | ``observe_unresolved`` | False | add the ``unresolved`` key: where the estimator tracks points it cannot range (a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall) |
+    | ``observe_unresolved``, ``observe_counts`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall) or the ``point_counts`` key (how much each sector's histogram rests on) |
     | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]``; False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
@@ -191,6 +190,7 @@ class FlowNavEnv(gym.Env):
         obs_source: str = "flow",
         histogram_sectors: Sequence[int] = (3, 5),
         observe_unresolved: bool = False,
+        observe_counts: bool = False,
         depth_error_info: bool = True,
         depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
         max_lateral_speed: float = 1.0,

@@ -10,12 +10,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
-from estimator import CameraIntrinsics, DepthPoints, sector_fraction, sector_histogram
+from estimator import CameraIntrinsics, DepthPoints, sector_counts, sector_fraction, sector_histogram
 from estimator.evaluation import relative_depth_error
 from flownav_env.settings import EnvSettings
 
 if TYPE_CHECKING:
     from flownav_env.physics import FlowNavPhysics
+
+# A sector's point count as a bounded confidence: 1 - exp(-n / COUNT_SCALE) is 0.63 at 10 points, 0.99 at 46.
+COUNT_SCALE = 10.0
 
 STATE_FIELDS = (
     "forward_velocity",
@@ -39,6 +42,8 @@ def observation_space(settings: EnvSettings) -> spaces.Dict:
     }
     if settings.observe_unresolved:
         boxes["unresolved"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+    if settings.observe_counts:
+        boxes["point_counts"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     return spaces.Dict(boxes)
 
 
@@ -84,7 +89,8 @@ def assemble_observation(
     points: DepthPoints,
     counted: np.ndarray,
 ) -> dict[str, np.ndarray]:
-    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector) only when asked for."""
+    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector) and ``point_counts``
+    (how many points a sector's histogram counts, as ``1 - exp(-n / COUNT_SCALE)``) only when asked for."""
     observation = {"depth_histogram": histogram, "state": state}
     if settings.observe_unresolved:
         observation["unresolved"] = sector_fraction(
@@ -94,6 +100,11 @@ def assemble_observation(
             intrinsics.image_size,
             sectors=settings.histogram_sectors,
         )
+    if settings.observe_counts:
+        counts = sector_counts(
+            points.points, counted, intrinsics.image_size, sectors=settings.histogram_sectors
+        )
+        observation["point_counts"] = (1.0 - np.exp(-counts / COUNT_SCALE)).astype(np.float32)
     return observation
 
 

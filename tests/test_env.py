@@ -63,6 +63,18 @@ def test_unresolved_share_complements_the_histogram() -> None:
     env.close()
 
 
+def test_point_counts_rise_with_the_points_each_histogram_counts() -> None:
+    env = make(observe_counts=True)
+    obs, _ = env.reset(seed=2)
+    assert env.observation_space.contains(obs) and not obs["point_counts"].any()
+    for _ in range(4):
+        obs, *_, info = env.step(np.zeros(3))
+    ranged = obs["depth_histogram"].sum(-1) > 0
+    assert np.array_equal(obs["point_counts"] > 0, ranged)  # a count where, and only where, a histogram is
+    assert obs["point_counts"].max() < 1.0 and info["points_valid"] > 0
+    env.close()
+
+
 def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
     flow_env, truth_env = make(), make(obs_source="oracle_valid")
     flow_obs, _ = flow_env.reset(seed=3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from estimator import DEFAULT_BIN_EDGES, sector_fraction, sector_histogram
+from estimator import DEFAULT_BIN_EDGES, sector_counts, sector_fraction, sector_histogram
 
 IMAGE_SIZE = (640, 480)
 
@@ -148,3 +148,16 @@ def test_sector_fraction_counts_selected_among_the_points_of_each_sector():
 def test_sector_fraction_bad_input_names_the_argument(selected, among, message):
     with pytest.raises(ValueError, match=message):
         sector_fraction(np.zeros((3, 2)), selected, among, (20, 10))
+
+
+def test_sector_counts_count_the_masked_points_per_sector() -> None:
+    points, _, valid = _random_points(500, seed=4)
+    counts = sector_counts(points, valid, IMAGE_SIZE, sectors=(3, 5))
+    assert counts.shape == (3, 5) and counts.dtype == np.float32 and counts.sum() == valid.sum()
+    column = np.minimum(((points[:, 0] + 0.5) * 5 / 640).astype(int), 4)
+    row = np.minimum(((points[:, 1] + 0.5) * 3 / 480).astype(int), 2)
+    expected = np.zeros((3, 5))
+    np.add.at(expected, (row[valid], column[valid]), 1)
+    np.testing.assert_array_equal(counts, expected)
+    with pytest.raises(ValueError, match="counted"):
+        sector_counts(points, valid[:10], IMAGE_SIZE)

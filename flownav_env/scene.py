@@ -29,10 +29,17 @@ PARKED_GROUP = 3
 # software rasteriser still transforms every triangle, so the onboard camera leaves this group out.
 DRONE_GROUP = 2
 # Capsule tessellation (slices around, stacks per cap). MuJoCo's 28 x 16 made the capsules 70 % of a software
-# frame; 16 x 8 halves the frame with the silhouette within 1 cm of the true 0.5 m circle and the estimator's
-# depth error unchanged (results/throughput/README.md).
-CAPSULE_SLICES = 16
-CAPSULE_STACKS = 8
+# frame; 16 x 8 halves the frame with the silhouette within 1 cm of the true 0.5 m circle, which at the env's
+# resolutions (offscreen buffers up to 320 px wide) left the estimator's depth error unchanged
+# (results/throughput/README.md). Wider frames resolve the facets (at 640x480 the capsule depth error of the
+# thesis replication doubled), so they keep MuJoCo's mesh.
+COARSE_MESH_MAX_WIDTH = 320
+CAPSULE_MESH = {"coarse": (16, 8), "fine": (28, 16)}
+
+
+def capsule_mesh(offscreen_width: int) -> tuple[int, int]:
+    """(slices, stacks) of the capsules for an offscreen buffer ``offscreen_width`` pixels wide."""
+    return CAPSULE_MESH["coarse" if offscreen_width <= COARSE_MESH_MAX_WIDTH else "fine"]
 # The plane's third size is its rendering grid spacing; a fine grid multiplies the triangles the software
 # rasteriser draws (0.1 m took half of each frame) for no visible difference under a directional sun.
 
@@ -154,12 +161,13 @@ def build_scene_xml(
         for i, spin in enumerate(quad.rotor_spin)
     )
     width, height = offscreen_size
+    slices, stacks = capsule_mesh(width)
     return f"""
 <mujoco model="flownav">
   <option timestep="{timestep}" integrator="implicitfast"/>
   <visual>
     <global offwidth="{width}" offheight="{height}"/>
-    <quality offsamples="0" shadowsize="0" numslices="{CAPSULE_SLICES}" numstacks="{CAPSULE_STACKS}"/>
+    <quality offsamples="0" shadowsize="0" numslices="{slices}" numstacks="{stacks}"/>
     <headlight ambient="0.3 0.3 0.3" diffuse="0.3 0.3 0.3" specular="0 0 0"/>
     <map znear="0.02" zfar="200"/>
   </visual>

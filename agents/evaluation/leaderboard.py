@@ -101,8 +101,9 @@ def summarise_runs(
     outcomes = {agent: success_outcomes(rows, names, layouts) for agent, names in runs.items()}
     estimates = interval_estimates({agent: block_scores(o, block) for agent, o in outcomes.items()})
     table = []
+    layout_set = set(layouts)
     for agent, names in runs.items():
-        mine = [row for row in rows if row["agent"] in names and int(row["seed"]) in set(layouts)]
+        mine = [row for row in rows if row["agent"] in names and int(row["seed"]) in layout_set]
         n = outcomes[agent].size
         success = float(outcomes[agent].mean())
         if len(names) == 1:

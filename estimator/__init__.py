@@ -12,7 +12,7 @@ Public API:
 from importlib.metadata import PackageNotFoundError, version
 
 from estimator.camera import CameraIntrinsics
-from estimator.estimator import DepthPoints, FlowDepthEstimator
+from estimator.estimator import FlowDepthEstimator
 from estimator.histogram import (
     DEFAULT_BIN_EDGES,
     DEFAULT_SECTORS,
@@ -20,6 +20,7 @@ from estimator.histogram import (
     sector_fraction,
     sector_histogram,
 )
+from estimator.points import DepthPoints
 
 try:
     # The one version of the flownav distribution (estimator, flownav_env and agents), from pyproject.toml.

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import cv2
 import numpy as np
 
-from estimator import geometry, tracking
+from estimator import geometry, multiframe, tracking
 from estimator._validation import (
     as_rotation_matrix,
     as_translation_vector,
@@ -19,65 +19,7 @@ from estimator._validation import (
     require_positive_finite,
 )
 from estimator.camera import CameraIntrinsics
-
-TIMING_KEYS = ("prepare", "fast", "flow", "depth", "total")
-
-
-@dataclass
-class DepthPoints:
-    """Result of one estimation: one row per FAST keypoint of the previous frame.
-
-    Attributes:
-        points: (N, 2) float32 keypoint pixel positions in the previous image.
-        next_points: (N, 2) float32 tracked positions in the next image; meaningless where ``tracked`` is
-            False.
-        depth: (N,) float64 z-depth in metres in the previous camera frame. Finite and positive where
-            ``valid``; may be NaN, negative or meaningless elsewhere.
-        valid: (N,) bool: the depth passed every check (tracking and geometry).
-        tracked: (N,) bool: LK converged, its error is within ``max_lk_error`` and the forward-backward check
-            (when on) passed. ``valid`` implies ``tracked``.
-        parallax_px: (N,) float64 translational flow (after derotation) behind the depth, in pixels.
-        timings: Seconds per stage: ``"prepare"`` (grayscale conversion and brightness normalisation of the
-            new frame, and of the previous one in :meth:`FlowDepthEstimator.estimate`), ``"fast"``, ``"flow"``
-            (pyramidal LK, both directions), ``"depth"`` (derotation, depth and checks) and ``"total"`` (the
-            whole call, including input checks).
-    """
-
-    points: np.ndarray
-    next_points: np.ndarray
-    depth: np.ndarray
-    valid: np.ndarray
-    tracked: np.ndarray
-    parallax_px: np.ndarray
-    timings: dict[str, float] = field(default_factory=lambda: dict.fromkeys(TIMING_KEYS, 0.0))
-
-    @classmethod
-    def empty(cls, timings: dict[str, float] | None = None) -> DepthPoints:
-        """A result with no points (first frame of a stream, or a frame without corners)."""
-        return cls(
-            points=np.empty((0, 2), dtype=np.float32),
-            next_points=np.empty((0, 2), dtype=np.float32),
-            depth=np.empty(0, dtype=np.float64),
-            valid=np.empty(0, dtype=bool),
-            tracked=np.empty(0, dtype=bool),
-            parallax_px=np.empty(0, dtype=np.float64),
-            timings=dict(timings) if timings is not None else dict.fromkeys(TIMING_KEYS, 0.0),
-        )
-
-    @property
-    def num_points(self) -> int:
-        """Number of keypoints detected in the previous frame (N)."""
-        return len(self.points)
-
-    @property
-    def num_tracked(self) -> int:
-        """Number of keypoints that were tracked into the next frame (``tracked.sum()``)."""
-        return int(np.count_nonzero(self.tracked))
-
-    @property
-    def num_valid(self) -> int:
-        """Number of keypoints with a trusted depth (``valid.sum()``)."""
-        return int(np.count_nonzero(self.valid))
+from estimator.points import TIMING_KEYS, DepthPoints
 
 
 @dataclass
@@ -88,6 +30,8 @@ class _Frame:
 
 
 BRIGHTNESS_MODES = ("pair", "frame", "off")
+# New corners closer than this to a carried track are the same corner found again (baseline_frames > 1).
+_TRACK_SPACING_PX = 3
 
 
 class FlowDepthEstimator:
@@ -181,6 +125,12 @@ class FlowDepthEstimator:
             allows (the epipolar line through the derotated position), > 0. A static point can only be off
             that line by flow noise plus the motion error; mistracks (repeated texture, occlusion edges) and
             moving objects usually are off by more.
+        baseline_frames: Longest baseline of a streamed depth, in frames, an integer in [1, 16]. 1 (default)
+            ranges every point over one frame pair, as the thesis. Above 1, :meth:`update` tracks points from
+            frame to frame and ranges each from its oldest view within that many frames, with the told
+            motions composed (:mod:`estimator.multiframe`): far points and points near the focus of
+            expansion gain parallax, while motion errors add up over the frames. :meth:`estimate` always
+            uses the one pair it is given.
 
     Raises:
         ValueError: A parameter is out of range; the message names it, its value and the allowed range.
@@ -204,6 +154,7 @@ class FlowDepthEstimator:
         normalize_brightness: bool | str = "off",
         min_parallax_px: float = 1.0,
         max_epipolar_error_px: float = 1.0,
+        baseline_frames: int = 1,
     ) -> None:
         if not isinstance(intrinsics, CameraIntrinsics):
             raise ValueError(f"intrinsics must be a CameraIntrinsics, got {type(intrinsics).__name__}")
@@ -233,6 +184,8 @@ class FlowDepthEstimator:
         self.normalize_brightness = normalize_brightness
         self.min_parallax_px = require_non_negative_finite("min_parallax_px", min_parallax_px)
         self.max_epipolar_error_px = require_positive_finite("max_epipolar_error_px", max_epipolar_error_px)
+        self.baseline_frames = require_int_in_range("baseline_frames", baseline_frames, 1, 16)
+        self._window = multiframe.TrackWindow(self.baseline_frames) if self.baseline_frames > 1 else None
         self._detector = cv2.FastFeatureDetector_create(self.fast_threshold, True)
         self._previous: _Frame | None = None
 
@@ -299,11 +252,16 @@ class FlowDepthEstimator:
         if previous is None:
             timings["total"] = time.perf_counter() - start
             return DepthPoints.empty(timings)
+        if self._window is not None:
+            return self._estimate_tracked(previous, current, rotation, translation, timings, start)
         return self._estimate_pair(previous, current, rotation, translation, timings, start)
 
     def reset(self) -> None:
-        """Forget the previous frame: the next :meth:`update` starts a new stream and returns empty."""
+        """Forget the previous frame (and the tracks): the next :meth:`update` starts a new stream and returns
+        empty."""
         self._previous = None
+        if self._window is not None:
+            self._window.reset()
 
     def _estimate_pair(
         self,
@@ -338,9 +296,7 @@ class FlowDepthEstimator:
         timings["flow"] = time.perf_counter() - stage_start
 
         stage_start = time.perf_counter()
-        tracked = tracks.status & (tracks.lk_error <= self.max_lk_error)
-        if self.forward_backward:
-            tracked &= tracks.fb_error_px <= self.fb_max_error_px
+        tracked = self._tracking_ok(tracks)
         solution = geometry.solve_depth(
             self.intrinsics.normalize(points),
             self.intrinsics.normalize(tracks.next_points),
@@ -362,6 +318,76 @@ class FlowDepthEstimator:
             parallax_px=solution.parallax_px,
             timings=timings,
         )
+
+    def _estimate_tracked(
+        self,
+        previous: _Frame,
+        current: _Frame,
+        rotation: np.ndarray,
+        translation: np.ndarray,
+        timings: dict[str, float],
+        start: float,
+    ) -> DepthPoints:
+        window = self._window
+        stage_start = time.perf_counter()
+        prev_image, next_image = self._tracking_images(previous, current)
+        timings["prepare"] += time.perf_counter() - stage_start
+        stage_start = time.perf_counter()
+        carried = window.latest_points
+        budget = None if self.max_points is None else self.max_points - len(carried)
+        if budget is None or budget > 0:
+            mask = multiframe.free_mask(prev_image.shape, carried, _TRACK_SPACING_PX)
+            spread_grid = self.spread_grid if self.spread_keypoints else None
+            window.add(tracking.detect_keypoints(prev_image, self._detector, budget, spread_grid, mask))
+        timings["fast"] = time.perf_counter() - stage_start
+
+        stage_start = time.perf_counter()
+        points = window.latest_points.copy()
+        tracks = tracking.track_points(
+            prev_image,
+            next_image,
+            points,
+            self.win_size,
+            self.max_level,
+            self.forward_backward,
+            self.fb_max_level,
+        )
+        timings["flow"] = time.perf_counter() - stage_start
+
+        stage_start = time.perf_counter()
+        tracked = self._tracking_ok(tracks)
+        anchors, frames_back = window.anchors()
+        baseline = frames_back + 1
+        ranging = multiframe.range_over_baselines(
+            self.intrinsics.normalize(anchors),
+            self.intrinsics.normalize(tracks.next_points),
+            baseline,
+            multiframe.motions_to_latest(window.steps, self.baseline_frames),
+            (rotation, translation),
+            self.intrinsics.focal_scale,
+            self.method,
+            self.min_parallax_px,
+            self.max_epipolar_error_px,
+        )
+        window.advance(tracks.next_points, tracked & ~ranging.off_epipolar, (rotation, translation))
+        timings["depth"] = time.perf_counter() - stage_start
+        timings["total"] = time.perf_counter() - start
+        return DepthPoints(
+            points=points,
+            next_points=tracks.next_points,
+            depth=ranging.depth,
+            valid=tracked & ranging.ok,
+            tracked=tracked,
+            parallax_px=ranging.parallax_px,
+            timings=timings,
+            baseline_frames=baseline.astype(np.int16),
+        )
+
+    def _tracking_ok(self, tracks: tracking.Tracks) -> np.ndarray:
+        ok = tracks.status & (tracks.lk_error <= self.max_lk_error)
+        if self.forward_backward:
+            ok &= tracks.fb_error_px <= self.fb_max_error_px
+        return ok
 
     def _prepare(self, gray: np.ndarray, timings: dict[str, float]) -> _Frame:
         stage_start = time.perf_counter()

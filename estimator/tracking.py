@@ -123,6 +123,7 @@ def detect_keypoints(
     detector: cv2.FastFeatureDetector,
     max_points: int | None,
     spread_grid: tuple[int, int] | None,
+    mask: np.ndarray | None = None,
 ) -> np.ndarray:
     """FAST corners of a frame, optionally limited in number and spread over the image.
 
@@ -134,11 +135,12 @@ def detect_keypoints(
             grid, the kept points are balanced over the cells: every cell keeps its strongest corners up to a
             common cap, the cap chosen as small as possible while still giving ``max_points`` in total, so
             sparse cells keep everything and crowded cells (texture) give way.
+        mask: uint8 (H, W), detect only where it is non-zero; None for the whole image.
 
     Returns:
         (N, 2) float32 pixel positions (integers: FAST works on the pixel grid).
     """
-    keypoints = detector.detect(gray)
+    keypoints = detector.detect(gray, mask)
     if not keypoints:
         return np.empty((0, 2), dtype=np.float32)
     points = cv2.KeyPoint_convert(keypoints).astype(np.float32, copy=False).reshape(-1, 2)

@@ -18,6 +18,7 @@ from flownav_env.scene import (
     build_scene_xml,
     material_names,
     paint_textures,
+    set_camera_near_plane,
 )
 
 
@@ -47,6 +48,7 @@ class FlowNavPhysics:
             layout, quad, timestep=timestep, camera_fov_deg=camera_fov_deg, offscreen_size=offscreen_size
         )
         self.model = mujoco.MjModel.from_xml_string(xml)
+        set_camera_near_plane(self.model)
         paint_textures(self.model, texture_seed)
         self.data = mujoco.MjData(self.model)
         self.controller = VelocityController(quad, gains)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from flownav_env.quadrotor import QuadrotorParams
@@ -40,6 +41,8 @@ CAPSULE_MESH = {"coarse": (16, 8), "fine": (28, 16)}
 def capsule_mesh(offscreen_width: int) -> tuple[int, int]:
     """(slices, stacks) of the capsules for an offscreen buffer ``offscreen_width`` pixels wide."""
     return CAPSULE_MESH["coarse" if offscreen_width <= COARSE_MESH_MAX_WIDTH else "fine"]
+
+
 # The plane's third size is its rendering grid spacing; a fine grid multiplies the triangles the software
 # rasteriser draws (0.1 m took half of each frame) for no visible difference under a directional sun.
 
@@ -127,6 +130,18 @@ def material_names() -> list[str]:
     return [f"{kind}{i}" for kind in TEXTURE_GENERATORS for i in range(MATERIALS_PER_KIND)]
 
 
+# The cameras' near clipping plane, in metres. MuJoCo's <map znear> is a fraction of the model's extent, which
+# the course makes about 60 m: the old fraction 0.02 clipped everything within 1.2 m of the camera, so near
+# capsules rendered hollow and the flow agents flew blind exactly where collisions happen. The nearest surface
+# the forward camera can face is the hull's radius minus the camera's offset, about 8 cm.
+CAMERA_NEAR_M = 0.05
+
+
+def set_camera_near_plane(model: mujoco.MjModel) -> None:
+    """Put every camera's near clipping plane at :data:`CAMERA_NEAR_M`, whatever the model's extent."""
+    model.vis.map.znear = CAMERA_NEAR_M / model.stat.extent
+
+
 def build_scene_xml(
     params: LayoutParams,
     quad: QuadrotorParams,
@@ -169,7 +184,7 @@ def build_scene_xml(
     <global offwidth="{width}" offheight="{height}"/>
     <quality offsamples="0" shadowsize="0" numslices="{slices}" numstacks="{stacks}"/>
     <headlight ambient="0.3 0.3 0.3" diffuse="0.3 0.3 0.3" specular="0 0 0"/>
-    <map znear="0.02" zfar="200"/>
+    <map zfar="200"/>
   </visual>
   <asset>
     <texture name="sky" type="skybox" builtin="gradient" rgb1="0.55 0.7 0.9" rgb2="0.9 0.93 0.97"

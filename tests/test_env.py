@@ -299,6 +299,25 @@ def test_ray_cast_truth_matches_the_renderers_depth_buffer() -> None:
     assert np.median(relative) < 0.01
 
 
+def test_an_obstacle_right_in_front_of_the_camera_is_rendered_solid() -> None:
+    # MuJoCo's znear is a fraction of the model's extent; a 60 m course once put the near plane at 1.2 m and
+    # near capsules rendered hollow. Here the camera faces a capsule surface 0.3 m ahead.
+    env = FlowNavEnv(layout="three", camera_width=64, camera_height=48)
+    env.reset(seed=0)
+    physics = env.physics
+    obstacle = physics.obstacle_positions[0]
+    radius = physics.layout.obstacle_radius
+    camera_offset = float(physics.quad.camera_offset.split()[0])
+    start = np.array([obstacle[0] - radius - 0.3 - camera_offset, obstacle[1], 1.0])
+    physics.reset_drone(start, yaw=0.0, velocity_world=np.zeros(3))
+    depth_buffer = env._camera.render_depth(physics.data, physics.camera_id)
+    centre = np.array([[31.5, 23.5]])
+    truth = physics.ray_depths(env.intrinsics.rays(centre), *physics.camera_pose())
+    env.close()
+    assert truth[0] == pytest.approx(0.3, abs=0.02)
+    assert depth_buffer[23:25, 31:33] == pytest.approx(truth[0], rel=0.02)
+
+
 def test_estimator_depth_on_env_frames_matches_depth_buffer_on_obstacles() -> None:
     """A frame pair rendered by the env with known motion: estimated depth vs the renderer's depth buffer."""
     import cv2

@@ -99,3 +99,12 @@ def _as_float_array(name: str, value: Any, expected: str) -> np.ndarray:
     except (TypeError, ValueError) as error:
         raise ValueError(f"{name} must be {expected}, got {type(value).__name__}: {error}") from None
     return array
+
+
+def as_grid(name: str, value: Any) -> tuple[int, int]:
+    """Return ``value`` as a ``(rows, cols)`` pair of integers, each in [1, 64]."""
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise ValueError(f"{name} must be a (rows, cols) pair of integers in [1, 64], got {value!r}")
+    rows = require_int_in_range(f"{name}[0] (rows)", value[0], 1, 64)
+    cols = require_int_in_range(f"{name}[1] (cols)", value[1], 1, 64)
+    return rows, cols

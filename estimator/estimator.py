@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import cv2
@@ -11,6 +10,7 @@ import numpy as np
 
 from estimator import geometry, multiframe, tracking
 from estimator._validation import (
+    as_grid,
     as_rotation_matrix,
     as_translation_vector,
     require_bool,
@@ -21,15 +21,6 @@ from estimator._validation import (
 from estimator.camera import CameraIntrinsics
 from estimator.points import TIMING_KEYS, DepthPoints
 
-
-@dataclass
-class _Frame:
-    # What one frame contributes, prepared once: its grayscale and its own brightness map (gain, offset).
-    gray: np.ndarray
-    brightness_map: tuple[float, float]
-
-
-BRIGHTNESS_MODES = ("pair", "frame", "off")
 # New corners closer than this to a carried track are the same corner found again (baseline_frames > 1).
 _TRACK_SPACING_PX = 3
 
@@ -168,7 +159,7 @@ class FlowDepthEstimator:
         self.max_level = require_int_in_range("max_level", max_level, 0, 8)
         self.max_lk_error = require_positive_finite("max_lk_error", max_lk_error)
         self.spread_keypoints = require_bool("spread_keypoints", spread_keypoints)
-        self.spread_grid = _as_grid("spread_grid", spread_grid)
+        self.spread_grid = as_grid("spread_grid", spread_grid)
         self.forward_backward = require_bool("forward_backward", forward_backward)
         self.fb_max_error_px = require_positive_finite("fb_max_error_px", fb_max_error_px)
         self.fb_max_level = (
@@ -176,7 +167,7 @@ class FlowDepthEstimator:
         )
         if isinstance(normalize_brightness, (bool, np.bool_)):
             normalize_brightness = "pair" if normalize_brightness else "off"
-        if normalize_brightness not in BRIGHTNESS_MODES:
+        if normalize_brightness not in tracking.BRIGHTNESS_MODES:
             raise ValueError(
                 "normalize_brightness must be one of 'pair', 'frame', 'off' (or True/False), "
                 f"got {normalize_brightness!r}"
@@ -187,7 +178,7 @@ class FlowDepthEstimator:
         self.baseline_frames = require_int_in_range("baseline_frames", baseline_frames, 1, 16)
         self._window = multiframe.TrackWindow(self.baseline_frames) if self.baseline_frames > 1 else None
         self._detector = cv2.FastFeatureDetector_create(self.fast_threshold, True)
-        self._previous: _Frame | None = None
+        self._previous: tracking.PreparedFrame | None = None
 
     def estimate(
         self, prev_image: np.ndarray, next_image: np.ndarray, rotation: Any, translation: Any
@@ -265,15 +256,15 @@ class FlowDepthEstimator:
 
     def _estimate_pair(
         self,
-        previous: _Frame,
-        current: _Frame,
+        previous: tracking.PreparedFrame,
+        current: tracking.PreparedFrame,
         rotation: np.ndarray,
         translation: np.ndarray,
         timings: dict[str, float],
         start: float,
     ) -> DepthPoints:
         stage_start = time.perf_counter()
-        prev_image, next_image = self._tracking_images(previous, current)
+        prev_image, next_image = tracking.tracking_images(previous, current, self.normalize_brightness)
         timings["prepare"] += time.perf_counter() - stage_start
         stage_start = time.perf_counter()
         spread_grid = self.spread_grid if self.spread_keypoints else None
@@ -284,15 +275,7 @@ class FlowDepthEstimator:
             return DepthPoints.empty(timings)
 
         stage_start = time.perf_counter()
-        tracks = tracking.track_points(
-            prev_image,
-            next_image,
-            points,
-            self.win_size,
-            self.max_level,
-            self.forward_backward,
-            self.fb_max_level,
-        )
+        tracks = self._track(prev_image, next_image, points)
         timings["flow"] = time.perf_counter() - stage_start
 
         stage_start = time.perf_counter()
@@ -321,8 +304,8 @@ class FlowDepthEstimator:
 
     def _estimate_tracked(
         self,
-        previous: _Frame,
-        current: _Frame,
+        previous: tracking.PreparedFrame,
+        current: tracking.PreparedFrame,
         rotation: np.ndarray,
         translation: np.ndarray,
         timings: dict[str, float],
@@ -330,7 +313,7 @@ class FlowDepthEstimator:
     ) -> DepthPoints:
         window = self._window
         stage_start = time.perf_counter()
-        prev_image, next_image = self._tracking_images(previous, current)
+        prev_image, next_image = tracking.tracking_images(previous, current, self.normalize_brightness)
         timings["prepare"] += time.perf_counter() - stage_start
         stage_start = time.perf_counter()
         carried = window.latest_points
@@ -343,15 +326,7 @@ class FlowDepthEstimator:
 
         stage_start = time.perf_counter()
         points = window.latest_points.copy()
-        tracks = tracking.track_points(
-            prev_image,
-            next_image,
-            points,
-            self.win_size,
-            self.max_level,
-            self.forward_backward,
-            self.fb_max_level,
-        )
+        tracks = self._track(prev_image, next_image, points)
         timings["flow"] = time.perf_counter() - stage_start
 
         stage_start = time.perf_counter()
@@ -383,27 +358,28 @@ class FlowDepthEstimator:
             baseline_frames=baseline.astype(np.int16),
         )
 
+    def _track(self, prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarray) -> tracking.Tracks:
+        return tracking.track_points(
+            prev_image,
+            next_image,
+            points,
+            self.win_size,
+            self.max_level,
+            self.forward_backward,
+            self.fb_max_level,
+        )
+
     def _tracking_ok(self, tracks: tracking.Tracks) -> np.ndarray:
         ok = tracks.status & (tracks.lk_error <= self.max_lk_error)
         if self.forward_backward:
             ok &= tracks.fb_error_px <= self.fb_max_error_px
         return ok
 
-    def _prepare(self, gray: np.ndarray, timings: dict[str, float]) -> _Frame:
+    def _prepare(self, gray: np.ndarray, timings: dict[str, float]) -> tracking.PreparedFrame:
         stage_start = time.perf_counter()
         frame_map = tracking.brightness_map(gray) if self.normalize_brightness != "off" else (1.0, 0.0)
         timings["prepare"] += time.perf_counter() - stage_start
-        return _Frame(gray=gray, brightness_map=frame_map)
-
-    def _tracking_images(self, previous: _Frame, current: _Frame) -> tuple[np.ndarray, np.ndarray]:
-        """The two images FAST and LK work on, per ``normalize_brightness``."""
-        if self.normalize_brightness == "off":
-            return previous.gray, current.gray
-        next_map = previous.brightness_map if self.normalize_brightness == "pair" else current.brightness_map
-        return (
-            tracking.apply_brightness_map(previous.gray, *previous.brightness_map),
-            tracking.apply_brightness_map(current.gray, *next_map),
-        )
+        return tracking.PreparedFrame(gray=gray, brightness_map=frame_map)
 
     def _check_size(self, gray: np.ndarray, name: str) -> None:
         height, width = gray.shape
@@ -416,11 +392,3 @@ class FlowDepthEstimator:
     @staticmethod
     def _check_motion(rotation: Any, translation: Any) -> tuple[np.ndarray, np.ndarray]:
         return as_rotation_matrix("rotation", rotation), as_translation_vector("translation", translation)
-
-
-def _as_grid(name: str, value: Any) -> tuple[int, int]:
-    if not isinstance(value, (tuple, list)) or len(value) != 2:
-        raise ValueError(f"{name} must be a (rows, cols) pair of integers in [1, 64], got {value!r}")
-    rows = require_int_in_range(f"{name}[0] (rows)", value[0], 1, 64)
-    cols = require_int_in_range(f"{name}[1] (cols)", value[1], 1, 64)
-    return rows, cols

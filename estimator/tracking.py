@@ -28,6 +28,30 @@ _NORMALIZED_STD = 48.0
 _LK_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01)
 
 
+BRIGHTNESS_MODES = ("pair", "frame", "off")
+
+
+class PreparedFrame(NamedTuple):
+    """What one frame contributes, prepared once: its grayscale and its own brightness map (gain, offset)."""
+
+    gray: np.ndarray
+    brightness_map: tuple[float, float]
+
+
+def tracking_images(
+    previous: PreparedFrame, current: PreparedFrame, mode: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """The two images FAST and LK work on, per the estimator's ``normalize_brightness`` mode: ``"off"`` the raw
+    frames, ``"pair"`` both mapped with the previous frame's map, ``"frame"`` each with its own."""
+    if mode == "off":
+        return previous.gray, current.gray
+    next_map = previous.brightness_map if mode == "pair" else current.brightness_map
+    return (
+        apply_brightness_map(previous.gray, *previous.brightness_map),
+        apply_brightness_map(current.gray, *next_map),
+    )
+
+
 class Tracks(NamedTuple):
     """Output of :func:`track_points`; N rows, one per input point.
 

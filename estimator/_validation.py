@@ -70,10 +70,20 @@ def as_rotation_matrix(name: str, value: Any) -> np.ndarray:
     matrix = _as_float_array(name, value, "a 3x3 rotation matrix")
     if matrix.shape != (3, 3):
         raise ValueError(f"{name} must be a 3x3 rotation matrix, got an array of shape {matrix.shape}")
-    if not np.all(np.isfinite(matrix)):
+    # Plain floats: this runs on every frame, where numpy's per-call cost on a 3x3 is larger than the maths.
+    entries = matrix.ravel().tolist()
+    if not all(math.isfinite(value) for value in entries):
         raise ValueError(f"{name} must be a finite 3x3 rotation matrix, got non-finite entries")
-    orthogonality_error = float(np.max(np.abs(matrix.T @ matrix - np.eye(3))))
-    determinant = float(np.linalg.det(matrix))
+    a, b, c, d, e, f, g, h, i = entries
+    orthogonality_error = max(  # the entries of R^T R - I, written out
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * i),
+        abs(b * c + e * f + h * i),
+    )
+    determinant = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     if orthogonality_error > ROTATION_TOLERANCE or abs(determinant - 1.0) > ROTATION_TOLERANCE:
         raise ValueError(
             f"{name} must be a rotation matrix (R^T R = I and det R = +1 within {ROTATION_TOLERANCE:g}), "

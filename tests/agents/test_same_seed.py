@@ -4,8 +4,8 @@
 subpackages and the env's settings and sensor pipeline got one owner each; the restructure (issue 11) and the
 trust fixes (issue 12) left every record identical. The throughput work (issue 13) changed episodes on
 purpose (the controller on plain floats rounds differently, and the backward LK check starts from the forward
-track's origin), and again when capsules got a coarser mesh for faster rendering, so the file was flown
-again each time, with the same tasks as below (see CHANGELOG.md).
+track's origin), again when capsules got a coarser mesh for faster rendering, and again when the camera's near
+plane moved from 1.22 m to 5 cm (near capsules had rendered hollow), so the file was flown again each time, with the same tasks as below (see CHANGELOG.md).
 Every field must match to the last digit: the physics, rendering, estimator and policies are deterministic
 for a seed, so any difference is a change of behaviour. A deliberate change of behaviour regenerates the file
 (``record_same_seed_episodes`` below) and says so in CHANGELOG.md.

@@ -19,6 +19,7 @@ from estimator.histogram import (
     sector_counts,
     sector_fraction,
     sector_histogram,
+    sector_near_depth,
 )
 from estimator.points import DepthPoints
 
@@ -38,4 +39,5 @@ __all__ = [
     "sector_counts",
     "sector_fraction",
     "sector_histogram",
+    "sector_near_depth",
 ]

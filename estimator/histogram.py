@@ -136,6 +136,48 @@ def sector_counts(
     return np.bincount(sector, minlength=rows * cols).astype(np.float32).reshape(rows, cols)
 
 
+def sector_near_depth(
+    points: Any,
+    depth: Any,
+    valid: Any,
+    image_size: tuple[int, int],
+    sectors: tuple[int, int] = DEFAULT_SECTORS,
+    quantile: float = 0.1,
+) -> np.ndarray:
+    """Per image sector, how near its nearest surface is, robustly: a low quantile of its valid depths.
+
+    A histogram says how a sector's depths are spread, not how near the nearest one is. The minimum would say
+    that, but one stray depth sets it; here a sector's depths are sorted and the one at rank
+    ``floor(quantile · (n - 1))`` is taken, but never the single nearest when the sector has two or more (so
+    one outlier cannot set it). Sectors as :func:`sector_histogram`.
+
+    Args:
+        points, depth, valid, image_size, sectors: As :func:`sector_histogram`.
+        quantile: The quantile of each sector's depths, in [0, 1].
+
+    Returns:
+        float32 array of shape (rows, cols): depths in metres, ``inf`` where a sector has no valid point.
+
+    Raises:
+        ValueError: As :func:`sector_histogram`, or ``quantile`` is outside [0, 1].
+    """
+    if isinstance(quantile, bool) or not isinstance(quantile, (int, float)) or not 0.0 <= quantile <= 1.0:
+        raise ValueError(f"quantile must be a number in [0, 1], got {quantile!r}")
+    width, height = _as_pair("image_size", image_size, "(width, height)")
+    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    points, depth, valid = _as_point_arrays(points, depth, valid)
+    sector, inside = _sector_index(points[valid], (width, height), (rows, cols))
+    depths = depth[valid][inside]
+    order = np.lexsort((depths, sector))
+    counts = np.bincount(sector, minlength=rows * cols)
+    starts = np.cumsum(counts) - counts
+    rank = np.maximum((quantile * (counts - 1)).astype(np.intp), np.minimum(1, counts - 1))
+    occupied = counts > 0
+    near = np.full(rows * cols, np.inf)
+    near[occupied] = depths[order][starts[occupied] + rank[occupied]]
+    return near.astype(np.float32).reshape(rows, cols)
+
+
 def _sector_index(
     points: np.ndarray, image_size: tuple[int, int], sectors: tuple[int, int]
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -62,7 +62,7 @@ class FlowNavEnv(gym.Env):
     | 2   | yaw rate (to the right) | -1  | 1   | ± ``max_yaw_rate_deg``           | deg/s |
 
     ## Observation Space
-    ``Dict`` of float32 boxes (two, plus one per ``observe_unresolved=True`` and ``observe_counts=True``):
+    ``Dict`` of float32 boxes: two, plus one per ``observe_unresolved``, ``observe_counts``, ``observe_nearness``:
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
@@ -70,6 +70,7 @@ class FlowNavEnv(gym.Env):
     | ``state``         | (7,)                    | see below            | what a real drone knows of itself         |
     | ``unresolved``    | (rows, cols)            | [0, 1]               | only with ``observe_unresolved=True``: per sector, the share of the tracked points that got no depth to count (too little parallax: far away, or near the focus of expansion); 0 where nothing was tracked |
     | ``point_counts``  | (rows, cols)            | [0, 1]               | only with ``observe_counts=True``: per sector, the confidence 1 − exp(−n/10) of the n points its histogram counts |
+    | ``nearness``      | (rows, cols)            | [0, 1]               | only with ``observe_nearness=True``: per sector, min(1, 0.5 m / d) of a robust near depth d (``estimator.sector_near_depth``: a low quantile of its depths, never one lone point); 0 where no depth counts |
 
     ``state`` (clipped to the bounds of the space):
 
@@ -124,7 +125,7 @@ class FlowNavEnv(gym.Env):
     {sensor_rows}
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
-    | ``observe_unresolved``, ``observe_counts`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall) or the ``point_counts`` key (how much each sector's histogram rests on) |
+    | ``observe_unresolved``, ``observe_counts``, ``observe_nearness`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on) or the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) |
     | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]``; False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
@@ -150,7 +151,6 @@ class FlowNavEnv(gym.Env):
 
     layout = settings_property("layout")
     obs_source = settings_property("obs_source")
-    observe_unresolved = settings_property("observe_unresolved")
     forward_speed = settings_property("forward_speed")
     frame_rate = settings_property("frame_rate")
     histogram_sectors = settings_property("histogram_sectors")
@@ -191,6 +191,7 @@ class FlowNavEnv(gym.Env):
         histogram_sectors: Sequence[int] = (3, 5),
         observe_unresolved: bool = False,
         observe_counts: bool = False,
+        observe_nearness: bool = False,
         depth_error_info: bool = True,
         depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
         max_lateral_speed: float = 1.0,
@@ -283,17 +284,11 @@ class FlowNavEnv(gym.Env):
         self.estimator.reset()
         self._depth_points = self.estimator.update(frame.gray, *frame.told_motion)
         histogram = np.zeros(self.observation_space["depth_histogram"].shape, np.float32)
-        no_points = np.zeros(len(self._depth_points.points), bool)
-        info = {
-            "collision": False,
-            "success": False,
-            "out_of_bounds": False,
-            "progress": 0.0,
-            "clearance": self._min_clearance,
-            "min_clearance": self._min_clearance,
-            **estimator_info(self._depth_points, np.zeros(0)),
-        }
-        return self._observation(histogram, self._depth_points, no_points), info
+        points = self._depth_points
+        info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
+        info |= {"clearance": self._min_clearance, "min_clearance": self._min_clearance}
+        info |= estimator_info(points, np.zeros(0))
+        return self._observation(histogram, points, points.depth, np.zeros(len(points.points), bool)), info
 
     def step(self, action):
         self._require_open("step")
@@ -358,7 +353,7 @@ class FlowNavEnv(gym.Env):
             **estimator_info(points, true_depth),
             **terms,
         }
-        observation = self._observation(histogram, points, valid)
+        observation = self._observation(histogram, points, depth, valid)
         terminated = collision or success or out_of_bounds
         return observation, float(sum(terms.values())), terminated, False, info
 
@@ -395,6 +390,8 @@ class FlowNavEnv(gym.Env):
     def _render_camera(self) -> np.ndarray:
         return self._camera.render(self.physics.data, self.physics.camera_id)
 
-    def _observation(self, histogram: np.ndarray, points: DepthPoints, counted: np.ndarray) -> dict:
+    def _observation(
+        self, histogram: np.ndarray, points: DepthPoints, depth: np.ndarray, counted: np.ndarray
+    ) -> dict:
         state = drone_state(self.physics)
-        return assemble_observation(self.settings, self.intrinsics, histogram, state, points, counted)
+        return assemble_observation(self.settings, self.intrinsics, histogram, state, points, depth, counted)

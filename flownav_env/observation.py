@@ -10,7 +10,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
-from estimator import CameraIntrinsics, DepthPoints, sector_counts, sector_fraction, sector_histogram
+from estimator import (
+    CameraIntrinsics,
+    DepthPoints,
+    sector_counts,
+    sector_fraction,
+    sector_histogram,
+    sector_near_depth,
+)
 from estimator.evaluation import relative_depth_error
 from flownav_env.settings import EnvSettings
 
@@ -19,6 +26,8 @@ if TYPE_CHECKING:
 
 # A sector's point count as a bounded confidence: 1 - exp(-n / COUNT_SCALE) is 0.63 at 10 points, 0.99 at 46.
 COUNT_SCALE = 10.0
+# A sector's near depth d as a nearness min(1, NEAR_DEPTH_M / d): 1 within half a metre, 0.1 at 5 m, 0 if empty.
+NEAR_DEPTH_M = 0.5
 
 STATE_FIELDS = (
     "forward_velocity",
@@ -44,6 +53,8 @@ def observation_space(settings: EnvSettings) -> spaces.Dict:
         boxes["unresolved"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     if settings.observe_counts:
         boxes["point_counts"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+    if settings.observe_nearness:
+        boxes["nearness"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     return spaces.Dict(boxes)
 
 
@@ -87,6 +98,7 @@ def assemble_observation(
     histogram: np.ndarray,
     state: np.ndarray,
     points: DepthPoints,
+    depth: np.ndarray,
     counted: np.ndarray,
 ) -> dict[str, np.ndarray]:
     """The observation dict; ``unresolved`` (tracked points left uncounted, per sector) and ``point_counts``
@@ -105,6 +117,11 @@ def assemble_observation(
             points.points, counted, intrinsics.image_size, sectors=settings.histogram_sectors
         )
         observation["point_counts"] = (1.0 - np.exp(-counts / COUNT_SCALE)).astype(np.float32)
+    if settings.observe_nearness:
+        near = sector_near_depth(
+            points.points, depth, counted, intrinsics.image_size, sectors=settings.histogram_sectors
+        )
+        observation["nearness"] = np.minimum(1.0, NEAR_DEPTH_M / near).astype(np.float32)
     return observation
 
 

@@ -75,6 +75,21 @@ def test_point_counts_rise_with_the_points_each_histogram_counts() -> None:
     env.close()
 
 
+def test_nearness_is_high_only_where_a_sector_holds_near_depths() -> None:
+    env = make(observe_nearness=True)
+    obs, _ = env.reset(seed=2)
+    assert env.observation_space.contains(obs) and not obs["nearness"].any()
+    for _ in range(4):
+        obs, *_, info = env.step(np.zeros(3))
+    ranged = obs["depth_histogram"].sum(-1) > 0
+    assert env.observation_space.contains(obs) and info["points_valid"] > 0
+    assert np.array_equal(obs["nearness"] > 0, ranged)  # a nearness where, and only where, a histogram is
+    points = env.unwrapped._depth_points
+    # No sector is nearer than its nearest valid depth.
+    assert obs["nearness"].max() <= min(1.0, 0.5 / points.depth[points.valid].min()) + 1e-6
+    env.close()
+
+
 def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
     flow_env, truth_env = make(), make(obs_source="oracle_valid")
     flow_obs, _ = flow_env.reset(seed=3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from estimator import DEFAULT_BIN_EDGES, sector_counts, sector_fraction, sector_histogram
+from estimator import DEFAULT_BIN_EDGES, sector_counts, sector_fraction, sector_histogram, sector_near_depth
 
 IMAGE_SIZE = (640, 480)
 
@@ -161,3 +161,32 @@ def test_sector_counts_count_the_masked_points_per_sector() -> None:
     np.testing.assert_array_equal(counts, expected)
     with pytest.raises(ValueError, match="counted"):
         sector_counts(points, valid[:10], IMAGE_SIZE)
+
+
+def test_sector_near_depth_is_a_low_quantile_per_sector_against_a_loop() -> None:
+    points, depth, valid = _random_points(600, seed=5)
+    near = sector_near_depth(points, depth, valid, IMAGE_SIZE, sectors=(3, 5), quantile=0.2)
+    assert near.shape == (3, 5) and near.dtype == np.float32
+    column = np.minimum(((points[:, 0] + 0.5) * 5 / 640).astype(int), 4)
+    row = np.minimum(((points[:, 1] + 0.5) * 3 / 480).astype(int), 2)
+    for r in range(3):
+        for c in range(5):
+            ranked = np.sort(depth[valid & (row == r) & (column == c)])
+            expected = (
+                ranked[max(int(0.2 * (len(ranked) - 1)), min(1, len(ranked) - 1))] if len(ranked) else np.inf
+            )
+            assert near[r, c] == pytest.approx(expected, rel=1e-6)
+
+
+def test_one_stray_near_depth_does_not_set_a_sectors_near_depth() -> None:
+    points = np.array([[10.0, 10.0], [20.0, 20.0], [30.0, 30.0], [600.0, 400.0]])
+    depth = np.array([0.1, 4.0, 5.0, 2.0])  # 0.1 m is a stray depth among 4-5 m
+    near = sector_near_depth(points, depth, np.ones(4, bool), IMAGE_SIZE, sectors=(2, 2), quantile=0.0)
+    np.testing.assert_array_equal(near, [[4.0, np.inf], [np.inf, 2.0]])  # a lone point still counts
+
+
+@pytest.mark.parametrize("quantile", [-0.1, 1.5, float("nan"), True, "0.1"])
+def test_sector_near_depth_rejects_a_quantile_outside_zero_to_one(quantile) -> None:
+    points, depth, valid = _random_points(10)
+    with pytest.raises(ValueError, match=r"quantile must be a number in \[0, 1\], got"):
+        sector_near_depth(points, depth, valid, IMAGE_SIZE, quantile=quantile)

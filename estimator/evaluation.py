@@ -15,6 +15,7 @@ ground-truth motion and compares with the ground-truth depth of frame i; ``flown
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 from typing import Any
 
@@ -137,22 +138,8 @@ def evaluate_sequence(
     """
     if isinstance(max_gap, bool) or not isinstance(max_gap, (int, np.integer)) or max_gap < 1:
         raise ValueError(f"max_gap must be an integer >= 1, got {max_gap!r}")
-    sequence_dir = Path(sequence_dir)
-    if not sequence_dir.is_dir():
-        raise FileNotFoundError(f"sequence folder not found: {sequence_dir}")
-    color_paths = _color_frames(sequence_dir)
-    depth_paths = [sequence_dir / "depth" / f"{path.stem}.png" for path in color_paths]
-    for depth_path in depth_paths:
-        if not depth_path.is_file():
-            raise FileNotFoundError(f"depth image not found: {depth_path}")
-    poses = read_trajectory_log(sequence_dir / "trajectory.log")
-    if len(poses) < len(color_paths):
-        raise ValueError(
-            f"{sequence_dir / 'trajectory.log'} has {len(poses)} poses for {len(color_paths)} frames"
-        )
-
+    images, depth_paths, poses = _load_sequence(sequence_dir)
     estimator = FlowDepthEstimator(intrinsics, method=method, **estimator_params)
-    images = [_read_color(path) for path in color_paths]
     rows = []
     for first in range(len(images)):
         true_depth = _read_depth(depth_paths[first])
@@ -160,6 +147,53 @@ def evaluate_sequence(
             rotation, translation = relative_motion(poses[first], poses[second])
             result = estimator.estimate(images[first], images[second], rotation, translation)
             rows.append(_pair_errors((first, second), result, true_depth, rotation, translation, intrinsics))
+    return rows
+
+
+def evaluate_stream(
+    sequence_dir: Path,
+    intrinsics: CameraIntrinsics,
+    method: str = "triangulation",
+    step: int = 1,
+    **estimator_params: Any,
+) -> list[dict[str, Any]]:
+    """Stream a sequence through :meth:`~estimator.FlowDepthEstimator.update` and measure every result.
+
+    Frames ``0, step, 2·step, …`` are fed in order with their ground-truth motion, as a drone would feed its
+    camera; each result (the depths of the frame before) is compared with that frame's ground-truth depth.
+    This is how multi-frame depth (``baseline_frames`` > 1) is evaluated: its tracks need the stream.
+
+    Args:
+        sequence_dir, intrinsics, method: As :func:`evaluate_sequence`.
+        step: Frames skipped between streamed frames plus one, an integer >= 1.
+        **estimator_params: Further :class:`~estimator.FlowDepthEstimator` keyword arguments, e.g.
+            ``baseline_frames``.
+
+    Returns:
+        One dict per streamed pair, with :func:`evaluate_sequence`'s keys plus ``baseline_frames`` (the mean
+        baseline, in streamed frames, of the valid depths; 1 for two-frame estimation).
+
+    Raises:
+        As :func:`evaluate_sequence` (``step`` in place of ``max_gap``).
+    """
+    if isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 1:
+        raise ValueError(f"step must be an integer >= 1, got {step!r}")
+    images, depth_paths, poses = _load_sequence(sequence_dir)
+    estimator = FlowDepthEstimator(intrinsics, method=method, **estimator_params)
+    frames = list(range(0, len(images), step))
+    estimator.update(images[frames[0]], np.eye(3), np.zeros(3))
+    rows = []
+    for before, after in itertools.pairwise(frames):
+        rotation, translation = relative_motion(poses[before], poses[after])
+        result = estimator.update(images[after], rotation, translation)
+        row = _pair_errors(
+            (before, after), result, _read_depth(depth_paths[before]), rotation, translation, intrinsics
+        )
+        baselines = result.baseline_frames
+        row["baseline_frames"] = (
+            float(np.mean(baselines[result.valid])) if baselines is not None and result.num_valid else 1.0
+        )
+        rows.append(row)
     return rows
 
 
@@ -228,6 +262,24 @@ def _pair_errors(
         "median_epe_px": float(np.median(endpoint_error)) if len(endpoint_error) else float("nan"),
         "time_ms": 1000.0 * result.timings["total"],
     }
+
+
+def _load_sequence(sequence_dir: Path) -> tuple[list[np.ndarray], list[Path], list[np.ndarray]]:
+    """RGB frames, their depth image paths and camera-to-world poses, checked for completeness."""
+    sequence_dir = Path(sequence_dir)
+    if not sequence_dir.is_dir():
+        raise FileNotFoundError(f"sequence folder not found: {sequence_dir}")
+    color_paths = _color_frames(sequence_dir)
+    depth_paths = [sequence_dir / "depth" / f"{path.stem}.png" for path in color_paths]
+    for depth_path in depth_paths:
+        if not depth_path.is_file():
+            raise FileNotFoundError(f"depth image not found: {depth_path}")
+    poses = read_trajectory_log(sequence_dir / "trajectory.log")
+    if len(poses) < len(color_paths):
+        raise ValueError(
+            f"{sequence_dir / 'trajectory.log'} has {len(poses)} poses for {len(color_paths)} frames"
+        )
+    return [_read_color(path) for path in color_paths], depth_paths, poses
 
 
 def _format_cell(value: Any, fmt: str) -> str:

@@ -11,6 +11,7 @@ import pytest
 from estimator import CameraIntrinsics
 from estimator.evaluation import (
     evaluate_sequence,
+    evaluate_stream,
     format_error_table,
     read_trajectory_log,
     relative_depth_error,
@@ -152,3 +153,20 @@ def test_relative_depth_error_is_relative_and_nan_where_nothing_compares():
     np.testing.assert_allclose(errors[[0, 1, 3]], [0.1, 0.2, 0.5])
     assert np.all(np.isnan(errors[[2, 4, 5]]))  # missing truth, zero truth, infinite estimate
     assert relative_depth_error(np.zeros((2, 3)), np.ones((2, 3))).shape == (2, 3)
+
+
+def test_evaluate_stream_feeds_frames_in_order_and_reports_the_baselines(icl_copy):
+    single = evaluate_stream(icl_copy, ICL_INTRINSICS)
+    assert [row["pair"] for row in single] == [(0, 1), (1, 2)]
+    assert all(row["baseline_frames"] == 1.0 and row["valid"] >= 50 for row in single)
+    multi = evaluate_stream(icl_copy, ICL_INTRINSICS, baseline_frames=2)
+    assert multi[0]["valid"] == single[0]["valid"]  # the first pair has no older view to range from
+    assert 1.0 < multi[1]["baseline_frames"] <= 2.0 and multi[1]["valid"] > single[1]["valid"]
+    assert multi[1]["within_10pct"] > 0.9
+    assert [row["pair"] for row in evaluate_stream(icl_copy, ICL_INTRINSICS, step=2)] == [(0, 2)]
+
+
+@pytest.mark.parametrize("step", [0, -1, 1.5, True])
+def test_evaluate_stream_rejects_a_bad_step(icl_copy, step):
+    with pytest.raises(ValueError, match=r"step must be an integer >= 1, got"):
+        evaluate_stream(icl_copy, ICL_INTRINSICS, step=step)

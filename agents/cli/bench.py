@@ -5,6 +5,8 @@ FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop)
 ``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
 render loop of the same scene, with the per-stage breakdown of a step.
 ``flownav bench train``: PPO training steps per second against the number of env workers.
+``flownav bench baselines``: multi-frame depth (``baseline_frames``) against two-frame depth, accuracy and yield
+on ICL-NUIM and in FlowNav flights.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -94,6 +96,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
     _add_output_options(train)
 
+    baselines = targets.add_parser(
+        "baselines", help="multi-frame depth vs two-frame depth: accuracy and yield, ICL-NUIM and in-scene"
+    )
+    baselines.add_argument(
+        "--frames", type=_int_list, default=(1, 2, 4), help="baseline_frames values (default 1,2,4)"
+    )
+    baselines.add_argument("--flights", type=int, default=6, help="scripted flights per value (default 6)")
+    baselines.add_argument("--steps", type=int, default=120, help="steps per flight (default 120)")
+    baselines.add_argument(
+        "--sequence",
+        type=Path,
+        default=Path("..") / "shared" / "testdata" / "icl_nuim_livingroom1",
+        help="ICL-NUIM-style sequence (skipped when absent; default ../shared/testdata/icl_nuim_livingroom1)",
+    )
+    _add_output_options(baselines)
+
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
@@ -111,6 +129,12 @@ def run(args: argparse.Namespace) -> int:
             loop_frames=args.loop_frames,
             out_dir=args.out,
             progress=not args.no_progress,
+        )
+    elif args.target == "baselines":
+        from agents.benchmarks.depth_baselines import run_depth_baselines
+
+        paths = run_depth_baselines(
+            args.frames, args.flights, args.steps, args.sequence, args.out, progress=not args.no_progress
         )
     elif args.target == "train":
         from agents.benchmarks.training import run_training_benchmark

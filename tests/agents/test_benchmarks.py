@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from agents.benchmarks import depth_loops, env_report, estimator_report, flight
+from agents.benchmarks import depth_baselines, depth_loops, env_report, estimator_report, flight
 from agents.cli import build_parser
 from agents.common import machine, tables
 from estimator import CameraIntrinsics
@@ -123,6 +123,8 @@ def test_cli_parses_both_targets() -> None:
     assert args.target == "env" and args.resolutions == ((64, 48), (160, 120))
     with pytest.raises(SystemExit):
         parser.parse_args(["bench", "env", "--resolutions", "64by48"])
+    args = parser.parse_args(["bench", "baselines", "--frames", "1,4", "--flights", "2"])
+    assert args.target == "baselines" and args.frames == (1, 4) and args.flights == 2
 
 
 def test_record_flight_rejects_bad_frame_counts() -> None:
@@ -156,3 +158,22 @@ def test_training_benchmark_times_each_worker_count(tmp_path) -> None:
     assert "flownav bench train" in md.read_text()
     with pytest.raises(ValueError, match=r"--rollouts, --repeats and every --n-envs must be >= 1"):
         run_training_benchmark(config, tmp_path / "tiny.yaml", (0,), 1, 1, tmp_path)
+
+
+def test_depth_baselines_report_compares_each_baseline_in_scene(tmp_path) -> None:
+    report, figure = depth_baselines.run_depth_baselines(
+        (1, 3), flights=1, steps=6, sequence=tmp_path / "absent", out_dir=tmp_path, progress=False
+    )
+    text = report.read_text()
+    assert figure.stat().st_size > 0
+    assert "| 1 | 6 |" in text and "| 3 | 6 |" in text  # one summary row per k, all steps flown
+    assert "was not found" in text  # the real-image section says why it is missing
+    summary, bands = depth_baselines.scene_rows((1,), flights=1, steps=4, progress=False)
+    assert summary[0]["valid_per_frame"] > 0 and 0 < summary[0]["within_10pct"] <= 1
+    assert len(bands) == len(depth_baselines.DEPTH_BANDS) - 1
+
+
+@pytest.mark.parametrize(("frames", "flights"), [((0,), 1), ((17,), 1), ((1,), 0)])
+def test_depth_baselines_rejects_bad_arguments(tmp_path, frames, flights) -> None:
+    with pytest.raises(ValueError, match=r"must (each )?be"):
+        depth_baselines.run_depth_baselines(frames, flights, 5, tmp_path, tmp_path, progress=False)

@@ -1,0 +1,263 @@
+"""Multi-frame depth against two-frame depth (``FlowDepthEstimator(baseline_frames=k)``), measured where the
+issue asks: on ICL-NUIM streamed with its ground-truth motion, and in FlowNav flights against the ray-cast truth.
+
+``flownav bench baselines --out results`` writes ``depth_baselines.md`` and ``depth_baselines.png``. An accuracy
+benchmark, not a speed one: the estimator's time per frame is reported only as a side note.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.benchmarks.common import hardware_summary
+from agents.benchmarks.flight import scripted_action
+from agents.common.seeds import VALIDATION_SEED_START
+from agents.common.tables import markdown_table, today
+
+#: True-depth bands (m) of the in-scene breakdown: near obstacles, the course ahead, far, very far.
+DEPTH_BANDS: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, math.inf)
+#: Flights start from these validation seeds (the ones the throughput work used), one per flight.
+FLIGHT_SEED_START = VALIDATION_SEED_START
+ICL_INTRINSICS = {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480}
+
+
+def icl_rows(sequence: Path, baseline_frames: Sequence[int], steps: Sequence[int] = (1, 2)) -> list[dict]:
+    """ICL-NUIM streamed every ``step`` frames, per ``baseline_frames``: medians over the streamed pairs."""
+    from estimator import CameraIntrinsics
+    from estimator.evaluation import evaluate_stream
+
+    intrinsics = CameraIntrinsics(**ICL_INTRINSICS)
+    rows = []
+    for step in steps:
+        for frames in baseline_frames:
+            pairs = evaluate_stream(sequence, intrinsics, step=step, baseline_frames=frames)
+            last = pairs[-1]
+            rows.append(
+                {
+                    "step": step,
+                    "baseline_frames": frames,
+                    "pairs": len(pairs),
+                    "valid_median": float(np.median([pair["valid"] for pair in pairs])),
+                    "valid_last": last["valid"],
+                    "median_rel_error_last": last["median_rel_error"],
+                    "within_10pct_last": last["within_10pct"],
+                    "mean_baseline_last": last["baseline_frames"],
+                }
+            )
+    return rows
+
+
+def scene_rows(
+    baseline_frames: Sequence[int], flights: int, steps: int, progress: bool = True
+) -> tuple[list[dict], list[dict]]:
+    """Scripted FlowNav flights (160×120, defaults) per ``baseline_frames``, every valid depth against the
+    ray-cast truth at its pixel in the previous camera.
+
+    Returns:
+        ``(summary, bands)``: one summary row per ``baseline_frames``; one row per (baseline_frames, band).
+    """
+    from tqdm import tqdm
+
+    from estimator.evaluation import relative_depth_error
+    from flownav_env import FlowNavEnv
+
+    summary, bands = [], []
+    jobs = [(frames, flight) for frames in baseline_frames for flight in range(flights)]
+    samples: dict[int, dict[str, list]] = {frames: _empty_samples() for frames in baseline_frames}
+    for frames, flight in tqdm(jobs, desc="flights", unit="flight", disable=not progress):
+        env = FlowNavEnv(estimator_kwargs={"baseline_frames": frames}, depth_error_info=False)
+        env.reset(seed=FLIGHT_SEED_START + flight)
+        width = env.intrinsics.width
+        sample = samples[frames]
+        for step in range(steps):
+            previous_pose = env.physics.camera_pose()
+            _, _, terminated, truncated, _ = env.step(scripted_action(step))
+            points = env._depth_points
+            valid = points.valid
+            truth = env.physics.ray_depths(env.intrinsics.rays(points.points[valid]), *previous_pose)
+            known = np.isfinite(truth)
+            sample["error"].append(relative_depth_error(points.depth[valid][known], truth[known]))
+            sample["truth"].append(truth[known])
+            central = np.abs(points.points[valid][:, 0] - (width - 1) / 2) < width / 6
+            sample["valid"].append(int(valid.sum()))
+            sample["central"].append(int(central.sum()))
+            sample["ms"].append(1000.0 * points.timings["total"])
+            if terminated or truncated:
+                break
+        env.close()
+    for frames, sample in samples.items():
+        error, truth = np.concatenate(sample["error"]), np.concatenate(sample["truth"])
+        steps_flown = len(sample["valid"])
+        summary.append(
+            {
+                "baseline_frames": frames,
+                "steps": steps_flown,
+                "valid_per_frame": float(np.mean(sample["valid"])),
+                "central_per_frame": float(np.mean(sample["central"])),
+                "median_rel_error": float(np.median(error)),
+                "within_10pct": float(np.mean(error <= 0.1)),
+                "p90_rel_error": float(np.quantile(error, 0.9)),
+                "estimator_ms": float(np.median(sample["ms"])),
+            }
+        )
+        for low, high in itertools.pairwise(DEPTH_BANDS):
+            band = (truth >= low) & (truth < high)
+            bands.append(
+                {
+                    "baseline_frames": frames,
+                    "band": (low, high),
+                    "valid_per_frame": float(band.sum() / steps_flown),
+                    "median_rel_error": float(np.median(error[band])) if band.any() else float("nan"),
+                }
+            )
+    return summary, bands
+
+
+def run_depth_baselines(
+    baseline_frames: Sequence[int],
+    flights: int,
+    steps: int,
+    sequence: Path,
+    out_dir: Path,
+    progress: bool = True,
+) -> list[Path]:
+    """Measure, then write ``depth_baselines.md`` and ``depth_baselines.png`` to ``out_dir``."""
+    if not baseline_frames or any(not 1 <= frames <= 16 for frames in baseline_frames):
+        raise ValueError(f"baseline frames must each be in [1, 16], got {list(baseline_frames)}")
+    if flights < 1 or steps < 1:
+        raise ValueError(f"flights and steps must be >= 1, got {flights} and {steps}")
+    started = time.perf_counter()
+    icl = icl_rows(sequence, baseline_frames) if sequence.is_dir() else []
+    summary, bands = scene_rows(baseline_frames, flights, steps, progress)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figure = out_dir / "depth_baselines.png"
+    _plot(bands, figure)
+    command = (
+        f"flownav bench baselines --frames {','.join(map(str, baseline_frames))} --flights {flights} "
+        f"--steps {steps} --out {out_dir}"
+    )
+    report = out_dir / "depth_baselines.md"
+    report.write_text(_report(command, time.perf_counter() - started, icl, summary, bands, sequence))
+    return [report, figure]
+
+
+def _empty_samples() -> dict[str, list]:
+    return {"error": [], "truth": [], "valid": [], "central": [], "ms": []}
+
+
+def _band_name(band: tuple[float, float]) -> str:
+    low, high = band
+    return f"≥ {low:g} m" if math.isinf(high) else f"{low:g}–{high:g} m"
+
+
+def _report(
+    command: str, seconds: float, icl: list[dict], summary: list[dict], bands: list[dict], sequence: Path
+) -> str:
+    lines = [
+        "# Multi-frame depth: ranging tracked points over several frames",
+        "",
+        f"Command: `{command}` ({today()}, {seconds / 60:.1f} min).",
+        "",
+        hardware_summary(),
+        "",
+        "`FlowDepthEstimator(baseline_frames=k)` tracks points frame to frame and ranges each from its oldest "
+        "view within k frames, with the told motions composed (`estimator.multiframe`); k = 1 is the thesis's "
+        "two-frame estimator. Longer baselines give far points and points near the focus of expansion the "
+        "parallax one frame pair lacks.",
+        "",
+        "## In FlowNav (160×120, default env, scripted weaving flights)",
+        "",
+        f"Flights from validation seed {FLIGHT_SEED_START:,}; every valid depth is compared with the ray-cast "
+        "z-depth at its pixel in the previous camera (the depth buffer's value, `tests/test_env.py`).",
+        "",
+    ]
+    header = [
+        "k",
+        "steps",
+        "valid / frame",
+        "in the central third",
+        "median error",
+        "within 10 %",
+        "p90 error",
+    ]
+    header.append("estimator ms (median)")
+    rows = [
+        [
+            row["baseline_frames"],
+            row["steps"],
+            f"{row['valid_per_frame']:.1f}",
+            f"{row['central_per_frame']:.1f}",
+            f"{row['median_rel_error']:.2%}",
+            f"{row['within_10pct']:.1%}",
+            f"{row['p90_rel_error']:.1%}",
+            f"{row['estimator_ms']:.2f}",
+        ]
+        for row in summary
+    ]
+    lines += [markdown_table(header, rows), "", "By true depth (valid depths per frame / median error):", ""]
+    names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
+    by_band = []
+    for frames in dict.fromkeys(row["baseline_frames"] for row in bands):
+        cells = [
+            f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}"
+            for row in bands
+            if row["baseline_frames"] == frames
+        ]
+        by_band.append([frames, *cells])
+    lines += [markdown_table(["k", *names], by_band), "", "![depth baselines](depth_baselines.png)", ""]
+    lines += ["## ICL-NUIM living room 1 (real images, 640×480), streamed with the true motion", ""]
+    if icl:
+        header = ["streamed every", "k", "pairs", "valid / pair (median)", "valid, last pair"]
+        header += ["median error, last pair", "within 10 %, last pair", "mean baseline (frames), last pair"]
+        rows = [
+            [
+                row["step"],
+                row["baseline_frames"],
+                row["pairs"],
+                f"{row['valid_median']:.0f}",
+                row["valid_last"],
+                f"{row['median_rel_error_last']:.2%}",
+                f"{row['within_10pct_last']:.1%}",
+                f"{row['mean_baseline_last']:.2f}",
+            ]
+            for row in icl
+        ]
+        lines += [markdown_table(header, rows), ""]
+        lines.append("The last pair is where the longest baselines apply (tracks start with the stream).")
+    else:
+        lines.append(f"Not measured: the sequence folder `{sequence}` was not found.")
+    return "\n".join(lines) + "\n"
+
+
+def _plot(bands: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
+    ks = list(dict.fromkeys(row["baseline_frames"] for row in bands))
+    figure, (count_axis, error_axis) = plt.subplots(1, 2, figsize=(10, 4))
+    width = 0.8 / len(ks)
+    x = np.arange(len(names))
+    for index, frames in enumerate(ks):
+        rows = [row for row in bands if row["baseline_frames"] == frames]
+        offset = x + (index - (len(ks) - 1) / 2) * width
+        count_axis.bar(offset, [row["valid_per_frame"] for row in rows], width, label=f"k = {frames}")
+        error_axis.bar(offset, [100 * row["median_rel_error"] for row in rows], width, label=f"k = {frames}")
+    for axis, title in ((count_axis, "valid depths per frame"), (error_axis, "median relative error (%)")):
+        axis.set_xticks(x, names)
+        axis.set_xlabel("true depth")
+        axis.set_title(title)
+        axis.legend()
+    figure.suptitle("Depth over k-frame baselines, FlowNav flights (160×120)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)

@@ -119,8 +119,9 @@ class FlowDepthEstimator:
         baseline_frames: Longest baseline of a streamed depth, in frames, an integer in [1, 16]. 1 (default)
             ranges every point over one frame pair, as the thesis. Above 1, :meth:`update` tracks points from
             frame to frame and ranges each from its oldest view within that many frames, with the told
-            motions composed (:mod:`estimator.multiframe`): far points and points near the focus of
-            expansion gain parallax, while motion errors add up over the frames. :meth:`estimate` always
+            motions composed, or from the previous frame where that fails a check
+            (:mod:`estimator.multiframe`): far points and points near the focus of expansion gain parallax,
+            while motion errors add up over the frames (``results/depth_baselines.md``). :meth:`estimate` always
             uses the one pair it is given.
 
     Raises:
@@ -332,11 +333,11 @@ class FlowDepthEstimator:
         stage_start = time.perf_counter()
         tracked = self._tracking_ok(tracks)
         anchors, frames_back = window.anchors()
-        baseline = frames_back + 1
         ranging = multiframe.range_over_baselines(
             self.intrinsics.normalize(anchors),
+            self.intrinsics.normalize(points),
             self.intrinsics.normalize(tracks.next_points),
-            baseline,
+            frames_back + 1,
             multiframe.motions_to_latest(window.steps, self.baseline_frames),
             (rotation, translation),
             self.intrinsics.focal_scale,
@@ -344,7 +345,8 @@ class FlowDepthEstimator:
             self.min_parallax_px,
             self.max_epipolar_error_px,
         )
-        window.advance(tracks.next_points, tracked & ~ranging.off_epipolar, (rotation, translation))
+        keep = tracked & ~ranging.off_epipolar
+        window.advance(tracks.next_points, keep, (rotation, translation), restart=ranging.drifted)
         timings["depth"] = time.perf_counter() - stage_start
         timings["total"] = time.perf_counter() - start
         return DepthPoints(
@@ -355,7 +357,7 @@ class FlowDepthEstimator:
             tracked=tracked,
             parallax_px=ranging.parallax_px,
             timings=timings,
-            baseline_frames=baseline.astype(np.int16),
+            baseline_frames=ranging.baseline,
         )
 
     def _track(self, prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarray) -> tracking.Tracks:

@@ -51,26 +51,32 @@ def motions_to_latest(steps_newest_first: list[Motion], count: int) -> list[Moti
 
 
 class Ranging(NamedTuple):
-    """Depths of tracked points ranged over several baselines; every field (N,).
+    """Depths of tracked points, each from the longest baseline that passes the checks; every field (N,).
 
     Attributes:
         depth: z-depth (m) in the camera of the frame before the newest, NaN where undefined.
         parallax_px: translational flow over the baseline the depth came from, pixels.
         ok: the geometry checks passed (parallax, epipolar line, in front of every camera involved).
-        off_epipolar: the point is off its epipolar line by more than allowed: the track has drifted or
-            mistracked. False where the motion gives no line (no translation).
+        baseline: frames the depth spans: the track's anchor where that passed the checks, else 1.
+        off_epipolar: off its epipolar line over the last frame pair by more than allowed: a mistrack. False
+            where the motion gives no line (no translation).
+        drifted: fine over the last frame pair but off the line from its anchor: the track's history has
+            drifted (or its older motions were told wrong), so it should start afresh.
     """
 
     depth: np.ndarray
     parallax_px: np.ndarray
     ok: np.ndarray
+    baseline: np.ndarray
     off_epipolar: np.ndarray
+    drifted: np.ndarray
 
 
 def range_over_baselines(
     anchor_normalized: np.ndarray,
+    previous_normalized: np.ndarray,
     next_normalized: np.ndarray,
-    baseline: np.ndarray,
+    anchor_baseline: np.ndarray,
     to_previous: list[Motion],
     step: Motion,
     focal_scale: np.ndarray,
@@ -78,14 +84,20 @@ def range_over_baselines(
     min_parallax_px: float,
     max_epipolar_error_px: float,
 ) -> Ranging:
-    """Depth of each point from its anchor view ``baseline`` frames before the next image.
+    """Depth of each point from its anchor view, ``anchor_baseline`` frames before the next image, or from
+    the previous frame where the long baseline fails a check.
+
+    The long baseline fails where a track has drifted along the way, or on near surfaces whose look changes
+    over the frames; one frame pair still ranges those, as the two-frame estimator would.
 
     Args:
         anchor_normalized: (N, 2) normalised positions in each point's anchor frame.
+        previous_normalized: (N, 2) normalised positions in the previous frame.
         next_normalized: (N, 2) normalised positions in the next frame.
-        baseline: (N,) int, frames from the anchor to the next frame (1 = the previous frame).
+        anchor_baseline: (N,) int, frames from the anchor to the next frame (1: the anchor is the previous
+            frame).
         to_previous: motions from the frame ``a + 1`` frames before the next one to the previous frame, for
-            ``a`` = 0 … ``baseline.max() - 1`` (:func:`motions_to_latest` of the stored steps).
+            ``a`` = 0 … ``anchor_baseline.max() - 1`` (:func:`motions_to_latest` of the stored steps).
         step: motion from the previous to the next frame.
         focal_scale: (2,) ``[fx, fy]`` in pixels.
         method: as :func:`estimator.geometry.solve_depth`.
@@ -94,13 +106,16 @@ def range_over_baselines(
     Returns:
         A :class:`Ranging`.
     """
-    count = len(baseline)
-    depth = np.full(count, np.nan)
-    parallax = np.zeros(count)
-    ok = np.zeros(count, bool)
-    off_epipolar = np.zeros(count, bool)
-    for frames in np.unique(baseline):
-        rows = np.flatnonzero(baseline == frames)
+    single = geometry.solve_depth(previous_normalized, next_normalized, *step, focal_scale, method)
+    with np.errstate(invalid="ignore"):
+        ok = geometry.valid_depth_mask(single, min_parallax_px, max_epipolar_error_px)
+        error = single.epipolar_error_px
+        off_epipolar = np.isfinite(error) & (error > max_epipolar_error_px)
+    depth, parallax = single.depth.copy(), single.parallax_px.copy()
+    baseline = np.ones(len(anchor_baseline), np.int16)
+    drifted = np.zeros(len(anchor_baseline), bool)
+    for frames in np.unique(anchor_baseline[anchor_baseline > 1]):
+        rows = np.flatnonzero(anchor_baseline == frames)
         anchor_to_previous = to_previous[frames - 1]
         rotation, translation = compose(anchor_to_previous, step)
         solution = geometry.solve_depth(
@@ -109,15 +124,20 @@ def range_over_baselines(
         # The anchor-frame point carried into the previous camera: its z there is the reported depth.
         (r20, r21, r22), t_z = anchor_to_previous[0][2], anchor_to_previous[1][2]
         x, y = anchor_normalized[rows, 0], anchor_normalized[rows, 1]
-        depth[rows] = solution.depth * (r20 * x + r21 * y + r22) + t_z
-        parallax[rows] = solution.parallax_px
-        error = solution.epipolar_error_px
+        long_depth = solution.depth * (r20 * x + r21 * y + r22) + t_z
         with np.errstate(invalid="ignore"):
-            off_epipolar[rows] = np.isfinite(error) & (error > max_epipolar_error_px)
-            ok[rows] = geometry.valid_depth_mask(solution, min_parallax_px, max_epipolar_error_px) & (
-                depth[rows] > 0.0
+            long_ok = geometry.valid_depth_mask(solution, min_parallax_px, max_epipolar_error_px)
+            long_ok &= long_depth > 0.0
+            long_error = solution.epipolar_error_px
+            drifted[rows] = (
+                np.isfinite(long_error) & (long_error > max_epipolar_error_px) & ~off_epipolar[rows]
             )
-    return Ranging(depth, parallax, ok, off_epipolar)
+        chosen = rows[long_ok]
+        depth[chosen] = long_depth[long_ok]
+        parallax[chosen] = solution.parallax_px[long_ok]
+        baseline[chosen] = frames
+        ok[chosen] = True
+    return Ranging(depth, parallax, ok, baseline, off_epipolar, drifted)
 
 
 def free_mask(shape: tuple[int, int], points: np.ndarray, radius_px: int) -> np.ndarray | None:
@@ -175,14 +195,20 @@ class TrackWindow:
         back = self.seen_frames.astype(np.intp) - 1
         return self.positions[np.arange(len(back)), back], back
 
-    def advance(self, next_points: np.ndarray, keep: np.ndarray, step: Motion) -> None:
+    def advance(
+        self, next_points: np.ndarray, keep: np.ndarray, step: Motion, restart: np.ndarray | None = None
+    ) -> None:
         """Move to a new frame: tracks where ``keep`` continue at ``next_points``, the others end.
 
         Args:
             next_points: (N, 2) positions of every live track in the new frame.
             keep: (N,) bool, the tracks that continue.
             step: told motion from the latest frame to the new one.
+            restart: (N,) bool, continuing tracks that forget their views before the latest frame.
         """
+        if restart is not None and restart.any():
+            self.positions[restart, 1:] = np.nan
+            self.seen_frames[restart] = 1
         kept = self.positions[keep]
         self.positions = np.concatenate([next_points[keep][:, None], kept[:, :-1]], axis=1)
         # Only the oldest view in the window matters, so the count saturates there.

@@ -70,7 +70,16 @@ def test_ranging_over_several_baselines_recovers_the_depth_in_the_previous_camer
     # Stored steps newest first: the one into the previous frame, then the one before.
     to_previous = motions_to_latest([steps[2], steps[1]], 3)
     ranging = range_over_baselines(
-        anchor_normalized, next_normalized, baseline, to_previous, steps[3], FOCAL, "triangulation", 1.0, 1.0
+        anchor_normalized,
+        project_points(previous),
+        next_normalized,
+        baseline,
+        to_previous,
+        steps[3],
+        FOCAL,
+        "triangulation",
+        1.0,
+        1.0,
     )
     np.testing.assert_allclose(ranging.depth, previous[:, 2], rtol=1e-9)
     # Exact tracks fail only the parallax check, near the focus of expansion.
@@ -79,6 +88,7 @@ def test_ranging_over_several_baselines_recovers_the_depth_in_the_previous_camer
     assert not ranging.off_epipolar.any()
     # A longer baseline gives the same point more parallax.
     single = range_over_baselines(
+        project_points(previous),
         project_points(previous),
         next_normalized,
         np.ones(count, int),
@@ -90,6 +100,27 @@ def test_ranging_over_several_baselines_recovers_the_depth_in_the_previous_camer
         1.0,
     )
     assert np.median(ranging.parallax_px[:20] / single.parallax_px[:20]) > 2.5
+    np.testing.assert_array_equal(ranging.baseline[ranging.ok], baseline[ranging.ok])
+    # A drifted anchor (2 px across its epipolar line) falls back to the last frame pair and is flagged.
+    drifted_anchors = anchor_normalized.copy()
+    drifted_anchors[:20] += [0.0, 2.0 / FOCAL[1]]
+    fallback = range_over_baselines(
+        drifted_anchors,
+        project_points(previous),
+        next_normalized,
+        baseline,
+        to_previous,
+        steps[3],
+        FOCAL,
+        "triangulation",
+        1.0,
+        1.0,
+    )
+    redone = fallback.drifted[:20] & fallback.ok[:20]
+    assert redone.sum() >= 10
+    np.testing.assert_array_equal(fallback.baseline[:20][redone], 1)
+    np.testing.assert_allclose(fallback.depth[:20][redone], previous[:20, 2][redone], rtol=1e-9)
+    assert not fallback.off_epipolar.any()
 
 
 def test_a_point_pushed_off_its_epipolar_line_is_flagged() -> None:
@@ -99,6 +130,7 @@ def test_a_point_pushed_off_its_epipolar_line_is_flagged() -> None:
     next_normalized = project_points(following)
     next_normalized[1] += [0.0, 0.05]  # 15 px off the radial line from the focus of expansion
     ranging = range_over_baselines(
+        project_points(previous),
         project_points(previous),
         next_normalized,
         np.ones(2, int),
@@ -130,6 +162,10 @@ def test_track_window_keeps_the_oldest_view_within_the_window() -> None:
     np.testing.assert_array_equal(back, [2, 2])
     np.testing.assert_array_equal(positions, [[11.0, 10.0], [30.0, 30.0]])
     assert len(window.steps) == 2
+    window.advance(window.latest_points, np.array([True, True]), step, restart=np.array([True, False]))
+    positions, back = window.anchors()
+    np.testing.assert_array_equal(back, [1, 2])  # the restarted track keeps only its last two views
+    np.testing.assert_array_equal(positions[0], [13.0, 10.0])
     window.reset()
     assert len(window.latest_points) == 0 and window.steps == []
 

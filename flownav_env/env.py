@@ -144,7 +144,8 @@ class FlowNavEnv(gym.Env):
     resolution (160×120) and FAST threshold (10) were measured: ``results/env_performance.md``.
 
     ## Version History
-    * v0: initial version (FAST threshold 10 since the benchmark's second sweep; 20 before).
+    * v0: initial version (FAST threshold 10 since the benchmark's second sweep; 20 before). Since 2026-11-23 the
+      camera's near plane is at 5 cm (it was 1.22 m, and nearer capsules rendered hollow): results differ.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10}

@@ -75,13 +75,26 @@ class StraightConfig(ExperimentConfig):
 
 
 @dataclass
+class ThesisRotationCase:
+    """A row of the thesis's Table 2: its Unity angles and what it measured (one frame pair, f = 417 px)."""
+
+    test: int = field_range(1, 100, default=1)
+    unity_deg: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # rot x, y, z in Unity
+    mean_px: float = field_range(0.0, None, default=0.0)
+    mean_inliers_px: float | None = field_range(0.0, None, default=None)  # None: every point an outlier
+    points: int = field_range(0, None, default=0)
+    points_inliers: int = field_range(0, None, default=0)
+
+
+@dataclass
 class RotationCase:
     """One pure rotation of Table 2: a constant rotation per frame about the camera's own axes (degrees)."""
 
     name: str = "case"
-    pitch_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the camera's x axis (right)
-    yaw_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the camera's y axis (down)
-    roll_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the optical axis
+    pitch_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the camera's x axis (right); + looks up
+    yaw_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the camera's y axis (down); + looks right
+    roll_deg: float = field_range(-30.0, 30.0, default=0.0)  # about the optical axis; + right side down
+    thesis: ThesisRotationCase | None = None
 
 
 @dataclass
@@ -92,6 +105,24 @@ class RotationConfig(ExperimentConfig):
     frames_per_case: int = field_range(2, 1000, default=8)
     outlier_px: float = field_range(0.0, None, default=5.0)
     cases: list[RotationCase] = field(default_factory=lambda: [RotationCase("yaw 2 deg", yaw_deg=2.0)])
+
+    def validate(self) -> None:
+        """As :meth:`ExperimentConfig.validate`, plus: a case quoting a thesis row flies that row's angles."""
+        from agents.thesis.attitude import unity_to_camera_deg
+
+        super().validate()
+        for index, case in enumerate(self.cases):
+            if case.thesis is None:
+                continue
+            if len(case.thesis.unity_deg) != 3:
+                raise ValueError(f"key 'cases[{index}].thesis.unity_deg' must be three angles [x, y, z]")
+            expected = unity_to_camera_deg(case.thesis.unity_deg)
+            flown = (case.pitch_deg, case.yaw_deg, case.roll_deg)
+            if any(abs(a - b) > 1e-9 for a, b in zip(flown, expected, strict=True)):
+                raise ValueError(
+                    f"key 'cases[{index}]': Unity angles {case.thesis.unity_deg} are (pitch, yaw, roll) = "
+                    f"{expected} in FlowNav (pitch = -x, yaw = y, roll = -z), but the case flies {flown}"
+                )
 
 
 @dataclass
@@ -178,6 +209,10 @@ class SweepConfig:
     translation_error: list[float] = env_setting_field(
         "translation_error", default_factory=lambda: [0.0, 0.1]
     )
+    # Not a playback setting: the rotation error applied to the absolute attitude (agents.thesis.attitude).
+    attitude_rotation_error: list[float] = env_setting_field(
+        "rotation_error", default_factory=lambda: [0.0, 0.1]
+    )
 
 
 @dataclass
@@ -188,3 +223,5 @@ class ThreeCapsuleConfig(ExperimentConfig):
     base: BaseSettingsConfig = field(default_factory=BaseSettingsConfig)
     sweeps: SweepConfig = field(default_factory=SweepConfig)
     obstacles: list[ObstacleConfig] = field(default_factory=list)
+    # The thesis ran its rotation-error tests on its 0.5 deg instability run, not on the plain base run.
+    rotation_error_jitter_deg: float = env_setting_field("attitude_jitter_deg", default=0.5)

@@ -4,6 +4,7 @@ rotation residuals of Table 2."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -91,6 +92,20 @@ def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = Fa
         "evaluated": int(count),
         "frames": len(frames),
     }
+
+
+def metric_rows(run: str, result: Any, names: Iterable[str]) -> list[dict[str, Any]]:
+    """One row of :func:`depth_metrics` per method of a :class:`~agents.thesis.playback_runs.RunResult`, with
+    the capsule-only error and count beside it."""
+    rows = []
+    for name in names:
+        frames = result.methods[name]
+        row = {"run": run, "method": name, **depth_metrics(frames)}
+        obstacle = depth_metrics(frames, obstacles_only=True)
+        row["obstacle_median_rel_error"] = obstacle["median_rel_error"]
+        row["obstacle_valid_per_frame"] = obstacle["valid_per_frame"]
+        rows.append(row)
+    return rows
 
 
 def rotation_residuals(

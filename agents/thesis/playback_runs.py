@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.thesis.attitude import AttitudeRotationError
 from agents.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
 from flownav_env.playback import play_back
 
@@ -24,8 +25,8 @@ class RunResult:
             camera's height on the capsule's axis), NaN where off-screen or hidden; one row per estimated frame.
         timings: Per method, per stage, the per-frame seconds (``DepthPoints.timings``).
         render_s: Seconds per rendered frame.
-        residuals: For pure rotations, per frame the tracked points' p1, p2 and tracked mask (thesis
-            estimator), and the told rotation.
+        residuals: Per frame the tracked points' p1, p2 and tracked mask (thesis estimator), the told and true
+            rotations and the camera's world-from-camera rotation (its attitude) when it was rendered.
     """
 
     methods: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
@@ -64,6 +65,7 @@ def run_playback(
     *,
     component_variants: bool = False,
     keep_residuals: bool = False,
+    attitude_error: float = 0.0,
     progress: bool = True,
     description: str = "",
 ) -> RunResult:
@@ -75,7 +77,10 @@ def run_playback(
         settings: :class:`flownav_env.playback.PlaybackSettings`.
         estimator_kwargs: :class:`estimator.FlowDepthEstimator` kwargs (without ``method``).
         component_variants: Also compute x-flow-only and y-flow-only depths from the thesis estimator's tracks.
-        keep_residuals: Keep p1, p2 and the told rotation per frame (pure-rotation analysis).
+        keep_residuals: Keep p1, p2, the told and true rotations and the attitude per frame.
+        attitude_error: Tell rotations built from absolute attitudes whose Euler angles each carry up to this
+            relative error (:class:`agents.thesis.attitude.AttitudeRotationError`), in place of the told
+            rotation of ``settings``; its draws come from their own generator seeded with ``settings.seed``.
         progress: Show a tqdm progress bar.
         description: Label of the progress bar.
 
@@ -101,6 +106,7 @@ def run_playback(
     if settings.max_frames is not None:
         total = min(total, settings.max_frames)
     frames = play_back(path, world, settings)
+    attitude = AttitudeRotationError(attitude_error, np.random.default_rng([settings.seed, 1]))
     bar = tqdm(total=total, desc=description, disable=not progress, leave=False)
     while True:
         # Timed by hand around next(): the generator places the camera and renders inside it.
@@ -112,6 +118,8 @@ def run_playback(
         bar.update()
         image = frame.image
         told_rotation, told_translation = frame.told_motion
+        if attitude_error > 0:
+            told_rotation = attitude.told_rotation(frame.rotation, first=frame.index == 0)
         outputs = {m: estimators[m].update(image, told_rotation, told_translation) for m in METHODS}
         if previous_pose is None:
             previous_pose = (frame.rotation, frame.position)
@@ -189,6 +197,8 @@ def run_playback(
                     "next_points": thesis_points.next_points,
                     "tracked": thesis_points.tracked,
                     "rotation": told_rotation,
+                    "true_rotation": frame.true_motion[0],
+                    "attitude": frame.rotation,
                 }
             )
         previous_pose = (frame.rotation, frame.position)

@@ -121,7 +121,7 @@ class FlowDepthEstimator:
             frame to frame and ranges each from its oldest view within that many frames, with the told
             motions composed, or from the previous frame where that fails a check
             (:mod:`estimator.multiframe`): far points and points near the focus of expansion gain parallax,
-            while motion errors add up over the frames (``results/depth_baselines.md``). :meth:`estimate` always
+            while motion errors add up over the frames (``results/depth_yield.md``). :meth:`estimate` always
             uses the one pair it is given.
 
     Raises:

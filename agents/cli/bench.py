@@ -5,8 +5,8 @@ FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop)
 ``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
 render loop of the same scene, with the per-stage breakdown of a step.
 ``flownav bench train``: PPO training steps per second against the number of env workers.
-``flownav bench baselines``: multi-frame depth (``baseline_frames``) against two-frame depth, accuracy and yield
-on ICL-NUIM and in FlowNav flights.
+``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights, and
+multi-frame depth (``baseline_frames``) on ICL-NUIM.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -96,21 +96,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
     _add_output_options(train)
 
-    baselines = targets.add_parser(
-        "baselines", help="multi-frame depth vs two-frame depth: accuracy and yield, ICL-NUIM and in-scene"
+    depth_yield = targets.add_parser(
+        "yield",
+        help="valid depths per frame and their accuracy per estimator setting, in-scene (and ICL-NUIM)",
     )
-    baselines.add_argument(
-        "--frames", type=_int_list, default=(1, 2, 4), help="baseline_frames values (default 1,2,4)"
+    depth_yield.add_argument(
+        "--frames", type=_int_list, default=(1, 2, 4, 8), help="baseline_frames variants (default 1,2,4,8)"
     )
-    baselines.add_argument("--flights", type=int, default=6, help="scripted flights per value (default 6)")
-    baselines.add_argument("--steps", type=int, default=120, help="steps per flight (default 120)")
-    baselines.add_argument(
+    depth_yield.add_argument(
+        "--fast-thresholds", type=_int_list, default=(7, 5), help="FAST threshold variants (default 7,5)"
+    )
+    depth_yield.add_argument(
+        "--setting",
+        action="append",
+        default=None,
+        metavar="KEY=VALUE",
+        help="one more variant per use, an estimator setting (default: fb_max_error_px=1.0, "
+        "min_parallax_px=0.5, max_epipolar_error_px=1.5, max_lk_error=8)",
+    )
+    depth_yield.add_argument(
+        "--flights", type=int, default=6, help="scripted flights per variant (default 6)"
+    )
+    depth_yield.add_argument("--steps", type=int, default=120, help="steps per flight (default 120)")
+    depth_yield.add_argument(
         "--sequence",
         type=Path,
         default=Path("..") / "shared" / "testdata" / "icl_nuim_livingroom1",
         help="ICL-NUIM-style sequence (skipped when absent; default ../shared/testdata/icl_nuim_livingroom1)",
     )
-    _add_output_options(baselines)
+    _add_output_options(depth_yield)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -130,11 +144,18 @@ def run(args: argparse.Namespace) -> int:
             out_dir=args.out,
             progress=not args.no_progress,
         )
-    elif args.target == "baselines":
-        from agents.benchmarks.depth_baselines import run_depth_baselines
+    elif args.target == "yield":
+        from agents.benchmarks.depth_yield import DEFAULT_SETTINGS, run_depth_yield
 
-        paths = run_depth_baselines(
-            args.frames, args.flights, args.steps, args.sequence, args.out, progress=not args.no_progress
+        paths = run_depth_yield(
+            args.frames,
+            args.fast_thresholds,
+            DEFAULT_SETTINGS if args.setting is None else args.setting,
+            args.flights,
+            args.steps,
+            args.sequence,
+            args.out,
+            progress=not args.no_progress,
         )
     elif args.target == "train":
         from agents.benchmarks.training import run_training_benchmark

@@ -148,7 +148,21 @@ def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = Tru
             "median_ms": float(np.median(render)),
         }
     )
-    return {"rows": metric_rows("random6dof", result, METHODS), "table3": timings, "figures": [figure.name]}
+    return {
+        "rows": metric_rows("random6dof", result, METHODS),
+        "table3": timings,
+        "figures": [figure.name],
+        "fast_threshold": _fast_threshold(config),
+    }
+
+
+def _fast_threshold(config: ExperimentConfig) -> int:
+    import inspect
+
+    from estimator import FlowDepthEstimator
+
+    default = inspect.signature(FlowDepthEstimator).parameters["fast_threshold"].default
+    return int(config.estimator.get("fast_threshold", default))
 
 
 @dataclass(frozen=True)

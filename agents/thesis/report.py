@@ -13,7 +13,9 @@ from typing import Any
 from agents.common.config import load_config
 from agents.common.machine import machine_summary
 from agents.common.paths import REPO_ROOT
+from agents.thesis.comparison import table2_comparison, table3_comparison, verdict_table
 from agents.thesis.experiments import EXPERIMENTS
+from agents.thesis.motion_errors import motion_error_section
 
 
 def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool = True) -> dict[str, Any]:
@@ -103,14 +105,15 @@ def _table2(rows: list[dict[str, Any]]) -> list[str]:
     lines = [
         "| case | frame pairs | points detected | points tracked | mean \\|p2 − p2′\\| incl. outliers (px) "
         "| excl. outliers (px) | outliers (> 5 px) | Euler-angle derotation (thesis), incl. / excl. (px) "
-        "| mean \\|p2 − p1\\| without compensation (px) |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| Euler order (px) | mean \\|p2 − p1\\| without compensation (px) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
             f"| {r['case']} | {r['frame_pairs']} | {r['detected']} | {r['tracked']} | {_num(r['matrix_mean_px'], 3)} | "
             f"{_num(r['matrix_mean_inliers_px'], 3)} | {r['matrix_outliers']} | {_num(r['euler_mean_px'], 3)} / "
-            f"{_num(r['euler_mean_inliers_px'], 3)} | {_num(r['uncompensated_mean_px'], 2)} |"
+            f"{_num(r['euler_mean_inliers_px'], 3)} | {_num(r.get('euler_order_shift_px', math.nan), 2)} | "
+            f"{_num(r['uncompensated_mean_px'], 2)} |"
         )
     return lines
 
@@ -135,11 +138,6 @@ def _sweep_table(rows: list[dict[str, Any]]) -> list[str]:
         )
     return lines
 
-
-NOT_AVAILABLE = (
-    "The thesis's own figures and numbers for this experiment are not available to this reproduction (only the "
-    "issue's description of the experiment is), so no side-by-side comparison of values is made."
-)
 
 DISCUSSION_FILE = "DISCUSSION.md"
 
@@ -176,7 +174,7 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
         lines += [
             f"## {result['title']}",
             "",
-            f"*Thesis:* {result['thesis']} {NOT_AVAILABLE}",
+            f"*Thesis:* {result['thesis']}",
             "",
             f"Config `{result['config']}`; camera {result['camera']}; wall time {result['wall_s']:.1f} s; "
             f"`flownav replicate --only {name}`.",
@@ -189,11 +187,37 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
                 "(saved as `three_capsule_path.npz`, format in `flownav_env/playback/path.py`).",
                 "",
             ]
+        if name == "three_capsule" and result.get("sweeps"):
+            lines += [
+                "The thesis's verdicts on its variable tests beside FlowNav's rows:",
+                "",
+                *verdict_table(result["sweeps"]),
+                "",
+            ]
         if result.get("rows"):
             lines += [*metrics_table(result["rows"]), ""]
         if result.get("table2"):
-            lines += ["Table 2 (pure rotations, rotation compensation):", "", *_table2(result["table2"]), ""]
+            lines += [
+                "Table 2, the thesis beside FlowNav (the thesis: one frame pair per case at f = 417 px; "
+                f"FlowNav: f = {result.get('focal_px', math.nan):.1f} px, the mean over 5 frame pairs):",
+                "",
+                *table2_comparison(result["table2"], result.get("focal_px", math.nan)),
+                "",
+                "FlowNav's Table 2 in full (rotation-matrix derotation; the `thesis` method's Euler-angle "
+                "derotation beside it; *Euler order*: how far composing the case's angles in eq. 4.15's Z-Y-X "
+                "order instead of Unity's z-x-y moves the points):",
+                "",
+                *_table2(result["table2"]),
+                "",
+            ]
         if result.get("table3"):
+            lines += [
+                "Table 3, the thesis beside FlowNav: the thesis's rows at our FAST threshold and at our number of "
+                "points used (other machine, other scene; FlowNav's estimator alone, rendering excluded):",
+                "",
+                *table3_comparison(result["table3"], result["rows"], result.get("fast_threshold", 20)),
+                "",
+            ]
             lines += [
                 "Table 3 (per-stage time per frame pair of the estimator on this path, from `DepthPoints.timings`; "
                 "render = placing the camera and rendering one frame):",
@@ -209,6 +233,8 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
                 "",
             ]
         lines += [f"![{name}]({figure})" for figure in result.get("figures", [])] + [""]
+    if "three_capsule" in results:
+        lines += motion_error_section(results["three_capsule"])
     if discussion.is_file():
         lines += [discussion.read_text().strip(), ""]
     if results:

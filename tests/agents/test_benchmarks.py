@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from agents.benchmarks import depth_baselines, depth_loops, env_report, estimator_report, flight
+from agents.benchmarks import depth_loops, depth_yield, env_report, estimator_report, flight
 from agents.cli import build_parser
 from agents.common import machine, tables
 from estimator import CameraIntrinsics
@@ -123,8 +123,8 @@ def test_cli_parses_both_targets() -> None:
     assert args.target == "env" and args.resolutions == ((64, 48), (160, 120))
     with pytest.raises(SystemExit):
         parser.parse_args(["bench", "env", "--resolutions", "64by48"])
-    args = parser.parse_args(["bench", "baselines", "--frames", "1,4", "--flights", "2"])
-    assert args.target == "baselines" and args.frames == (1, 4) and args.flights == 2
+    args = parser.parse_args(["bench", "yield", "--frames", "1,4", "--setting", "max_lk_error=8"])
+    assert args.target == "yield" and args.frames == (1, 4) and args.setting == ["max_lk_error=8"]
 
 
 def test_record_flight_rejects_bad_frame_counts() -> None:
@@ -160,20 +160,42 @@ def test_training_benchmark_times_each_worker_count(tmp_path) -> None:
         run_training_benchmark(config, tmp_path / "tiny.yaml", (0,), 1, 1, tmp_path)
 
 
-def test_depth_baselines_report_compares_each_baseline_in_scene(tmp_path) -> None:
-    report, figure = depth_baselines.run_depth_baselines(
-        (1, 3), flights=1, steps=6, sequence=tmp_path / "absent", out_dir=tmp_path, progress=False
+def test_depth_yield_report_compares_each_variant_in_scene(tmp_path) -> None:
+    report, figure = depth_yield.run_depth_yield(
+        (1, 3), (7,), ("min_parallax_px=0.5",), 1, 6, tmp_path / "absent", tmp_path, progress=False
     )
     text = report.read_text()
     assert figure.stat().st_size > 0
-    assert "| 1 | 6 |" in text and "| 3 | 6 |" in text  # one summary row per k, all steps flown
+    for variant in ("default", "baseline_frames=3", "fast_threshold=7", "min_parallax_px=0.5"):
+        assert f"| {variant} | 6 |" in text  # one summary row per variant, all steps flown
     assert "was not found" in text  # the real-image section says why it is missing
-    summary, bands = depth_baselines.scene_rows((1,), flights=1, steps=4, progress=False)
+    summary, bands = depth_yield.scene_rows({"default": {}}, flights=1, steps=4, progress=False)
     assert summary[0]["valid_per_frame"] > 0 and 0 < summary[0]["within_10pct"] <= 1
-    assert len(bands) == len(depth_baselines.DEPTH_BANDS) - 1
+    assert len(bands) == len(depth_yield.DEPTH_BANDS) - 1
 
 
-@pytest.mark.parametrize(("frames", "flights"), [((0,), 1), ((17,), 1), ((1,), 0)])
-def test_depth_baselines_rejects_bad_arguments(tmp_path, frames, flights) -> None:
-    with pytest.raises(ValueError, match=r"must (each )?be"):
-        depth_baselines.run_depth_baselines(frames, flights, 5, tmp_path, tmp_path, progress=False)
+def test_depth_yield_variants_parse_settings() -> None:
+    variants = depth_yield.variant_settings((1, 4), (5,), ("spread_grid=4,4", "max_lk_error=8"))
+    assert variants == {
+        "default": {},
+        "baseline_frames=4": {"baseline_frames": 4},
+        "fast_threshold=5": {"fast_threshold": 5},
+        "spread_grid=4,4": {"spread_grid": (4, 4)},
+        "max_lk_error=8": {"max_lk_error": 8.0},
+    }
+
+
+@pytest.mark.parametrize(
+    ("frames", "settings", "flights", "message"),
+    [
+        ((0,), (), 1, "baseline frames must each be in"),
+        ((17,), (), 1, "baseline frames must each be in"),
+        ((1,), (), 0, "flights and steps must be >= 1"),
+        ((1,), ("max_lk_error",), 1, "settings must be KEY=VALUE"),
+        ((1,), ("no_such_setting=1",), 1, "variant 'no_such_setting=1'"),
+        ((1,), ("min_parallax_px=-1",), 1, "min_parallax_px must be"),
+    ],
+)
+def test_depth_yield_rejects_bad_arguments(tmp_path, frames, settings, flights, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        depth_yield.run_depth_yield(frames, (), settings, flights, 5, tmp_path, tmp_path, progress=False)

@@ -222,7 +222,7 @@ def _report(
         "",
     ]
     header = [
-        "k",
+        "variant",
         "steps",
         "valid / frame",
         "in the central third",

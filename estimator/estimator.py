@@ -244,8 +244,6 @@ class FlowDepthEstimator:
         if previous is None:
             timings["total"] = time.perf_counter() - start
             return DepthPoints.empty(timings)
-        if self._window is not None:
-            return self._estimate_tracked(previous, current, rotation, translation, timings, start)
         return self._estimate_pair(previous, current, rotation, translation, timings, start)
 
     def reset(self) -> None:
@@ -268,10 +266,11 @@ class FlowDepthEstimator:
         prev_image, next_image = tracking.tracking_images(previous, current, self.normalize_brightness)
         timings["prepare"] += time.perf_counter() - stage_start
         stage_start = time.perf_counter()
-        spread_grid = self.spread_grid if self.spread_keypoints else None
-        points = tracking.detect_keypoints(prev_image, self._detector, self.max_points, spread_grid)
+        points = self._keypoints(prev_image)
         timings["fast"] = time.perf_counter() - stage_start
         if len(points) == 0:
+            if self._window is not None:  # the step is still part of the window's motion history
+                self._window.advance(points, np.zeros(0, bool), (rotation, translation))
             timings["total"] = time.perf_counter() - start
             return DepthPoints.empty(timings)
 
@@ -281,62 +280,75 @@ class FlowDepthEstimator:
 
         stage_start = time.perf_counter()
         tracked = self._tracking_ok(tracks)
-        solution = geometry.solve_depth(
-            self.intrinsics.normalize(points),
-            self.intrinsics.normalize(tracks.next_points),
-            rotation,
-            translation,
-            self.intrinsics.focal_scale,
-            self.method,
-        )
-        geometry_ok = geometry.valid_depth_mask(solution, self.min_parallax_px, self.max_epipolar_error_px)
-        valid = tracked & geometry_ok
+        previous_normalized = self.intrinsics.normalize(points)
+        next_normalized = self.intrinsics.normalize(tracks.next_points)
+        baseline = None
+        if self._window is None:
+            solution = geometry.solve_depth(
+                previous_normalized,
+                next_normalized,
+                rotation,
+                translation,
+                self.intrinsics.focal_scale,
+                self.method,
+            )
+            depth, parallax = solution.depth, solution.parallax_px
+            geometry_ok = geometry.valid_depth_mask(
+                solution, self.min_parallax_px, self.max_epipolar_error_px
+            )
+        else:
+            ranging = self._range_tracks(
+                previous_normalized, next_normalized, tracks, tracked, rotation, translation
+            )
+            depth, parallax, geometry_ok, baseline = (
+                ranging.depth,
+                ranging.parallax_px,
+                ranging.ok,
+                ranging.baseline,
+            )
         timings["depth"] = time.perf_counter() - stage_start
         timings["total"] = time.perf_counter() - start
         return DepthPoints(
             points=points,
             next_points=tracks.next_points,
-            depth=solution.depth,
-            valid=valid,
+            depth=depth,
+            valid=tracked & geometry_ok,
             tracked=tracked,
-            parallax_px=solution.parallax_px,
+            parallax_px=parallax,
             timings=timings,
+            baseline_frames=baseline,
         )
 
-    def _estimate_tracked(
-        self,
-        previous: tracking.PreparedFrame,
-        current: tracking.PreparedFrame,
-        rotation: np.ndarray,
-        translation: np.ndarray,
-        timings: dict[str, float],
-        start: float,
-    ) -> DepthPoints:
+    def _keypoints(self, prev_image: np.ndarray) -> np.ndarray:
+        """FAST corners of the previous frame; with a track window, its live tracks first, then new corners away
+        from them up to ``max_points``."""
+        spread_grid = self.spread_grid if self.spread_keypoints else None
         window = self._window
-        stage_start = time.perf_counter()
-        prev_image, next_image = tracking.tracking_images(previous, current, self.normalize_brightness)
-        timings["prepare"] += time.perf_counter() - stage_start
-        stage_start = time.perf_counter()
+        if window is None:
+            return tracking.detect_keypoints(prev_image, self._detector, self.max_points, spread_grid)
         carried = window.latest_points
         budget = None if self.max_points is None else self.max_points - len(carried)
         if budget is None or budget > 0:
             mask = multiframe.free_mask(prev_image.shape, carried, _TRACK_SPACING_PX)
-            spread_grid = self.spread_grid if self.spread_keypoints else None
             window.add(tracking.detect_keypoints(prev_image, self._detector, budget, spread_grid, mask))
-        timings["fast"] = time.perf_counter() - stage_start
+        return window.latest_points.copy()
 
-        stage_start = time.perf_counter()
-        points = window.latest_points.copy()
-        tracks = self._track(prev_image, next_image, points)
-        timings["flow"] = time.perf_counter() - stage_start
-
-        stage_start = time.perf_counter()
-        tracked = self._tracking_ok(tracks)
+    def _range_tracks(
+        self,
+        previous_normalized: np.ndarray,
+        next_normalized: np.ndarray,
+        tracks: tracking.Tracks,
+        tracked: np.ndarray,
+        rotation: np.ndarray,
+        translation: np.ndarray,
+    ) -> multiframe.Ranging:
+        """Depths over the window's baselines; then the window moves on to the next frame."""
+        window = self._window
         anchors, frames_back = window.anchors()
         ranging = multiframe.range_over_baselines(
             self.intrinsics.normalize(anchors),
-            self.intrinsics.normalize(points),
-            self.intrinsics.normalize(tracks.next_points),
+            previous_normalized,
+            next_normalized,
             frames_back + 1,
             multiframe.motions_to_latest(window.steps, self.baseline_frames),
             (rotation, translation),
@@ -347,18 +359,7 @@ class FlowDepthEstimator:
         )
         keep = tracked & ~ranging.off_epipolar
         window.advance(tracks.next_points, keep, (rotation, translation), restart=ranging.drifted)
-        timings["depth"] = time.perf_counter() - stage_start
-        timings["total"] = time.perf_counter() - start
-        return DepthPoints(
-            points=points,
-            next_points=tracks.next_points,
-            depth=ranging.depth,
-            valid=tracked & ranging.ok,
-            tracked=tracked,
-            parallax_px=ranging.parallax_px,
-            timings=timings,
-            baseline_frames=ranging.baseline,
-        )
+        return ranging
 
     def _track(self, prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarray) -> tracking.Tracks:
         return tracking.track_points(

@@ -25,6 +25,13 @@ ICL_INTRINSICS = CameraIntrinsics(fx=525.0, fy=525.0, cx=319.5, cy=239.5, width=
 FOCAL = np.array([600.0, 600.0])
 
 
+def _range(anchors, previous, following, baseline, to_previous, step):
+    """range_over_baselines with this file's camera and the estimator's default thresholds (1 px, 1 px)."""
+    return range_over_baselines(
+        anchors, previous, following, baseline, to_previous, step, FOCAL, "triangulation", 1.0, 1.0
+    )
+
+
 def _step(roll: float, pitch: float, yaw: float, translation: tuple[float, float, float]):
     return euler_zyx_to_rotation(roll, pitch, yaw), np.array(translation, np.float64)
 
@@ -69,17 +76,8 @@ def test_ranging_over_several_baselines_recovers_the_depth_in_the_previous_camer
     next_normalized = project_points(following)
     # Stored steps newest first: the one into the previous frame, then the one before.
     to_previous = motions_to_latest([steps[2], steps[1]], 3)
-    ranging = range_over_baselines(
-        anchor_normalized,
-        project_points(previous),
-        next_normalized,
-        baseline,
-        to_previous,
-        steps[3],
-        FOCAL,
-        "triangulation",
-        1.0,
-        1.0,
+    ranging = _range(
+        anchor_normalized, project_points(previous), next_normalized, baseline, to_previous, steps[3]
     )
     np.testing.assert_allclose(ranging.depth, previous[:, 2], rtol=1e-9)
     # Exact tracks fail only the parallax check, near the focus of expansion.
@@ -87,34 +85,21 @@ def test_ranging_over_several_baselines_recovers_the_depth_in_the_previous_camer
     assert ranging.ok.mean() > 0.8
     assert not ranging.off_epipolar.any()
     # A longer baseline gives the same point more parallax.
-    single = range_over_baselines(
+    single = _range(
         project_points(previous),
         project_points(previous),
         next_normalized,
         np.ones(count, int),
         to_previous,
         steps[3],
-        FOCAL,
-        "triangulation",
-        1.0,
-        1.0,
     )
     assert np.median(ranging.parallax_px[:20] / single.parallax_px[:20]) > 2.5
     np.testing.assert_array_equal(ranging.baseline[ranging.ok], baseline[ranging.ok])
     # A drifted anchor (2 px across its epipolar line) falls back to the last frame pair and is flagged.
     drifted_anchors = anchor_normalized.copy()
     drifted_anchors[:20] += [0.0, 2.0 / FOCAL[1]]
-    fallback = range_over_baselines(
-        drifted_anchors,
-        project_points(previous),
-        next_normalized,
-        baseline,
-        to_previous,
-        steps[3],
-        FOCAL,
-        "triangulation",
-        1.0,
-        1.0,
+    fallback = _range(
+        drifted_anchors, project_points(previous), next_normalized, baseline, to_previous, steps[3]
     )
     redone = fallback.drifted[:20] & fallback.ok[:20]
     assert redone.sum() >= 10
@@ -129,17 +114,13 @@ def test_a_point_pushed_off_its_epipolar_line_is_flagged() -> None:
     following = previous + step[1]
     next_normalized = project_points(following)
     next_normalized[1] += [0.0, 0.05]  # 15 px off the radial line from the focus of expansion
-    ranging = range_over_baselines(
+    ranging = _range(
         project_points(previous),
         project_points(previous),
         next_normalized,
         np.ones(2, int),
         motions_to_latest([], 1),
         step,
-        FOCAL,
-        "triangulation",
-        1.0,
-        1.0,
     )
     np.testing.assert_array_equal(ranging.off_epipolar, [False, True])
     np.testing.assert_array_equal(ranging.ok, [True, False])

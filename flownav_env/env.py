@@ -24,6 +24,7 @@ from flownav_env.observation import (
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_command
 from flownav_env.rendering import VIEW_PANEL_SIZE, CameraRenderer, camera_panel
+from flownav_env.rewards import reward_terms
 from flownav_env.scene import LAYOUT_FUNCTIONS, LayoutParams, material_names
 from flownav_env.sensor import Pose, SensorPipeline
 from flownav_env.settings import Choice, EnvSettings, settings_property, with_sensor_settings
@@ -86,9 +87,10 @@ class FlowNavEnv(gym.Env):
 
     ## Rewards
     Per step: ``reward = progress_weight · Δx + success_bonus · [goal reached] − collision_penalty ·
-    [collision or out of bounds] − control_cost_weight · ‖action‖²``, where Δx is the metres gained toward the
-    goal line this step. Each term is in ``info`` as ``reward_progress``, ``reward_success``,
-    ``reward_collision`` and ``reward_control``.
+    [collision or out of bounds] − control_cost_weight · ‖action‖² − clearance_weight · max(0, 1 − c /
+    safe_clearance)``, where Δx is the metres gained toward the goal line this step and c the distance from the
+    drone's centre to the nearest capsule surface. Each term is in ``info`` as ``reward_progress``,
+    ``reward_success``, ``reward_collision``, ``reward_control`` and ``reward_clearance``.
 
     ## Starting State
     The drone starts at x = 0, y = 0, at ``flight_height``, heading +x and already moving at
@@ -135,6 +137,7 @@ class FlowNavEnv(gym.Env):
     | ``success_bonus`` | 10.0 | reward on reaching the goal, ≥ 0 |
     | ``collision_penalty`` | 10.0 | penalty on collision or leaving the bounds, ≥ 0 |
     | ``control_cost_weight`` | 0.05 | weight of ‖action‖², ≥ 0 |
+    | ``clearance_weight``, ``safe_clearance`` | 0.0, 0.5 | clearance shaping: the most a step closer than ``safe_clearance`` (m, in (0, 5]) to a capsule can cost, ≥ 0; 0 turns it off |
     | ``estimator_kwargs`` | None | keyword arguments of ``estimator.FlowDepthEstimator`` (method, thresholds, ...), over ``ENV_ESTIMATOR_DEFAULTS`` (``fast_threshold=10``) |
     | ``texture_seed`` | 0 | seed of the procedural textures (the world's look) |
     | ``physics_timestep`` | 0.004 | MuJoCo timestep (s), in [0.0005, 0.005] (physics ≥ 200 Hz) |
@@ -202,6 +205,8 @@ class FlowNavEnv(gym.Env):
         success_bonus: float = 10.0,
         collision_penalty: float = 10.0,
         control_cost_weight: float = 0.05,
+        clearance_weight: float = 0.0,
+        safe_clearance: float = 0.5,
         estimator_kwargs: Mapping[str, Any] | None = None,
         texture_seed: int = 0,
         physics_timestep: float = 0.004,
@@ -335,12 +340,8 @@ class FlowNavEnv(gym.Env):
         self._min_clearance = min(self._min_clearance, clearance)
         success = bool(position[0] >= self._goal_x and not collision)
         out_of_bounds = bool(abs(position[1]) > settings.lateral_bound or position[2] > settings.max_height)
-        terms = {
-            "reward_progress": settings.progress_weight * float(position[0] - x_before),
-            "reward_success": settings.success_bonus * float(success),
-            "reward_collision": -settings.collision_penalty * float(collision or out_of_bounds),
-            "reward_control": -settings.control_cost_weight * float(action @ action),
-        }
+        progress = float(position[0] - x_before)
+        terms = reward_terms(settings, progress, success, collision or out_of_bounds, action, clearance)
         info = {
             "collision": collision,
             "success": success,

@@ -250,6 +250,13 @@ class EnvSettings(SensorSettings):
     success_bonus: float = _setting(10.0, _WEIGHT)
     collision_penalty: float = _setting(10.0, _WEIGHT)
     control_cost_weight: float = _setting(0.05, _WEIGHT)
+    clearance_weight: float = _setting(0.0, _WEIGHT)
+    safe_clearance: float = _setting(
+        0.5,
+        Range(
+            0.0, 5.0, low_open=True, unit="m", meaning="clearance below which the clearance penalty starts"
+        ),
+    )
     # Physics at 200 Hz or faster keeps the inner attitude loop stable.
     physics_timestep: float = _setting(0.004, Range(0.0005, 0.005, unit="s", meaning="MuJoCo timestep"))
     texture_seed: int = _setting(0, AnyInteger())

@@ -174,6 +174,30 @@ def test_flying_straight_into_a_capsule_terminates_with_collision() -> None:
     assert 3.5 < info["progress"] < 5.0  # the capsule stands at x = 5 m with radius 0.5 m
 
 
+@pytest.mark.parametrize("clearance_weight", [0.0, 2.0])
+def test_clearance_shaping_costs_only_closer_than_the_safe_clearance(clearance_weight: float) -> None:
+    env = make("FlowNavSingle-v0", clearance_weight=clearance_weight, safe_clearance=1.0)
+    env.reset(seed=0)
+    penalties = []
+    for _ in range(200):
+        _, reward, terminated, truncated, info = env.step(np.zeros(3))
+        terms = [value for key, value in info.items() if key.startswith("reward_")]
+        assert reward == pytest.approx(sum(terms)) and len(terms) == 5
+        expected = clearance_weight * max(0.0, 1.0 - info["clearance"] / 1.0)
+        assert info["reward_clearance"] == pytest.approx(-expected)
+        penalties.append(-info["reward_clearance"])
+        if terminated or truncated:
+            break
+    env.close()
+    assert penalties[0] == 0.0  # the capsule is 5 m ahead at the start
+    assert (max(penalties) > 1.0) == (clearance_weight > 0)  # straight into it: within half a metre
+
+
+def test_safe_clearance_out_of_range_is_rejected() -> None:
+    with pytest.raises(ValueError, match=r"safe_clearance must be in \(0.0, 5.0\], got 0.0"):
+        FlowNavEnv(safe_clearance=0.0)
+
+
 def test_reaching_the_goal_ends_with_success() -> None:
     env = make("FlowNavSingle-v0", forward_speed=2.0)
     env.reset(seed=0)

@@ -24,6 +24,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
     )
+    parser.add_argument(
+        "--reference",
+        default="",
+        help="comma-separated reactive agents flown on the same layouts as reference rows, e.g. bee_robust,bee",
+    )
     parser.add_argument("--runs-dir", default="runs", help="where the seeds' runs are (default: %(default)s)")
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
@@ -45,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
         workers=args.workers,
         report_only=args.report_only,
         command=command.strip(),
+        reference_agents=[agent.strip() for agent in args.reference.split(",") if agent.strip()],
     )
     print("\n".join(lines))
     return 0

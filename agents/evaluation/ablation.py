@@ -4,7 +4,9 @@ what each lever buys, decided without touching a test layout.
 Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``; every run
 flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEED_START`) into its own CSV,
 ``<out>/<name>/seed_<k>.csv`` (resumable). Per config: the failure rate over runs × layouts with a two-level
-bootstrap interval, each seed's failure rate, and the learning curves of its seeds.
+bootstrap interval, each seed's failure rate, and the learning curves of its seeds. Reactive reference agents
+(``--reference bee_robust``) fly the same layouts once, into ``<out>/reference/<agent>.csv``, for a row with a
+Wilson interval: a lever is worth shipping only if it beats what needs no training.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import EpisodeTask, execute, rows_of
+from agents.evaluation.statistics import wilson_interval
+from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
 from agents.training.curves import plot_learning_curves
 from agents.training.outputs import RunFiles
@@ -55,14 +59,20 @@ def compare_configs(
     workers: int = 2,
     report_only: bool = False,
     command: str = "flownav ablation",
+    reference_agents: Sequence[str] = (),
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A run not trained yet is listed as
     missing, not flown.
 
     Raises:
-        ValueError: a bad config, episode count or worker count.
+        ValueError: a bad config, episode count or worker count, or a reference agent that is not reactive.
     """
+    for agent in reference_agents:
+        if agent not in REACTIVE_AGENTS:
+            raise ValueError(
+                f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
+            )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows, missing, curves = [], [], {}
@@ -92,6 +102,19 @@ def compare_configs(
                 curves[f"{name} seed {seed}"] = files.evaluations
         if outcomes:
             rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
+    for agent in reference_agents:
+        tasks = [
+            EpisodeTask(agent, "clean", 0.0, task.seed) for task in ablation_tasks(Path(agent), episodes)
+        ]
+        csv_path = out / "reference" / f"{agent}.csv"
+        csv_path.parent.mkdir(parents=True, exist_ok=True)
+        if not report_only:
+            execute(tasks, csv_path, workers=workers, description=f"{agent} (reference)")
+        flown = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+        if len(flown) < episodes:
+            missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
+            continue
+        rows.append(_reference_row(agent, flown))
     lines = _report(rows, missing, seeds, episodes, command)
     if curves:
         plot_learning_curves(curves, out / "ablation_curves.png", "held-out evaluation return, per seed")
@@ -120,6 +143,22 @@ def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[st
     ]
 
 
+def _reference_row(agent: str, flown: list[dict[str, Any]]) -> list[Any]:
+    total = len(flown)
+    failures = sum(not bool(row["success"]) for row in flown)
+    low, high = wilson_interval(failures, total)
+    return [
+        f"{agent} (reactive, reference)",
+        "-",
+        total,
+        f"{failures / total:.2f} [{low:.2f}, {high:.2f}]",
+        f"{1 - failures / total:.2f}",
+        f"{sum(bool(row['collision']) for row in flown) / total:.2f}",
+        f"{sum(bool(row['out_of_bounds']) for row in flown) / total:.2f}",
+        "-",
+    ]
+
+
 def _report(rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str) -> list[str]:
     lines = [
         "# Ablations on validation layouts",
@@ -127,7 +166,8 @@ def _report(rows: list, missing: list[str], seeds: Sequence[int], episodes: int,
         f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
         f"{ABLATION_SEED_START + episodes - 1:,} (clean sensors), never a test layout; seeds asked: "
         f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
-        "two-level bootstrap (runs, then layouts within each run).",
+        "two-level bootstrap (runs, then layouts within each run); a reactive reference row's is Wilson's over its "
+        "layouts.",
         "",
         markdown_table(
             [

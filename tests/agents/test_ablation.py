@@ -49,3 +49,26 @@ def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) 
     assert "--workers must be >= 1, got 0" in capsys.readouterr().err
     assert main(["ablation", "--configs", str(config_path), "--seeds", "3-1", "--out", str(tmp_path)]) == 2
     assert "--seeds takes N, N-M (N <= M)" in capsys.readouterr().err
+
+
+def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path) -> None:
+    _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    out = tmp_path / "ablation"
+    lines = compare_configs(
+        [config_path],
+        [0],
+        out,
+        runs_dir=tmp_path / "runs",
+        episodes=2,
+        workers=1,
+        reference_agents=["straight"],
+    )
+    text = "\n".join(lines)
+    assert "| straight (reactive, reference) | - | 2 |" in text
+    rows = read_records(out / "reference" / "straight.csv")
+    assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]
+    with pytest.raises(
+        ValueError,
+        match=r"reference agents must be reactive \(straight, bee, bee_robust, vfh\), got 'ppo_flow'",
+    ):
+        compare_configs([config_path], [0], out, episodes=2, reference_agents=["ppo_flow"])

@@ -50,6 +50,7 @@ SWEEP_FACTORS = (
     "attitude_jitter_deg",
     "brightness",
     "forward_speed",
+    "obstacle_density",
     "rotation_bias",
     "translation_bias",
     "rotation_drift",
@@ -64,7 +65,7 @@ SWEEP_FACTORS = (
 
 @dataclass
 class SweepConfig:
-    """A sweep. ``factors`` maps each FlowNavEnv sensor kwarg to its levels beyond the clean setting.
+    """A sweep. ``factors`` maps each FlowNavEnv sensor or course kwarg to its levels beyond the clean setting.
 
     A relative ``policy_dir`` is resolved against the repository root, not the working directory, so the
     same config finds the shipped policies wherever the command runs from.

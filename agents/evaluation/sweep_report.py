@@ -60,6 +60,7 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         "attitude_jitter_deg": "attitude jitter (deg)",
         "brightness": "brightness (1 = daylight)",
         "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
+        "obstacle_density": "obstacle density (capsules per m²)",
         "rotation_bias": "rotation bias (relative scale error)",
         "translation_bias": "translation bias (relative scale error)",
         "rotation_drift": "rotation bias drift (std after 1 s)",

@@ -227,3 +227,16 @@ def test_all_seeds_of_a_learned_agent_share_each_cells_layouts_in_turn(tmp_path:
     assert {t.policy for t in tasks if t.agent == "ppo_flow@4"} == {str(policies / "ppo_flow" / "seed_4.zip")}
     rows = [{"agent": t.agent, "seed": t.seed} for t in tasks]
     assert {r["agent"] for r in pool_seeds(rows, config.agents)} == {"bee", "ppo_flow@all"}
+
+
+def test_obstacle_density_is_swept_as_a_course_factor(tmp_path: Path) -> None:
+    from agents.cli import main
+
+    config_path = write_sweep_config(
+        tmp_path, agents=["straight"], env_id="FlowNav-v0", factors={"obstacle_density": [0.3]}
+    )
+    assert main(["sweep", "--config", str(config_path), "--out", str(tmp_path / "out")]) == 0
+    rows = read_records(tmp_path / "out" / "sweep_episodes.csv")
+    dense = [r for r in rows if r["factor"] == "obstacle_density"]
+    assert len(dense) == 2 and all('"obstacle_density":0.3' in r["env_kwargs"] for r in dense)
+    assert all("obstacle_density" not in r["env_kwargs"] for r in rows if r["factor"] == "clean")

@@ -17,6 +17,7 @@ from typing import Any
 from agents.common.config import ConfigError, load_config
 from agents.policies.base import Agent
 from agents.policies.stacked import FrameStackedAgent, stacked_space
+from agents.training.algorithms import algorithm_class, network_kwargs, policy_alias
 from agents.training.config import TrainConfig
 from agents.training.manifest import manifest_problem
 from agents.training.saved_models import SavedModel, read_saved_model
@@ -37,8 +38,9 @@ def training_config_beside(path: Path) -> TrainConfig | None:
 
 
 def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
-    """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, its ``net_arch`` and
-    ``log_std_init``; spaces from ``config``'s env) holding the parameters of ``saved``. Its ``predict``
+    """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, or MultiInputLstmPolicy
+    for a recurrent run, with its ``net_arch`` and ``log_std_init``; spaces from ``config``'s env) holding the
+    parameters of ``saved``. Its ``predict``
     gives the same actions as ``PPO.load(path).predict``; a policy trained on stacked frames comes wrapped
     in a :class:`~agents.policies.stacked.FrameStackedAgent` that keeps the stack.
 
@@ -46,11 +48,10 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
         ValueError: the zip's network does not match the config's; the message names the file.
     """
     import gymnasium as gym
-    from stable_baselines3 import PPO
 
     import flownav_env  # noqa: F401  (registers the env ids)
 
-    network = {"net_arch": list(config.ppo.net_arch), "log_std_init": config.ppo.log_std_init}
+    network = network_kwargs(config.ppo)
     saved_network = saved.data.get("policy_kwargs")
     if isinstance(saved_network, dict) and ":serialized:" not in saved_network and saved_network != network:
         raise ValueError(
@@ -62,7 +63,7 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
         observation_space, action_space = env.observation_space, env.action_space
     finally:
         env.close()
-    policy_class = PPO.policy_aliases["MultiInputPolicy"]
+    policy_class = algorithm_class(config.ppo).policy_aliases[policy_alias(config.ppo)]
     policy_space = (
         stacked_space(observation_space, config.frame_stack) if config.frame_stack > 1 else observation_space
     )

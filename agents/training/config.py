@@ -26,6 +26,9 @@ class PPOParams:
     # Initial log standard deviation of the Gaussian actions: 0 (std 1) on a [-1, 1] action box is mostly
     # clipped, bang-bang exploration that crashes early; lower starts calmer.
     log_std_init: float = field_range(-5.0, 2.0, default=0.0)
+    # 0: a feed-forward policy (PPO). Above 0: an LSTM of this many units after the shared features
+    # (sb3-contrib's RecurrentPPO), so the policy can remember what left the view.
+    lstm_hidden_size: int = field_range(0, 1024, default=0)
 
 
 @dataclass
@@ -74,6 +77,13 @@ class TrainConfig:
     # ``frame_stack`` frames, each array stacked along its last axis; 1 = the current frame only.
     frame_stack: int = field_range(1, 16, default=1)
     ppo: PPOParams = field(default_factory=PPOParams)
+
+    def validate(self) -> None:
+        if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
+            raise ValueError(
+                f"keys 'frame_stack' ({self.frame_stack}) and 'ppo.lstm_hidden_size' ({self.ppo.lstm_hidden_size}) "
+                "are two kinds of memory: use one (frame_stack: 1 or lstm_hidden_size: 0)"
+            )
 
 
 def checked_config(config: TrainConfig, source: str) -> TrainConfig:

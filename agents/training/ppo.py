@@ -16,11 +16,11 @@ import json
 import os
 import shutil
 import time
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from agents.common.machine import available_cores, code_version, cpu_model, gl_renderer
+from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
 from agents.training.config import TrainConfig, checked_config
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
@@ -57,21 +57,17 @@ def select_policy(model: Any, files: RunFiles) -> str:
 
 
 def new_model(config: TrainConfig, envs: Any, tensorboard_log: str | None = None) -> Any:
-    """A fresh PPO model of ``config`` (``MultiInputPolicy``, its network and hyperparameters) on ``envs``."""
-    from stable_baselines3 import PPO
-
-    params = asdict(config.ppo)
-    net_arch = params.pop("net_arch")
-    log_std_init = params.pop("log_std_init")
-    return PPO(
-        "MultiInputPolicy",
+    """A fresh model of ``config`` on ``envs``: PPO with a ``MultiInputPolicy``, or RecurrentPPO with a
+    ``MultiInputLstmPolicy`` when ``ppo.lstm_hidden_size`` > 0 (:mod:`agents.training.algorithms`)."""
+    return algorithm_class(config.ppo)(
+        policy_alias(config.ppo),
         envs,
-        policy_kwargs={"net_arch": net_arch, "log_std_init": log_std_init},
+        policy_kwargs=network_kwargs(config.ppo),
         tensorboard_log=tensorboard_log,
         seed=config.seed,
         device="cpu",
         verbose=0,
-        **params,
+        **algorithm_kwargs(config.ppo),
     )
 
 
@@ -82,11 +78,11 @@ def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) 
         ValueError: a fresh start in a folder that holds an earlier run's evaluations, best model or
             checkpoints, which would otherwise mix with this run's.
     """
-    from stable_baselines3 import PPO
-
     checkpoint = latest_checkpoint(files.checkpoints) if resume else None
     if checkpoint is not None:
-        model = PPO.load(checkpoint, env=envs, device="cpu", tensorboard_log=str(files.tensorboard))
+        model = algorithm_class(config.ppo).load(
+            checkpoint, env=envs, device="cpu", tensorboard_log=str(files.tensorboard)
+        )
         print(f"resuming from {checkpoint} at {model.num_timesteps} steps")
         return model, model.num_timesteps
     leftovers = [p for p in (files.evaluations, files.best_model) if p.exists()]

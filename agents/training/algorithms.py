@@ -1,0 +1,46 @@
+"""Which stable-baselines3 algorithm and policy a config's ``ppo`` block means: PPO with a feed-forward
+``MultiInputPolicy``, or, with ``lstm_hidden_size`` > 0, sb3-contrib's RecurrentPPO with a
+``MultiInputLstmPolicy`` (issue 16's memory lever: obstacles leave the 60° view as the drone passes them).
+Training, resuming and loading all ask here, so the choice is made in one place."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any
+
+from agents.training.config import PPOParams
+
+# Fields of PPOParams that shape the policy network rather than the algorithm.
+_NETWORK_FIELDS = ("net_arch", "log_std_init", "lstm_hidden_size")
+
+
+def is_recurrent(params: PPOParams) -> bool:
+    return params.lstm_hidden_size > 0
+
+
+def algorithm_class(params: PPOParams) -> Any:
+    """``stable_baselines3.PPO``, or ``sb3_contrib.RecurrentPPO`` for a recurrent policy."""
+    if is_recurrent(params):
+        from sb3_contrib import RecurrentPPO
+
+        return RecurrentPPO
+    from stable_baselines3 import PPO
+
+    return PPO
+
+
+def policy_alias(params: PPOParams) -> str:
+    return "MultiInputLstmPolicy" if is_recurrent(params) else "MultiInputPolicy"
+
+
+def network_kwargs(params: PPOParams) -> dict[str, Any]:
+    """The policy's ``policy_kwargs``: ``net_arch``, ``log_std_init`` and, when recurrent, ``lstm_hidden_size``."""
+    network: dict[str, Any] = {"net_arch": list(params.net_arch), "log_std_init": params.log_std_init}
+    if is_recurrent(params):
+        network["lstm_hidden_size"] = params.lstm_hidden_size
+    return network
+
+
+def algorithm_kwargs(params: PPOParams) -> dict[str, Any]:
+    """The remaining hyperparameters, as the algorithm's constructor takes them."""
+    return {key: value for key, value in asdict(params).items() if key not in _NETWORK_FIELDS}

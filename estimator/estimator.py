@@ -21,9 +21,6 @@ from estimator._validation import (
 from estimator.camera import CameraIntrinsics
 from estimator.points import TIMING_KEYS, DepthPoints
 
-# New corners closer than this to a carried track are the same corner found again (baseline_frames > 1).
-_TRACK_SPACING_PX = 3
-
 
 class FlowDepthEstimator:
     """Sparse depth from optical flow and known camera motion (the thesis's estimator).
@@ -320,18 +317,14 @@ class FlowDepthEstimator:
         )
 
     def _keypoints(self, prev_image: np.ndarray) -> np.ndarray:
-        """FAST corners of the previous frame; with a track window, its live tracks first, then new corners away
-        from them up to ``max_points``."""
+        """FAST corners of the previous frame; with a track window, they become its tracks, a corner that
+        continues a track at that track's position."""
         spread_grid = self.spread_grid if self.spread_keypoints else None
-        window = self._window
-        if window is None:
-            return tracking.detect_keypoints(prev_image, self._detector, self.max_points, spread_grid)
-        carried = window.latest_points
-        budget = None if self.max_points is None else self.max_points - len(carried)
-        if budget is None or budget > 0:
-            mask = multiframe.free_mask(prev_image.shape, carried, _TRACK_SPACING_PX)
-            window.add(tracking.detect_keypoints(prev_image, self._detector, budget, spread_grid, mask))
-        return window.latest_points.copy()
+        points = tracking.detect_keypoints(prev_image, self._detector, self.max_points, spread_grid)
+        if self._window is None:
+            return points
+        self._window.adopt(points)
+        return self._window.latest_points.copy()
 
     def _range_tracks(
         self,

@@ -6,8 +6,9 @@ depth. A point tracked over k frames moves k times as far, so it is ranged from 
 carried to the previous frame, so a result means what a two-frame result means: the z-depth of the previous
 frame's points in the previous camera frame.
 
-Tracking stays frame to frame (one LK pass per frame, as with two frames): tracks that pass the tracking checks
-are carried over, new FAST corners fill the image away from them. The pure kernels here (motion composition,
+Tracking stays frame to frame (one LK pass per frame, as with two frames): each frame's FAST corners are the
+points ranged, exactly as with two frames, and a corner found again where a track was followed to inherits
+that track's older views. The pure kernels here (motion composition,
 ranging by baseline, the detection mask) take plain arrays; :class:`TrackWindow` holds the tracks between
 frames.
 """
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import cv2
 import numpy as np
 
 from estimator import geometry
@@ -25,6 +25,9 @@ from estimator import geometry
 Motion = tuple[np.ndarray, np.ndarray]
 
 _IDENTITY: Motion = (np.eye(3), np.zeros(3))
+#: A corner found again within this many pixels of where a track was followed to is that track: FAST puts
+#: corners on the pixel grid, LK follows them to sub-pixel positions, and FAST's own localisation wobbles.
+MATCH_RADIUS_PX = 1.5
 
 
 def compose(first: Motion, then: Motion) -> Motion:
@@ -140,19 +143,39 @@ def range_over_baselines(
     return Ranging(depth, parallax, ok, baseline, off_epipolar, drifted)
 
 
-def free_mask(shape: tuple[int, int], points: np.ndarray, radius_px: int) -> np.ndarray | None:
-    """uint8 detection mask: 0 within ``radius_px`` (square) of any of ``points`` (N, 2), 255 elsewhere;
-    None when there are no points (detect everywhere)."""
-    if len(points) == 0:
-        return None
-    height, width = shape
-    columns = np.clip(np.rint(points[:, 0]).astype(np.intp), 0, width - 1)
-    rows = np.clip(np.rint(points[:, 1]).astype(np.intp), 0, height - 1)
-    occupied = np.zeros(shape, np.uint8)
-    occupied[rows, columns] = 255
-    side = 2 * radius_px + 1
-    occupied = cv2.dilate(occupied, np.ones((side, side), np.uint8))
-    return cv2.bitwise_not(occupied)
+def nearest_within(points: np.ndarray, candidates: np.ndarray, radius_px: float) -> np.ndarray:
+    """Index of the nearest of ``candidates`` (K, 2) within ``radius_px`` of each of ``points`` (M, 2), or -1.
+
+    Candidates are put on the pixel grid and looked up in the square around each point, all points and
+    offsets at once (no per-point loop, and no K × M distance matrix at a thousand points).
+    """
+    result = np.full(len(points), -1, np.intp)
+    finite = np.all(np.isfinite(candidates), axis=1) if len(candidates) else np.zeros(0, bool)
+    if not len(points) or not finite.any():
+        return result
+    # Corners lie on the pixel grid; a candidate within the radius rounds to a cell at most half a pixel further.
+    reach = int(np.ceil(radius_px + 0.5))
+    index = np.flatnonzero(finite)
+    cells = np.rint(candidates[index]).astype(np.intp)
+    origin = cells.min(axis=0) - reach
+    width, height = cells.max(axis=0) - origin + reach + 1
+    grid = np.full((height, width), -1, np.intp)
+    grid[cells[:, 1] - origin[1], cells[:, 0] - origin[0]] = index
+    offsets = np.arange(-reach, reach + 1)
+    x = (np.rint(points[:, 0]).astype(np.intp) - origin[0])[:, None, None] + offsets[None, None, :]
+    y = (np.rint(points[:, 1]).astype(np.intp) - origin[1])[:, None, None] + offsets[None, :, None]
+    inside = (x >= 0) & (x < width) & (y >= 0) & (y < height)
+    found = np.where(inside, grid[np.clip(y, 0, height - 1), np.clip(x, 0, width - 1)], -1).reshape(
+        len(points), -1
+    )
+    padded = np.concatenate([candidates.astype(np.float32), np.full((1, 2), np.inf, np.float32)])  # -1: none
+    offset = padded[found] - np.asarray(points, np.float32)[:, None, :]
+    distance = np.sqrt(offset[..., 0] ** 2 + offset[..., 1] ** 2)
+    nearest = np.argmin(distance, axis=1)
+    best = distance[np.arange(len(points)), nearest]
+    chosen = best <= radius_px
+    result[chosen] = found[chosen, nearest[chosen]]
+    return result
 
 
 class TrackWindow:
@@ -180,12 +203,25 @@ class TrackWindow:
         """(N, 2) float32 positions of the live tracks in the latest frame."""
         return self.positions[:, 0]
 
-    def add(self, points: np.ndarray) -> None:
-        """Start tracks at new detections ``points`` (M, 2) of the latest frame."""
-        new = np.full((len(points), self.baseline_frames, 2), np.nan, np.float32)
-        new[:, 0] = points
-        self.positions = np.concatenate([self.positions, new])
-        self.seen_frames = np.concatenate([self.seen_frames, np.ones(len(points), np.int16)])
+    def adopt(self, corners: np.ndarray, radius_px: float = MATCH_RADIUS_PX) -> None:
+        """Make the latest frame's corners (M, 2) the tracks: a corner within ``radius_px`` of a live track's
+        latest position is that track found again, which goes on (its position and older views); the other
+        corners start afresh, and tracks no corner found end.
+
+        Tracks follow the corners rather than the other way round, so the points ranged are exactly those a
+        two-frame estimator would range; only their baselines grow.
+        """
+        count = len(corners)
+        adopted = np.full((count, self.baseline_frames, 2), np.nan, np.float32)
+        adopted[:, 0] = corners
+        seen = np.ones(count, np.int16)
+        match = nearest_within(corners, self.latest_points, radius_px)
+        found = match >= 0
+        # A found track keeps its own position, not the corner's: its older views were followed from there, and
+        # the corner's pixel-grid position can be a pixel off, which over a long baseline is a depth error.
+        adopted[found] = self.positions[match[found]]
+        seen[found] = self.seen_frames[match[found]]
+        self.positions, self.seen_frames = adopted, seen
 
     def anchors(self) -> tuple[np.ndarray, np.ndarray]:
         """Each track's oldest view in the window: ``(positions (N, 2), frames back from the latest (N,))``.

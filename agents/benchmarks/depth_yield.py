@@ -34,6 +34,7 @@ DEFAULT_SETTINGS: tuple[str, ...] = (
     "min_parallax_px=0.5",
     "max_epipolar_error_px=1.5",
     "max_lk_error=8",
+    "fast_threshold=5;baseline_frames=4",
 )
 ICL_INTRINSICS = {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480}
 
@@ -134,16 +135,18 @@ def variant_settings(
     baseline_frames: Sequence[int], fast_thresholds: Sequence[int], settings: Sequence[str]
 ) -> dict[str, dict[str, Any]]:
     """Named estimator variants: the default, one per ``baseline_frames`` and FAST threshold, and one per
-    ``KEY=VALUE`` setting (numbers as floats, ``a,b`` as a pair of integers)."""
+    ``KEY=VALUE[;KEY=VALUE...]`` setting (integers as ints, other numbers as floats, ``a,b`` as a pair)."""
     variants: dict[str, dict[str, Any]] = {"default": {}}
     variants |= {f"baseline_frames={k}": {"baseline_frames": k} for k in baseline_frames if k != 1}
     variants |= {f"fast_threshold={value}": {"fast_threshold": value} for value in fast_thresholds}
     for setting in settings:
-        key, sep, text = setting.partition("=")
-        if not sep or not key or not text:
-            raise ValueError(f"settings must be KEY=VALUE, got {setting!r}")
-        value: Any = tuple(int(part) for part in text.split(",")) if "," in text else float(text)
-        variants[setting] = {key.strip(): value}
+        variant: dict[str, Any] = {}
+        for part in setting.split(";"):
+            key, sep, text = part.partition("=")
+            if not sep or not key.strip() or not text.strip():
+                raise ValueError(f"settings must be KEY=VALUE[;KEY=VALUE...], got {setting!r}")
+            variant[key.strip()] = _setting_value(text.strip())
+        variants[setting] = variant
     return variants
 
 
@@ -188,6 +191,16 @@ def run_depth_yield(
     report = out_dir / "depth_yield.md"
     report.write_text(_report(command, time.perf_counter() - started, icl, summary, bands, sequence))
     return [report, figure]
+
+
+def _setting_value(text: str) -> Any:
+    """``a,b`` → a pair of integers; an integer literal → int (the estimator refuses 5.0 for a count); else float."""
+    if "," in text:
+        return tuple(int(part) for part in text.split(","))
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
 
 
 def _empty_samples() -> dict[str, list]:

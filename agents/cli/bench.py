@@ -112,7 +112,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="KEY=VALUE",
         help="one more variant per use, an estimator setting (default: fb_max_error_px=1.0, "
-        "min_parallax_px=0.5, max_epipolar_error_px=1.5, max_lk_error=8)",
+        "min_parallax_px=0.5, max_epipolar_error_px=1.5, max_lk_error=8, fast_threshold=5;baseline_frames=4)",
     )
     depth_yield.add_argument(
         "--flights", type=int, default=6, help="scripted flights per variant (default 6)"

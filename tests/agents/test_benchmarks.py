@@ -175,13 +175,16 @@ def test_depth_yield_report_compares_each_variant_in_scene(tmp_path) -> None:
 
 
 def test_depth_yield_variants_parse_settings() -> None:
-    variants = depth_yield.variant_settings((1, 4), (5,), ("spread_grid=4,4", "max_lk_error=8"))
+    variants = depth_yield.variant_settings(
+        (1, 4), (5,), ("spread_grid=4,4", "max_lk_error=8.5", "fast_threshold=5;baseline_frames=4")
+    )
     assert variants == {
         "default": {},
         "baseline_frames=4": {"baseline_frames": 4},
         "fast_threshold=5": {"fast_threshold": 5},
         "spread_grid=4,4": {"spread_grid": (4, 4)},
-        "max_lk_error=8": {"max_lk_error": 8.0},
+        "max_lk_error=8.5": {"max_lk_error": 8.5},
+        "fast_threshold=5;baseline_frames=4": {"fast_threshold": 5, "baseline_frames": 4},
     }
 
 
@@ -191,7 +194,7 @@ def test_depth_yield_variants_parse_settings() -> None:
         ((0,), (), 1, "baseline frames must each be in"),
         ((17,), (), 1, "baseline frames must each be in"),
         ((1,), (), 0, "flights and steps must be >= 1"),
-        ((1,), ("max_lk_error",), 1, "settings must be KEY=VALUE"),
+        ((1,), ("max_lk_error",), 1, r"settings must be KEY=VALUE\[;KEY=VALUE...\], got 'max_lk_error'"),
         ((1,), ("no_such_setting=1",), 1, "variant 'no_such_setting=1'"),
         ((1,), ("min_parallax_px=-1",), 1, "min_parallax_px must be"),
     ],

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import shlex
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -186,7 +187,9 @@ def run_depth_yield(
     figure = out_dir / "depth_yield.png"
     _plot(bands, figure)
     command = f"flownav bench yield --frames {','.join(map(str, baseline_frames))} --fast-thresholds "
-    command += ",".join(map(str, fast_thresholds)) + "".join(f" --setting {setting}" for setting in settings)
+    command += ",".join(map(str, fast_thresholds)) + "".join(
+        f" --setting {shlex.quote(setting)}" for setting in settings
+    )
     command += f" --flights {flights} --steps {steps} --out {out_dir}"
     report = out_dir / "depth_yield.md"
     report.write_text(_report(command, time.perf_counter() - started, icl, summary, bands, sequence))

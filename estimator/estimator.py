@@ -114,9 +114,9 @@ class FlowDepthEstimator:
             that line by flow noise plus the motion error; mistracks (repeated texture, occlusion edges) and
             moving objects usually are off by more.
         baseline_frames: Longest baseline of a streamed depth, in frames, an integer in [1, 16]. 1 (default)
-            ranges every point over one frame pair, as the thesis. Above 1, :meth:`update` tracks points from
-            frame to frame and ranges each from its oldest view within that many frames, with the told
-            motions composed, or from the previous frame where that fails a check
+            ranges every point over one frame pair, as the thesis. Above 1, :meth:`update` follows the same
+            FAST corners from frame to frame and ranges each from its oldest view within that many frames,
+            with the told motions composed, or from the previous frame where that fails a check
             (:mod:`estimator.multiframe`): far points and points near the focus of expansion gain parallax,
             while motion errors add up over the frames (``results/depth_yield.md``). :meth:`estimate` always
             uses the one pair it is given.

@@ -7,10 +7,9 @@ carried to the previous frame, so a result means what a two-frame result means: 
 frame's points in the previous camera frame.
 
 Tracking stays frame to frame (one LK pass per frame, as with two frames): each frame's FAST corners are the
-points ranged, exactly as with two frames, and a corner found again where a track was followed to inherits
-that track's older views. The pure kernels here (motion composition,
-ranging by baseline, the detection mask) take plain arrays; :class:`TrackWindow` holds the tracks between
-frames.
+points ranged, as with two frames, and a corner found again where a track was followed to continues that
+track, with its older views. The pure kernels here (motion composition, ranging by baseline, nearest-track
+lookup) take plain arrays; :class:`TrackWindow` holds the tracks between frames.
 """
 
 from __future__ import annotations
@@ -208,8 +207,8 @@ class TrackWindow:
         latest position is that track found again, which goes on (its position and older views); the other
         corners start afresh, and tracks no corner found end.
 
-        Tracks follow the corners rather than the other way round, so the points ranged are exactly those a
-        two-frame estimator would range; only their baselines grow.
+        Tracks follow the corners rather than the other way round, so the points ranged are those a two-frame
+        estimator would range (a continued track at its own sub-pixel position); only their baselines grow.
         """
         count = len(corners)
         adopted = np.full((count, self.baseline_frames, 2), np.nan, np.float32)

@@ -85,11 +85,7 @@ def compare_configs(
                 missing.append(f"{name} seed {seed}")
                 continue
             tasks = ablation_tasks(files.policy, episodes)
-            csv_path = out / name / f"seed_{seed}.csv"
-            csv_path.parent.mkdir(parents=True, exist_ok=True)
-            if not report_only:
-                execute(tasks, csv_path, workers=workers, description=f"{name} seed {seed}")
-            flown = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+            flown = _fly(tasks, out / name / f"seed_{seed}.csv", workers, report_only, f"{name} seed {seed}")
             if len(flown) < episodes:
                 missing.append(f"{name} seed {seed} ({len(flown)} of {episodes} episodes)")
                 continue
@@ -106,11 +102,7 @@ def compare_configs(
         tasks = [
             EpisodeTask(agent, "clean", 0.0, task.seed) for task in ablation_tasks(Path(agent), episodes)
         ]
-        csv_path = out / "reference" / f"{agent}.csv"
-        csv_path.parent.mkdir(parents=True, exist_ok=True)
-        if not report_only:
-            execute(tasks, csv_path, workers=workers, description=f"{agent} (reference)")
-        flown = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+        flown = _fly(tasks, out / "reference" / f"{agent}.csv", workers, report_only, f"{agent} (reference)")
         if len(flown) < episodes:
             missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
             continue
@@ -141,6 +133,16 @@ def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[st
         f"{counts['out_of_bounds'] / total:.2f}",
         ", ".join(f"{seed}: {rate:.2f}" for seed, rate in per_seed),
     ]
+
+
+def _fly(
+    tasks: list[EpisodeTask], csv_path: Path, workers: int, report_only: bool, description: str
+) -> list[dict[str, Any]]:
+    """Fly ``tasks`` into ``csv_path`` (resumably; nothing with ``report_only``) and return their records."""
+    csv_path.parent.mkdir(parents=True, exist_ok=True)
+    if not report_only:
+        execute(tasks, csv_path, workers=workers, description=description)
+    return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
 
 
 def _reference_row(agent: str, flown: list[dict[str, Any]]) -> list[Any]:

@@ -18,6 +18,7 @@ COMMANDS = {
     "eval-estimator": "agents.cli.eval_estimator",
     "bench": "agents.cli.bench",
     "train": "agents.cli.train",
+    "select": "agents.cli.select",
     "curves": "agents.cli.curves",
     "evaluate": "agents.cli.evaluate",
     "sweep": "agents.cli.sweep",

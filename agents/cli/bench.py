@@ -94,6 +94,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     train.add_argument("--rollouts", type=int, default=2, help="timed rollouts per run (default 2)")
     train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
+    train.add_argument(
+        "--side-by-side",
+        type=int,
+        default=0,
+        help="also time this many runs of the config's n_envs at once, each stepping its own envs, as "
+        "flownav train --seeds --parallel trains them (default 0: off)",
+    )
     _add_output_options(train)
 
     depth_yield = targets.add_parser(
@@ -170,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
             args.repeats,
             args.out,
             progress=not args.no_progress,
+            side_by_side=args.side_by_side,
         )
     else:
         from agents.benchmarks.env_report import run_env_benchmark

@@ -1,5 +1,5 @@
 """The callbacks of a training run: atomic checkpoints, an evaluation whose history and best model carry
-over a resume, and a wall-clock budget."""
+over a resume, a wall-clock budget, and progress lines for runs that share a terminal."""
 
 from __future__ import annotations
 
@@ -118,3 +118,33 @@ class WallClockBudget(BaseCallback):
 
     def _on_step(self) -> bool:
         return time.monotonic() < self.deadline
+
+
+class ProgressLines(BaseCallback):
+    """Prints one line every ``every`` steps (steps done, of how many, and the rate this session): the progress
+    report of runs that share a terminal, where progress bars would overwrite each other."""
+
+    def __init__(self, every: int, label: str) -> None:
+        super().__init__()
+        self.every = max(1, every)
+        self.label = label
+        self._started = time.monotonic()
+        self._first_step = 0
+        self._next_report = 0
+        self._total = 0
+
+    def _on_training_start(self) -> None:
+        self._started = time.monotonic()
+        self._first_step = self.num_timesteps
+        self._next_report = self.num_timesteps + self.every
+        self._total = int(self.locals["total_timesteps"])  # the run's target, resumed steps included
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self._next_report:
+            self._next_report += self.every
+            rate = (self.num_timesteps - self._first_step) / max(time.monotonic() - self._started, 1e-9)
+            print(
+                f"{self.label}: {self.num_timesteps:,} / {self._total:,} steps ({rate:.0f} steps/s)",
+                flush=True,
+            )
+        return True

@@ -67,22 +67,27 @@ class IgnoringInterrupts:
 EVAL_WORKERS = 2
 
 
-def build_envs(config: TrainConfig) -> tuple[Any, Any]:
-    """The training vector env (``n_envs`` workers, seeded from ``config.seed``) and the evaluation vector
-    env of the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two classes
-    differ. With one env, both run in this process (DummyVecEnv, one evaluation env); else in forkserver
-    subprocesses (a forked EGL context hangs) that ignore Ctrl-C, with ``EVAL_WORKERS`` evaluation workers."""
+def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, Any]:
+    """The training vector env (``n_envs`` envs, seeded from ``config.seed``) and the evaluation vector env of
+    the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two classes differ.
+
+    By default the envs run in forkserver subprocesses (a forked EGL context hangs) that ignore Ctrl-C, with
+    ``EVAL_WORKERS`` evaluation envs; with one env, both run in this process (one evaluation env).
+    ``in_process=True`` steps the same envs, with the same seeds, in this process (``DummyVecEnv``): for
+    several training seeds side by side, one process per core, where a lock-stepped worker per env loses a
+    third of the cores to waiting (``results/training_performance.md``). Both give the same rollouts.
+    """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     factories = [make_env_factory(config, i) for i in range(config.n_envs)]
-    if config.n_envs > 1:
+    eval_count = EVAL_WORKERS if config.n_envs > 1 else 1
+    eval_factories = [make_env_factory(config, i) for i in range(eval_count)]
+    if config.n_envs > 1 and not in_process:
         envs = SubprocVecEnv([IgnoringInterrupts(f) for f in factories], start_method="forkserver")
         # Two evaluation workers halve the time the training workers sit idle during an evaluation.
-        eval_factories = [IgnoringInterrupts(make_env_factory(config, i)) for i in range(EVAL_WORKERS)]
-        eval_env = SubprocVecEnv(eval_factories, start_method="forkserver")
+        eval_env = SubprocVecEnv([IgnoringInterrupts(f) for f in eval_factories], start_method="forkserver")
     else:
-        envs = DummyVecEnv(factories)
-        eval_env = DummyVecEnv([make_env_factory(config, 0)])
+        envs, eval_env = DummyVecEnv(factories), DummyVecEnv(eval_factories)
     envs.seed(training_env_seed(config.seed))
     eval_env.seed(checkpoint_selection_seed(config.seed))
     if config.frame_stack > 1:

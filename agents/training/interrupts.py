@@ -41,3 +41,10 @@ def ignore_stop_signals() -> None:
     """For env worker processes: leave stopping to the main process, which closes them after saving."""
     for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
+
+
+def ignore_ctrl_c() -> None:
+    """For the processes of seeds trained side by side: Ctrl-C reaches the whole process group, and an idle
+    one would die of it; while learning, :func:`stop_signals_interrupt` handles it. SIGTERM keeps its default
+    outside learning, so a seed still building its envs when the parent passes a stop on simply ends."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -5,7 +5,10 @@ Seed k is the config with ``seed: k``: PPO's seed and the start of its env worke
 ``results/policies/<name>/seed_<k>.zip`` with config, record, evaluations and curve.
 
 The seeds are independent jobs. The local backend trains them in turn in this process (each with its own env
-workers); the Ray backend submits each as a task asking for ``n_envs`` CPUs, so a cluster trains them side by side.
+workers), or ``parallel`` at a time, each in a process of its own that steps its envs itself: on a small
+machine that keeps every core stepping an env instead of idling in lock-step (``flownav bench train``
+measures both); the Ray backend submits each as a task asking for ``n_envs`` CPUs, so a cluster trains them side
+by side.
 Every job resumes: a seed whose record shows its full budget is skipped, one with checkpoints continues from the
 newest, and one without starts fresh. Re-running the same command after an interruption picks up where it
 stopped.
@@ -101,8 +104,11 @@ def write_seed_config(job: SeedJob) -> Path:
     return files.config
 
 
-def train_seed(job: SeedJob) -> Path:
-    """Train (or resume, or skip as finished) one seed; returns its policy path."""
+def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
+    """Train (or resume, or skip as finished) one seed; returns its policy path.
+
+    ``side_by_side`` is for a seed trained beside others on the same machine: its envs step in its own process
+    and it reports progress in lines, not a bar."""
     from agents.training.ppo import train
     from agents.training.shipping import ship_run
 
@@ -119,6 +125,8 @@ def train_seed(job: SeedJob) -> Path:
         runs_dir=job.runs_dir,
         ship_to=job.ship_to,
         files=job.files,
+        in_process_envs=side_by_side,
+        progress_bar=not side_by_side,
     )
     if json.loads(job.files.record.read_text())["sessions"][-1]["interrupted"]:
         # Stop here rather than start the next seed: the same command resumes this one.
@@ -128,18 +136,63 @@ def train_seed(job: SeedJob) -> Path:
     return policy
 
 
-def train_seeds(jobs: list[SeedJob], *, backend: str = "local", address: str | None = None) -> list[Path]:
-    """Train every job: in turn here (``"local"``), or as parallel Ray tasks (``"ray"``); returns the policy
-    paths in job order.
+def train_seeds(
+    jobs: list[SeedJob], *, backend: str = "local", address: str | None = None, parallel: int = 1
+) -> list[Path]:
+    """Train every job: in turn here (``"local"``), ``parallel`` at a time in local processes, or as parallel
+    Ray tasks (``"ray"``); returns the policy paths in job order.
 
     Raises:
-        ValueError: an unknown backend, or Ray not installed.
+        ValueError: an unknown backend, Ray not installed, or ``parallel`` not an integer in [1, 64] (or
+            above 1 with the Ray backend, which schedules by itself).
+        KeyboardInterrupt: SIGINT or SIGTERM stopped the training; every running seed saved first.
     """
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
-    if backend == "local":
+    if isinstance(parallel, bool) or not isinstance(parallel, int) or not 1 <= parallel <= MAX_PARALLEL_SEEDS:
+        raise ValueError(f"parallel must be an integer in [1, {MAX_PARALLEL_SEEDS}], got {parallel!r}")
+    if backend == "ray":
+        if parallel != 1:
+            raise ValueError(
+                f"parallel applies to the local backend only (Ray schedules its tasks), got {parallel}"
+            )
+        return list(_ray_train(jobs, address))
+    if parallel == 1 or len(jobs) == 1:
         return [train_seed(job) for job in jobs]
-    return list(_ray_train(jobs, address))
+    return _train_side_by_side(jobs, parallel)
+
+
+MAX_PARALLEL_SEEDS = 64
+
+
+def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
+    """``parallel`` seeds at a time, each in a forkserver process (EGL cannot render after a fork).
+
+    The workers ignore Ctrl-C while idle and, like any run, save and stop on SIGINT or SIGTERM while learning.
+    A stop signal here is passed on to the running seeds as SIGTERM, and they save; seeds not yet started are not
+    started.
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    from functools import partial
+
+    from agents.training.interrupts import ignore_ctrl_c, stop_signals_interrupt
+
+    context = multiprocessing.get_context("forkserver")
+    pool = ProcessPoolExecutor(max_workers=parallel, mp_context=context, initializer=ignore_ctrl_c)
+    futures = [pool.submit(partial(train_seed, side_by_side=True), job) for job in jobs]
+    try:
+        with stop_signals_interrupt():
+            return [future.result() for future in futures]
+    except KeyboardInterrupt:
+        for future in futures:
+            future.cancel()
+        for process in list(getattr(pool, "_processes", {}).values()):
+            if process.is_alive():
+                process.terminate()  # SIGTERM: the seed saves its checkpoint and record, then stops
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _ray_train(jobs: list[SeedJob], address: str | None) -> Iterator[Path]:

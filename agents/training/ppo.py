@@ -107,9 +107,15 @@ def train(
     runs_dir: Path,
     ship_to: Path | None = None,
     files: RunFiles | None = None,
+    in_process_envs: bool = False,
+    progress_bar: bool = True,
 ) -> Path:
     """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
     training seeds); returns the run's policy path.
+
+    ``in_process_envs`` steps the envs in this process instead of one worker each (the same rollouts, see
+    :func:`agents.training.envs.build_envs`), for seeds trained side by side; ``progress_bar=False`` prints a
+    line every ``checkpoint_every`` steps instead, where several runs share one terminal.
 
     Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
     shipped deliberately later, with :func:`agents.training.shipping.ship_run`).
@@ -121,12 +127,17 @@ def train(
     import torch
     from stable_baselines3.common.callbacks import CallbackList
 
-    from agents.training.callbacks import AtomicCheckpointCallback, ResumableEvalCallback, WallClockBudget
+    from agents.training.callbacks import (
+        AtomicCheckpointCallback,
+        ProgressLines,
+        ResumableEvalCallback,
+        WallClockBudget,
+    )
 
     config = checked_config(config, source=str(config_path))
     torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
     files = files or RunFiles.of(runs_dir, config.name)
-    envs, eval_env = build_envs(config)
+    envs, eval_env = build_envs(config, in_process=in_process_envs)
     try:
         model, resume_step = _build_model(config, envs, files, resume)
         per_env = max(1, config.n_envs)
@@ -149,6 +160,10 @@ def train(
                 WallClockBudget(config.max_minutes),
             ]
         )
+        if not progress_bar:
+            callbacks.callbacks.append(
+                ProgressLines(config.checkpoint_every, f"{config.name} seed {config.seed}")
+            )
     except BaseException:
         close_quietly(envs)
         close_quietly(eval_env)
@@ -161,7 +176,7 @@ def train(
             model.learn(
                 max(0, config.total_timesteps - model.num_timesteps),
                 callback=callbacks,
-                progress_bar=True,
+                progress_bar=progress_bar,
                 reset_num_timesteps=resume_step is None,
                 tb_log_name=config.name,
             )
@@ -191,6 +206,7 @@ def train(
         "cpu": cpu_model(),
         "cores": available_cores(),
         "n_envs": config.n_envs,
+        "env_workers": "in process" if in_process_envs or config.n_envs == 1 else "one subprocess per env",
         # What the policy saw depends on these as much as on the config: record them per session.
         "code": code_version(),
         "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),

@@ -138,7 +138,7 @@ def test_markdown_table_shape() -> None:
     assert table.splitlines()[0] == "| a | b |" and len(table.splitlines()) == 3
 
 
-def test_training_benchmark_times_each_worker_count(tmp_path) -> None:
+def test_training_benchmark_times_each_worker_count_and_runs_side_by_side(tmp_path) -> None:
     from agents.benchmarks.training import run_training_benchmark
     from agents.training.config import PPOParams, TrainConfig
 
@@ -146,18 +146,34 @@ def test_training_benchmark_times_each_worker_count(tmp_path) -> None:
         name="tiny",
         env_id="FlowNavSingle-v0",
         env={"camera_width": 64, "camera_height": 48},
+        n_envs=2,
         ppo=PPOParams(n_steps=32, batch_size=32, n_epochs=1, net_arch=[8]),
     )
     md, csv_path = run_training_benchmark(
-        config, tmp_path / "tiny.yaml", (1, 2), rollouts=1, repeats=1, out_dir=tmp_path, progress=False
+        config,
+        tmp_path / "tiny.yaml",
+        (1, 2),
+        rollouts=1,
+        repeats=1,
+        out_dir=tmp_path,
+        progress=False,
+        side_by_side=2,
     )
     rows = list(csv.DictReader(csv_path.open()))
-    assert [int(r["n_envs"]) for r in rows] == [1, 2]
-    assert [int(r["rollout_steps"]) for r in rows] == [32, 64]
+    assert [(int(r["n_envs"]), int(r["runs_side_by_side"])) for r in rows] == [(1, 1), (2, 1), (2, 2)]
+    assert [r["env_workers"] for r in rows] == ["in process", "one subprocess per env", "in process"]
+    assert [int(r["rollout_steps"]) for r in rows] == [32, 64, 64]
     assert all(float(r["steps_per_s_median"]) > 0 and float(r["collect_ms_per_step"]) > 0 for r in rows)
-    assert "flownav bench train" in md.read_text()
+    # The machine's rate of two runs is the sum of theirs: at least the slower run's twice.
+    side = rows[2]
+    assert float(side["steps_per_s_median"]) >= 2 * float(side["per_run_steps_per_s_median"]) - 1e-6
+    text = md.read_text()
+    assert "flownav bench train" in text and "--side-by-side 2" in text
+    assert "2 runs side by side train" in text
     with pytest.raises(ValueError, match=r"--rollouts, --repeats and every --n-envs must be >= 1"):
         run_training_benchmark(config, tmp_path / "tiny.yaml", (0,), 1, 1, tmp_path)
+    with pytest.raises(ValueError, match=r"--side-by-side must be 0 \(off\) or >= 2 runs, got 1"):
+        run_training_benchmark(config, tmp_path / "tiny.yaml", (1,), 1, 1, tmp_path, side_by_side=1)
 
 
 def test_depth_yield_report_compares_each_variant_in_scene(tmp_path) -> None:

@@ -92,7 +92,13 @@ def test_each_seed_trains_into_its_own_folder_and_a_finished_one_is_skipped(tmp_
     ("extra", "message"),
     [
         (["--seeds", "0", "--resume"], "--seeds always resumes unfinished seeds: drop --resume"),
-        (["--backend", "ray"], "--backend and --address apply to --seeds runs only"),
+        (["--backend", "ray"], "--backend, --address and --parallel apply to --seeds runs only"),
+        (["--parallel", "2"], "--backend, --address and --parallel apply to --seeds runs only"),
+        (["--seeds", "0-1", "--parallel", "0"], "parallel must be an integer in [1, 64], got 0"),
+        (
+            ["--seeds", "0-1", "--parallel", "2", "--backend", "ray"],
+            "parallel applies to the local backend only",
+        ),
         (["--seeds", "2-1"], "--seeds takes N, N-M (N <= M)"),
     ],
 )
@@ -111,6 +117,49 @@ def test_an_unknown_backend_is_refused(tmp_path: Path) -> None:
     jobs = seed_jobs(config, [0], config_path=config_path, runs_dir=tmp_path, ship_to=None)
     with pytest.raises(ValueError, match="backend must be 'local' or 'ray', got 'slurm'"):
         train_seeds(jobs, backend="slurm")
+
+
+@pytest.mark.parametrize(
+    ("parallel", "message"),
+    [
+        (0, "parallel must be an integer in [1, 64], got 0"),
+        (65, "parallel must be an integer in [1, 64], got 65"),
+        (True, "parallel must be an integer in [1, 64], got True"),
+        (1.5, "parallel must be an integer in [1, 64], got 1.5"),
+    ],
+)
+def test_bad_parallel_counts_are_refused(tmp_path: Path, parallel, message: str) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="parallel")
+    jobs = seed_jobs(config, [0, 1], config_path=config_path, runs_dir=tmp_path, ship_to=None)
+    with pytest.raises(ValueError) as caught:
+        train_seeds(jobs, parallel=parallel)
+    assert message in str(caught.value)
+    assert not (tmp_path / "parallel").exists()
+
+
+def test_seeds_side_by_side_train_exactly_what_they_train_in_turn(tmp_path: Path, capfd) -> None:
+    import torch
+
+    from agents.training.saved_models import read_saved_model
+
+    config, config_path = tiny_train_config(tmp_path, total=64, name="sides", n_envs=2)
+    in_turn, side_by_side = tmp_path / "in_turn", tmp_path / "side_by_side"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=in_turn, ship_to=None))
+    capfd.readouterr()
+    jobs = seed_jobs(config, [0, 1], config_path=config_path, runs_dir=side_by_side, ship_to=None)
+    train_seeds(jobs, parallel=2)
+    output = capfd.readouterr().out
+    assert "sides seed 0: 64 / 64 steps" in output and "sides seed 1: 64 / 64 steps" in output
+    for seed in (0, 1):
+        record = json.loads(RunFiles.of_seed(side_by_side, "sides", seed).record.read_text())
+        assert record["sessions"][-1]["env_workers"] == "in process"
+    # The envs stepped in the seed's own process gave the same rollouts as one worker process per env.
+    first = read_saved_model(RunFiles.of_seed(in_turn, "sides", 0).policy).policy_state
+    second = read_saved_model(RunFiles.of_seed(side_by_side, "sides", 0).policy).policy_state
+    assert first.keys() == second.keys()
+    assert all(torch.equal(first[name], second[name]) for name in first)
+    other = read_saved_model(RunFiles.of_seed(side_by_side, "sides", 1).policy).policy_state
+    assert not all(torch.equal(first[name], other[name]) for name in first)
 
 
 def test_sigterm_saves_the_seed_and_stops_before_the_next_even_in_the_background(tmp_path: Path) -> None:

@@ -100,15 +100,25 @@ def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, A
 def close_quietly(envs: Any) -> None:
     """Close a vector env whose workers may already be gone (killed, or interrupted by an older SB3): a
     broken pipe is reported in one line and the remaining workers are terminated, instead of raising and
-    losing the run's outputs."""
+    losing the run's outputs.
+
+    A stop signal that lands while the workers step leaves SB3's ``waiting`` flag set with some of their
+    replies already read; its ``close`` would then wait for replies that never come. Those replies do not
+    matter once the env closes, so the flag is cleared first and each worker just gets its close message.
+    """
+    inner = envs
+    while hasattr(inner, "venv"):  # VecFrameStack and other wrappers around the workers
+        inner = inner.venv
+    if getattr(inner, "waiting", False):
+        inner.waiting = False
     try:
         envs.close()
     except (EOFError, OSError) as error:  # OSError covers ConnectionResetError and BrokenPipeError
         print(f"warning: an env worker had already stopped ({type(error).__name__}); terminating the rest")
-        for process in getattr(envs, "processes", []):
+        for process in getattr(inner, "processes", []):
             if process.is_alive():
                 process.terminate()
             process.join(timeout=5)
-        for remote in getattr(envs, "remotes", []):
+        for remote in getattr(inner, "remotes", []):
             remote.close()
-        envs.closed = True
+        inner.closed = True

@@ -214,6 +214,26 @@ def test_workers_ignore_ctrl_c_and_a_dead_worker_closes_quietly() -> None:
     assert not first.is_alive() and envs.closed
 
 
+def test_workers_interrupted_mid_step_still_close() -> None:
+    """A stop signal inside SB3's step_wait leaves some replies read and ``waiting`` set; SB3's own close
+    then waits forever for the replies already read (a training run hung there after its checkpoint)."""
+    import threading
+
+    from stable_baselines3.common.vec_env import SubprocVecEnv
+
+    envs = SubprocVecEnv(
+        [IgnoringInterrupts(lambda: gym.make("CartPole-v1")) for _ in range(2)], start_method="forkserver"
+    )
+    envs.reset()
+    envs.step_async(np.zeros(2, dtype=np.int64))
+    envs.remotes[0].recv()  # where the interrupt struck: the first worker's reply read, the second's not
+    closing = threading.Thread(target=close_quietly, args=(envs,), daemon=True)
+    closing.start()
+    closing.join(timeout=30)
+    assert not closing.is_alive(), "close_quietly hung on replies that had already been read"
+    assert envs.closed and not any(process.is_alive() for process in envs.processes)
+
+
 def test_zero_timesteps_are_rejected_from_the_config_and_the_command_line(tmp_path: Path, capsys) -> None:
     from agents.cli import main
 

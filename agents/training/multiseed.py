@@ -157,16 +157,17 @@ def train_seeds(
                 f"parallel applies to the local backend only (Ray schedules its tasks), got {parallel}"
             )
         return list(_ray_train(jobs, address))
-    if parallel == 1 or len(jobs) == 1:
+    if parallel == 1:
         return [train_seed(job) for job in jobs]
-    return _train_side_by_side(jobs, parallel)
+    return _train_side_by_side(jobs, min(parallel, len(jobs)))
 
 
 MAX_PARALLEL_SEEDS = 64
 
 
 def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
-    """``parallel`` seeds at a time, each in a forkserver process (EGL cannot render after a fork).
+    """``parallel`` seeds at a time, each in a forkserver process (EGL cannot render after a fork); one seed
+    alone runs so too, as for a seed trained beside another command.
 
     The workers ignore Ctrl-C while idle and, like any run, save and stop on SIGINT or SIGTERM while learning.
     A stop signal here is passed on to the running seeds as SIGTERM, and they save; seeds not yet started are not

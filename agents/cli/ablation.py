@@ -8,6 +8,8 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.common.paths import POLICIES_DIR
+
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
 
 
@@ -30,6 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated reactive agents flown on the same layouts as reference rows, e.g. bee_robust,bee",
     )
     parser.add_argument("--runs-dir", default="runs", help="where the seeds' runs are (default: %(default)s)")
+    parser.add_argument(
+        "--policies",
+        default=str(POLICIES_DIR),
+        help="where a seed whose run folder is gone is read from, as shipped: <policies>/<name>/seed_<k>.zip "
+        "(default: %(default)s)",
+    )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -46,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
         parse_seeds(args.seeds),
         Path(args.out),
         runs_dir=Path(args.runs_dir),
+        policies_dir=Path(args.policies),
         episodes=args.episodes,
         workers=args.workers,
         report_only=args.report_only,

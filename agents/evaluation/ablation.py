@@ -1,7 +1,8 @@
 """Training configs compared over their seeds on validation layouts (``flownav ablation``): the issue-16 table of
 what each lever buys, decided without touching a test layout.
 
-Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``; every run
+Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``, or, where
+that folder is gone (a new checkout), the seed's shipped policy ``results/policies/<name>/seed_<k>.zip``; every run
 flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEED_START`) into its own CSV,
 ``<out>/<name>/seed_<k>.csv`` (resumable). Per config: the failure rate over runs × layouts with a two-level
 bootstrap interval, each seed's failure rate, and the learning curves of its seeds. Reactive reference agents
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from agents.common.config import load_config
+from agents.common.paths import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
@@ -55,6 +57,7 @@ def compare_configs(
     out: Path,
     *,
     runs_dir: Path = Path("runs"),
+    policies_dir: Path | None = POLICIES_DIR,
     episodes: int = 100,
     workers: int = 2,
     report_only: bool = False,
@@ -62,8 +65,8 @@ def compare_configs(
     reference_agents: Sequence[str] = (),
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
-    ``ablation_curves.png`` into ``out``; returns the report's lines. A run not trained yet is listed as
-    missing, not flown.
+    ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
+    policy shipped to ``policies_dir`` (None: runs only); one that is neither is listed as missing, not flown.
 
     Raises:
         ValueError: a bad config, episode count or worker count, or a reference agent that is not reactive.
@@ -80,8 +83,8 @@ def compare_configs(
         name = load_config(Path(config_path), TrainConfig).name
         outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
         for seed in seeds:
-            files = RunFiles.of_seed(runs_dir, name, seed)
-            if not files.policy.is_file():
+            files = seed_files(runs_dir, policies_dir, name, seed)
+            if files is None:
                 missing.append(f"{name} seed {seed}")
                 continue
             tasks = ablation_tasks(files.policy, episodes)
@@ -94,8 +97,11 @@ def compare_configs(
             per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
             for key in counts:
                 counts[key] += sum(bool(r[key]) for r in flown)
-            if files.evaluations.is_file():
-                curves[f"{name} seed {seed}"] = files.evaluations
+            evaluations = files.evaluations
+            if not evaluations.is_file():  # a shipped seed: its evaluations beside the policy
+                evaluations = files.run_dir / files.shipped_names()[files.evaluations]
+            if evaluations.is_file():
+                curves[f"{name} seed {seed}"] = evaluations
         if outcomes:
             rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
     for agent in reference_agents:
@@ -113,6 +119,19 @@ def compare_configs(
         lines += ["", "![learning curves](ablation_curves.png)"]
     (out / "ablation.md").write_text("\n".join(lines) + "\n")
     return lines
+
+
+def seed_files(runs_dir: Path, policies_dir: Path | None, name: str, seed: int) -> RunFiles | None:
+    """The files of training seed ``seed`` of config ``name``: its run folder if it holds the policy, else its
+    shipped files (``<policies_dir>/<name>/seed_<k>.*``, the same names without the run folder), else None."""
+    run = RunFiles.of_seed(runs_dir, name, seed)
+    if run.policy.is_file():
+        return run
+    if policies_dir is not None:
+        shipped = RunFiles(Path(policies_dir) / name, run.name)
+        if shipped.policy.is_file():
+            return shipped
+    return None
 
 
 def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:

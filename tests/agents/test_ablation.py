@@ -43,6 +43,28 @@ def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tm
     assert again[4:] == lines[4:]
 
 
+def test_a_seed_whose_run_folder_is_gone_flies_its_shipped_policy(tmp_path: Path) -> None:
+    import shutil
+
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir, policies = tmp_path / "runs", tmp_path / "policies"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=policies))
+    shutil.rmtree(runs_dir)  # a new checkout: runs/ is not committed, the shipped policy is
+    out = tmp_path / "ablation"
+    lines = compare_configs(
+        [config_path], [0, 1], out, runs_dir=runs_dir, policies_dir=policies, episodes=2, workers=1
+    )
+    text = "\n".join(lines)
+    assert "| lever | 1 | 2 |" in text and "lever seed 1." in text
+    assert len(read_records(out / "lever" / "seed_0.csv")) == 2
+    assert (out / "ablation_curves.png").is_file()  # drawn from the shipped evaluations
+    # Without a policies folder only run folders count.
+    nothing = compare_configs(
+        [config_path], [0], tmp_path / "none", runs_dir=runs_dir, policies_dir=None, episodes=2, workers=1
+    )
+    assert "lever seed 0" in "\n".join(nothing)
+
+
 def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) -> None:
     _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
     assert main(["ablation", "--configs", str(config_path), "--workers", "0", "--out", str(tmp_path)]) == 2

@@ -11,6 +11,7 @@ import argparse
 from pathlib import Path
 
 from agents.common.paths import POLICIES_DIR
+from agents.training.parking import PARKED_DIR
 
 HELP = "train a PPO policy from a YAML config into runs/<name>/ (resumable; --ship to publish it)"
 
@@ -63,6 +64,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "steps its own envs (same rollouts; on 2 cores, 2 side by side train about 1.4x the steps per second "
         "of one at a time, see results/training_performance.md). Default 1",
     )
+    parser.add_argument(
+        "--park",
+        action="store_true",
+        help="with --seeds, do not train: copy each unfinished seed's resume state (newest checkpoint, "
+        "evaluations, best model, record) to --parked-dir to commit, so a new checkout resumes it "
+        "(runs/ is not committed); --seeds restores and resumes parked seeds by itself",
+    )
+    parser.add_argument(
+        "--parked-dir",
+        default=str(PARKED_DIR),
+        help=f"where seeds are parked and restored from (default {PARKED_DIR})",
+    )
     parser.add_argument("--total-timesteps", type=int, help="override the config's total_timesteps")
     parser.add_argument("--max-minutes", type=float, help="override the config's wall-clock budget")
 
@@ -78,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(config_path, TrainConfig)
     if args.seeds is not None and args.resume:
         raise ValueError("--seeds always resumes unfinished seeds: drop --resume")
+    if args.park and (args.seeds is None or args.ship or args.ship_only):
+        raise ValueError("--park takes --seeds and no shipping options: it copies unfinished seeds aside")
     if args.ship_only and args.seeds is not None:
         from agents.training.multiseed import parse_seeds
 
@@ -109,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
-    from agents.training.multiseed import parse_seeds, seed_jobs, train_seeds
+    from agents.training.multiseed import park_seeds, parse_seeds, seed_jobs, train_seeds
 
     jobs = seed_jobs(
         config,
@@ -117,7 +132,11 @@ def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
         config_path=config_path,
         runs_dir=Path(args.runs_dir),
         ship_to=Path(args.ship_to) if args.ship else None,
+        parked_dir=Path(args.parked_dir),
     )
+    if args.park:
+        park_seeds(jobs)
+        return 0
     policies = train_seeds(jobs, backend=args.backend, address=args.address, parallel=args.parallel)
     print("\n".join(f"seed {job.config.seed}: {policy}" for job, policy in zip(jobs, policies, strict=True)))
     return 0

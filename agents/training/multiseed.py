@@ -28,6 +28,7 @@ import yaml
 from agents.common.seeds import MAX_RUN_SEED
 from agents.training.config import TrainConfig
 from agents.training.outputs import RunFiles
+from agents.training.parking import discard, parked_files, restore
 
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
 
@@ -62,19 +63,35 @@ class SeedJob:
     source_config: Path
     runs_dir: Path
     ship_to: Path | None
+    parked_dir: Path | None = None
 
     @property
     def files(self) -> RunFiles:
         return RunFiles.of_seed(self.runs_dir, self.config.name, self.config.seed)
 
+    @property
+    def parked(self) -> RunFiles | None:
+        """Where this seed is parked, if jobs may be parked at all."""
+        if self.parked_dir is None:
+            return None
+        return parked_files(self.parked_dir, self.config.name, self.config.seed)
+
 
 def seed_jobs(
-    config: TrainConfig, seeds: list[int], *, config_path: Path, runs_dir: Path, ship_to: Path | None
+    config: TrainConfig,
+    seeds: list[int],
+    *,
+    config_path: Path,
+    runs_dir: Path,
+    ship_to: Path | None,
+    parked_dir: Path | None = None,
 ) -> list[SeedJob]:
-    """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds."""
+    """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds; seeds parked
+    in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty."""
     seed_ship_to = Path(ship_to) / config.name if ship_to is not None else None
     return [
-        SeedJob(replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to) for seed in seeds
+        SeedJob(replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to, parked_dir)
+        for seed in seeds
     ]
 
 
@@ -112,6 +129,8 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
     from agents.training.ppo import train
     from agents.training.shipping import ship_run
 
+    if job.parked is not None and not finished(job) and restore(job.parked, job.files):
+        print(f"seed {job.config.seed}: restored from {job.parked.run_dir} (parked), resuming")
     if finished(job):
         print(f"seed {job.config.seed}: finished ({job.files.policy}); skipping")
         if job.ship_to is not None and not (job.ship_to / job.files.policy.name).is_file():
@@ -133,7 +152,35 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
         raise KeyboardInterrupt(
             f"seed {job.config.seed} saved at its last step; run the same command to resume"
         )
+    if job.parked is not None:
+        discard(job.parked)
     return policy
+
+
+def park_seeds(jobs: list[SeedJob]) -> list[Path]:
+    """Park every unfinished seed that has a checkpoint (:func:`agents.training.parking.park`); returns the
+    parked run folders. Finished seeds and seeds without a checkpoint are passed over with a line each.
+
+    Raises:
+        ValueError: a job without a parking folder.
+    """
+    from agents.training.parking import park
+
+    parked = []
+    for job in jobs:
+        if job.parked is None:
+            raise ValueError(f"seed {job.config.seed}: no parking folder given")
+        if finished(job):
+            print(f"seed {job.config.seed}: finished; nothing to park (ship it)")
+            continue
+        try:
+            copied = park(job.files, job.parked)
+        except FileNotFoundError as error:
+            print(f"seed {job.config.seed}: {error}")
+            continue
+        print(f"seed {job.config.seed}: parked {len(copied)} files in {job.parked.run_dir}")
+        parked.append(job.parked.run_dir)
+    return parked
 
 
 def train_seeds(

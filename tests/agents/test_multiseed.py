@@ -193,3 +193,49 @@ def test_sigterm_saves_the_seed_and_stops_before_the_next_even_in_the_background
     record = json.loads(files.record.read_text())
     assert record["sessions"][-1]["interrupted"] is True
     assert not (runs_dir / "stopped" / "seed_1").exists()
+
+
+def test_a_parked_seed_resumes_in_a_new_checkout_and_its_parked_copy_goes(tmp_path: Path, capsys) -> None:
+    import shutil
+
+    from agents.training.multiseed import park_seeds
+
+    config, config_path = tiny_train_config(tmp_path, total=64, name="parked")
+    runs_dir, parked_dir = tmp_path / "runs", tmp_path / "unfinished"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    # A larger budget makes the seed unfinished, as the end of a session leaves it.
+    longer = config.__class__(**{**config.__dict__, "total_timesteps": 128})
+    jobs = seed_jobs(
+        longer, [0, 1], config_path=config_path, runs_dir=runs_dir, ship_to=None, parked_dir=parked_dir
+    )
+    assert park_seeds(jobs) == [parked_dir / "parked" / "seed_0"]
+    output = capsys.readouterr().out
+    assert "seed 0: parked" in output and "seed 1: " in output and "no readable checkpoint" in output
+    parked = RunFiles.of_seed(parked_dir, "parked", 0)
+    assert [p.name for p in parked.checkpoints.iterdir()] == ["parked_64_steps.zip"]
+    assert parked.record.is_file() and parked.evaluations.is_file() and parked.best_model.is_file()
+    shutil.rmtree(runs_dir)  # the new checkout: runs/ is gone, results/unfinished/ was committed
+    train_seeds(jobs[:1])
+    assert "seed 0: restored from" in capsys.readouterr().out
+    record = json.loads(RunFiles.of_seed(runs_dir, "parked", 0).record.read_text())
+    assert record["total_timesteps"] == 128 and len(record["sessions"]) == 2
+    assert not (parked_dir / "parked").exists()  # finished: the parked copy is removed
+
+
+def test_parking_refuses_what_it_cannot_park(tmp_path: Path, capsys) -> None:
+    from agents.training.multiseed import park_seeds
+
+    config, config_path = tiny_train_config(tmp_path, total=64, name="parked")
+    runs_dir = tmp_path / "runs"
+    finished_jobs = seed_jobs(
+        config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None, parked_dir=tmp_path / "u"
+    )
+    train_seeds(finished_jobs)
+    capsys.readouterr()
+    assert park_seeds(finished_jobs) == []
+    assert "seed 0: finished; nothing to park (ship it)" in capsys.readouterr().out
+    with pytest.raises(ValueError, match="seed 0: no parking folder given"):
+        park_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    code = main(["train", "--config", str(config_path), "--park"])
+    assert code == 2
+    assert "--park takes --seeds and no shipping options" in capsys.readouterr().err

@@ -137,7 +137,7 @@ def test_bad_parallel_counts_are_refused(tmp_path: Path, parallel, message: str)
     assert not (tmp_path / "parallel").exists()
 
 
-def test_seeds_side_by_side_train_exactly_what_they_train_in_turn(tmp_path: Path, capfd) -> None:
+def test_seeds_side_by_side_train_exactly_what_they_train_in_turn(tmp_path: Path) -> None:
     import torch
 
     from agents.training.saved_models import read_saved_model
@@ -145,11 +145,8 @@ def test_seeds_side_by_side_train_exactly_what_they_train_in_turn(tmp_path: Path
     config, config_path = tiny_train_config(tmp_path, total=64, name="sides", n_envs=2)
     in_turn, side_by_side = tmp_path / "in_turn", tmp_path / "side_by_side"
     train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=in_turn, ship_to=None))
-    capfd.readouterr()
     jobs = seed_jobs(config, [0, 1], config_path=config_path, runs_dir=side_by_side, ship_to=None)
     train_seeds(jobs, parallel=2)
-    output = capfd.readouterr().out
-    assert "sides seed 0: 64 / 64 steps" in output and "sides seed 1: 64 / 64 steps" in output
     for seed in (0, 1):
         record = json.loads(RunFiles.of_seed(side_by_side, "sides", seed).record.read_text())
         assert record["sessions"][-1]["env_workers"] == "in process"
@@ -160,6 +157,15 @@ def test_seeds_side_by_side_train_exactly_what_they_train_in_turn(tmp_path: Path
     assert all(torch.equal(first[name], second[name]) for name in first)
     other = read_saved_model(RunFiles.of_seed(side_by_side, "sides", 1).policy).policy_state
     assert not all(torch.equal(first[name], other[name]) for name in first)
+
+
+def test_a_run_without_a_progress_bar_prints_progress_lines(tmp_path: Path, capsys) -> None:
+    from agents.training.ppo import train
+
+    config, config_path = tiny_train_config(tmp_path, total=128, name="lines")
+    train(config, config_path=config_path, resume=False, runs_dir=tmp_path / "runs", progress_bar=False)
+    output = capsys.readouterr().out
+    assert "lines seed 0: 64 / 128 steps (" in output and "lines seed 0: 128 / 128 steps (" in output
 
 
 def test_sigterm_saves_the_seed_and_stops_before_the_next_even_in_the_background(tmp_path: Path) -> None:

@@ -28,9 +28,11 @@ import yaml
 from agents.common.seeds import MAX_RUN_SEED
 from agents.training.config import TrainConfig
 from agents.training.outputs import RunFiles
-from agents.training.parking import discard, parked_files, restore
+from agents.training.parking import discard, park, parked_files, restore
 
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
+# Most seeds trained at once by the local backend; each wants a core or more.
+MAX_PARALLEL_SEEDS = 64
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -164,8 +166,6 @@ def park_seeds(jobs: list[SeedJob]) -> list[Path]:
     Raises:
         ValueError: a job without a parking folder.
     """
-    from agents.training.parking import park
-
     parked = []
     for job in jobs:
         if job.parked is None:
@@ -207,9 +207,6 @@ def train_seeds(
     if parallel == 1:
         return [train_seed(job) for job in jobs]
     return _train_side_by_side(jobs, min(parallel, len(jobs)))
-
-
-MAX_PARALLEL_SEEDS = 64
 
 
 def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:

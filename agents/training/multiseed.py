@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import json
 import os
+import queue
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -209,35 +211,87 @@ def train_seeds(
     return _train_side_by_side(jobs, min(parallel, len(jobs)))
 
 
+# How often the parent of seeds side by side looks for one that died without reporting.
+RESULT_POLL_S = 5.0
+
+
+def _died(job: SeedJob, exit_code: int | None) -> str:
+    return (
+        f"seed {job.config.seed}'s process ended (exit code {exit_code}) without a result; its newest "
+        "checkpoint is its resume point: run the same command to resume"
+    )
+
+
+def _seed_process(index: int, job: SeedJob, results: Any) -> None:
+    """One seed trained side by side, in its own process: its outcome goes to ``results`` as ``(index, policy
+    path or None, error or None)``."""
+    from agents.training.interrupts import ignore_ctrl_c
+
+    ignore_ctrl_c()
+    try:
+        results.put((index, str(train_seed(job, side_by_side=True)), None))
+    except BaseException as error:  # an interrupted seed raises KeyboardInterrupt; any error goes back too
+        results.put((index, None, error))
+
+
 def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
     """``parallel`` seeds at a time, each in a forkserver process (EGL cannot render after a fork); one seed
     alone runs so too, as for a seed trained beside another command.
 
-    The workers ignore Ctrl-C while idle and, like any run, save and stop on SIGINT or SIGTERM while learning.
-    A stop signal here is passed on to the running seeds as SIGTERM, and they save; seeds not yet started are not
-    started.
+    A process is started for a seed only when one is free, so nothing waits in a queue. The processes ignore
+    Ctrl-C (it reaches the whole process group) and, like any run, save and stop on SIGTERM while learning. A
+    stop signal here is passed on once, as SIGTERM, to every running seed, which saves; no further seed starts.
+    The first error of a seed is raised once the running ones have ended.
     """
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-    from functools import partial
 
-    from agents.training.interrupts import ignore_ctrl_c, stop_signals_interrupt
+    from agents.training.interrupts import stop_signals_interrupt
 
     context = multiprocessing.get_context("forkserver")
-    pool = ProcessPoolExecutor(max_workers=parallel, mp_context=context, initializer=ignore_ctrl_c)
-    futures = [pool.submit(partial(train_seed, side_by_side=True), job) for job in jobs]
+    results = context.Queue()
+    running: dict[int, Any] = {}
+    outcomes: dict[int, tuple[str | None, BaseException | None]] = {}
+    waiting = list(range(len(jobs)))
+    stopping = False
     try:
         with stop_signals_interrupt():
-            return [future.result() for future in futures]
-    except KeyboardInterrupt:
-        for future in futures:
-            future.cancel()
-        for process in list(getattr(pool, "_processes", {}).values()):
-            if process.is_alive():
-                process.terminate()  # SIGTERM: the seed saves its checkpoint and record, then stops
-        raise
+            while waiting or running:
+                while waiting and len(running) < parallel and not stopping:
+                    index = waiting.pop(0)
+                    process = context.Process(target=_seed_process, args=(index, jobs[index], results))
+                    process.start()
+                    running[index] = process
+                if not running:
+                    break
+                try:
+                    index, policy, error = results.get(timeout=RESULT_POLL_S)
+                except queue.Empty:
+                    for index, process in list(running.items()):
+                        if not process.is_alive() and results.empty():  # died without a word (SIGKILL)
+                            running.pop(index).join()
+                            outcomes[index] = (None, RuntimeError(_died(jobs[index], process.exitcode)))
+                            stopping = True
+                    continue
+                except KeyboardInterrupt:
+                    if not stopping:
+                        stopping = True
+                        for process in running.values():
+                            process.terminate()  # SIGTERM: the seed saves its checkpoint and record
+                    continue
+                running.pop(index).join()
+                outcomes[index] = (policy, error)
+                stopping = stopping or error is not None
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        for process in running.values():  # only left after an error in this loop itself
+            process.terminate()
+            process.join()
+    errors = [error for _, error in outcomes.values() if error is not None]
+    failures = [error for error in errors if not isinstance(error, KeyboardInterrupt)]
+    if failures or errors:
+        raise (failures or errors)[0]
+    if waiting:
+        raise KeyboardInterrupt("stopped before every seed had started; run the same command to resume")
+    return [Path(outcomes[index][0]) for index in range(len(jobs))]
 
 
 def _ray_train(jobs: list[SeedJob], address: str | None) -> Iterator[Path]:

@@ -245,3 +245,33 @@ def test_parking_refuses_what_it_cannot_park(tmp_path: Path, capsys) -> None:
     code = main(["train", "--config", str(config_path), "--park"])
     assert code == 2
     assert "--park takes --seeds and no shipping options" in capsys.readouterr().err
+
+
+def test_sigterm_saves_every_seed_side_by_side_and_starts_no_other(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    _, config_path = tiny_train_config(tmp_path, total=100_000, name="stopped")
+    runs_dir = tmp_path / "runs"
+    process = subprocess.Popen(
+        [sys.executable, "-c", "from agents.cli import main; raise SystemExit(main())", "train", "--config",
+         str(config_path), "--seeds", "0-2", "--parallel", "2", "--runs-dir", str(runs_dir)],
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )  # fmt: skip
+    seeds = [RunFiles.of_seed(runs_dir, "stopped", seed) for seed in (0, 1)]
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and not all(
+        files.checkpoints.is_dir() and any(files.checkpoints.iterdir()) for files in seeds
+    ):
+        time.sleep(0.5)
+    process.send_signal(signal.SIGTERM)
+    output, _ = process.communicate(timeout=120)
+    assert process.returncode == 130, output
+    for files in seeds:
+        assert json.loads(files.record.read_text())["sessions"][-1]["interrupted"] is True
+    assert not (runs_dir / "stopped" / "seed_2").exists()

@@ -1,6 +1,9 @@
-"""The main job in a few minutes: flies the bee baseline, the straight floor and every shipped PPO policy on
-the same few held-out seeds of FlowNav-v0 and prints the comparison table (collision and success rates with
-Wilson 95 % intervals). The full benchmark is ``flownav sweep`` (results/benchmark.md)."""
+"""The main job in a few minutes: flies every reactive agent (the straight floor, the bee, ``bee_robust``,
+``vfh``) and every shipped PPO agent on the same few held-out seeds of FlowNav-v0 and prints the comparison
+table (collision and success rates with Wilson 95 % intervals). A learned agent flies its shipped training
+seeds (``results/policies/<agent>/seed_<k>.zip``) in turn over the layouts, as the sweep does; one without
+any flies its single ``<agent>.zip`` if there is one, and says so. The full benchmark is ``flownav
+leaderboard`` and ``flownav sweep`` (results/benchmark.md)."""
 
 from __future__ import annotations
 
@@ -20,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--policy-dir",
         default=str(POLICIES_DIR),
-        help="folder of the PPO policies <agent>.zip (default: this repository's %(default)s)",
+        help="folder of the PPO policies, <agent>/seed_<k>.zip or <agent>.zip (default: this repository's "
+        "%(default)s)",
     )
     parser.add_argument(
         "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
@@ -31,18 +35,20 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_records
     from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, execute
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import LEARNED_AGENTS, policy_file
+    from agents.policies import REACTIVE_AGENTS, policy_file, split_agent_name
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    files = {name: policy_file(name, directory=args.policy_dir) for name in LEARNED_AGENTS}
-    policies = {name: str(path) for name, path in files.items() if path.exists()}
-    for name, path in files.items():
-        if name not in policies:
-            print(f"skipping {name}: no policy at {path}")
-    agents = ["straight", "bee", *policies]
+    runs = {name: [name] for name in REACTIVE_AGENTS} | learned_runs(Path(args.policy_dir))
     seeds = range(TEST_SEED_START, TEST_SEED_START + args.episodes)
-    tasks = [EpisodeTask(a, "clean", 0.0, s, args.env_id, (), policies.get(a)) for a in agents for s in seeds]
+    tasks = []
+    for agent, names in runs.items():
+        for index, seed in enumerate(seeds):
+            name = names[index % len(names)]  # training seeds in turn over the layouts
+            policy = (
+                str(policy_file(name, directory=args.policy_dir)) if agent not in REACTIVE_AGENTS else None
+            )
+            tasks.append(EpisodeTask(name, "clean", 0.0, seed, args.env_id, (), policy))
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"
         try:
@@ -50,7 +56,28 @@ def run(args: argparse.Namespace) -> int:
         except EpisodesInterrupted:
             # Its CSV was a scratch file: there is nothing to resume, whatever the runner's message says.
             raise KeyboardInterrupt("the demo keeps no episodes; run it again to start over") from None
-        table = summarise(read_records(episodes))
+        rows = [{**row, "agent": split_agent_name(row["agent"])[0]} for row in read_records(episodes)]
+        table = summarise(rows)
     print(f"\n{args.env_id}, {args.episodes} held-out seeds per agent (from {TEST_SEED_START}):\n")
     print(format_summary(table))
     return 0
+
+
+def learned_runs(policy_dir: Path) -> dict[str, list[str]]:
+    """Each learned agent's runs to fly: its shipped training seeds (``ppo_flow@0``, ...), else its single
+    ``<agent>.zip``; an agent with neither is left out. Says which, for every agent."""
+    from agents.policies import LEARNED_AGENTS, policy_file, seeded_agent_name, trained_seeds
+
+    runs: dict[str, list[str]] = {}
+    for agent in LEARNED_AGENTS:
+        seeds = trained_seeds(agent, policy_dir)
+        single = policy_file(agent, directory=policy_dir)
+        if seeds:
+            runs[agent] = [seeded_agent_name(agent, seed) for seed in seeds]
+            print(f"{agent}: training seeds {', '.join(map(str, seeds))} in turn over the layouts")
+        elif single.exists():
+            runs[agent] = [agent]
+            print(f"{agent}: no training seeds in {policy_dir / agent}/, flying the single policy {single}")
+        else:
+            print(f"skipping {agent}: no policy at {policy_dir / agent}/seed_<k>.zip or {single}")
+    return runs

@@ -106,28 +106,52 @@ def test_help_pages_show_their_defaults(capsys, command: str, defaults: list[str
         assert default in page
 
 
-def test_demo_finds_the_shipped_policies_from_any_folder_and_names_missing_ones(
+def test_demo_flies_every_agent_with_learned_ones_over_their_training_seeds(
     tmp_path: Path, monkeypatch, capsys
 ) -> None:
     from agents.cli import main
+    from agents.evaluation import runner
+    from agents.policies import REACTIVE_AGENTS
+
+    policies = tmp_path / "policies"
+    (policies / "ppo_flow").mkdir(parents=True)
+    for seed in (0, 2):
+        (policies / "ppo_flow" / f"seed_{seed}.zip").write_bytes(b"")
+    (policies / "ppo_robust.zip").write_bytes(b"")  # a single policy, no training seeds
+    flown: list[EpisodeTask] = []
+    monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--episodes", "3", "--policy-dir", str(policies)]) == 0
+    by_agent: dict[str, list[tuple[int, str | None]]] = {}
+    for task in flown:
+        by_agent.setdefault(task.agent, []).append((task.seed, task.policy))
+    for name in REACTIVE_AGENTS:
+        assert [policy for _, policy in by_agent[name]] == [None] * 3
+    # Layout i by training seed i mod the seed count, as the sweep flies them.
+    assert [seed for seed, _ in by_agent["ppo_flow@0"]] == [1_000_000, 1_000_002]
+    assert by_agent["ppo_flow@2"] == [(1_000_001, str(policies / "ppo_flow" / "seed_2.zip"))]
+    assert {policy for _, policy in by_agent["ppo_robust"]} == {str(policies / "ppo_robust.zip")}
+    assert "ppo_oracle" not in by_agent
+    out = capsys.readouterr().out
+    assert "ppo_flow: training seeds 0, 2 in turn over the layouts" in out
+    assert f"ppo_robust: no training seeds in {policies / 'ppo_robust'}/, flying the single policy" in out
+    assert f"skipping ppo_oracle: no policy at {policies / 'ppo_oracle'}/seed_<k>.zip" in out
+
+
+def test_demo_finds_the_shipped_policies_from_any_folder(tmp_path: Path, monkeypatch) -> None:
+    from agents.cli import main
     from agents.common.paths import POLICIES_DIR
     from agents.evaluation import runner
-    from agents.policies import LEARNED_AGENTS
+    from agents.policies import LEARNED_AGENTS, trained_seeds
 
     flown: list[EpisodeTask] = []
     monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
     monkeypatch.chdir(tmp_path)
     assert main(["demo", "--episodes", "1"]) == 0
-    assert {t.agent: t.policy for t in flown if t.policy} == {
-        name: str(POLICIES_DIR / f"{name}.zip") for name in LEARNED_AGENTS
-    }
-    assert "skipping" not in capsys.readouterr().out
-    flown.clear()
-    assert main(["demo", "--episodes", "1", "--policy-dir", "elsewhere"]) == 0
-    assert [t.agent for t in flown] == ["straight", "bee"]
-    out = capsys.readouterr().out
     for name in LEARNED_AGENTS:
-        assert f"skipping {name}: no policy at {Path('elsewhere') / name}.zip" in out
+        policies = {t.policy for t in flown if t.agent.partition("@")[0] == name}
+        expected = POLICIES_DIR / name / f"seed_{trained_seeds(name)[0]}.zip" if trained_seeds(name) else None
+        assert policies == {str(expected or POLICIES_DIR / f"{name}.zip")}
 
 
 def test_evaluate_flies_a_shipped_policy_from_another_folder(tmp_path: Path, monkeypatch) -> None:

@@ -42,6 +42,26 @@ def test_finalists_fly_fresh_validation_layouts_and_the_better_becomes_the_polic
     assert len(read_records(files.run_dir / "finalists" / "episodes.csv")) == len(rows)
 
 
+def test_finalists_flown_before_the_run_trained_on_are_set_aside(tmp_path: Path, capsys) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=192, name="longer")
+    runs_dir = tmp_path / "runs"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    files = RunFiles.of_seed(runs_dir, "longer", 0)
+    select_finalist(files, 0, workers=1, episodes=2)
+    # As if the run had trained on: its best held-out model is now another file.
+    last = next(path for label, path in finalists(files).items() if label.startswith("last"))
+    files.best_model.write_bytes(last.read_bytes())
+    selected = select_finalist(files, 0, workers=1, episodes=2)
+    staging = files.run_dir / "finalists"
+    assert "holds episodes of finalists that are not the run's candidates now" in capsys.readouterr().out
+    assert len(list(staging.glob("episodes.csv.bak-*"))) == 1
+    rows = read_records(staging / "episodes.csv")
+    assert {r["policy_sha256"] for r in rows} == {file_sha256(last)} and len(rows) == 2
+    assert selected.startswith("finalist on 2 validation layouts") and file_sha256(
+        files.policy
+    ) == file_sha256(last)
+
+
 def test_selecting_an_untrained_run_names_what_is_missing(tmp_path: Path, capsys) -> None:
     with pytest.raises(FileNotFoundError, match=r"is not a finished training run"):
         select_finalist(RunFiles.of_seed(tmp_path, "none", 0), 0)

@@ -8,6 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.cli.arguments import env_kwarg
 from agents.common.paths import POLICIES_DIR
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
@@ -38,6 +39,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where a seed whose run folder is gone is read from, as shipped: <policies>/<name>/seed_<k>.zip "
         "(default: %(default)s)",
     )
+    parser.add_argument(
+        "--env",
+        type=env_kwarg,
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="FlowNavEnv setting every run flies with, repeatable (e.g. --env obstacle_density=0.18; default: "
+        "none, clean); give each condition its own --out, for its own ablation.md",
+    )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -60,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
         report_only=args.report_only,
         command=command.strip(),
         reference_agents=[agent.strip() for agent in args.reference.split(",") if agent.strip()],
+        env=dict(args.env),
     )
     print("\n".join(lines))
     return 0

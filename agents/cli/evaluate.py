@@ -11,30 +11,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import yaml
-
+from agents.cli.arguments import env_kwarg
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
-
-
-def _env_kwarg(text: str) -> tuple[str, object]:
-    if "=" not in text:
-        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
-    key, value = text.split("=", 1)
-    return key, yaml.safe_load(value)
-
-
-def record_label(env_kwargs: dict[str, object]) -> tuple[str, float]:
-    """(factor, level) of the records: ``clean`` for defaults, the kwarg and its value for one numeric
-    setting (as in the sweep), else every setting spelled out, so different settings never share a row key."""
-    if not env_kwargs:
-        return "clean", 0.0
-    if len(env_kwargs) == 1:
-        ((key, value),) = env_kwargs.items()
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return key, float(value)
-    return ",".join(f"{k}={v}" for k, v in sorted(env_kwargs.items())), 0.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -56,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
     parser.add_argument(
         "--env",
-        type=_env_kwarg,
+        type=env_kwarg,
         action="append",
         default=[],
         metavar="KEY=VALUE",
@@ -80,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from agents.common.config import check_env_kwargs
     from agents.evaluation.records import read_episodes, start_new_file
-    from agents.evaluation.runner import EpisodeTask, execute, rows_of
+    from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of
     from agents.evaluation.statistics import format_summary, summarise
     from agents.policies import split_agent_name
 

@@ -12,19 +12,19 @@ Wilson interval: a lever is worth shipping only if it beats what needs no traini
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.common.config import load_config
+from agents.common.config import check_env_kwargs, load_config
 from agents.common.paths import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute, rows_of
+from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of
 from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
@@ -36,8 +36,11 @@ from agents.training.outputs import RunFiles
 RUN_LABEL = "ppo_flow"
 
 
-def ablation_tasks(policy: Path, episodes: int) -> list[EpisodeTask]:
-    """One run's episodes: the clean cell on validation layouts ``ABLATION_SEED_START ..``.
+def ablation_tasks(
+    policy: Path, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
+) -> list[EpisodeTask]:
+    """One run's episodes on validation layouts ``ABLATION_SEED_START ..``: clean, or with the env settings
+    ``env`` on top of the run's own (issue 16's robustness conditions, such as ``obstacle_density=0.18``).
 
     Raises:
         ValueError: so many episodes that they would reach the test layouts.
@@ -48,7 +51,13 @@ def ablation_tasks(policy: Path, episodes: int) -> list[EpisodeTask]:
             f"{ABLATION_SEED_START:,}), got {episodes}"
         )
     seeds = range(ABLATION_SEED_START, ABLATION_SEED_START + episodes)
-    return [EpisodeTask(RUN_LABEL, "clean", 0.0, seed, policy=str(policy)) for seed in seeds]
+    env = dict(env or {})
+    factor, level = record_label(env)
+    settings = tuple(sorted(env.items()))
+    policy_path = str(policy) if policy is not None else None
+    return [
+        EpisodeTask(agent, factor, level, seed, env_kwargs=settings, policy=policy_path) for seed in seeds
+    ]
 
 
 def compare_configs(
@@ -63,14 +72,20 @@ def compare_configs(
     report_only: bool = False,
     command: str = "flownav ablation",
     reference_agents: Sequence[str] = (),
+    env: Mapping[str, Any] | None = None,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
     policy shipped to ``policies_dir`` (None: runs only); one that is neither is listed as missing, not flown.
+    ``env``: FlowNavEnv settings every run and reference agent flies with (default: clean). Its episodes are
+    labelled with the setting, so they never count with another condition's in the same CSV; ``ablation.md``
+    reports the condition asked, so give each condition its own ``out`` to keep each report.
 
     Raises:
-        ValueError: a bad config, episode count or worker count, or a reference agent that is not reactive.
+        ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
+            reactive.
     """
+    env = check_env_kwargs(dict(env or {}), "command line", key="--env")
     for agent in reference_agents:
         if agent not in REACTIVE_AGENTS:
             raise ValueError(
@@ -87,7 +102,7 @@ def compare_configs(
             if files is None:
                 missing.append(f"{name} seed {seed}")
                 continue
-            tasks = ablation_tasks(files.policy, episodes)
+            tasks = ablation_tasks(files.policy, episodes, env)
             flown = _fly(tasks, out / name / f"seed_{seed}.csv", workers, report_only, f"{name} seed {seed}")
             if len(flown) < episodes:
                 missing.append(f"{name} seed {seed} ({len(flown)} of {episodes} episodes)")
@@ -105,15 +120,13 @@ def compare_configs(
         if outcomes:
             rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
     for agent in reference_agents:
-        tasks = [
-            EpisodeTask(agent, "clean", 0.0, task.seed) for task in ablation_tasks(Path(agent), episodes)
-        ]
+        tasks = ablation_tasks(None, episodes, env, agent=agent)
         flown = _fly(tasks, out / "reference" / f"{agent}.csv", workers, report_only, f"{agent} (reference)")
         if len(flown) < episodes:
             missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
             continue
         rows.append(_reference_row(agent, flown))
-    lines = _report(rows, missing, seeds, episodes, command)
+    lines = _report(rows, missing, seeds, episodes, command, env)
     if curves:
         plot_learning_curves(curves, out / "ablation_curves.png", "held-out evaluation return, per seed")
         lines += ["", "![learning curves](ablation_curves.png)"]
@@ -180,12 +193,15 @@ def _reference_row(agent: str, flown: list[dict[str, Any]]) -> list[Any]:
     ]
 
 
-def _report(rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str) -> list[str]:
+def _report(
+    rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str, env: dict[str, Any]
+) -> list[str]:
+    condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
     lines = [
         "# Ablations on validation layouts",
         "",
         f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
-        f"{ABLATION_SEED_START + episodes - 1:,} (clean sensors), never a test layout; seeds asked: "
+        f"{ABLATION_SEED_START + episodes - 1:,} ({condition}), never a test layout; seeds asked: "
         f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
         "two-level bootstrap (runs, then layouts within each run); a reactive reference row's is Wilson's over its "
         "layouts.",

@@ -55,6 +55,19 @@ def file_sha256(path: Path) -> str:
     return _HASHES[key]
 
 
+def record_label(env_kwargs: dict[str, Any]) -> tuple[str, float]:
+    """(factor, level) of the records flown with ``env_kwargs``: ``clean`` for defaults, the kwarg and its value
+    for one numeric setting (as in the sweep), else every setting spelled out, so different settings never share
+    a row key."""
+    if not env_kwargs:
+        return "clean", 0.0
+    if len(env_kwargs) == 1:
+        ((key, value),) = env_kwargs.items()
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return key, float(value)
+    return ",".join(f"{k}={v}" for k, v in sorted(env_kwargs.items())), 0.0
+
+
 @dataclass(frozen=True)
 class EpisodeTask:
     """One episode to fly: who, with which env kwargs, from which seed; ``factor``/``level`` label the record."""

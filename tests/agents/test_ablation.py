@@ -3,6 +3,7 @@ seeds are listed, not flown; the episode budget never reaches the test layouts."
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -94,3 +95,33 @@ def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path) -> Non
         match=r"reference agents must be reactive \(straight, bee, bee_robust, vfh\), got 'ppo_flow'",
     ):
         compare_configs([config_path], [0], out, episodes=2, reference_agents=["ppo_flow"])
+
+
+def test_a_condition_flies_every_run_and_reference_with_its_env_settings(tmp_path: Path, capsys) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir = tmp_path / "runs"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    out = tmp_path / "dense"
+    lines = compare_configs(
+        [config_path],
+        [0],
+        out,
+        runs_dir=runs_dir,
+        episodes=2,
+        workers=1,
+        reference_agents=["straight"],
+        env={"obstacle_density": 0.18},
+    )
+    assert "(obstacle_density=0.18), never a test layout" in lines[2]
+    for csv_path in (out / "lever" / "seed_0.csv", out / "reference" / "straight.csv"):
+        rows = read_records(csv_path)
+        assert {(r["factor"], float(r["level"])) for r in rows} == {("obstacle_density", 0.18)}
+        assert all(json.loads(r["env_kwargs"])["obstacle_density"] == 0.18 for r in rows)
+    # Clean episodes in the same folder are other rows, never counted with the condition's.
+    clean = compare_configs([config_path], [0], out, runs_dir=runs_dir, episodes=2, workers=1)
+    assert "(clean sensors), never a test layout" in clean[2] and "| lever | 1 | 2 |" in "\n".join(clean)
+    assert len(read_records(out / "lever" / "seed_0.csv")) == 4
+    # A bad setting is named with its range before anything flies.
+    command = ["ablation", "--configs", str(config_path), "--env", "obstacle_density=-1", "--out", str(out)]
+    assert main(command) == 2
+    assert "obstacle_density" in capsys.readouterr().err

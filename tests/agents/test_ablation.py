@@ -124,4 +124,7 @@ def test_a_condition_flies_every_run_and_reference_with_its_env_settings(tmp_pat
     # A bad setting is named with its range before anything flies.
     command = ["ablation", "--configs", str(config_path), "--env", "obstacle_density=-1", "--out", str(out)]
     assert main(command) == 2
-    assert "obstacle_density" in capsys.readouterr().err
+    assert "obstacle_density must be in [0.0, 1.0], got -1" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*command[:3], "--env", "density", "--out", str(out)])
+    assert "argument --env: expected KEY=VALUE, got 'density'" in capsys.readouterr().err

@@ -8,7 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.cli.arguments import env_kwarg
+from agents.cli.arguments import add_env_argument
 from agents.common.paths import POLICIES_DIR
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
@@ -39,13 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where a seed whose run folder is gone is read from, as shipped: <policies>/<name>/seed_<k>.zip "
         "(default: %(default)s)",
     )
-    parser.add_argument(
-        "--env",
-        type=env_kwarg,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="FlowNavEnv setting every run flies with, repeatable (e.g. --env obstacle_density=0.18; default: "
+    add_env_argument(
+        parser,
+        "FlowNavEnv setting every run flies with, repeatable (e.g. --env obstacle_density=0.18; default: "
         "none, clean); give each condition its own --out, for its own ablation.md",
     )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")

@@ -13,3 +13,10 @@ def env_kwarg(text: str) -> tuple[str, object]:
         raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
     key, value = text.split("=", 1)
     return key, yaml.safe_load(value)
+
+
+def add_env_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """``--env KEY=VALUE``, repeatable, collected as a list of pairs (``dict(args.env)``)."""
+    parser.add_argument(
+        "--env", type=env_kwarg, action="append", default=[], metavar="KEY=VALUE", help=help_text
+    )

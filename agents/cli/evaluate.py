@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.cli.arguments import env_kwarg
+from agents.cli.arguments import add_env_argument
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
@@ -34,13 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--seed-start", type=int, default=TEST_SEED_START, help="first seed (default: %(default)s)"
     )
     parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
-    parser.add_argument(
-        "--env",
-        type=env_kwarg,
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="FlowNavEnv kwarg, repeatable (e.g. --env rotation_error=0.05; default: none, the env's defaults)",
+    add_env_argument(
+        parser,
+        "FlowNavEnv kwarg, repeatable (e.g. --env rotation_error=0.05; default: none, the env's defaults)",
     )
     parser.add_argument(
         "--out",

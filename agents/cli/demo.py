@@ -35,19 +35,17 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_records
     from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, execute
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import REACTIVE_AGENTS, policy_file, split_agent_name
+    from agents.policies import REACTIVE_AGENTS, is_learned, policy_file, split_agent_name
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     runs = {name: [name] for name in REACTIVE_AGENTS} | learned_runs(Path(args.policy_dir))
     seeds = range(TEST_SEED_START, TEST_SEED_START + args.episodes)
     tasks = []
-    for agent, names in runs.items():
+    for names in runs.values():
         for index, seed in enumerate(seeds):
             name = names[index % len(names)]  # training seeds in turn over the layouts
-            policy = (
-                str(policy_file(name, directory=args.policy_dir)) if agent not in REACTIVE_AGENTS else None
-            )
+            policy = str(policy_file(name, directory=args.policy_dir)) if is_learned(name) else None
             tasks.append(EpisodeTask(name, "clean", 0.0, seed, args.env_id, (), policy))
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"
@@ -66,15 +64,16 @@ def run(args: argparse.Namespace) -> int:
 def learned_runs(policy_dir: Path) -> dict[str, list[str]]:
     """Each learned agent's runs to fly: its shipped training seeds (``ppo_flow@0``, ...), else its single
     ``<agent>.zip``; an agent with neither is left out. Says which, for every agent."""
-    from agents.policies import LEARNED_AGENTS, policy_file, seeded_agent_name, trained_seeds
+    from agents.policies import LEARNED_AGENTS, policy_file, shipped_seed_runs, split_agent_name
 
     runs: dict[str, list[str]] = {}
     for agent in LEARNED_AGENTS:
-        seeds = trained_seeds(agent, policy_dir)
+        names = shipped_seed_runs(agent, policy_dir)
         single = policy_file(agent, directory=policy_dir)
-        if seeds:
-            runs[agent] = [seeded_agent_name(agent, seed) for seed in seeds]
-            print(f"{agent}: training seeds {', '.join(map(str, seeds))} in turn over the layouts")
+        if names:
+            runs[agent] = names
+            seeds = ", ".join(str(split_agent_name(name)[1]) for name in names)
+            print(f"{agent}: training seeds {seeds} in turn over the layouts")
         elif single.exists():
             runs[agent] = [agent]
             print(f"{agent}: no training seeds in {policy_dir / agent}/, flying the single policy {single}")

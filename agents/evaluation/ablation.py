@@ -37,10 +37,11 @@ RUN_LABEL = "ppo_flow"
 
 
 def ablation_tasks(
-    policy: Path, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
+    policy: Path | None, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
 ) -> list[EpisodeTask]:
     """One run's episodes on validation layouts ``ABLATION_SEED_START ..``: clean, or with the env settings
     ``env`` on top of the run's own (issue 16's robustness conditions, such as ``obstacle_density=0.18``).
+    ``policy`` None: a reactive ``agent``.
 
     Raises:
         ValueError: so many episodes that they would reach the test layouts.

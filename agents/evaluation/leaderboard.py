@@ -41,8 +41,7 @@ from agents.policies import (
     REACTIVE_AGENTS,
     is_learned,
     policy_file,
-    seeded_agent_name,
-    trained_seeds,
+    shipped_seed_runs,
 )
 
 MIN_EPISODES = 300
@@ -60,13 +59,13 @@ def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -
         if agent in REACTIVE_AGENTS:
             runs[agent] = [agent]
         elif agent in LEARNED_AGENTS:
-            seeds = trained_seeds(agent, policies_dir)
-            if not seeds:
+            names = shipped_seed_runs(agent, policies_dir)
+            if not names:
                 print(
                     f"leaving out {agent}: no {Path(policies_dir) / agent}/seed_<k>.zip (flownav train --seeds)"
                 )
                 continue
-            runs[agent] = [seeded_agent_name(agent, seed) for seed in seeds]
+            runs[agent] = names
         else:
             raise ValueError(
                 f"agent must be one of {', '.join(REACTIVE_AGENTS + LEARNED_AGENTS)}, got {agent!r}"

@@ -36,9 +36,8 @@ from agents.policies import (
     LEARNED_AGENTS,
     is_learned,
     policy_file,
-    seeded_agent_name,
+    shipped_seed_runs,
     split_agent_name,
-    trained_seeds,
 )
 from flownav_env.settings import check_setting
 
@@ -125,7 +124,7 @@ def seed_rotation(config: SweepConfig, agent: str) -> list[str]:
     if not agent.endswith(ALL_SEEDS):
         return [agent]
     base = agent[: -len(ALL_SEEDS)]
-    return [seeded_agent_name(base, seed) for seed in trained_seeds(base, config.policy_folder())]
+    return shipped_seed_runs(base, config.policy_folder())
 
 
 def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, Any]]:

@@ -16,6 +16,7 @@ from agents.policies.learned import (
     load_agent,
     load_policy,
     policy_file,
+    shipped_seed_runs,
     trained_seeds,
 )
 from agents.policies.loading import UnverifiedPolicyWarning
@@ -43,6 +44,7 @@ __all__ = [
     "quantile_nearness",
     "sector_nearness",
     "seeded_agent_name",
+    "shipped_seed_runs",
     "split_agent_name",
     "trained_seeds",
 ]

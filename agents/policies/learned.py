@@ -11,7 +11,7 @@ from typing import Any
 
 from agents.common.config import load_config
 from agents.common.paths import POLICIES_DIR
-from agents.policies.base import Agent, is_learned, split_agent_name
+from agents.policies.base import Agent, is_learned, seeded_agent_name, split_agent_name
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, VFHAgent
@@ -46,6 +46,11 @@ def trained_seeds(agent: str, policies_dir: str | Path = POLICIES_DIR) -> list[i
     if not folder.is_dir():
         return []
     return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _SEED_FILE.match(p.name)))
+
+
+def shipped_seed_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> list[str]:
+    """The run names of the learned ``agent``'s shipped training seeds, in seed order: ``ppo_flow@0``, ..."""
+    return [seeded_agent_name(agent, seed) for seed in trained_seeds(agent, policies_dir)]
 
 
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:

@@ -14,7 +14,6 @@ from agents.evaluation.leaderboard import (
     leaderboard_tasks,
     report_lines,
     summarise_runs,
-    trained_seeds,
 )
 from agents.evaluation.over_seeds import (
     block_scores,
@@ -24,7 +23,7 @@ from agents.evaluation.over_seeds import (
     runs_and_layouts_interval,
     success_outcomes,
 )
-from agents.policies import is_learned, policy_file, seeded_agent_name, split_agent_name
+from agents.policies import is_learned, policy_file, seeded_agent_name, split_agent_name, trained_seeds
 
 LAYOUTS = list(range(1_000_000, 1_000_040))
 

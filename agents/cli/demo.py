@@ -64,19 +64,12 @@ def run(args: argparse.Namespace) -> int:
 def learned_runs(policy_dir: Path) -> dict[str, list[str]]:
     """Each learned agent's runs to fly: its shipped training seeds (``ppo_flow@0``, ...), else its single
     ``<agent>.zip``; an agent with neither is left out. Says which, for every agent."""
-    from agents.policies import LEARNED_AGENTS, policy_file, shipped_seed_runs, split_agent_name
+    from agents.policies import LEARNED_AGENTS, default_runs
 
     runs: dict[str, list[str]] = {}
     for agent in LEARNED_AGENTS:
-        names = shipped_seed_runs(agent, policy_dir)
-        single = policy_file(agent, directory=policy_dir)
+        names, message = default_runs(agent, policy_dir)
+        print(message if names else f"skipping {message}")
         if names:
             runs[agent] = names
-            seeds = ", ".join(str(split_agent_name(name)[1]) for name in names)
-            print(f"{agent}: training seeds {seeds} in turn over the layouts")
-        elif single.exists():
-            runs[agent] = [agent]
-            print(f"{agent}: no training seeds in {policy_dir / agent}/, flying the single policy {single}")
-        else:
-            print(f"skipping {agent}: no policy at {policy_dir / agent}/seed_<k>.zip or {single}")
     return runs

@@ -24,7 +24,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--agent",
         required=True,
         help=f"who flies: {', '.join(AGENT_NAMES)}, or a training seed of a learned one (ppo_flow@3 flies "
-        "results/policies/ppo_flow/seed_3.zip)",
+        "results/policies/ppo_flow/seed_3.zip); a learned agent named alone flies its shipped training "
+        "seeds in turn over the seeds, as the leaderboard does",
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument(
@@ -58,9 +59,9 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_episodes, start_new_file
     from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import split_agent_name
+    from agents.policies import default_runs, is_learned, split_agent_name
 
-    split_agent_name(args.agent)
+    agent, train_seed = split_agent_name(args.agent)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seed_start < TEST_SEED_START:
@@ -69,11 +70,24 @@ def run(args: argparse.Namespace) -> int:
         )
     env_kwargs = check_env_kwargs(dict(args.env), "command line", key="--env")
     factor, level = record_label(env_kwargs)
+    runs = [args.agent]
+    if is_learned(agent) and train_seed is None and args.policy is None:
+        runs, message = default_runs(agent)
+        if not runs:
+            raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
+        print(message)
+    # Layout by layout, each run's turn, so an interrupted evaluation leaves every seed with about as many.
     tasks = [
         EpisodeTask(
-            args.agent, factor, level, seed, args.env_id, tuple(sorted(env_kwargs.items())), args.policy
+            runs[index % len(runs)],
+            factor,
+            level,
+            seed,
+            args.env_id,
+            tuple(sorted(env_kwargs.items())),
+            args.policy,
         )
-        for seed in range(args.seed_start, args.seed_start + args.episodes)
+        for index, seed in enumerate(range(args.seed_start, args.seed_start + args.episodes))
     ]
     out = Path(args.out)
     if args.overwrite:
@@ -83,7 +97,10 @@ def run(args: argparse.Namespace) -> int:
     # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are) with exit 130.
     flown = execute(tasks, out, workers=args.workers, description=f"evaluate {args.agent}")
     episodes = read_episodes(out)
-    print(format_summary(summarise(rows_of(tasks, episodes.rows))))
+    rows = rows_of(tasks, episodes.rows)
+    if len(runs) > 1:  # one row for the agent, its seeds pooled as the leaderboard's headline pools them
+        rows = [{**row, "agent": split_agent_name(row["agent"])[0]} for row in rows]
+    print(format_summary(summarise(rows)))
     skipped = len(tasks) - flown
     print(
         f"flew {flown} episodes" + (f", {skipped} already in {out} (skipped)" if skipped else f" into {out}")

@@ -21,7 +21,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
 
     parser.add_argument(
-        "--agent", required=True, help=f"{', '.join(AGENT_NAMES)}, or a training seed such as ppo_flow@0"
+        "--agent",
+        required=True,
+        help=f"{', '.join(AGENT_NAMES)}, or a training seed such as ppo_flow@0 (a learned agent named alone flies "
+        "its first shipped training seed)",
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--env-id", default="FlowNav-v0")
@@ -31,9 +34,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.policies import split_agent_name
+    from agents.policies import default_runs, is_learned, split_agent_name
 
-    split_agent_name(args.agent)
+    agent, train_seed = split_agent_name(args.agent)
+    if is_learned(agent) and train_seed is None and args.policy is None:
+        runs, message = default_runs(agent)
+        if not runs:
+            raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
+        args.agent = runs[0]
+        print(f"{message}; this video flies {args.agent}")
     out = Path(args.out or f"results/videos/{args.agent}_{args.env_id}_{args.seed}.mp4")
     from agents.evaluation.video import record_episode
 

@@ -53,6 +53,26 @@ def shipped_seed_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> li
     return [seeded_agent_name(agent, seed) for seed in trained_seeds(agent, policies_dir)]
 
 
+def default_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> tuple[list[str], str]:
+    """The runs that fly when a learned ``agent`` is named without a training seed, and a line saying which:
+    its shipped training seeds (``ppo_flow@0``, ...), else its single ``<agent>.zip``, else none.
+
+    The single ``<agent>.zip`` is kept for agents trained before training seeds existed; where seeds are
+    shipped it is not what the benchmark reports, so it only flies when named with ``--policy``.
+    """
+    names = shipped_seed_runs(agent, policies_dir)
+    single = policy_file(agent, directory=policies_dir)
+    if names:
+        seeds = ", ".join(str(split_agent_name(name)[1]) for name in names)
+        where = Path(policies_dir) / agent
+        return names, f"{agent}: training seeds {seeds} in turn over the layouts ({where}/seed_<k>.zip)"
+    if single.exists():
+        return [agent], (
+            f"{agent}: no training seeds in {Path(policies_dir) / agent}/, flying the single policy {single}"
+        )
+    return [], f"{agent}: no policy at {Path(policies_dir) / agent}/seed_<k>.zip or {single}"
+
+
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
     """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
     ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -154,15 +155,53 @@ def test_demo_finds_the_shipped_policies_from_any_folder(tmp_path: Path, monkeyp
         assert policies == {str(expected or POLICIES_DIR / f"{name}.zip")}
 
 
-def test_evaluate_flies_a_shipped_policy_from_another_folder(tmp_path: Path, monkeypatch) -> None:
+def test_evaluate_flies_a_learned_agents_shipped_training_seeds_from_another_folder(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
     import hashlib
 
     from agents.cli import main
     from agents.common.paths import POLICIES_DIR
 
     monkeypatch.chdir(tmp_path)
-    args = ["evaluate", "--agent", "ppo_flow", "--episodes", "1", "--env-id", "FlowNavSingle-v0"]
+    args = ["evaluate", "--agent", "ppo_flow", "--episodes", "2", "--env-id", "FlowNavSingle-v0"]
     assert main([*args, "--env", "camera_width=96", "--env", "camera_height=72", "--out", "e.csv"]) == 0
-    (row,) = read_records(tmp_path / "e.csv")
-    assert row["policy_sha256"] == hashlib.sha256((POLICIES_DIR / "ppo_flow.zip").read_bytes()).hexdigest()
-    assert row["env_kwargs"] == '{"camera_height":72,"camera_width":96,"obs_source":"flow"}'
+    rows = read_records(tmp_path / "e.csv")
+    # Not the single results/policies/ppo_flow.zip trained before the seeds: the seeds, one per layout.
+    assert [(row["agent"], int(row["seed"])) for row in rows] == [
+        ("ppo_flow@0", 1_000_000),
+        ("ppo_flow@1", 1_000_001),
+    ]
+    for row in rows:
+        shipped = POLICIES_DIR / "ppo_flow" / f"seed_{row['agent'][-1]}.zip"
+        assert row["policy_sha256"] == hashlib.sha256(shipped.read_bytes()).hexdigest()
+        assert row["env_kwargs"] == '{"camera_height":72,"camera_width":96,"obs_source":"flow"}'
+    out = capsys.readouterr().out
+    assert "ppo_flow: training seeds 0, 1, 2, 3, 4 in turn over the layouts" in out
+    assert re.search(r"^\| ppo_flow \| \S+ \| \S+ \| 2 \|", out, re.MULTILINE)  # seeds pooled in one row
+
+
+def test_evaluate_flies_the_single_policy_only_when_asked(tmp_path: Path, monkeypatch) -> None:
+    from agents.cli import main
+    from agents.common.paths import POLICIES_DIR
+    from agents.evaluation import runner
+
+    flown: list[EpisodeTask] = []
+    monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
+    monkeypatch.chdir(tmp_path)
+    single = str(POLICIES_DIR / "ppo_flow.zip")
+    assert main(["evaluate", "--agent", "ppo_flow", "--policy", single, "--episodes", "2"]) == 0
+    assert [(task.agent, task.policy) for task in flown] == [("ppo_flow", single)] * 2
+
+
+def test_evaluate_refuses_a_learned_agent_with_no_policy(tmp_path: Path, monkeypatch, capsys) -> None:
+    import agents.policies
+    from agents.cli import main
+    from agents.policies import default_runs
+
+    monkeypatch.setattr(agents.policies, "default_runs", lambda agent: default_runs(agent, tmp_path))
+    monkeypatch.chdir(tmp_path)
+    assert main(["evaluate", "--agent", "ppo_oracle", "--episodes", "1"]) == 2
+    error = capsys.readouterr().err
+    assert "flownav evaluate: error: nothing to fly for ppo_oracle: no policy at " in error
+    assert "seed_<k>.zip or " in error and not (tmp_path / "results").exists()

@@ -17,6 +17,9 @@ def test_video_of_a_shipped_policy_from_outside_the_repository(tmp_path: Path, m
     assert main([*args, "--out", str(out)]) == 0
     captured = capsys.readouterr()
     assert f"wrote {out}" in captured.out and "warning" not in captured.err  # a shipped, verified policy
+    assert (
+        "this video flies ppo_flow@0" in captured.out
+    )  # the first training seed, not the pre-seed ppo_flow.zip
     with imageio.get_reader(out) as reader:
         assert sum(1 for _ in reader) == 3
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 import json
 import signal
 from collections.abc import Iterator
@@ -32,6 +31,7 @@ from agents.evaluation.records import (
     row_identity,
 )
 from agents.policies import agent_env_kwargs, is_learned, load_agent, policy_file
+from agents.training.manifest import file_sha256
 from flownav_env.limits import episode_step_limit
 
 
@@ -43,15 +43,16 @@ def canonical_json(value: Any) -> str:
 _HASHES: dict[tuple[str, int, int], str] = {}
 
 
-def file_sha256(path: Path) -> str:
-    """SHA-256 of the file's content ("" if there is none), cached while its size and mtime stay the same."""
+def cached_file_sha256(path: Path) -> str:
+    """:func:`~agents.training.manifest.file_sha256` of the file ("" if there is none), cached while its size
+    and mtime stay the same: every episode record carries its policy's hash."""
     try:
         stat = path.stat()
     except OSError:
         return ""
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
     if key not in _HASHES:
-        _HASHES[key] = hashlib.sha256(path.read_bytes()).hexdigest()
+        _HASHES[key] = file_sha256(path)
     return _HASHES[key]
 
 
@@ -100,7 +101,7 @@ class EpisodeTask:
             "env_id": self.env_id,
             "env_kwargs": canonical_json(self.env_settings()),
             "agent_params": canonical_json(dict(self.bee_params)),
-            "policy_sha256": "" if policy is None else file_sha256(policy),
+            "policy_sha256": "" if policy is None else cached_file_sha256(policy),
         }
 
 

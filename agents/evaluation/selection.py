@@ -19,7 +19,8 @@ from typing import Any
 from agents.common.seeds import checkpoint_selection_seed
 from agents.evaluation.csv_file import move_aside
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute, file_sha256, rows_of
+from agents.evaluation.runner import EpisodeTask, cached_file_sha256, execute, rows_of
+from agents.training.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 from agents.training.saved_models import latest_checkpoint
 
@@ -62,7 +63,7 @@ def select_finalist(
     if not files.config.is_file():
         raise FileNotFoundError(f"{files.config} not found: {files.run_dir} is not a finished training run")
     candidates = finalists(files)
-    by_content = {file_sha256(path): label for label, path in reversed(list(candidates.items()))}
+    by_content = {cached_file_sha256(path): label for label, path in reversed(list(candidates.items()))}
     candidates = {
         label: candidates[label] for label in reversed(list(by_content.values()))
     }  # one per content
@@ -79,6 +80,8 @@ def select_finalist(
         shutil.copyfile(files.config, staged[label].with_suffix(".yaml"))
         agent = f"{_RUN_LABEL}@{index}"
         tasks += [EpisodeTask(agent, "clean", 0.0, seed, policy=str(staged[label])) for seed in seeds]
+    # Copies of this run's own outputs, made just now: vouched for, so loading them does not warn.
+    record_in_manifest(staging, [path.name for path in staged.values()])
     csv_path = staging / "episodes.csv"
     _set_aside_other_finalists(csv_path, {task.agent: task.policy for task in tasks})
     execute(tasks, csv_path, workers=workers, description=f"{files.name} finalists")
@@ -103,7 +106,7 @@ def _set_aside_other_finalists(csv_path: Path, policies: dict[str, str | None]) 
     on (or was resumed and retrained) since they were flown, so they say nothing about its current candidates."""
     if not csv_path.is_file():
         return
-    hashes = {agent: file_sha256(Path(policy)) for agent, policy in policies.items() if policy}
+    hashes = {agent: cached_file_sha256(Path(policy)) for agent, policy in policies.items() if policy}
     stale = {
         row["agent"]
         for row in read_records(csv_path)

@@ -4,6 +4,7 @@ layouts of the run's block, the one with more successes becomes its policy, and 
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import pytest
@@ -11,8 +12,9 @@ import pytest
 from agents.cli import main
 from agents.common.seeds import checkpoint_selection_seed
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import file_sha256
 from agents.evaluation.selection import FINALIST_SEED_OFFSET, finalist_seeds, finalists, select_finalist
+from agents.policies import UnverifiedPolicyWarning
+from agents.training.manifest import file_sha256
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 from tests.agents.test_training import tiny_train_config
@@ -26,7 +28,9 @@ def test_finalists_fly_fresh_validation_layouts_and_the_better_becomes_the_polic
     candidates = finalists(files)
     assert len(candidates) == 2 and "best held-out eval" in candidates
 
-    selected = select_finalist(files, 1, workers=1, episodes=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnverifiedPolicyWarning)  # select vouches for the copies it staged
+        selected = select_finalist(files, 1, workers=1, episodes=3)
     rows = read_records(files.run_dir / "finalists" / "episodes.csv")
     seeds = finalist_seeds(1, 3)
     assert seeds[0] == checkpoint_selection_seed(1) + FINALIST_SEED_OFFSET

@@ -24,7 +24,7 @@ from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of
+from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of, set_aside_stale_episodes
 from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
@@ -122,7 +122,12 @@ def compare_configs(
             rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
     for agent in reference_agents:
         tasks = ablation_tasks(None, episodes, env, agent=agent)
-        flown = _fly(tasks, out / "reference" / f"{agent}.csv", workers, report_only, f"{agent} (reference)")
+        reference_csv = out / "reference" / f"{agent}.csv"
+        if not report_only:
+            set_aside_stale_episodes(
+                tasks, reference_csv, f"{agent}'s parameters have changed; flying it anew"
+            )
+        flown = _fly(tasks, reference_csv, workers, report_only, f"{agent} (reference)")
         if len(flown) < episodes:
             missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
             continue

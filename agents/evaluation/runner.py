@@ -20,6 +20,7 @@ from typing import Any
 
 from agents.common.machine import code_version
 from agents.common.paths import POLICIES_DIR
+from agents.evaluation.csv_file import move_aside
 from agents.evaluation.episode import EpisodeRecord, run_episode
 from agents.evaluation.records import (
     IDENTITY_FIELDS,
@@ -30,7 +31,7 @@ from agents.evaluation.records import (
     read_episodes,
     row_identity,
 )
-from agents.policies import agent_env_kwargs, is_learned, load_agent, policy_file
+from agents.policies import agent_env_kwargs, agent_parameters, is_learned, load_agent, policy_file
 from agents.training.manifest import file_sha256
 from flownav_env.limits import episode_step_limit
 
@@ -100,7 +101,7 @@ class EpisodeTask:
         return {
             "env_id": self.env_id,
             "env_kwargs": canonical_json(self.env_settings()),
-            "agent_params": canonical_json(dict(self.bee_params)),
+            "agent_params": canonical_json(agent_parameters(self.agent, **dict(self.bee_params))),
             "policy_sha256": "" if policy is None else cached_file_sha256(policy),
         }
 
@@ -185,6 +186,35 @@ def pending_tasks(tasks: list[EpisodeTask], csv_path: Path) -> list[EpisodeTask]
             raise ValueError(_conflict(csv_path, episode_key(vars(task)), identity, found))
         todo.append(task)
     return todo
+
+
+def set_aside_stale_episodes(tasks: list[EpisodeTask], csv_path: Path, why: str) -> Path | None:
+    """Move ``csv_path`` aside (``<name>.bak-<time>``) when it holds an episode of one of ``tasks`` flown with
+    other settings, and say so with ``why``; returns where it went, or None when nothing was stale.
+
+    For episodes that only ever stand for the current code's agent (a re-tuned reactive reference, a run's
+    current finalists), where :func:`pending_tasks` would refuse to mix them. Nothing is deleted.
+    """
+    csv_path = Path(csv_path)
+    if not csv_path.is_file():
+        return None
+    wanted = {
+        episode_key(vars(task)): identity for task, identity in zip(tasks, _identities(tasks), strict=True)
+    }
+    stale = sorted(
+        {
+            str(row["agent"])
+            for row in read_episodes(csv_path).rows
+            if episode_key(row) in wanted and row_identity(row) != wanted[episode_key(row)]
+        }
+    )
+    if not stale:
+        return None
+    backup = move_aside(csv_path)
+    print(
+        f"{csv_path} holds episodes of {', '.join(stale)} flown with other settings ({why}); moved to {backup}"
+    )
+    return backup
 
 
 def _describe(key: tuple[str, str, float, int]) -> str:

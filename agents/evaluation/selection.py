@@ -17,9 +17,14 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.seeds import checkpoint_selection_seed
-from agents.evaluation.csv_file import move_aside
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, cached_file_sha256, execute, rows_of
+from agents.evaluation.runner import (
+    EpisodeTask,
+    cached_file_sha256,
+    execute,
+    rows_of,
+    set_aside_stale_episodes,
+)
 from agents.training.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 from agents.training.saved_models import latest_checkpoint
@@ -83,7 +88,7 @@ def select_finalist(
     # Copies of this run's own outputs, made just now: vouched for, so loading them does not warn.
     record_in_manifest(staging, [path.name for path in staged.values()])
     csv_path = staging / "episodes.csv"
-    _set_aside_other_finalists(csv_path, {task.agent: task.policy for task in tasks})
+    set_aside_stale_episodes(tasks, csv_path, "other finalists: the run trained on since; flying today's")
     execute(tasks, csv_path, workers=workers, description=f"{files.name} finalists")
     flown = rows_of(tasks, read_records(csv_path))
     successes = {
@@ -99,25 +104,6 @@ def select_finalist(
     selected = f"finalist on {episodes} validation layouts from {seeds[0]:,}: {chosen} ({scores})"
     _note_in_record(files, selected, successes, episodes)
     return selected
-
-
-def _set_aside_other_finalists(csv_path: Path, policies: dict[str, str | None]) -> None:
-    """Move the finalists' episodes aside when they were flown by other finalists than today's: the run trained
-    on (or was resumed and retrained) since they were flown, so they say nothing about its current candidates."""
-    if not csv_path.is_file():
-        return
-    hashes = {agent: cached_file_sha256(Path(policy)) for agent, policy in policies.items() if policy}
-    stale = {
-        row["agent"]
-        for row in read_records(csv_path)
-        if row["agent"] not in hashes or row["policy_sha256"] != hashes[row["agent"]]
-    }
-    if stale:
-        backup = move_aside(csv_path)
-        print(
-            f"{csv_path} holds episodes of finalists that are not the run's candidates now "
-            f"({', '.join(sorted(stale))}: the run trained on since); moved to {backup}, flying them anew"
-        )
 
 
 def _note_in_record(files: RunFiles, selected: str, successes: dict[str, int], episodes: int) -> None:

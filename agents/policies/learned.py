@@ -4,6 +4,7 @@ agent by name (a reactive one is built, a learned one is loaded from its ``.zip`
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -116,6 +117,24 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
         return load_policy_file(path)
     raise AssertionError(f"agent {base!r} is in AGENT_NAMES but has no constructor here")
+
+
+def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
+    """Every parameter the agent ``name`` flies with: a reactive agent's dataclass fields, its defaults with
+    ``overrides`` on top; for a learned agent just ``overrides`` (its parameters are its policy file, which
+    episode records identify by hash). Episode records keep these, so episodes flown before a reactive
+    agent's defaults were re-tuned never count as the re-tuned agent's.
+
+    Raises:
+        ValueError: an unknown agent, or an override the agent does not have.
+    """
+    if is_learned(name):
+        return dict(overrides)
+    try:
+        agent = load_agent(name, **overrides)
+    except TypeError as error:  # an unknown field: the dataclass names it
+        raise ValueError(f"agent {name!r} has no such parameter: {error}") from None
+    return dataclasses.asdict(agent)
 
 
 @dataclass(frozen=True)

@@ -74,7 +74,10 @@ def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) 
     assert "--seeds takes N, N-M (N <= M)" in capsys.readouterr().err
 
 
-def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path) -> None:
+def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path, monkeypatch, capsys) -> None:
+    from agents.policies.reactive import StraightAgent
+    from tests.agents.test_runner import with_other_defaults
+
     _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
     out = tmp_path / "ablation"
     lines = compare_configs(
@@ -90,6 +93,16 @@ def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path) -> Non
     assert "| straight (reactive, reference) | - | 2 |" in text
     rows = read_records(out / "reference" / "straight.csv")
     assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]
+    # Its defaults re-tuned since: the old episodes are moved aside and the agent flies anew.
+    monkeypatch.setattr(
+        StraightAgent, "__init__", with_other_defaults(StraightAgent.__init__, heading_gain=0.5)
+    )
+    compare_configs([config_path], [0], out, runs_dir=tmp_path / "runs", episodes=2, workers=1,
+                    reference_agents=["straight"])  # fmt: skip
+    assert "straight's parameters have changed; flying it anew" in capsys.readouterr().out
+    assert len(list((out / "reference").glob("straight.csv.bak-*"))) == 1
+    rows = read_records(out / "reference" / "straight.csv")
+    assert len(rows) == 2 and {json.loads(r["agent_params"])["heading_gain"] for r in rows} == {0.5}
     with pytest.raises(
         ValueError,
         match=r"reference agents must be reactive \(straight, bee, bee_robust, vfh\), got 'ppo_flow'",

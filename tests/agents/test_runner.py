@@ -42,7 +42,9 @@ def test_records_carry_the_full_settings_they_were_flown_with(tmp_path: Path) ->
     record = runner.run_task(TASK)
     assert record.env_id == "FlowNavSingle-v0"
     assert record.env_kwargs == '{"camera_height":72,"camera_width":96}'
-    assert record.agent_params == "{}" and record.policy_sha256 == "" and record.code_version
+    # Every parameter of a reactive agent, its defaults too, so a re-tuned default is a different episode.
+    assert record.agent_params == '{"flight_height":1.0,"heading_gain":1.5,"height_gain":2.0}'
+    assert record.policy_sha256 == "" and record.code_version
     identity = EpisodeTask("ppo_flow", "clean", 0.0, 0).identity()
     assert identity["env_kwargs"] == '{"obs_source":"flow"}'  # the policy's training settings are included
     assert (
@@ -77,12 +79,33 @@ def test_resume_refuses_a_csv_of_the_same_episodes_flown_with_other_settings(
     assert difference in message and "--out" in message and "--overwrite" in message
 
 
+def test_a_reactive_agents_new_defaults_are_not_its_old_episodes(tmp_path: Path, monkeypatch) -> None:
+    from agents.policies.reactive import BeeAgent
+
+    path = tmp_path / "episodes.csv"
+    bee = EpisodeTask("bee", "clean", 0.0, 0)
+    append_record(path, fake_record(bee))
+    assert pending_tasks([bee], path) == []
+    monkeypatch.setattr(BeeAgent, "__init__", with_other_defaults(BeeAgent.__init__, yaw_gain=0.123))
+    with pytest.raises(ValueError, match=r"agent_params .*there, .*\"yaw_gain\":0.123\}' now"):
+        pending_tasks([bee], path)
+
+
+def with_other_defaults(init, **defaults):
+    """``init`` with other defaults for some keyword arguments: a re-tuned dataclass."""
+
+    def patched(self, **kwargs):
+        init(self, **{**defaults, **kwargs})
+
+    return patched
+
+
 def test_bee_gains_and_policy_content_are_part_of_an_episode(tmp_path: Path) -> None:
     path = tmp_path / "episodes.csv"
     bee = EpisodeTask("bee", "candidate", 0.0, 0, bee_params=(("yaw_gain", 0.5),))
     append_record(path, fake_record(bee))
     with pytest.raises(
-        ValueError, match=r"agent_params '\{\"yaw_gain\":0.5\}' there, '\{\"yaw_gain\":0.7\}' now"
+        ValueError, match=r"agent_params '.*\"yaw_gain\":0.5\}' there, '.*\"yaw_gain\":0.7\}' now"
     ):
         pending_tasks([replace(bee, bee_params=(("yaw_gain", 0.7),))], path)
     policy = tmp_path / "ppo_flow.zip"

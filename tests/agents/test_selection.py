@@ -57,7 +57,7 @@ def test_finalists_flown_before_the_run_trained_on_are_set_aside(tmp_path: Path,
     files.best_model.write_bytes(last.read_bytes())
     selected = select_finalist(files, 0, workers=1, episodes=2)
     staging = files.run_dir / "finalists"
-    assert "holds episodes of finalists that are not the run's candidates now" in capsys.readouterr().out
+    assert "flown with other settings (other finalists: the run trained on since" in capsys.readouterr().out
     assert len(list(staging.glob("episodes.csv.bak-*"))) == 1
     rows = read_records(staging / "episodes.csv")
     assert {r["policy_sha256"] for r in rows} == {file_sha256(last)} and len(rows) == 2

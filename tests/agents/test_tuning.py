@@ -129,7 +129,7 @@ def test_layouts_are_training_seeds_shared_within_a_stage_and_disjoint_across(
     assert all(0 <= row["seed"] < VALIDATION_SEED_START for row in rows)
     # Trial 0 is the defaults, and the defaults are always a finalist.
     assert result.search[0].params == default_params("bee")
-    assert json.loads(rows[0]["agent_params"]) == default_params("bee")
+    assert json.loads(rows[0]["agent_params"]).items() >= default_params("bee").items()
     assert result.defaults.params == default_params("bee")
     assert [t.number for t in result.search] == list(range(TINY.trials))
     assert result.winner.rank() == min(t.rank() for t in result.finals)

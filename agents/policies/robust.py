@@ -74,17 +74,17 @@ class BeeRobustAgent(BeeAgent):
     average is the ``state`` that ``predict`` returns and takes back, reset at ``episode_start``.
 
     The defaults are the winner of ``flownav tune --agent bee_robust`` (40 TPE trials on 30 training layouts,
-    5 finalists on 150 fresh training layouts; ``results/tuning/bee_robust/tuning.md``), to 4 significant
-    digits: failure 0.32 [0.25, 0.40] on the final layouts, against 0.46 [0.38, 0.54] with the bee's gains
-    and quantile = smoothing = 0.5 (the intervals touch: not clearly better, but the best measured).
+    5 finalists on 150 fresh training layouts; ``results/tuning/bee_robust/tuning.md``, re-tuned 2026-12-02
+    after the camera's near-plane fix), to 4 significant digits: failure 0.01 [0.00, 0.04] on the final
+    layouts, against 0.13 [0.09, 0.20] with the defaults tuned before the fix.
     """
 
-    centring_gain: float = 0.3053
-    frontal_gain: float = 2.658
-    frontal_threshold: float = 0.1757
-    yaw_gain: float = 1.694
-    quantile: float = 0.4184
-    smoothing: float = 0.3935
+    centring_gain: float = 0.1269
+    frontal_gain: float = 0.6809
+    frontal_threshold: float = 0.3050
+    yaw_gain: float = 0.9488
+    quantile: float = 0.4305
+    smoothing: float = 0.4907
 
     def __post_init__(self) -> None:
         if not 0.0 < self.quantile <= 1.0:

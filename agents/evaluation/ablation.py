@@ -24,7 +24,14 @@ from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of, set_aside_stale_episodes
+from agents.evaluation.runner import (
+    EpisodeTask,
+    cached_file_sha256,
+    execute,
+    record_label,
+    rows_of,
+    set_aside_stale_episodes,
+)
 from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
@@ -141,16 +148,16 @@ def compare_configs(
 
 
 def seed_files(runs_dir: Path, policies_dir: Path | None, name: str, seed: int) -> RunFiles | None:
-    """The files of training seed ``seed`` of config ``name``: its run folder if it holds the policy, else its
-    shipped files (``<policies_dir>/<name>/seed_<k>.*``, the same names without the run folder), else None."""
+    """The files of training seed ``seed`` of config ``name``: its shipped files (``<policies_dir>/<name>/
+    seed_<k>.*``, the same names without the run folder) when its run folder holds the same policy or none,
+    its run folder when that holds another (it trained or was selected since shipping), else None. The
+    shipped copy is the one its folder's manifest vouches for."""
     run = RunFiles.of_seed(runs_dir, name, seed)
-    if run.policy.is_file():
-        return run
-    if policies_dir is not None:
-        shipped = RunFiles(Path(policies_dir) / name, run.name)
-        if shipped.policy.is_file():
+    shipped = RunFiles(Path(policies_dir) / name, run.name) if policies_dir is not None else None
+    if shipped is not None and shipped.policy.is_file():
+        if not run.policy.is_file() or cached_file_sha256(run.policy) == cached_file_sha256(shipped.policy):
             return shipped
-    return None
+    return run if run.policy.is_file() else None
 
 
 def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:

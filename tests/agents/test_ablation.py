@@ -10,7 +10,7 @@ import pytest
 
 from agents.cli import main
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
-from agents.evaluation.ablation import ablation_tasks, compare_configs
+from agents.evaluation.ablation import ablation_tasks, compare_configs, seed_files
 from agents.evaluation.records import read_records
 from agents.training.multiseed import seed_jobs, train_seeds
 from tests.agents.test_training import tiny_train_config
@@ -50,6 +50,11 @@ def test_a_seed_whose_run_folder_is_gone_flies_its_shipped_policy(tmp_path: Path
     config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
     runs_dir, policies = tmp_path / "runs", tmp_path / "policies"
     train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=policies))
+    # While the run folder holds the policy it shipped, the shipped copy (vouched for by its manifest) flies.
+    assert seed_files(runs_dir, policies, "lever", 0).policy == policies / "lever" / "seed_0.zip"
+    run_policy = runs_dir / "lever" / "seed_0" / "seed_0.zip"
+    run_policy.write_bytes(run_policy.read_bytes() + b"\0")  # as if it trained on after shipping
+    assert seed_files(runs_dir, policies, "lever", 0).policy == run_policy
     shutil.rmtree(runs_dir)  # a new checkout: runs/ is not committed, the shipped policy is
     out = tmp_path / "ablation"
     lines = compare_configs(

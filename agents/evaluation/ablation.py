@@ -103,12 +103,15 @@ def compare_configs(
     out.mkdir(parents=True, exist_ok=True)
     rows, missing, curves = [], [], {}
     for config_path in config_paths:
-        name = load_config(Path(config_path), TrainConfig).name
+        config = load_config(Path(config_path), TrainConfig)
+        name = config.name
         outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
         for seed in seeds:
-            files = seed_files(runs_dir, policies_dir, name, seed)
+            files = seed_files(runs_dir, policies_dir, name, seed, config.total_timesteps)
             if files is None:
-                missing.append(f"{name} seed {seed}")
+                steps = RunFiles.of_seed(runs_dir, name, seed).trained_steps()
+                unfinished = f" (unfinished: {steps:,} of {config.total_timesteps:,} steps)" if steps else ""
+                missing.append(f"{name} seed {seed}{unfinished}")
                 continue
             tasks = ablation_tasks(files.policy, episodes, env)
             flown = _fly(tasks, out / name / f"seed_{seed}.csv", workers, report_only, f"{name} seed {seed}")
@@ -147,17 +150,21 @@ def compare_configs(
     return lines
 
 
-def seed_files(runs_dir: Path, policies_dir: Path | None, name: str, seed: int) -> RunFiles | None:
-    """The files of training seed ``seed`` of config ``name``: its shipped files (``<policies_dir>/<name>/
-    seed_<k>.*``, the same names without the run folder) when its run folder holds the same policy or none,
-    its run folder when that holds another (it trained or was selected since shipping), else None. The
-    shipped copy is the one its folder's manifest vouches for."""
+def seed_files(
+    runs_dir: Path, policies_dir: Path | None, name: str, seed: int, total_timesteps: int
+) -> RunFiles | None:
+    """The files of finished training seed ``seed`` of config ``name``: its shipped files (``<policies_dir>/
+    <name>/seed_<k>.*``, the same names without the run folder) unless its run folder holds another finished
+    policy (it trained on or was selected since shipping), then the run folder's; None when neither holds a
+    finished one. A run folder stopped short of ``total_timesteps`` never counts: its policy is whatever the
+    interruption saved. The shipped copy is the one its folder's manifest vouches for."""
     run = RunFiles.of_seed(runs_dir, name, seed)
+    run_finished = run.trained_steps() >= total_timesteps
     shipped = RunFiles(Path(policies_dir) / name, run.name) if policies_dir is not None else None
     if shipped is not None and shipped.policy.is_file():
-        if not run.policy.is_file() or cached_file_sha256(run.policy) == cached_file_sha256(shipped.policy):
+        if not run_finished or cached_file_sha256(run.policy) == cached_file_sha256(shipped.policy):
             return shipped
-    return run if run.policy.is_file() else None
+    return run if run_finished else None
 
 
 def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:

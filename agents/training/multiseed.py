@@ -101,11 +101,7 @@ def seed_jobs(
 
 def finished(job: SeedJob) -> bool:
     """Whether the seed's record shows its whole ``total_timesteps`` trained, with its policy written."""
-    files = job.files
-    if not (files.record.is_file() and files.policy.is_file()):
-        return False
-    record = json.loads(files.record.read_text())
-    return int(record.get("total_timesteps", 0)) >= job.config.total_timesteps
+    return job.files.trained_steps() >= job.config.total_timesteps
 
 
 def write_seed_config(job: SeedJob) -> Path:

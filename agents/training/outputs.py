@@ -7,6 +7,7 @@ step, so that training, even a short test run, cannot replace a benchmarked poli
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -43,6 +44,13 @@ class RunFiles:
     def record(self) -> Path:
         """The training record (sessions, steps, machine, selection)."""
         return self.run_dir / f"{self.name}.json"
+
+    def trained_steps(self) -> int:
+        """The steps the record says were trained, with the policy written; 0 when either is missing (a run
+        stopped before its first save, or another run's folder)."""
+        if not (self.record.is_file() and self.policy.is_file()):
+            return 0
+        return int(json.loads(self.record.read_text()).get("total_timesteps", 0))
 
     @property
     def evaluations(self) -> Path:

@@ -13,6 +13,7 @@ from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION
 from agents.evaluation.ablation import ablation_tasks, compare_configs, seed_files
 from agents.evaluation.records import read_records
 from agents.training.multiseed import seed_jobs, train_seeds
+from agents.training.outputs import RunFiles
 from tests.agents.test_training import tiny_train_config
 
 
@@ -42,6 +43,17 @@ def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tm
     # Reporting again flies nothing and says the same.
     again = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, report_only=True)
     assert again[4:] == lines[4:]
+    # The same runs judged as seeds of a longer config: cut short, so not flown, and the report says so.
+    (tmp_path / "longer").mkdir()
+    _, longer = tiny_train_config(tmp_path / "longer", total=640, name="lever")
+    cut = "\n".join(
+        compare_configs([longer], [0], tmp_path / "cut", runs_dir=runs_dir, episodes=2, workers=1)
+    )
+    trained = RunFiles.of_seed(runs_dir, "lever", 0).trained_steps()
+    assert (
+        f"lever seed 0 (unfinished: {trained:,} of 640 steps)" in cut
+        and not (tmp_path / "cut" / "lever").exists()
+    )
 
 
 def test_a_seed_whose_run_folder_is_gone_flies_its_shipped_policy(tmp_path: Path) -> None:
@@ -51,10 +63,14 @@ def test_a_seed_whose_run_folder_is_gone_flies_its_shipped_policy(tmp_path: Path
     runs_dir, policies = tmp_path / "runs", tmp_path / "policies"
     train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=policies))
     # While the run folder holds the policy it shipped, the shipped copy (vouched for by its manifest) flies.
-    assert seed_files(runs_dir, policies, "lever", 0).policy == policies / "lever" / "seed_0.zip"
+    steps = config.total_timesteps
+    assert seed_files(runs_dir, policies, "lever", 0, steps).policy == policies / "lever" / "seed_0.zip"
     run_policy = runs_dir / "lever" / "seed_0" / "seed_0.zip"
     run_policy.write_bytes(run_policy.read_bytes() + b"\0")  # as if it trained on after shipping
-    assert seed_files(runs_dir, policies, "lever", 0).policy == run_policy
+    assert seed_files(runs_dir, policies, "lever", 0, steps).policy == run_policy
+    # A run stopped short never counts: with more steps asked of it, the shipped policy flies, or nothing.
+    assert seed_files(runs_dir, policies, "lever", 0, 10 * steps).policy == policies / "lever" / "seed_0.zip"
+    assert seed_files(runs_dir, None, "lever", 0, 10 * steps) is None
     shutil.rmtree(runs_dir)  # a new checkout: runs/ is not committed, the shipped policy is
     out = tmp_path / "ablation"
     lines = compare_configs(

@@ -66,19 +66,19 @@ class BeeAgent:
     slides away from the nearer side, and when the centre columns loom (their nearness exceeds
     ``frontal_threshold``) it also turns and slides toward the emptier side. Only the sector rows at and above
     the horizon are used: the bottom row mostly sees the ground. Height and heading are held as in
-    :class:`StraightAgent`. The gains are the best of 16 candidates of a random search on training seeds 0-29
-    only, at FlowNav-v0's defaults (``flownav tune-bee --candidates 16 --seeds 30``, ranking in
-    ``results/bee_tuning/ranking.md``): 14 of 30 successes and 16 collisions, against 8 successes and 18
-    collisions for the previous gains (1.798, 1.297, 0.398, 1.363; tuned at FAST threshold 20) and 7 and 20 for
-    the hand-set start (1.5, 2.0, 0.15, 0.5): gentle centring with a strong frontal rule ranked first. With
-    30 episodes per candidate, the winner's margin is partly luck; the benchmark scores it on held-out layouts.
+    :class:`StraightAgent`. The gains are the winner of ``flownav tune --agent bee`` (40 TPE trials on 30
+    training layouts, 5 finalists on 150 fresh training layouts; ``results/tuning/bee/tuning.md``, re-tuned
+    2026-12-02 after the camera's near-plane fix), to 4 significant digits: failure 0.17 [0.12, 0.24] on the
+    final layouts, against 0.29 [0.22, 0.36] with the gains of the 16-candidate search before the fix
+    (0.595, 3.959, 0.257, 0.033; ``results/bee_tuning/``). The intervals overlap: the best measured, not
+    clearly better.
     """
 
     bin_edges: tuple[float, ...] = tuple(DEFAULT_BIN_EDGES)
-    centring_gain: float = 0.595
-    frontal_gain: float = 3.959
-    frontal_threshold: float = 0.257
-    yaw_gain: float = 0.033
+    centring_gain: float = 0.3100
+    frontal_gain: float = 1.224
+    frontal_threshold: float = 0.2790
+    yaw_gain: float = 0.1088
     obstacle_rows: int = 2
     flight_height: float = 1.0
     height_gain: float = 2.0

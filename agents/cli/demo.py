@@ -33,9 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_records
-    from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, execute
+    from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, execute, pooled_over_training_seeds
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import REACTIVE_AGENTS, is_learned, policy_file, split_agent_name
+    from agents.policies import REACTIVE_AGENTS, is_learned, policy_file
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         except EpisodesInterrupted:
             # Its CSV was a scratch file: there is nothing to resume, whatever the runner's message says.
             raise KeyboardInterrupt("the demo keeps no episodes; run it again to start over") from None
-        rows = [{**row, "agent": split_agent_name(row["agent"])[0]} for row in read_records(episodes)]
+        rows = pooled_over_training_seeds(read_records(episodes))
         table = summarise(rows)
     print(f"\n{args.env_id}, {args.episodes} held-out seeds per agent (from {TEST_SEED_START}):\n")
     print(format_summary(table))

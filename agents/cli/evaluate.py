@@ -57,11 +57,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from agents.common.config import check_env_kwargs
     from agents.evaluation.records import read_episodes, start_new_file
-    from agents.evaluation.runner import EpisodeTask, execute, record_label, rows_of
+    from agents.evaluation.runner import (
+        EpisodeTask,
+        execute,
+        pooled_over_training_seeds,
+        record_label,
+        rows_of,
+    )
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import default_runs, is_learned, split_agent_name
+    from agents.policies import runs_to_fly, split_agent_name
 
-    agent, train_seed = split_agent_name(args.agent)
+    split_agent_name(args.agent)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seed_start < TEST_SEED_START:
@@ -70,11 +76,8 @@ def run(args: argparse.Namespace) -> int:
         )
     env_kwargs = check_env_kwargs(dict(args.env), "command line", key="--env")
     factor, level = record_label(env_kwargs)
-    runs = [args.agent]
-    if is_learned(agent) and train_seed is None and args.policy is None:
-        runs, message = default_runs(agent)
-        if not runs:
-            raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
+    runs, message = runs_to_fly(args.agent, args.policy)
+    if message:
         print(message)
     # Layout by layout, each run's turn, so an interrupted evaluation leaves every seed with about as many.
     tasks = [
@@ -99,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     episodes = read_episodes(out)
     rows = rows_of(tasks, episodes.rows)
     if len(runs) > 1:  # one row for the agent, its seeds pooled as the leaderboard's headline pools them
-        rows = [{**row, "agent": split_agent_name(row["agent"])[0]} for row in rows]
+        rows = pooled_over_training_seeds(rows)
     print(format_summary(summarise(rows)))
     skipped = len(tasks) - flown
     print(

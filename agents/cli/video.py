@@ -34,14 +34,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.policies import default_runs, is_learned, split_agent_name
+    from agents.policies import runs_to_fly
 
-    agent, train_seed = split_agent_name(args.agent)
-    if is_learned(agent) and train_seed is None and args.policy is None:
-        runs, message = default_runs(agent)
-        if not runs:
-            raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
-        args.agent = runs[0]
+    runs, message = runs_to_fly(args.agent, args.policy)
+    args.agent = runs[0]
+    if message:
         print(f"{message}; this video flies {args.agent}")
     out = Path(args.out or f"results/videos/{args.agent}_{args.env_id}_{args.seed}.mp4")
     from agents.evaluation.video import record_episode

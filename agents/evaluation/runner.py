@@ -31,7 +31,14 @@ from agents.evaluation.records import (
     read_episodes,
     row_identity,
 )
-from agents.policies import agent_env_kwargs, agent_parameters, is_learned, load_agent, policy_file
+from agents.policies import (
+    agent_env_kwargs,
+    agent_parameters,
+    is_learned,
+    load_agent,
+    policy_file,
+    split_agent_name,
+)
 from agents.training.manifest import file_sha256
 from flownav_env.limits import episode_step_limit
 
@@ -239,6 +246,12 @@ def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set) -> 
             else ""
         )
     )
+
+
+def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows with each learned agent's training seeds (``ppo_flow@3``) relabelled as the agent, so that a
+    summary gives the agent one row over its seeds."""
+    return [{**row, "agent": split_agent_name(row["agent"])[0]} for row in rows]
 
 
 def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

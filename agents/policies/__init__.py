@@ -18,6 +18,7 @@ from agents.policies.learned import (
     load_agent,
     load_policy,
     policy_file,
+    runs_to_fly,
     shipped_seed_runs,
     trained_seeds,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "load_policy",
     "policy_file",
     "quantile_nearness",
+    "runs_to_fly",
     "sector_nearness",
     "seeded_agent_name",
     "shipped_seed_runs",

@@ -74,6 +74,24 @@ def default_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> tuple[l
     return [], f"{agent}: no policy at {Path(policies_dir) / agent}/seed_<k>.zip or {single}"
 
 
+def runs_to_fly(name: str, policy: str | Path | None = None) -> tuple[list[str], str | None]:
+    """The runs a command flies for the agent ``name``, and a line saying which when it chose them: ``name``
+    itself, unless it is a learned agent named without a training seed or a ``policy`` file; then its
+    :func:`default_runs` in the repository's ``results/policies/``.
+
+    Raises:
+        ValueError: an unknown agent name.
+        FileNotFoundError: a learned agent with neither shipped seeds nor a single policy.
+    """
+    agent, train_seed = split_agent_name(name)
+    if not is_learned(agent) or train_seed is not None or policy is not None:
+        return [name], None
+    runs, message = default_runs(agent, POLICIES_DIR)
+    if not runs:
+        raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
+    return runs, message
+
+
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
     """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
     ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle

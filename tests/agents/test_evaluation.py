@@ -195,11 +195,10 @@ def test_evaluate_flies_the_single_policy_only_when_asked(tmp_path: Path, monkey
 
 
 def test_evaluate_refuses_a_learned_agent_with_no_policy(tmp_path: Path, monkeypatch, capsys) -> None:
-    import agents.policies
     from agents.cli import main
-    from agents.policies import default_runs
+    from agents.policies import learned
 
-    monkeypatch.setattr(agents.policies, "default_runs", lambda agent: default_runs(agent, tmp_path))
+    monkeypatch.setattr(learned, "POLICIES_DIR", tmp_path)  # a checkout with no policies
     monkeypatch.chdir(tmp_path)
     assert main(["evaluate", "--agent", "ppo_oracle", "--episodes", "1"]) == 2
     error = capsys.readouterr().err

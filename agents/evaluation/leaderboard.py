@@ -213,7 +213,7 @@ def report_lines(
     lines = [
         "# Leaderboard: every agent on the same clean test layouts",
         "",
-        f"Generated {today()} by `{command}` (code `{code_version()}`), on {len(layouts)} test layouts "
+        f"Generated {today()} by `{command}` (code: {code_version()}), on {len(layouts)} test layouts "
         f"(seeds {layouts[0]:,}–{layouts[-1]:,}). {machine_summary()}",
         "",
         "A learned agent is every training seed shipped in `results/policies/<agent>/seed_<k>.zip`, each flying "

@@ -14,8 +14,9 @@ since an episode fails exactly when it does not reach the goal.
 
 from __future__ import annotations
 
+import contextlib
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,39 @@ BOOTSTRAP_REPS = 2000
 # rliable's probability of improvement runs a Mann-Whitney test per block in every replicate: fewer of them.
 IMPROVEMENT_REPS = 1000
 CONFIDENCE = 0.95
+
+
+@contextlib.contextmanager
+def _seeded_global_numpy(seed: int) -> Iterator[None]:
+    """Seed NumPy's global generator for the block, then restore its state.
+
+    rliable's ``StratifiedBootstrap`` draws its run indices from ``np.random`` itself, whatever
+    ``random_state`` it is given, so without this the same episodes gave other intervals on every report.
+    """
+    state = np.random.get_state()  # noqa: NPY002 (rliable reads the legacy global generator)
+    np.random.seed(seed)  # noqa: NPY002
+    try:
+        yield
+    finally:
+        np.random.set_state(state)  # noqa: NPY002
+
+
+def _rliable_estimates(
+    scores: Mapping[str, Any], func: Callable[..., np.ndarray], seed: int, reps: int
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """rliable's point estimates and stratified-bootstrap intervals, the same for the same inputs and seed."""
+    from rliable import library
+
+    with warnings.catch_warnings(), _seeded_global_numpy(seed):
+        # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
+        warnings.simplefilter("ignore", FutureWarning)
+        return library.get_interval_estimates(
+            dict(scores),
+            func,
+            reps=reps,
+            confidence_interval_size=CONFIDENCE,
+            random_state=np.random.RandomState(seed),
+        )
 
 
 def run_rates(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
@@ -99,21 +133,11 @@ def interval_estimates(
 ) -> dict[str, dict[str, float]]:
     """Mean and interquartile mean (IQM) of each agent's block scores with their stratified-bootstrap 95 %
     intervals over runs (rliable); an agent of one run gets a zero-width interval (nothing to resample)."""
-    from rliable import library
 
     def aggregates(matrix: np.ndarray) -> np.ndarray:
         return np.array([float(np.mean(matrix)), _iqm(matrix)])
 
-    with warnings.catch_warnings():
-        # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
-        warnings.simplefilter("ignore", FutureWarning)
-        points, intervals = library.get_interval_estimates(
-            dict(scores),
-            aggregates,
-            reps=reps,
-            confidence_interval_size=CONFIDENCE,
-            random_state=np.random.RandomState(seed),
-        )
+    points, intervals = _rliable_estimates(scores, aggregates, seed, reps)
     return {
         name: {
             "mean": float(points[name][0]),
@@ -148,17 +172,10 @@ def probability_of_improvement(
 ) -> tuple[float, float, float]:
     """P(X > Y): the chance that a run of X beats a run of Y on a random block of layouts (ties count half),
     with its stratified-bootstrap 95 % interval (rliable)."""
-    from rliable import library, metrics
+    from rliable import metrics
 
-    with warnings.catch_warnings():
-        # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
-        warnings.simplefilter("ignore", FutureWarning)
-        points, intervals = library.get_interval_estimates(
-            {"pair": (scores_x, scores_y)},
-            metrics.probability_of_improvement,
-            reps=reps,
-            confidence_interval_size=CONFIDENCE,
-            random_state=np.random.RandomState(seed),
-        )
+    points, intervals = _rliable_estimates(
+        {"pair": (scores_x, scores_y)}, metrics.probability_of_improvement, seed, reps
+    )
     low, high = np.ravel(intervals["pair"])
     return float(points["pair"]), float(low), float(high)

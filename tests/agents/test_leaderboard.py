@@ -129,6 +129,21 @@ def test_interval_estimates_cover_the_truth_and_single_runs_have_none() -> None:
     assert spread_high - spread_low > 2 * (high - low)
 
 
+def test_bootstrap_intervals_repeat_for_the_same_scores_and_leave_numpys_global_state_alone() -> None:
+    # rliable's stratified bootstrap draws from np.random itself: unseeded, every report moved its intervals.
+    rng = np.random.default_rng(2)
+    x = block_scores((rng.random((5, 300)) < 0.7).astype(float))
+    y = block_scores((rng.random((1, 300)) < 0.6).astype(float))
+    np.random.seed(123)  # noqa: NPY002
+    expected_next = np.random.random()  # noqa: NPY002
+    np.random.seed(123)  # noqa: NPY002
+    first = (interval_estimates({"x": x}, reps=200), probability_of_improvement(x, y, reps=100))
+    assert np.random.random() == expected_next  # noqa: NPY002
+    np.random.seed(7)  # noqa: NPY002  (another global state must not matter)
+    assert (interval_estimates({"x": x}, reps=200), probability_of_improvement(x, y, reps=100)) == first
+    assert interval_estimates({"x": x}, seed=1, reps=200) != first[0]
+
+
 def test_probability_of_improvement_is_one_for_a_clear_winner_and_a_half_for_a_tie() -> None:
     better = np.full((3, 4), 0.9)
     worse = np.full((1, 4), 0.2)

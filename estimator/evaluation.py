@@ -30,6 +30,9 @@ _COLOR_SUFFIXES = (".jpg", ".jpeg", ".png")
 _MILLIMETRES_PER_METRE = 1000.0
 # The headline accuracy figure: share of valid points whose depth is within this relative error.
 _WITHIN_FRACTION = 0.10
+#: A depth is an outlier when it is off by more than half its true value: it then lands a histogram bin or more
+#: from the truth at any distance, where smaller errors mostly blur within a bin.
+OUTLIER_RELATIVE_ERROR = 0.5
 
 #: Columns of :func:`format_error_table`: (row key, header, format).
 TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (

@@ -128,7 +128,7 @@ class FlowNavEnv(gym.Env):
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
     | ``observe_unresolved``, ``observe_counts``, ``observe_nearness`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on) or the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) |
-    | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]``; False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
+    | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]`` and ``info["depth_outlier_share"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
     | ``max_vertical_speed`` | 0.5 | vertical speed at action 1 (m/s), in (0, 5] |

@@ -18,7 +18,7 @@ from estimator import (
     sector_histogram,
     sector_near_depth,
 )
-from estimator.evaluation import relative_depth_error
+from estimator.evaluation import OUTLIER_RELATIVE_ERROR, relative_depth_error
 from flownav_env.settings import EnvSettings
 
 if TYPE_CHECKING:
@@ -147,12 +147,14 @@ def drone_state(physics: FlowNavPhysics) -> np.ndarray:
 
 
 def estimator_info(points: DepthPoints, true_depth: np.ndarray) -> dict[str, Any]:
-    """Estimator statistics; ``depth_error_median`` only when some valid point has a finite ground truth
-    (a reset frame has no truth yet, so it passes an empty ``true_depth``)."""
+    """Estimator statistics; ``depth_error_median`` and ``depth_outlier_share`` (share of those points off by
+    more than ``OUTLIER_RELATIVE_ERROR`` of their true depth) only when some valid point has a finite ground
+    truth (a reset frame has no truth yet, so it passes an empty ``true_depth``)."""
     valid = np.asarray(points.valid, bool)
     comparable = valid & np.isfinite(true_depth) if len(true_depth) == len(valid) else np.zeros_like(valid)
     info: dict[str, Any] = {"points_tracked": len(valid), "points_valid": int(valid.sum())}
     if comparable.any():
         relative = relative_depth_error(points.depth[comparable], true_depth[comparable])
         info["depth_error_median"] = float(np.median(relative))
+        info["depth_outlier_share"] = float(np.mean(relative > OUTLIER_RELATIVE_ERROR))
     return info

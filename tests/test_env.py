@@ -361,10 +361,31 @@ def test_depth_error_info_can_be_skipped_where_only_flow_is_observed() -> None:
         env.close()
         return info
 
-    assert "depth_error_median" in last_info()
+    info = last_info()
+    assert "depth_error_median" in info and 0.0 <= info["depth_outlier_share"] <= 1.0
     skipped = last_info(depth_error_info=False)
-    assert "depth_error_median" not in skipped and skipped["points_valid"] == last_info()["points_valid"]
+    assert "depth_error_median" not in skipped and "depth_outlier_share" not in skipped
+    assert skipped["points_valid"] == info["points_valid"]
     # Oracle observations need the true depths whatever the flag says.
     assert "depth_error_median" in last_info(depth_error_info=False, obs_source="oracle")
     with pytest.raises(ValueError, match="depth_error_info must be True or False"):
         FlowNavEnv(**SMALL, depth_error_info=1)
+
+
+def test_estimator_info_counts_depths_off_by_more_than_half_as_outliers() -> None:
+    from types import SimpleNamespace
+
+    from estimator.evaluation import OUTLIER_RELATIVE_ERROR
+    from flownav_env.observation import estimator_info
+
+    true_depth = np.array([2.0, 2.0, 2.0, 2.0, 2.0, np.nan])
+    depth = np.array(
+        [2.1, 3.2, 0.9, 5.0, 2.0, 4.0]
+    )  # relative errors 0.05, 0.6, 0.55, 1.5, (invalid), (no truth)
+    valid = np.array([True, True, True, True, False, True])
+    info = estimator_info(SimpleNamespace(depth=depth, valid=valid), true_depth)
+    assert OUTLIER_RELATIVE_ERROR == 0.5
+    assert info["points_valid"] == 5 and info["depth_outlier_share"] == pytest.approx(3 / 4)
+    assert "depth_outlier_share" not in estimator_info(
+        SimpleNamespace(depth=depth, valid=valid), np.array([])
+    )

@@ -21,6 +21,11 @@ class EpisodeRecord:
     agent, defaults included, :func:`~agents.policies.agent_parameters`); ``policy_sha256`` is the learned policy file's
     content hash ("" for reactive agents). ``code_version`` is recorded for provenance only: resuming does not
     compare it, or every commit would fly every episode again.
+
+    Depth quality, over the steps with ground truth: ``median_depth_error`` is the median of the per-step
+    median relative errors, ``mean_depth_outlier_share`` the mean per-step share of valid depths off by more
+    than half (``estimator.evaluation.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth, or (the
+    outlier share) in files written before it was recorded.
     """
 
     agent: str
@@ -44,6 +49,8 @@ class EpisodeRecord:
     agent_params: str = ""
     policy_sha256: str = ""
     code_version: str = ""
+    # Last, and defaulted: files written before it existed keep their columns (records.PREVIOUS_CSV_FIELDS).
+    mean_depth_outlier_share: float = math.nan
 
 
 def run_episode(
@@ -53,7 +60,7 @@ def run_episode(
     observation, info = env.reset(seed=seed)
     position = np.array([0.0, 0.0, 0.0])
     path_length, total_return, steps = 0.0, 0.0, 0
-    valid_points, depth_errors = [], []
+    valid_points, depth_errors, outlier_shares = [], [], []
     terminated = truncated = False
     # As SB3's evaluate_policy: an agent with memory gets its state back and is told where an episode starts.
     agent_state, episode_start = None, np.ones(1, bool)
@@ -72,6 +79,7 @@ def run_episode(
         valid_points.append(info["points_valid"])
         if "depth_error_median" in info:
             depth_errors.append(info["depth_error_median"])
+            outlier_shares.append(info["depth_outlier_share"])
     frame_rate = env.unwrapped.frame_rate
     return EpisodeRecord(
         agent=label,
@@ -90,4 +98,5 @@ def run_episode(
         mean_points_valid=float(np.mean(valid_points)) if valid_points else 0.0,
         median_depth_error=float(np.median(depth_errors)) if depth_errors else math.nan,
         episode_return=float(total_return),
+        mean_depth_outlier_share=float(np.mean(outlier_shares)) if outlier_shares else math.nan,
     )

@@ -5,7 +5,8 @@ and one dose-response model per agent that pools every factor and level.
   failure rate stays inside the clean cell's Wilson 95 % interval, and the first level at which the failure
   rate reaches twice the clean one (none when twice the clean rate would exceed 1).
 - **Dose-response.** Episode failure against the measured depth quality of that episode (its median relative
-  depth error and its mean number of valid depths per frame), pooled over every factor and level, fitted as a
+  depth error, its mean number of valid depths per frame and, where recorded, its mean share of depths off by
+  more than half), pooled over every factor and level, fitted as a
   logistic regression (statsmodels). A second fit adds one indicator per factor: if the factors improve the fit
   beyond depth quality (likelihood-ratio test), they act on failures through something else too, e.g. the
   drone's motion or what the estimator cannot measure.
@@ -35,7 +36,9 @@ THESIS_VERDICTS = {
     "translation_error": "a band close to a direct 2–10 % variation",
 }
 NOT_TESTED = "not tested"
-DOSE_FEATURES = ("log_depth_error", "valid_points_per_100")
+# Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
+# depths off by more than half, where the episodes recorded it (not in files from before it existed).
+DOSE_FEATURES = ("log_depth_error", "valid_points_per_100", "outlier_share")
 
 
 def neutral_level(factor: str) -> float:
@@ -130,18 +133,32 @@ def is_flow_agent(row: Mapping[str, Any]) -> bool:
 def dose_features(
     rows: Sequence[Mapping[str, Any]],
 ) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-    """Design matrix (episodes, 2) of :data:`DOSE_FEATURES`, failures (episodes,), and the rows used: episodes
-    with a finite, positive median depth error."""
+    """Design matrix (episodes, features) of :data:`DOSE_FEATURES`, failures (episodes,), and the rows used:
+    episodes with a finite, positive median depth error. The outlier share is the third column only when every
+    one of those episodes recorded it (:func:`dose_feature_names`)."""
     used = [
         r
         for r in rows
         if math.isfinite(float(r["median_depth_error"])) and float(r["median_depth_error"]) > 0.0
     ]
+    names = dose_feature_names(used)
     features = np.array(
-        [[math.log(float(r["median_depth_error"])), float(r["mean_points_valid"]) / 100.0] for r in used]
-    ).reshape(-1, len(DOSE_FEATURES))
+        [
+            [math.log(float(r["median_depth_error"])), float(r["mean_points_valid"]) / 100.0]
+            + ([float(r["mean_depth_outlier_share"])] if len(names) == 3 else [])
+            for r in used
+        ]
+    ).reshape(-1, len(names))
     failures = np.array([0.0 if bool(r["success"]) else 1.0 for r in used])
     return features, failures, used
+
+
+def dose_feature_names(rows: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
+    """The :data:`DOSE_FEATURES` these rows can fit: all three when every row has a finite outlier share."""
+    known = [r.get("mean_depth_outlier_share") for r in rows]
+    if known and all(v is not None and math.isfinite(float(v)) for v in known):
+        return DOSE_FEATURES
+    return DOSE_FEATURES[:2]
 
 
 def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
@@ -149,7 +166,7 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     the likelihood-ratio test of adding one indicator per factor.
 
     Returns:
-        ``{"episodes", "params", "bse", "pvalues", "conf_int", "model", "lr_statistic", "lr_df",
+        ``{"episodes", "features", "params", "bse", "pvalues", "conf_int", "model", "lr_statistic", "lr_df",
         "lr_pvalue"}``; the model is the fitted statsmodels result of depth quality alone.
 
     Raises:
@@ -164,7 +181,8 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
             f"a dose-response fit needs >= 20 episodes with a depth error and both outcomes, got {len(used)} "
             f"episodes with {int(failures.sum())} failures"
         )
-    flat = [name for name, column in zip(DOSE_FEATURES, features.T, strict=True) if np.ptp(column) == 0.0]
+    feature_names = dose_feature_names(used)
+    flat = [name for name, column in zip(feature_names, features.T, strict=True) if np.ptp(column) == 0.0]
     if flat:
         raise ValueError(f"a dose-response fit needs spread in every feature; {', '.join(flat)} is constant")
     design = sm.add_constant(features)
@@ -181,10 +199,11 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         lr_statistic = max(0.0, 2.0 * (full.llf - model.llf))
         lr_df = len(factors)
         lr_pvalue = float(stats.chi2.sf(lr_statistic, lr_df))
-    names = ["const", *DOSE_FEATURES]
+    names = ["const", *feature_names]
     interval = np.asarray(model.conf_int())
     return {
         "episodes": len(used),
+        "features": feature_names,
         "params": dict(zip(names, map(float, model.params), strict=True)),
         "bse": dict(zip(names, map(float, model.bse), strict=True)),
         "pvalues": dict(zip(names, map(float, model.pvalues), strict=True)),
@@ -196,12 +215,15 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     }
 
 
-def dose_curve(fit: Mapping[str, Any], errors: np.ndarray, valid_points: float) -> tuple[np.ndarray, ...]:
+def dose_curve(
+    fit: Mapping[str, Any], errors: np.ndarray, valid_points: float, outlier_share: float = 0.0
+) -> tuple[np.ndarray, ...]:
     """Predicted failure probability and its 95 % band against median depth error ``errors`` (relative),
-    at ``valid_points`` valid depths per frame."""
-    design = np.column_stack(
-        [np.ones(len(errors)), np.log(errors), np.full(len(errors), valid_points / 100.0)]
-    )
+    at ``valid_points`` valid depths per frame and (where the fit has it) ``outlier_share``."""
+    columns = [np.ones(len(errors)), np.log(errors), np.full(len(errors), valid_points / 100.0)]
+    if "outlier_share" in fit["features"]:
+        columns.append(np.full(len(errors), outlier_share))
+    design = np.column_stack(columns)
     frame = fit["model"].get_prediction(design).summary_frame()
     return (
         np.asarray(frame["predicted"]),

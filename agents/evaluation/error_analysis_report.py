@@ -59,7 +59,7 @@ def tolerance_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
 def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
     rows = []
     for agent, fit in fits.items():
-        for name in ("const", "log_depth_error", "valid_points_per_100"):
+        for name in ("const", *fit["features"]):
             low, high = fit["conf_int"][name]
             rows.append(
                 [
@@ -91,7 +91,7 @@ def plot_dose_response(
     rows: Sequence[Mapping[str, Any]], fits: Mapping[str, Mapping[str, Any]], path: Path
 ) -> None:
     """A panel per flow agent: observed failure rate in deciles of median depth error (dots), and the fitted
-    probability at the agent's median valid points per frame with its 95 % band."""
+    probability at the agent's median valid points per frame (and outlier share) with its 95 % band."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -111,7 +111,8 @@ def plot_dose_response(
             np.array(centres) * 100, observed, color="black", s=18, zorder=3, label="observed (deciles)"
         )
         grid = np.geomspace(errors.min(), errors.max(), 80)
-        predicted, low, high = dose_curve(fits[agent], grid, float(np.median(features[:, 1]) * 100))
+        outliers = float(np.median(features[:, 2])) if features.shape[1] > 2 else 0.0
+        predicted, low, high = dose_curve(fits[agent], grid, float(np.median(features[:, 1]) * 100), outliers)
         axis.plot(grid * 100, predicted, color="tab:red", label="logistic fit")
         axis.fill_between(grid * 100, low, high, color="tab:red", alpha=0.2)
         axis.set_xscale("log")
@@ -157,7 +158,9 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         "## Dose-response: failure against measured depth quality",
         "",
         "Logistic regression per flow agent, pooled over every factor and level: "
-        "logit P(failure) = b0 + b1 · ln(median relative depth error) + b2 · (valid depths per frame / 100). "
+        "logit P(failure) = b0 + b1 · ln(median relative depth error) + b2 · (valid depths per frame / 100) "
+        "+ b3 · (share of depths off by more than half), the last term where the episodes recorded it "
+        "(`outlier_share`, the mean over the episode's frames). "
         "Episodes without a measured depth error are left out; oracle agents too (they do not see the estimate).",
         "",
     ]

@@ -28,6 +28,11 @@ from agents.evaluation.episode import EpisodeRecord
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
+# Columns added since identities, last in the record: a file written before one of them keeps its own columns
+# when episodes are appended (the new value is then unknown, None on reading), so resuming never re-flies.
+ADDED_FIELDS = ("mean_depth_outlier_share",)
+PREVIOUS_CSV_FIELDS = [name for name in CSV_FIELDS if name not in ADDED_FIELDS]
+_READABLE_HEADERS = [CSV_FIELDS, PREVIOUS_CSV_FIELDS, LEGACY_FIELDS]
 
 # What a resumed run compares besides (agent, factor, level, seed). The record's code_version is left out on
 # purpose: it changes with every commit, and comparing it would fly every episode again after any change.
@@ -61,17 +66,28 @@ def append_record(path: Path, record: EpisodeRecord) -> None:
         ValueError: the file is not an episodes CSV of this format (a foreign or pre-identity header).
     """
     path = Path(path)
-    values = [str(value) for value in asdict(record).values()]
+    columns = PREVIOUS_CSV_FIELDS if _first_line(path) == csv_line(PREVIOUS_CSV_FIELDS) else CSV_FIELDS
+    row = asdict(record)
+    values = [str(row[name]) for name in columns if name != CHECKSUM_FIELD]
     append_line(
         path,
-        csv_line(CSV_FIELDS) + "\r\n",
+        csv_line(columns) + "\r\n",
         sealed_line(values),
         other_header_error=lambda: f"cannot add episodes to {path}: {_header_problem(path)}",
     )
 
 
+def _first_line(path: Path) -> str:
+    """The file's first line without its line end ("" for a missing or empty file)."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.readline().rstrip(b"\r\n").decode("utf-8", "replace")
+    except OSError:  # missing, or not a file: append_line says what is wrong
+        return ""
+
+
 def _header_problem(path: Path) -> str:
-    header = read_csv_content(path, [CSV_FIELDS, LEGACY_FIELDS]).header  # raises for a foreign file
+    header = read_csv_content(path, _READABLE_HEADERS).header  # raises for a foreign file
     if header == LEGACY_FIELDS:
         return predates_identities(path)
     return "its header is not this version's"
@@ -94,7 +110,7 @@ def read_episodes(path: Path) -> EpisodesCsv:
         ValueError: ``path`` is a directory, binary, or another kind of CSV; the message names it.
     """
     path = Path(path)
-    content = read_csv_content(path, [CSV_FIELDS, LEGACY_FIELDS])
+    content = read_csv_content(path, _READABLE_HEADERS)
     episodes = EpisodesCsv(path, [], content.skipped, legacy=content.header == LEGACY_FIELDS)
     for raw in content.rows:
         row = _typed(raw)

@@ -109,6 +109,33 @@ def test_the_dose_response_recovers_a_known_logistic_law() -> None:
     assert fit["lr_df"] == 2 and fit["lr_pvalue"] > 0.001  # the factors act only through the error
 
 
+def test_the_outlier_share_joins_the_fit_where_every_episode_recorded_it() -> None:
+    rng = np.random.default_rng(2)
+    rows = []
+    for i in range(3000):
+        outliers = float(rng.uniform(0.0, 0.6))
+        probability = 1.0 / (1.0 + math.exp(-(-3.0 + 8.0 * outliers)))
+        rows.append(
+            {
+                "agent": "bee",
+                "factor": ("clean", "depth_outliers")[i % 2],
+                "level": 0.0,
+                "success": rng.random() >= probability,
+                "median_depth_error": float(rng.uniform(0.02, 0.1)),
+                "mean_points_valid": float(rng.uniform(50, 200)),
+                "mean_depth_outlier_share": outliers,
+            }
+        )
+    fit = fit_dose_response(rows)
+    assert fit["features"] == ("log_depth_error", "valid_points_per_100", "outlier_share")
+    low, high = fit["conf_int"]["outlier_share"]
+    assert low < 8.0 < high
+    assert abs(fit["params"]["log_depth_error"]) < 0.5  # the median error does not matter in this law
+    # One episode from a file written before the outlier share existed: the fit falls back to two features.
+    rows[0]["mean_depth_outlier_share"] = None
+    assert fit_dose_response(rows)["features"] == ("log_depth_error", "valid_points_per_100")
+
+
 def test_a_fit_needs_both_outcomes_and_spread() -> None:
     with pytest.raises(
         ValueError, match="needs >= 20 episodes with a depth error and both outcomes, got 100"
@@ -131,6 +158,11 @@ def test_the_report_and_figure_are_written(tmp_path: Path) -> None:
     assert text == "\n".join(lines) + "\n"
     assert "| bee | rotation_error | above | 0.20 [0.13, 0.29] |" in text
     assert "log_depth_error" in text and (tmp_path / "dose_response.png").stat().st_size > 10_000
+    assert "| outlier_share |" not in text  # these rows never recorded it
+    for row in rows:
+        row["mean_depth_outlier_share"] = float(rng.uniform(0.0, 0.2))
+    write_error_analysis(rows, tmp_path, "flownav error-analysis --episodes x.csv")
+    assert "| outlier_share |" in (tmp_path / "error_analysis.md").read_text()
 
 
 def test_the_command_refuses_a_missing_or_empty_file(tmp_path: Path, capsys) -> None:

@@ -8,10 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from agents.evaluation.csv_file import LEGACY_FIELDS
+from agents.evaluation.csv_file import LEGACY_FIELDS, sealed_line
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.records import (
     CSV_FIELDS,
+    PREVIOUS_CSV_FIELDS,
     append_record,
     drop_agents,
     read_episodes,
@@ -59,6 +60,24 @@ def test_rows_round_trip_with_their_identity_and_checksum(tmp_path: Path) -> Non
     assert [r["seed"] for r in rows] == [1_000_000, 1_000_001]
     assert rows[0]["env_kwargs"] == RECORD.env_kwargs and rows[0]["collision"] is True
     assert rows[1]["median_depth_error"] != rows[1]["median_depth_error"]  # nan survives
+
+
+def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
+    # Committed leaderboard, ablation and tuning CSVs predate mean_depth_outlier_share: resuming into them must
+    # neither be refused nor fly their episodes again.
+    assert [*PREVIOUS_CSV_FIELDS[:-1], "mean_depth_outlier_share", "row_crc"] == CSV_FIELDS
+    append_record(tmp_path / "new.csv", replace(RECORD, mean_depth_outlier_share=0.25))
+    assert read_records(tmp_path / "new.csv")[0]["mean_depth_outlier_share"] == 0.25
+    old = tmp_path / "old.csv"
+    previous_values = [str(getattr(RECORD, name)) for name in PREVIOUS_CSV_FIELDS[:-1]]
+    old.write_text(",".join(PREVIOUS_CSV_FIELDS) + "\r\n" + sealed_line(previous_values), newline="")
+    append_record(old, replace(RECORD, seed=1_000_001, mean_depth_outlier_share=0.25))
+    lines = old.read_text().splitlines()
+    assert lines[0] == ",".join(PREVIOUS_CSV_FIELDS) and len(lines) == 3
+    rows = read_records(old)
+    assert [r["seed"] for r in rows] == [1_000_000, 1_000_001]
+    assert [r["mean_depth_outlier_share"] for r in rows] == [None, None]  # unknown in that format
+    assert rows[1]["env_kwargs"] == RECORD.env_kwargs
 
 
 def test_a_torn_last_row_is_skipped_wherever_it_was_cut(tmp_path: Path) -> None:

@@ -170,7 +170,9 @@ def test_report_only_rebuilds_the_committed_sweep_from_its_pre_identity_csv(tmp_
     shutil.copy(RESULTS_DIR / "sweep_thesis_range" / "sweep_episodes.csv", tmp_path / "sweep_episodes.csv")
     config = str(CONFIGS_DIR / "sweep_thesis_range.yaml")  # the config the committed sweep was flown with
     assert main(["sweep", "--config", config, "--out", str(tmp_path), "--report-only"]) == 0
-    assert (tmp_path / "sweep.csv").read_text() == (RESULTS_DIR / "sweep_thesis_range" / "sweep.csv").read_text()
+    assert (tmp_path / "sweep.csv").read_text() == (
+        RESULTS_DIR / "sweep_thesis_range" / "sweep.csv"
+    ).read_text()
 
 
 def test_a_sweep_into_a_pre_identity_csv_is_refused_until_overwrite(tmp_path: Path, capsys) -> None:

@@ -35,7 +35,7 @@ from agents.evaluation.runner import (
 from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
-from agents.training.curves import plot_learning_curves
+from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
@@ -127,7 +127,7 @@ def compare_configs(
             if not evaluations.is_file():  # a shipped seed: its evaluations beside the policy
                 evaluations = files.run_dir / files.shipped_names()[files.evaluations]
             if evaluations.is_file():
-                curves[f"{name} seed {seed}"] = evaluations
+                curves.setdefault(name, {})[f"seed {seed}"] = evaluations
         if outcomes:
             rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
     for agent in reference_agents:
@@ -144,7 +144,9 @@ def compare_configs(
         rows.append(_reference_row(agent, flown))
     lines = _report(rows, missing, seeds, episodes, command, env)
     if curves:
-        plot_learning_curves(curves, out / "ablation_curves.png", "held-out evaluation return, per seed")
+        plot_grouped_learning_curves(
+            curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
+        )
         lines += ["", "![learning curves](ablation_curves.png)"]
     (out / "ablation.md").write_text("\n".join(lines) + "\n")
     return lines

@@ -1,4 +1,5 @@
-"""Learning curves: held-out evaluation return against environment steps, one line per training run."""
+"""Learning curves: held-out evaluation return against environment steps, one line per training run, or one
+panel per config with its training seeds."""
 
 from __future__ import annotations
 
@@ -39,6 +40,50 @@ def plot_learning_curves(
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    output.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(output, dpi=120)
+    plt.close(fig)
+
+
+def plot_grouped_learning_curves(
+    groups: Mapping[str, Mapping[str, Path]], output: Path, title: str = "held-out evaluation"
+) -> None:
+    """One panel per group (a config), sharing the return axis: a thin line per run (a training seed) and
+    their mean, thick, over the evaluations every run reached. With a dozen runs or more in one axis the
+    colours repeat and the lines cannot be told apart; panels keep each config's seeds together."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if not groups:
+        raise ValueError("no learning curves to plot: groups is empty")
+    columns = min(3, len(groups))
+    rows = -(-len(groups) // columns)
+    fig, axes = plt.subplots(
+        rows, columns, figsize=(3.6 * columns, 2.7 * rows + 0.5), sharex=True, sharey=True, squeeze=False
+    )
+    for axis, (group, curves) in zip(axes.flat, groups.items(), strict=False):
+        means = []
+        for path in curves.values():
+            data = np.load(path)
+            steps, returns = data["timesteps"], data["results"].mean(axis=1)
+            axis.plot(steps, returns, color="tab:blue", alpha=0.35, linewidth=1)
+            means.append((steps, returns))
+        reached = min(len(steps) for steps, _ in means)
+        mean = np.mean([returns[:reached] for _, returns in means], axis=0)
+        axis.plot(means[0][0][:reached], mean, color="tab:blue", linewidth=2.2, label="mean over seeds")
+        axis.set_title(f"{group} ({len(curves)} seed{'s' * (len(curves) > 1)})", fontsize=9)
+        axis.grid(alpha=0.3)
+    for axis in axes.flat[len(groups) :]:
+        axis.set_visible(False)
+    for axis in axes[-1]:
+        axis.set_xlabel("environment steps")
+    for axis in axes[:, 0]:
+        axis.set_ylabel("mean episode return")
+    axes.flat[0].legend(loc="lower right", fontsize=7)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     output.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(output, dpi=120)

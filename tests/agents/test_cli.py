@@ -70,6 +70,28 @@ def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path
     assert "evaluations file not found" in capsys.readouterr().err
 
 
+def test_grouped_curves_draw_a_panel_per_config_even_when_a_seed_stopped_evaluating_earlier(
+    tmp_path: Path,
+) -> None:
+    from agents.training.curves import plot_grouped_learning_curves
+
+    def evaluations(name: str, evaluations_done: int) -> Path:
+        path = tmp_path / f"{name}.npz"
+        steps = np.arange(1, evaluations_done + 1) * 100
+        np.savez(path, timesteps=steps, results=np.outer(steps, [1.0, 2.0]) / 100)
+        return path
+
+    groups = {
+        "ppo_a": {"seed 0": evaluations("a0", 3), "seed 1": evaluations("a1", 2)},
+        "ppo_b": {"seed 0": evaluations("b0", 3)},
+    }
+    out = tmp_path / "grouped.png"
+    plot_grouped_learning_curves(groups, out, "per config")
+    assert out.stat().st_size > 10_000
+    with pytest.raises(ValueError, match="no learning curves to plot: groups is empty"):
+        plot_grouped_learning_curves({}, tmp_path / "none.png")
+
+
 def test_an_unknown_env_id_is_one_line_naming_the_ids(tmp_path: Path, capsys) -> None:
     from agents.cli import main
 

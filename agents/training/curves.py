@@ -56,6 +56,7 @@ def plot_grouped_learning_curves(
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     if not groups:
         raise ValueError("no learning curves to plot: groups is empty")
@@ -80,6 +81,7 @@ def plot_grouped_learning_curves(
         axis.set_visible(False)
     for axis in axes[-1]:
         axis.set_xlabel("environment steps")
+        axis.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value / 1000:g}k"))
     for axis in axes[:, 0]:
         axis.set_ylabel("mean episode return")
     axes.flat[0].legend(loc="lower right", fontsize=7)

@@ -278,6 +278,7 @@ def run_sweep(
         None
         if baseline_path is None
         else (baseline_path, comparison_markdown(rows, read_records(baseline_path))),
+        episodes_per_cell=config.episodes,
     )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")

@@ -123,7 +123,8 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
 
 
 def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
-    """Collision rate [95 % CI] per agent (rows) and level (columns) of one factor, the clean run first."""
+    """Failure rate [95 % CI] (collision rate) per agent (rows) and level (columns) of one factor, the clean
+    run first."""
     agents = sorted({r["agent"] for r in table})
     levels = sorted({r["level"] for r in table if r["factor"] == factor})
     cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
@@ -134,7 +135,10 @@ def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
         lines.append(
             f"| {agent} | "
             + " | ".join(
-                "–" if r is None else f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
+                "–"
+                if r is None
+                else f"{r['failure_rate']:.2f} [{r['failure_ci_low']:.2f}, {r['failure_ci_high']:.2f}] "
+                f"({r['collision_rate']:.2f})"
                 for r in row
             )
             + " |"
@@ -190,6 +194,23 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
     return "\n".join(lines)
 
 
+def partial_lines(table: list[dict[str, Any]], episodes_per_cell: int | None) -> list[str]:
+    """A warning for ``sweep.md`` while some cell has fewer than ``episodes_per_cell`` episodes (none when
+    every cell is complete, or nothing is known of the target)."""
+    if not episodes_per_cell or not table:
+        return []
+    short = [r for r in table if r["episodes"] < episodes_per_cell]
+    if not short:
+        return []
+    fewest = min(r["episodes"] for r in table)
+    return [
+        "",
+        f"> **Partial: {len(short)} of {len(table)} cells have fewer than the config's {episodes_per_cell} "
+        f"episodes** (fewest: {fewest}). Their rates are over the layouts flown so far and their intervals "
+        "are wider; the same command resumes the sweep.",
+    ]
+
+
 def write_report(
     path: Path,
     table: list[dict[str, Any]],
@@ -198,11 +219,14 @@ def write_report(
     minutes: float | None,
     factors: list[str],
     comparison: tuple[Path, str] | None = None,
+    episodes_per_cell: int | None = None,
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md);
-    ``comparison`` is an earlier sweep's episodes CSV and :func:`comparison_markdown` against it."""
+    ``comparison`` is an earlier sweep's episodes CSV and :func:`comparison_markdown` against it. With
+    ``episodes_per_cell`` (the config's), a sweep not yet flown in full says so at the top."""
     parts = [
-        "# Sweep: collision rate per agent and sensor error",
+        "# Sweep: failure rate per agent and sensor error",
+        *partial_lines(table, episodes_per_cell),
         "",
         f"Command: `{command}`  ",
         f"Config: `{config_path}`  ",
@@ -224,7 +248,9 @@ def write_report(
         config_path.read_text().strip(),
         "```",
         "",
-        "Collision rate with its Wilson 95 % interval, per factor (levels beyond the clean setting):",
+        "Failure rate (collision, out of bounds or time limit; success is one minus it) with its Wilson 95 % "
+        "interval, and the collision rate in brackets, per factor (levels beyond the clean setting); every "
+        "rate of every cell is in the last table:",
         "",
     ]
     for factor in factors:

@@ -47,6 +47,10 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     rows = read_records(tmp_path / "out" / "sweep_episodes.csv")
     table = {(r["agent"], r["factor"]): r for r in summarise(rows)}
     assert table[("straight", "clean")]["collision_rate"] == 1.0
+    report = (tmp_path / "out" / "sweep.md").read_text()
+    assert report.startswith("# Sweep: failure rate per agent and sensor error") and "Partial" not in report
+    straight_clean = next(line for line in report.splitlines() if line.startswith("| straight | 1.00 ["))
+    assert straight_clean.split(" | ")[1].endswith("(1.00)")  # failure [CI] (collision)
 
     # --report-only rebuilds the outputs from the episodes so far and flies nothing, even when more are asked for
     (tmp_path / "out" / "sweep.csv").unlink()
@@ -56,6 +60,10 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
     assert "Rebuilt with `--report-only`" in (tmp_path / "out" / "sweep.md").read_text()
     assert "fast_threshold" in (tmp_path / "out" / "sweep.md").read_text()
+    assert (
+        "**Partial: 4 of 4 cells have fewer than the config's 5 episodes** (fewest: "
+        in (tmp_path / "out" / "sweep.md").read_text()
+    )
 
     # --refly flies one agent again (a retrained policy); --compare-with sets each cell beside an earlier sweep
     earlier = tmp_path / "earlier.csv"

@@ -39,6 +39,7 @@ from agents.policies import (
     policy_file,
     split_agent_name,
 )
+from agents.training.interrupts import stop_signals_interrupt
 from agents.training.manifest import file_sha256
 from flownav_env.limits import episode_step_limit
 
@@ -268,8 +269,8 @@ def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[s
 
 
 class EpisodesInterrupted(KeyboardInterrupt):
-    """Ctrl-C during :func:`execute`: the episodes flown so far are on disk; the message says where and how
-    to resume (``flownav`` prints it as ``interrupted: <message>`` and exits 130). A KeyboardInterrupt, so
+    """Ctrl-C or SIGTERM during :func:`execute`: the episodes flown so far are on disk; the message says where
+    and how to resume (``flownav`` prints it as ``interrupted: <message>`` and exits 130). A KeyboardInterrupt, so
     code that does not know it still stops."""
 
 
@@ -297,8 +298,9 @@ def execute(
 
     Raises:
         ValueError: a bad backend or worker count, or a CSV that cannot be resumed (see :func:`pending_tasks`).
-        EpisodesInterrupted: Ctrl-C; the workers are stopped, the episodes flown so far are kept, and the
-            message says how many are in the CSV and how to resume.
+        EpisodesInterrupted: Ctrl-C or SIGTERM (a scheduler, ``kill``, the end of a session); the workers are
+            stopped, the episodes flown so far are kept, and the message says how many are in the CSV and how
+            to resume.
     """
     from tqdm import tqdm
 
@@ -314,10 +316,13 @@ def execute(
     results = _results(todo, backend, workers, address)
     flown = 0
     try:
-        for record in results:
-            append_record(csv_path, record)
-            flown += 1
-            progress.update()
+        # SIGTERM too: killed mid-sweep, the parent would die with its pool's workers still sending results
+        # into a closed pipe, each printing a traceback.
+        with stop_signals_interrupt():
+            for record in results:
+                append_record(csv_path, record)
+                flown += 1
+                progress.update()
     except KeyboardInterrupt:
         results.close()  # stops the pool or Ray before the message, whichever line Ctrl-C hit
         progress.close()
@@ -333,7 +338,8 @@ def execute(
 
 
 def _ignore_interrupts() -> None:
-    """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback."""
+    """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback. SIGTERM
+    keeps its default: it is how the parent's ``pool.terminate()`` stops them."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 

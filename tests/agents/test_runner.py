@@ -210,6 +210,51 @@ def test_ctrl_c_stops_the_worker_pool(tmp_path: Path, monkeypatch) -> None:
     assert read_episodes(path).skipped == 0 and len(read_records(path)) == 1
 
 
+def test_sigterm_stops_a_pooled_run_like_ctrl_c_with_one_message_and_no_worker_tracebacks(
+    tmp_path: Path,
+) -> None:
+    # A scheduler or the end of a session stops a sweep with SIGTERM; its pool workers used to outlive the
+    # parent and each print a BrokenPipeError traceback.
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "episodes.csv"
+    command = [
+        sys.executable,
+        "-c",
+        "import sys; from agents.cli import main; sys.exit(main(sys.argv[1:]))",
+        "evaluate",
+        "--agent",
+        "straight",
+        "--episodes",
+        "40",
+    ]
+    command += ["--env-id", "FlowNavSingle-v0", "--env", "camera_height=48", "--env", "camera_width=64"]
+    command += ["--workers", "2", "--out", str(path)]
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "egl"},
+    )
+    deadline = time.monotonic() + 120
+    while not (path.is_file() and len(read_records(path)) >= 2):
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate()[1][-2000:]
+        time.sleep(0.2)
+    process.send_signal(signal.SIGTERM)
+    _, error = process.communicate(timeout=60)
+    assert process.returncode == 130, error[-2000:]
+    assert "Traceback" not in error and "BrokenPipeError" not in error
+    last = error.strip().splitlines()[-1]
+    flown = len(read_records(path))
+    assert last.startswith(f"flownav evaluate: interrupted: {flown} episodes are in {path}")
+    assert 2 <= flown < 40 and read_episodes(path).skipped == 0
+
+
 def test_the_time_limit_follows_speed_frame_rate_and_field_length() -> None:
     assert episode_step_limit("FlowNav-v0", {}) is None  # the registered 400 steps
     assert episode_step_limit("FlowNav-v0", {"frame_rate": 50.0}) == 2000  # was 400: 8 s for 20 m

@@ -128,7 +128,12 @@ def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:
     return result
 
 
-_CACHE: dict[tuple, tuple[Any, Any]] = {}
+# One env per worker (the settings of the cell it flies) and the agents flown in it lately: a learned agent
+# written <agent>@all flies layout i with training seed i mod k, so consecutive tasks alternate between k
+# policies on the same env, and rebuilding both for each episode cost about 0.4 s on an episode of 1 s.
+_ENV: dict[tuple, Any] = {}
+_AGENTS: dict[tuple, Any] = {}
+MAX_CACHED_AGENTS = 16
 
 
 def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
@@ -138,15 +143,19 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
 
     settings = task.env_settings()
     # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
-    key = (task.agent, task.env_id, canonical_json(settings), task.policy, task.bee_params)
-    if key not in _CACHE:
-        for env, _ in _CACHE.values():
+    env_key = (task.env_id, canonical_json(settings))
+    if env_key not in _ENV:
+        for env in _ENV.values():
             env.close()
-        _CACHE.clear()
+        _ENV.clear()
         limit = episode_step_limit(task.env_id, settings)
-        env = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
-        _CACHE[key] = (env, load_agent(task.agent, task.policy_path(), **dict(task.bee_params)))
-    return _CACHE[key]
+        _ENV[env_key] = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
+    agent_key = (task.agent, task.policy, task.bee_params)
+    if agent_key not in _AGENTS:
+        if len(_AGENTS) >= MAX_CACHED_AGENTS:
+            del _AGENTS[next(iter(_AGENTS))]  # the oldest
+        _AGENTS[agent_key] = load_agent(task.agent, task.policy_path(), **dict(task.bee_params))
+    return _ENV[env_key], _AGENTS[agent_key]
 
 
 @functools.lru_cache(maxsize=1)

@@ -255,6 +255,26 @@ def test_sigterm_stops_a_pooled_run_like_ctrl_c_with_one_message_and_no_worker_t
     assert 2 <= flown < 40 and read_episodes(path).skipped == 0
 
 
+def test_alternating_agents_share_one_env_and_fly_as_if_each_had_its_own() -> None:
+    # <agent>@all alternates training seeds from one layout to the next: the env must not be rebuilt for each.
+    tasks = [
+        replace(TASK, agent=agent, seed=TEST_SEED_START + i)
+        for i, agent in enumerate(["straight", "bee"] * 2)
+    ]
+    runner._ENV.clear()
+    runner._AGENTS.clear()
+    shared = [runner.run_task(task) for task in tasks]
+    assert len(runner._ENV) == 1 and len(runner._AGENTS) == 2
+    alone = []
+    for task in tasks:
+        runner._ENV.clear()
+        runner._AGENTS.clear()
+        alone.append(runner.run_task(task))
+    assert shared == alone
+    runner._ENV.clear()
+    runner._AGENTS.clear()
+
+
 def test_the_time_limit_follows_speed_frame_rate_and_field_length() -> None:
     assert episode_step_limit("FlowNav-v0", {}) is None  # the registered 400 steps
     assert episode_step_limit("FlowNav-v0", {"frame_rate": 50.0}) == 2000  # was 400: 8 s for 20 m

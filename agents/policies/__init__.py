@@ -24,7 +24,7 @@ from agents.policies.learned import (
 )
 from agents.policies.loading import UnverifiedPolicyWarning
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
-from agents.policies.robust import BeeRobustAgent, VFHAgent, quantile_nearness
+from agents.policies.robust import BeeRobustAgent, BeeTTCAgent, VFHAgent, quantile_nearness
 
 __all__ = [
     "AGENT_NAMES",
@@ -34,6 +34,7 @@ __all__ = [
     "Agent",
     "BeeAgent",
     "BeeRobustAgent",
+    "BeeTTCAgent",
     "LoadedPolicy",
     "StraightAgent",
     "UnverifiedPolicyWarning",

@@ -6,7 +6,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "vfh")
+REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
 LEARNED_AGENTS = ("ppo_flow", "ppo_robust", "ppo_oracle")
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is

@@ -15,7 +15,7 @@ from agents.common.paths import POLICIES_DIR
 from agents.policies.base import Agent, is_learned, seeded_agent_name, split_agent_name
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
-from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, VFHAgent
+from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
 from agents.training.config import TrainConfig
 
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
@@ -127,6 +127,8 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
         return BeeAgent(**bee_params)
     if name == "bee_robust":
         return BeeRobustAgent(**bee_params)
+    if name == "bee_ttc":
+        return BeeTTCAgent(**bee_params)
     if name == "vfh":
         return VFHAgent(**bee_params)
     if is_learned(name):

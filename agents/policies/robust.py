@@ -4,6 +4,9 @@
   the sector's points (a single wrong near depth moves a quantile little, a mean a lot), points the
   estimator tracked but could not range counted as far (the ``unresolved`` observation), smoothed over
   frames.
+* ``bee_ttc``: ``bee_robust`` steering by the rate at which things approach, nearness × forward speed
+  (1 / time to contact), as a bee's optic flow does, instead of by nearness alone: at its gains' speed
+  (``reference_speed_mps``) it is ``bee_robust``; faster, it turns and slides away earlier.
 * ``vfh``: a Vector Field Histogram planner (Borenstein & Koren, 1991) on the sector histogram: obstacle
   density per image column, smoothed across columns, thresholded into free and blocked columns, steering to
   the free column nearest the goal.
@@ -24,6 +27,7 @@ from estimator import DEFAULT_BIN_EDGES
 # What these agents need the env to observe, beyond its defaults (the runner adds it to every cell).
 REACTIVE_ENV_KWARGS: dict[str, dict[str, bool]] = {
     "bee_robust": {"observe_unresolved": True},
+    "bee_ttc": {"observe_unresolved": True},
     "vfh": {"observe_unresolved": True},
 }
 
@@ -104,8 +108,46 @@ class BeeRobustAgent(BeeAgent):
             )
             blended = self.smoothing * nearness + (1.0 - self.smoothing) * state
             nearness = np.where(starting.reshape(-1, 1, 1), nearness, blended)
-        actions = self.centring_actions(nearness, observation)
+        actions = self.centring_actions(self.steering_nearness(nearness, observation), observation)
         return (actions if batched else actions[0]), nearness
+
+    def steering_nearness(self, nearness: np.ndarray, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """What the steering law reads, from the smoothed nearness (batch, rows, cols): the nearness itself."""
+        return nearness
+
+
+# Forward speeds the time-to-contact scaling is clipped to (m/s): below, a drone barely moving would
+# ignore obstacles; above, one reading of a fast state would swamp the gains.
+TTC_SPEED_RANGE = (0.25, 4.0)
+
+
+@dataclass
+class BeeTTCAgent(BeeRobustAgent):
+    """``bee_robust`` on the rate of approach: each sector's smoothed nearness n (1/m) times the drone's forward
+    speed v over ``reference_speed_mps``, i.e. the inverse time to contact relative to the speed its gains
+    were tuned at.
+
+    Why: a bee balances the image's angular speed, v / d, so it reacts earlier when it flies faster. The
+    estimator divides the flow by the known translation and so hands the agents depth, and a rule on depth
+    alone turns as late at 1.5 m/s as at 1 m/s. The gains are ``bee_robust``'s (tuned at FlowNav-v0's
+    1 m/s, the default ``reference_speed_mps``); v is the ``state`` observation's forward velocity, clipped
+    to :data:`TTC_SPEED_RANGE`. Chosen on validation layouts (``results/flow_gap.md``); nothing was tuned
+    for it.
+    """
+
+    reference_speed_mps: float = 1.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not (math.isfinite(self.reference_speed_mps) and self.reference_speed_mps > 0.0):
+            raise ValueError(
+                f"reference_speed_mps must be a finite speed > 0 m/s, got {self.reference_speed_mps!r}"
+            )
+
+    def steering_nearness(self, nearness: np.ndarray, observation: dict[str, np.ndarray]) -> np.ndarray:
+        state = np.asarray(observation["state"], np.float64).reshape(len(nearness), -1)
+        speed = np.clip(state[:, 0], *TTC_SPEED_RANGE)
+        return nearness * (speed / self.reference_speed_mps)[:, None, None]
 
 
 @dataclass

@@ -22,6 +22,7 @@ from agents.policies import (
     StraightAgent,
     UnverifiedPolicyWarning,
     agent_env_kwargs,
+    agent_parameters,
     load_agent,
     load_policy,
     policy_file,
@@ -228,7 +229,7 @@ def _observation(near_columns: slice, *, heading: float = 0.0, unresolved: float
     }
 
 
-@pytest.mark.parametrize("name", ["bee_robust", "vfh"])
+@pytest.mark.parametrize("name", ["bee_robust", "bee_ttc", "vfh"])
 def test_strong_reactive_agents_steer_away_from_the_near_side(name: str) -> None:
     agent = load_agent(name)
     left_blocked, _ = agent.predict(_observation(slice(0, 3)))
@@ -273,8 +274,31 @@ def test_robust_bee_smooths_over_frames_and_restarts_each_episode() -> None:
 
 
 def test_strong_reactive_agents_fly_a_real_episode() -> None:
-    for name in ("bee_robust", "vfh"):
+    for name in ("bee_robust", "bee_ttc", "vfh"):
         env = gym.make("FlowNavSingle-v0", observe_unresolved=True, **SMALL)
         record = run_episode(env, load_agent(name), seed=0, label=name)
         env.close()
         assert record.steps > 5 and record.agent == name
+
+
+def test_bee_ttc_is_bee_robust_at_its_reference_speed_and_reacts_earlier_when_faster() -> None:
+    def at_speed(speed: float) -> dict:
+        observation = _observation(slice(0, 2))  # something within 1 m on the left
+        observation["state"] = observation["state"].copy()
+        observation["state"][0] = speed
+        return observation
+
+    robust, ttc = load_agent("bee_robust"), load_agent("bee_ttc")
+    assert {k: v for k, v in agent_parameters("bee_ttc").items() if k != "reference_speed_mps"} == (
+        agent_parameters("bee_robust")
+    )
+    np.testing.assert_allclose(ttc.predict(at_speed(1.0))[0], robust.predict(at_speed(1.0))[0])
+    # Twice as fast, half the time to contact: it slides away harder, while bee_robust does not change.
+    assert ttc.predict(at_speed(2.0))[0][0] > ttc.predict(at_speed(1.0))[0][0] > 0
+    np.testing.assert_allclose(robust.predict(at_speed(2.0))[0], robust.predict(at_speed(1.0))[0])
+    # Its memory holds the nearness, not the scaled rate, so the speed never leaks across frames.
+    np.testing.assert_allclose(ttc.predict(at_speed(2.0))[1], robust.predict(at_speed(2.0))[1])
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="reference_speed_mps must be a finite speed > 0 m/s, got"):
+            load_agent("bee_ttc", reference_speed_mps=bad)
+    assert agent_env_kwargs("bee_ttc") == {"observe_unresolved": True}

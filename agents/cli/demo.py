@@ -1,4 +1,4 @@
-"""The main job in a few minutes: flies every reactive agent (the straight floor, the bee, ``bee_robust``,
+"""The main job in a few minutes: flies every reactive agent (the straight floor, the bee, ``bee_robust``, ``bee_ttc``,
 ``vfh``) and every shipped PPO agent on the same few held-out seeds of FlowNav-v0 and prints the comparison
 table (collision and success rates with Wilson 95 % intervals). A learned agent flies its shipped training
 seeds (``results/policies/<agent>/seed_<k>.zip``) in turn over the layouts, as the sweep does; one without

@@ -4,6 +4,7 @@ seeds are listed, not flown; the episode budget never reaches the test layouts."
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from agents.cli import main
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
 from agents.evaluation.ablation import ablation_tasks, compare_configs, seed_files
 from agents.evaluation.records import read_records
+from agents.policies import REACTIVE_AGENTS
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 from tests.agents.test_training import tiny_train_config
@@ -126,7 +128,7 @@ def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path, monkey
     assert len(rows) == 2 and {json.loads(r["agent_params"])["heading_gain"] for r in rows} == {0.5}
     with pytest.raises(
         ValueError,
-        match=r"reference agents must be reactive \(straight, bee, bee_robust, vfh\), got 'ppo_flow'",
+        match=re.escape(f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got 'ppo_flow'"),
     ):
         compare_configs([config_path], [0], out, episodes=2, reference_agents=["ppo_flow"])
 

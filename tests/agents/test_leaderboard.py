@@ -23,7 +23,14 @@ from agents.evaluation.over_seeds import (
     runs_and_layouts_interval,
     success_outcomes,
 )
-from agents.policies import is_learned, policy_file, seeded_agent_name, split_agent_name, trained_seeds
+from agents.policies import (
+    REACTIVE_AGENTS,
+    is_learned,
+    policy_file,
+    seeded_agent_name,
+    split_agent_name,
+    trained_seeds,
+)
 
 LAYOUTS = list(range(1_000_000, 1_000_040))
 
@@ -173,7 +180,7 @@ def test_the_report_leads_with_every_agent_and_compares_learned_with_reactive() 
     [
         (["--episodes", "0"], "--episodes and --workers must be >= 1, got 0 and 2"),
         (["--workers", "0"], "--episodes and --workers must be >= 1, got 300 and 0"),
-        (["--agents", "bee,hawk"], "agent must be one of straight, bee, bee_robust, vfh, ppo_flow"),
+        (["--agents", "bee,hawk"], f"agent must be one of {', '.join(REACTIVE_AGENTS)}, ppo_flow"),
     ],
 )
 def test_the_command_refuses_bad_input_before_flying(

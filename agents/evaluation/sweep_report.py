@@ -92,8 +92,15 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         fig.savefig(path, dpi=120)
         plt.close(fig)
         return
-    fig, axes = plt.subplots(1, len(factors), figsize=(3.6 * len(factors), 3.4), sharey=True, squeeze=False)
-    for ax, factor in zip(axes[0], factors, strict=True):
+    # A grid, not a row: fifteen factors side by side made a figure 54 inches wide.
+    columns = min(4, len(factors))
+    rows = -(-len(factors) // columns)
+    fig, axes = plt.subplots(
+        rows, columns, figsize=(3.6 * columns, 3.0 * rows + 0.6), sharey=True, squeeze=False
+    )
+    for ax in axes.flat[len(factors) :]:
+        ax.set_visible(False)
+    for ax, factor in zip(axes.flat, factors, strict=False):
         for agent in agents:
             points = [
                 (neutral.get(factor, 0.0), r) for r in table if r["agent"] == agent and r["factor"] == "clean"
@@ -115,9 +122,11 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         ax.set_xlabel(units.get(factor, factor))
         ax.set_ylim(0, 1)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("failure rate (95 % CI)\ndashed: collision rate")
-    axes[0][-1].legend(loc="upper left", fontsize=8)
-    fig.tight_layout()
+    for ax in axes[:, 0]:
+        ax.set_ylabel("failure rate (95 % CI)\ndashed: collision rate")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", ncol=min(len(labels), 8), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / (3.0 * rows + 0.6)))
     fig.savefig(path, dpi=120)
     plt.close(fig)
 

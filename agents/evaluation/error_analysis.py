@@ -181,7 +181,7 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
             f"a dose-response fit needs >= 20 episodes with a depth error and both outcomes, got {len(used)} "
             f"episodes with {int(failures.sum())} failures"
         )
-    feature_names = dose_feature_names(used)
+    feature_names = DOSE_FEATURES[: features.shape[1]]  # the columns dose_features chose
     flat = [name for name, column in zip(feature_names, features.T, strict=True) if np.ptp(column) == 0.0]
     if flat:
         raise ValueError(f"a dose-response fit needs spread in every feature; {', '.join(flat)} is constant")

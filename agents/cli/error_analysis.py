@@ -29,11 +29,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from agents.evaluation.error_analysis_report import write_error_analysis
     from agents.evaluation.records import read_records
+    from agents.evaluation.sweep import pool_every_seed
 
     episodes = Path(args.episodes)
     if not episodes.is_file():
         raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
-    rows = read_records(episodes)
+    rows = pool_every_seed(read_records(episodes))
     if not rows:
         raise ValueError(f"--episodes {episodes} holds no readable episode")
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])

@@ -138,6 +138,14 @@ def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, 
     return relabelled
 
 
+def pool_every_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`pool_seeds` for episodes read without their sweep config: every learned agent flown by training
+    seed (``ppo_flow@3``) is pooled as ``ppo_flow@all``, so that a rate is over its runs and layouts, never one
+    seed's few layouts of a cell."""
+    seeded = {split_agent_name(row["agent"]) for row in rows}
+    return pool_seeds(rows, sorted({base + ALL_SEEDS for base, seed in seeded if seed is not None}))
+
+
 def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     """Every (agent, factor, level, seed) episode, in passes of ``config.seed_block`` seeds.
 

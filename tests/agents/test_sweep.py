@@ -13,7 +13,7 @@ from agents.common.config import ConfigError, load_config
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import summarise
-from agents.evaluation.sweep import SweepConfig, build_tasks, pool_seeds
+from agents.evaluation.sweep import SweepConfig, build_tasks, pool_every_seed, pool_seeds
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 
@@ -237,6 +237,20 @@ def test_all_seeds_of_a_learned_agent_share_each_cells_layouts_in_turn(tmp_path:
     assert {t.policy for t in tasks if t.agent == "ppo_flow@4"} == {str(policies / "ppo_flow" / "seed_4.zip")}
     rows = [{"agent": t.agent, "seed": t.seed} for t in tasks]
     assert {r["agent"] for r in pool_seeds(rows, config.agents)} == {"bee", "ppo_flow@all"}
+
+
+def test_episodes_read_without_their_config_pool_every_training_seed() -> None:
+    rows = [
+        {"agent": name, "seed": 1}
+        for name in ("bee", "ppo_flow@0", "ppo_flow@3", "ppo_oracle@1", "ppo_robust")
+    ]
+    assert [r["agent"] for r in pool_every_seed(rows)] == [
+        "bee",
+        "ppo_flow@all",
+        "ppo_flow@all",
+        "ppo_oracle@all",
+        "ppo_robust",
+    ]
 
 
 def test_obstacle_density_is_swept_as_a_course_factor(tmp_path: Path) -> None:

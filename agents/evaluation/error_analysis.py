@@ -58,7 +58,8 @@ def _failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, in
 
 def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
-    inside the clean interval, the first level at which the failure rate doubles, and the thesis's verdict.
+    inside the clean interval, the first level at which the failure rate doubles, the first level at which it
+    breaks (its Wilson interval lies wholly above the clean one), and the thesis's verdict.
 
     A level is tolerated while its failure rate stays at or below the clean interval's upper end (a level
     that fails less than clean is no harm); scanning outward from the neutral level, the tolerated level is
@@ -82,11 +83,13 @@ def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
             ):
                 if not chosen:
                     continue
-                tolerated, doubled, broke = neutral, None, False
+                tolerated, doubled, broke, breaking = neutral, None, False, None
                 rates = []
                 for level in chosen:
                     rate, low, high, n = _failure(cells[(agent, factor, level)])
                     rates.append((level, rate, low, high, n))
+                    if breaking is None and low > clean_high:
+                        breaking = (level, rate)
                     if not broke and rate <= clean_high:
                         tolerated = level
                     else:
@@ -109,6 +112,8 @@ def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                         "worst_failure": worst[1],
                         "worst_low": worst[2],
                         "breaks": worst[2] > clean_high,
+                        "breaking_level": None if breaking is None else breaking[0],
+                        "breaking_failure": None if breaking is None else breaking[1],
                         "thesis": THESIS_VERDICTS.get(factor, NOT_TESTED),
                     }
                 )

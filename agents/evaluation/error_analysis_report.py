@@ -56,6 +56,29 @@ def tolerance_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
     ]
 
 
+def breaking_point_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
+    """A factor × agent matrix: the first level at which each agent breaks, with its failure rate there, or
+    '—' and its worst failure rate where none of the levels flown breaks it."""
+    agents = sorted({r["agent"] for r in table})
+    by_key = {(r["factor"], r["side"], r["agent"]): r for r in table}
+    keys = sorted({(r["factor"], r["side"]) for r in table})
+
+    def cell(row: Mapping[str, Any] | None) -> str:
+        if row is None:
+            return ""
+        if row["breaking_level"] is None:
+            return f"— ({row['worst_failure']:.2f} at {row['worst_level']:g})"
+        return f"**{row['breaking_level']:g}** ({row['breaking_failure']:.2f})"
+
+    clean = {r["agent"]: f"{r['clean_failure']:.2f}" for r in table}
+    rows = [["clean failure", "", *(clean[agent] for agent in agents)]]
+    rows += [
+        [factor, side, *(cell(by_key.get((factor, side, agent))) for agent in agents)]
+        for factor, side in keys
+    ]
+    return [markdown_table(["factor", "side", *agents], rows)]
+
+
 def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
     rows = []
     for agent, fit in fits.items():
@@ -141,10 +164,19 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
             fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent])
         except ValueError as reason:
             skipped.append(f"- `{agent}`: no fit ({reason}).")
+    table = tolerance_table(rows)
     lines = [
         "# How estimation errors cause failures",
         "",
         f"Generated {today()} by `{command}` from {len(rows)} episodes.",
+        "",
+        "## Where each factor breaks each agent",
+        "",
+        "The first level, scanning outward from the neutral one, whose failure rate's Wilson 95 % interval lies "
+        "wholly above the clean cell's, with its failure rate; '—' where no level flown does, with the worst "
+        "failure rate and its level.",
+        "",
+        *breaking_point_lines(table),
         "",
         "## Tolerance per agent and factor",
         "",
@@ -153,7 +185,7 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         "one and above its interval ('—': none, or twice the clean rate exceeds 1), and the worst level "
         "('breaks': its interval lies above the clean one).",
         "",
-        *tolerance_lines(tolerance_table(rows)),
+        *tolerance_lines(table),
         "",
         "## Dose-response: failure against measured depth quality",
         "",

@@ -64,9 +64,12 @@ def test_tolerance_scans_outward_from_neutral_on_each_side() -> None:
     assert rotation["tolerated_level"] == 0.1  # 0.25 is inside [0.13, 0.29]; 0.33 is not
     assert rotation["doubling_level"] == 0.5  # 0.45 >= 2 x 0.2 and above the interval
     assert rotation["breaks"] and rotation["worst_level"] == 1.0
+    # 0.33 at 0.3 has [0.25, 0.43], overlapping the clean [0.13, 0.29]; 0.45 at 0.5 has [0.36, 0.55].
+    assert (rotation["breaking_level"], rotation["breaking_failure"]) == (0.5, pytest.approx(0.45))
     assert rotation["thesis"].startswith("at 8 %")
     slower = table[("forward_speed", "below")]
     assert slower["levels"] == [0.5, 0.25] and slower["tolerated_level"] == 0.25 and not slower["breaks"]
+    assert slower["breaking_level"] is None
     faster = table[("forward_speed", "above")]
     assert faster["tolerated_level"] == 1.0 and faster["doubling_level"] == 2.0
 
@@ -157,6 +160,8 @@ def test_the_report_and_figure_are_written(tmp_path: Path) -> None:
     text = (tmp_path / "error_analysis.md").read_text()
     assert text == "\n".join(lines) + "\n"
     assert "| bee | rotation_error | above | 0.20 [0.13, 0.29] |" in text
+    assert "| rotation_error | above | **0.5** (0.45) |" in text
+    assert "| forward_speed | below | — (0.18 at 0.25) |" in text
     assert "log_depth_error" in text and (tmp_path / "dose_response.png").stat().st_size > 10_000
     assert "| outlier_share |" not in text  # these rows never recorded it
     for row in rows:

@@ -120,6 +120,49 @@ def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     return table
 
 
+# Episodes that ended within this many metres of the start say nothing of how much the agent weaves.
+MIN_PROGRESS_FOR_WEAVING_M = 2.0
+
+
+def turning_and_rotation_error(
+    rows: Sequence[Mapping[str, Any]], factor: str = "rotation_error"
+) -> list[dict[str, Any]]:
+    """Per agent: how much it weaves on the clean course, and its median depth error at each level of a
+    relative rotation error.
+
+    A relative error scales the told rotation, so its harm grows with how much the agent turns. Weaving is the
+    median over clean episodes of path length / forward progress − 1 (episodes with at least
+    :data:`MIN_PROGRESS_FOR_WEAVING_M` of progress). Empty when the rows lack path length and progress (files
+    from before they were recorded) or the factor was not flown.
+    """
+    if not rows or any(r.get("path_length_m") is None or r.get("progress_m") is None for r in rows):
+        return []
+    table = []
+    for agent in sorted({r["agent"] for r in rows}):
+        clean = [
+            float(r["path_length_m"]) / float(r["progress_m"]) - 1.0
+            for r in rows
+            if r["agent"] == agent
+            and r["factor"] == "clean"
+            and float(r["progress_m"]) >= MIN_PROGRESS_FOR_WEAVING_M
+        ]
+        swept = [r for r in rows if r["agent"] == agent and r["factor"] in ("clean", factor)]
+        levels = sorted({0.0 if r["factor"] == "clean" else float(r["level"]) for r in swept})
+        if not clean or len(levels) < 2:
+            continue
+        errors = {}
+        for level in levels:
+            depth_errors = [
+                float(r["median_depth_error"])
+                for r in swept
+                if (0.0 if r["factor"] == "clean" else float(r["level"])) == level
+                and math.isfinite(float(r["median_depth_error"]))
+            ]
+            errors[level] = float(np.median(depth_errors)) if depth_errors else math.nan
+        table.append({"agent": agent, "weaving": float(np.median(clean)), "depth_error": errors})
+    return sorted(table, key=lambda r: r["weaving"])
+
+
 # Agents that never read the depth histogram: their failures cannot respond to depth quality.
 BLIND_AGENTS = ("straight",)
 

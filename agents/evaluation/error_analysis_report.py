@@ -16,6 +16,7 @@ from agents.evaluation.error_analysis import (
     fit_dose_response,
     is_flow_agent,
     tolerance_table,
+    turning_and_rotation_error,
 )
 
 
@@ -77,6 +78,39 @@ def breaking_point_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
         for factor, side in keys
     ]
     return [markdown_table(["factor", "side", *agents], rows)]
+
+
+def turning_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The weaving of each agent beside its median depth error at each relative rotation error level."""
+    if not table:
+        return []
+    levels = sorted({level for row in table for level in row["depth_error"]})
+    rows = [
+        [
+            row["agent"],
+            f"{100 * row['weaving']:.1f} %",
+            *(
+                "" if level not in row["depth_error"] else f"{row['depth_error'][level]:.2f}"
+                for level in levels
+            ),
+        ]
+        for row in table
+    ]
+    header = [
+        "agent",
+        "weaving, clean (path / progress − 1)",
+        *(f"depth error at {level:g}" for level in levels),
+    ]
+    return [
+        "## Relative rotation error and how much each agent turns",
+        "",
+        "`rotation_error` scales the told rotation of each frame, so its harm grows with how much the agent "
+        "turns. Weaving: the median over clean episodes of path length over forward progress, minus 1; depth "
+        "error: the median over episodes of each episode's median relative depth error (0: clean).",
+        "",
+        markdown_table(header, rows),
+        "",
+    ]
 
 
 def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
@@ -187,6 +221,7 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         "",
         *tolerance_lines(table),
         "",
+        *turning_lines(turning_and_rotation_error(rows)),
         "## Dose-response: failure against measured depth quality",
         "",
         "Logistic regression per flow agent, pooled over every factor and level: "

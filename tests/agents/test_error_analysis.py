@@ -16,6 +16,7 @@ from agents.evaluation.error_analysis import (
     is_flow_agent,
     neutral_level,
     tolerance_table,
+    turning_and_rotation_error,
 )
 from agents.evaluation.error_analysis_report import write_error_analysis
 
@@ -164,6 +165,7 @@ def test_the_report_and_figure_are_written(tmp_path: Path) -> None:
     assert "| forward_speed | below | — (0.18 at 0.25) |" in text
     assert "log_depth_error" in text and (tmp_path / "dose_response.png").stat().st_size > 10_000
     assert "| outlier_share |" not in text  # these rows never recorded it
+    assert "how much each agent turns" not in text  # nor path length and progress
     for row in rows:
         row["mean_depth_outlier_share"] = float(rng.uniform(0.0, 0.2))
     write_error_analysis(rows, tmp_path, "flownav error-analysis --episodes x.csv")
@@ -178,3 +180,21 @@ def test_the_command_refuses_a_missing_or_empty_file(tmp_path: Path, capsys) -> 
     empty.write_text("")
     assert main(["error-analysis", "--episodes", str(empty), "--out", str(tmp_path)]) == 2
     assert "holds no readable episode" in capsys.readouterr().err
+
+
+def test_rotation_error_is_set_beside_how_much_each_agent_weaves(tmp_path: Path) -> None:
+    rows = []
+    for agent, path, errors in (("vfh", 22.0, (0.06, 0.6)), ("bee", 20.2, (0.04, 0.05))):
+        for factor, level, error in (("clean", 0.0, errors[0]), ("rotation_error", 1.0, errors[1])):
+            for row in _cell(agent, factor, level, 5, n=10, error=error):
+                rows.append({**row, "path_length_m": path, "progress_m": 20.0})
+    rows.append({**rows[0], "agent": "bee", "progress_m": 0.5, "path_length_m": 9.0})  # crashed at the start
+    table = turning_and_rotation_error(rows)
+    assert [r["agent"] for r in table] == ["bee", "vfh"]
+    assert table[0]["weaving"] == pytest.approx(0.01) and table[1]["weaving"] == pytest.approx(0.1)
+    assert table[1]["depth_error"] == {0.0: pytest.approx(0.06), 1.0: pytest.approx(0.6)}
+    write_error_analysis(rows, tmp_path, "flownav error-analysis")
+    assert "| vfh | 10.0 % | 0.06 | 0.60 |" in (tmp_path / "error_analysis.md").read_text()
+    assert (
+        turning_and_rotation_error([{k: v for k, v in r.items() if k != "path_length_m"} for r in rows]) == []
+    )

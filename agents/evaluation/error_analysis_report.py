@@ -147,8 +147,10 @@ def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
 def plot_dose_response(
     rows: Sequence[Mapping[str, Any]], fits: Mapping[str, Mapping[str, Any]], path: Path
 ) -> None:
-    """A panel per flow agent: observed failure rate in deciles of median depth error (dots), and the fitted
-    probability at the agent's median valid points per frame (and outlier share) with its 95 % band."""
+    """A panel per flow agent: observed failure rate in deciles of median depth error (dots); the fit's mean
+    predicted probability over the same deciles' episodes (squares: how well all its terms together follow
+    the dots); and the fitted probability against depth error alone, at the agent's median valid points per
+    frame (and outlier share), with its 95 % band."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -156,21 +158,37 @@ def plot_dose_response(
     import matplotlib.ticker
 
     agents = list(fits)
-    figure, axes = plt.subplots(1, len(agents), figsize=(4.2 * len(agents), 3.6), squeeze=False)
-    for axis, agent in zip(axes[0], agents, strict=True):
+    columns = min(3, len(agents))
+    rows_of_panels = -(-len(agents) // columns)
+    figure, axes = plt.subplots(
+        rows_of_panels, columns, figsize=(4.2 * columns, 3.6 * rows_of_panels), squeeze=False
+    )
+    for axis in axes.flat[len(agents) :]:
+        axis.set_visible(False)
+    for axis, agent in zip(axes.flat, agents, strict=False):
         features, failures, _ = dose_features([r for r in rows if r["agent"] == agent])
         errors = np.exp(features[:, 0])
         edges = np.unique(np.quantile(errors, np.linspace(0, 1, 11)))
         which = np.clip(np.searchsorted(edges, errors, side="right") - 1, 0, len(edges) - 2)
-        centres = [np.median(errors[which == b]) for b in range(len(edges) - 1) if (which == b).any()]
-        observed = [failures[which == b].mean() for b in range(len(edges) - 1) if (which == b).any()]
+        bins = [b for b in range(len(edges) - 1) if (which == b).any()]
+        centres = np.array([np.median(errors[which == b]) for b in bins])
+        observed = [failures[which == b].mean() for b in bins]
+        fitted = fits[agent]["model"].predict(np.column_stack([np.ones(len(errors)), features]))
+        axis.scatter(centres * 100, observed, color="black", s=18, zorder=3, label="observed (deciles)")
         axis.scatter(
-            np.array(centres) * 100, observed, color="black", s=18, zorder=3, label="observed (deciles)"
+            centres * 100,
+            [fitted[which == b].mean() for b in bins],
+            marker="s",
+            facecolors="none",
+            edgecolors="tab:red",
+            s=24,
+            zorder=3,
+            label="fit, mean over the decile",
         )
         grid = np.geomspace(errors.min(), errors.max(), 80)
         outliers = float(np.median(features[:, 2])) if features.shape[1] > 2 else 0.0
         predicted, low, high = dose_curve(fits[agent], grid, float(np.median(features[:, 1]) * 100), outliers)
-        axis.plot(grid * 100, predicted, color="tab:red", label="logistic fit")
+        axis.plot(grid * 100, predicted, color="tab:red", label="fit, depth error alone")
         axis.fill_between(grid * 100, low, high, color="tab:red", alpha=0.2)
         axis.set_xscale("log")
         axis.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
@@ -179,7 +197,8 @@ def plot_dose_response(
         axis.set_xlabel("episode's median relative depth error (%)")
         axis.set_title(f"{agent} ({fits[agent]['episodes']} episodes)", fontsize=10)
         axis.grid(alpha=0.3)
-    axes[0][0].set_ylabel("failure probability")
+    for row in axes:
+        row[0].set_ylabel("failure probability")
     axes[0][0].legend(fontsize=8, loc="upper left")
     figure.tight_layout()
     figure.savefig(path, dpi=120)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -209,6 +210,36 @@ def dose_feature_names(rows: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
     return DOSE_FEATURES[:2]
 
 
+def _converged_logit(failures: np.ndarray, design: np.ndarray, terms: str, method: str = "newton") -> Any:
+    """A fitted statsmodels Logit, or ValueError where its estimate is not one: a fit that did not converge,
+    whose Hessian cannot be inverted, or whose outcomes the terms separate (perfectly or nearly), where the
+    coefficients run off to infinity and statsmodels only warns."""
+    import statsmodels.api as sm
+    from statsmodels.tools.sm_exceptions import (
+        ConvergenceWarning,
+        HessianInversionWarning,
+        PerfectSeparationWarning,
+    )
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = sm.Logit(failures, design).fit(disp=0, maxiter=200, method=method)
+    problems = sorted(
+        {
+            "overflow" if issubclass(w.category, RuntimeWarning) else w.category.__name__
+            for w in caught
+            if issubclass(w.category, (ConvergenceWarning, HessianInversionWarning, PerfectSeparationWarning))
+            or (issubclass(w.category, RuntimeWarning) and "overflow" in str(w.message))
+        }
+    )
+    if problems or not model.mle_retvals.get("converged", True):
+        raise ValueError(
+            f"the logistic fit on {terms} has no reliable estimate ({', '.join(problems) or 'not converged'}): "
+            "failures are (nearly) perfectly separated by these terms, or too few to fit them"
+        )
+    return model
+
+
 def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     """Logistic regression of failure on depth quality (one agent's episodes, every factor and level), and
     the likelihood-ratio test of adding one indicator per factor.
@@ -234,14 +265,16 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     if flat:
         raise ValueError(f"a dose-response fit needs spread in every feature; {', '.join(flat)} is constant")
     design = sm.add_constant(features)
-    model = sm.Logit(failures, design).fit(disp=0, maxiter=200)
+    model = _converged_logit(failures, design, "depth quality")
     factors = sorted({r["factor"] for r in used} - {"clean"})
     indicators = np.array([[1.0 if r["factor"] == f else 0.0 for f in factors] for r in used]).reshape(
         len(used), -1
     )
     lr_statistic, lr_df, lr_pvalue = math.nan, 0, math.nan
     if factors:
-        full = sm.Logit(failures, np.hstack([design, indicators])).fit(disp=0, maxiter=200, method="bfgs")
+        full = _converged_logit(
+            failures, np.hstack([design, indicators]), "depth quality and the factors", method="bfgs"
+        )
         from scipy import stats
 
         lr_statistic = max(0.0, 2.0 * (full.llf - model.llf))

@@ -198,3 +198,55 @@ def test_rotation_error_is_set_beside_how_much_each_agent_weaves(tmp_path: Path)
     assert (
         turning_and_rotation_error([{k: v for k, v in r.items() if k != "path_length_m"} for r in rows]) == []
     )
+
+
+def _write_sweep_episodes(path: Path, separated: bool) -> None:
+    from agents.evaluation.episode import EpisodeRecord
+    from agents.evaluation.records import append_record
+
+    rng = np.random.default_rng(0)
+    for i in range(60):
+        for factor, level in (("clean", 0.0), ("rotation_error", 0.5)):
+            error = float(rng.uniform(0.02, 0.4))
+            failed = error > 0.2 if separated else bool(rng.random() < 2.0 * error)
+            append_record(
+                path,
+                EpisodeRecord(
+                    agent=f"ppo_flow@{i % 3}",
+                    factor=factor,
+                    level=level,
+                    seed=1_000_000 + i,
+                    collision=failed,
+                    success=not failed,
+                    out_of_bounds=False,
+                    truncated=False,
+                    progress_m=20.0,
+                    time_s=20.0,
+                    steps=200,
+                    min_clearance_m=0.5,
+                    path_length_m=20.4,
+                    mean_points_valid=float(rng.uniform(50, 200)),
+                    median_depth_error=error,
+                    episode_return=1.0,
+                    env_kwargs=json.dumps({"obs_source": "flow"}),
+                    mean_depth_outlier_share=float(rng.uniform(0.0, 0.2)),
+                ),
+            )
+
+
+def test_the_command_pools_a_learned_agents_training_seeds(tmp_path: Path) -> None:
+    episodes = tmp_path / "sweep_episodes.csv"
+    _write_sweep_episodes(episodes, separated=False)
+    assert main(["error-analysis", "--episodes", str(episodes), "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "error_analysis.md").read_text()
+    assert "| ppo_flow@all | rotation_error | above |" in text and "ppo_flow@0" not in text
+    assert "| ppo_flow@all | 120 | const |" in text  # one fit over all three seeds' episodes
+
+
+def test_a_fit_that_separates_the_outcomes_is_refused_not_reported(tmp_path: Path) -> None:
+    episodes = tmp_path / "sweep_episodes.csv"
+    _write_sweep_episodes(episodes, separated=True)  # every episode with error > 0.2 fails, no other
+    assert main(["error-analysis", "--episodes", str(episodes), "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "error_analysis.md").read_text()
+    assert "- `ppo_flow@all`: no fit (the logistic fit on depth quality has no reliable estimate" in text
+    assert "perfectly separated" in text and "| ppo_flow@all | 120 | const |" not in text

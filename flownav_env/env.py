@@ -63,7 +63,8 @@ class FlowNavEnv(gym.Env):
     | 2   | yaw rate (to the right) | -1  | 1   | ± ``max_yaw_rate_deg``           | deg/s |
 
     ## Observation Space
-    ``Dict`` of float32 boxes: two, plus one per ``observe_unresolved``, ``observe_counts``, ``observe_nearness``:
+    ``Dict`` of float32 boxes: two, plus one per ``observe_unresolved``, ``observe_counts``, ``observe_nearness``,
+    ``observe_approach``:
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
@@ -72,6 +73,7 @@ class FlowNavEnv(gym.Env):
     | ``unresolved``    | (rows, cols)            | [0, 1]               | only with ``observe_unresolved=True``: per sector, the share of the tracked points that got no depth to count (too little parallax: far away, or near the focus of expansion); 0 where nothing was tracked |
     | ``point_counts``  | (rows, cols)            | [0, 1]               | only with ``observe_counts=True``: per sector, the confidence 1 − exp(−n/10) of the n points its histogram counts |
     | ``nearness``      | (rows, cols)            | [0, 1]               | only with ``observe_nearness=True``: per sector, min(1, 0.5 m / d) of a robust near depth d (``estimator.sector_near_depth``: a low quantile of its depths, never one lone point); 0 where no depth counts |
+    | ``approach``      | (rows, cols)            | [0, 1]               | only with ``observe_approach=True``: per sector, min(1, 0.5 s · v / d) for the same d and the forward velocity v (0 when flying backwards): the inverse time to contact, as a bee's optic flow gives it; at 1 m/s it equals ``nearness`` |
 
     ``state`` (clipped to the bounds of the space):
 
@@ -127,7 +129,7 @@ class FlowNavEnv(gym.Env):
     {sensor_rows}
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
-    | ``observe_unresolved``, ``observe_counts``, ``observe_nearness`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on) or the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) |
+    | ``observe_unresolved``, ``observe_counts``, ``observe_nearness``, ``observe_approach`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on), the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) or the ``approach`` key (how soon the drone reaches it at its forward speed) |
     | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]`` and ``info["depth_outlier_share"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
     | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
@@ -196,6 +198,7 @@ class FlowNavEnv(gym.Env):
         observe_unresolved: bool = False,
         observe_counts: bool = False,
         observe_nearness: bool = False,
+        observe_approach: bool = False,
         depth_error_info: bool = True,
         depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
         max_lateral_speed: float = 1.0,

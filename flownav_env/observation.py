@@ -28,6 +28,9 @@ if TYPE_CHECKING:
 COUNT_SCALE = 10.0
 # A sector's near depth d as a nearness min(1, NEAR_DEPTH_M / d): 1 within half a metre, 0.1 at 5 m, 0 if empty.
 NEAR_DEPTH_M = 0.5
+# ... and as an approach min(1, NEAR_TIME_S · v / d) at forward speed v: 1 within half a second of contact. With
+# NEAR_TIME_S · 1 m/s = NEAR_DEPTH_M the two agree at 1 m/s, the speed the env flies by default.
+NEAR_TIME_S = 0.5
 
 STATE_FIELDS = (
     "forward_velocity",
@@ -55,6 +58,8 @@ def observation_space(settings: EnvSettings) -> spaces.Dict:
         boxes["point_counts"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     if settings.observe_nearness:
         boxes["nearness"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+    if settings.observe_approach:
+        boxes["approach"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     return spaces.Dict(boxes)
 
 
@@ -101,8 +106,10 @@ def assemble_observation(
     depth: np.ndarray,
     counted: np.ndarray,
 ) -> dict[str, np.ndarray]:
-    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector) and ``point_counts``
-    (how many points a sector's histogram counts, as ``1 - exp(-n / COUNT_SCALE)``) only when asked for."""
+    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector), ``point_counts``
+    (how many points a sector's histogram counts, as ``1 - exp(-n / COUNT_SCALE)``), ``nearness`` and
+    ``approach`` (a sector's robust near depth over a distance, and over the distance flown in
+    :data:`NEAR_TIME_S`) only when asked for."""
     observation = {"depth_histogram": histogram, "state": state}
     if settings.observe_unresolved:
         observation["unresolved"] = sector_fraction(
@@ -117,11 +124,17 @@ def assemble_observation(
             points.points, counted, intrinsics.image_size, sectors=settings.histogram_sectors
         )
         observation["point_counts"] = (1.0 - np.exp(-counts / COUNT_SCALE)).astype(np.float32)
-    if settings.observe_nearness:
+    if settings.observe_nearness or settings.observe_approach:
         near = sector_near_depth(
             points.points, depth, counted, intrinsics.image_size, sectors=settings.histogram_sectors
         )
-        observation["nearness"] = np.minimum(1.0, NEAR_DEPTH_M / near).astype(np.float32)
+        if settings.observe_nearness:
+            observation["nearness"] = np.minimum(1.0, NEAR_DEPTH_M / near).astype(np.float32)
+        if settings.observe_approach:
+            forward_speed = max(float(state[0]), 0.0)
+            # The floor keeps a zero depth at hover from giving 0 / 0.
+            approach = NEAR_TIME_S * forward_speed / np.maximum(near, 1e-6)
+            observation["approach"] = np.minimum(1.0, approach).astype(np.float32)
     return observation
 
 

@@ -90,6 +90,21 @@ def test_nearness_is_high_only_where_a_sector_holds_near_depths() -> None:
     env.close()
 
 
+def test_approach_is_nearness_times_forward_speed_per_metre_per_second() -> None:
+    env = make(observe_nearness=True, observe_approach=True, forward_speed=1.5)
+    obs, _ = env.reset(seed=2)
+    assert env.observation_space.contains(obs) and not obs["approach"].any()
+    for _ in range(6):
+        obs, *_ = env.step(np.zeros(3))
+    speed = max(float(obs["state"][0]), 0.0)
+    assert env.observation_space.contains(obs) and speed > 0.5 and obs["approach"].any()
+    open_ended = obs["nearness"] < 1.0  # nearness is clipped at 1 within half a metre
+    expected = np.minimum(1.0, obs["nearness"] * speed)
+    assert np.allclose(obs["approach"][open_ended], expected[open_ended], atol=1e-5)
+    assert np.array_equal(obs["approach"] > 0, obs["nearness"] > 0)
+    env.close()
+
+
 def test_oracle_valid_measures_the_estimators_valid_points_exactly() -> None:
     flow_env, truth_env = make(), make(obs_source="oracle_valid")
     flow_obs, _ = flow_env.reset(seed=3)

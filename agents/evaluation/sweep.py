@@ -287,6 +287,7 @@ def run_sweep(
         if baseline_path is None
         else (baseline_path, comparison_markdown(rows, read_records(baseline_path))),
         episodes_per_cell=config.episodes,
+        expected_cells=len(agents) * (1 + sum(len(levels) for levels in config.factors.values())),
     )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")

@@ -203,20 +203,26 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
     return "\n".join(lines)
 
 
-def partial_lines(table: list[dict[str, Any]], episodes_per_cell: int | None) -> list[str]:
-    """A warning for ``sweep.md`` while some cell has fewer than ``episodes_per_cell`` episodes (none when
-    every cell is complete, or nothing is known of the target)."""
+def partial_lines(
+    table: list[dict[str, Any]], episodes_per_cell: int | None, expected_cells: int | None = None
+) -> list[str]:
+    """A warning for ``sweep.md`` while some cell has fewer than ``episodes_per_cell`` episodes, or fewer
+    than ``expected_cells`` cells (the config's) have any (none when every cell is complete, or nothing is
+    known of the target)."""
     if not episodes_per_cell or not table:
         return []
     short = [r for r in table if r["episodes"] < episodes_per_cell]
-    if not short:
+    missing = max(0, (expected_cells or 0) - len(table))
+    if not short and not missing:
         return []
-    fewest = min(r["episodes"] for r in table)
+    total = len(table) + missing
+    fewest = 0 if missing else min(r["episodes"] for r in table)
+    unflown = f"; {missing} of them not flown at all" if missing else ""
     return [
         "",
-        f"> **Partial: {len(short)} of {len(table)} cells have fewer than the config's {episodes_per_cell} "
-        f"episodes** (fewest: {fewest}). Their rates are over the layouts flown so far and their intervals "
-        "are wider; the same command resumes the sweep.",
+        f"> **Partial: {len(short) + missing} of {total} cells have fewer than the config's {episodes_per_cell} "
+        f"episodes** (fewest: {fewest}{unflown}). Their rates are over the layouts flown so far and their "
+        "intervals are wider; the same command resumes the sweep.",
     ]
 
 
@@ -229,13 +235,14 @@ def write_report(
     factors: list[str],
     comparison: tuple[Path, str] | None = None,
     episodes_per_cell: int | None = None,
+    expected_cells: int | None = None,
 ) -> None:
     """``sweep.md``: how the sweep was run and its tables (interpretation belongs in benchmark.md);
     ``comparison`` is an earlier sweep's episodes CSV and :func:`comparison_markdown` against it. With
     ``episodes_per_cell`` (the config's), a sweep not yet flown in full says so at the top."""
     parts = [
         "# Sweep: failure rate per agent and sensor error",
-        *partial_lines(table, episodes_per_cell),
+        *partial_lines(table, episodes_per_cell, expected_cells),
         "",
         f"Command: `{command}`  ",
         f"Config: `{config_path}`  ",

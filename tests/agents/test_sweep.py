@@ -264,3 +264,14 @@ def test_obstacle_density_is_swept_as_a_course_factor(tmp_path: Path) -> None:
     dense = [r for r in rows if r["factor"] == "obstacle_density"]
     assert len(dense) == 2 and all('"obstacle_density":0.3' in r["env_kwargs"] for r in dense)
     assert all("obstacle_density" not in r["env_kwargs"] for r in rows if r["factor"] == "clean")
+
+
+def test_the_partial_warning_counts_cells_not_flown_at_all() -> None:
+    from agents.evaluation.sweep_report import partial_lines
+
+    table = [{"episodes": 100}, {"episodes": 100}]
+    assert partial_lines(table, 100, expected_cells=2) == []
+    warning = partial_lines(table, 100, expected_cells=5)[1]
+    assert (
+        "**Partial: 3 of 5 cells have fewer than the config's 100 episodes** (fewest: 0; 3 of them" in warning
+    )

@@ -52,6 +52,7 @@ class _Subject:
     stage_seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
     env_blocks: list[float] = field(default_factory=list)  # seconds per step, one entry per block
     bare_blocks: list[float] = field(default_factory=list)
+    floor_blocks: list[float] = field(default_factory=list)
     stage_blocks: dict[str, list[float]] = field(default_factory=lambda: {s: [] for s in (*STAGES, "rest")})
     points_tracked: list[int] = field(default_factory=list)
     points_valid: list[int] = field(default_factory=list)
@@ -139,6 +140,44 @@ def _bare_block(subject: _Subject, steps: int) -> float:
     return (time.perf_counter() - start) / steps
 
 
+def _floor_block(subject: _Subject, steps: int) -> float:
+    """Seconds per step of the bare loop plus the bare OpenCV work any flow estimator of these settings must
+    do on each frame: grayscale, FAST on the previous frame, one pyramidal LK pass into the current one.
+
+    Nothing of FlowNav's own runs (no controller, checks, backward pass, depth stage, histogram), so the ratio
+    of this loop to the bare one is the least an env that runs the thesis's estimator can reach.
+    """
+    import cv2
+    import mujoco
+
+    estimator = subject.env.unwrapped.estimator
+    detector = cv2.FastFeatureDetector_create(estimator.fast_threshold, True)
+    window = (estimator.win_size, estimator.win_size)
+    model = subject.env.unwrapped.physics.model
+    data, renderer, camera, substeps = (
+        subject.bare_data,
+        subject.bare_renderer,
+        subject.camera_id,
+        subject.substeps,
+    )
+    _reset_bare(subject)
+    previous = None
+    start = time.perf_counter()
+    for _ in range(steps):
+        for _ in range(substeps):
+            mujoco.mj_step(model, data)
+        gray = cv2.cvtColor(renderer.render(data, camera), cv2.COLOR_RGB2GRAY)
+        if previous is not None:
+            keypoints = detector.detect(previous)
+            if keypoints:
+                points = cv2.KeyPoint_convert(keypoints)[: estimator.max_points].reshape(-1, 1, 2)
+                cv2.calcOpticalFlowPyrLK(
+                    previous, gray, points, None, winSize=window, maxLevel=estimator.max_level
+                )
+        previous = gray
+    return (time.perf_counter() - start) / steps
+
+
 def _env_block(subject: _Subject, steps: int, seed: int, record: bool) -> float:
     """Seconds per env step over ``steps`` steps of the scripted flight; resets happen untimed."""
 
@@ -219,6 +258,7 @@ def measure_env(
         for subject in subjects:  # warm-up: GL contexts, first-call allocations; not recorded
             _env_block(subject, WARMUP_STEPS, seed, record=False)
             _bare_block(subject, WARMUP_STEPS)
+            _floor_block(subject, WARMUP_STEPS)
         bar = tqdm(total=repeats * len(subjects), desc="env blocks", disable=not progress)
         for repeat in range(repeats):
             order = subjects if repeat % 2 == 0 else subjects[::-1]
@@ -227,7 +267,9 @@ def measure_env(
                     if (repeat + position) % 2 == 0:
                         subject.env_blocks.append(_env_block(subject, steps, seed, record=True))
                         subject.bare_blocks.append(_bare_block(subject, steps))
+                        subject.floor_blocks.append(_floor_block(subject, steps))
                     else:
+                        subject.floor_blocks.append(_floor_block(subject, steps))
                         subject.bare_blocks.append(_bare_block(subject, steps))
                         subject.env_blocks.append(_env_block(subject, steps, seed, record=True))
                 bar.update()
@@ -243,6 +285,9 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
     env_step = float(np.median(subject.env_blocks))
     bare_step = float(np.median(subject.bare_blocks))
     ratios = [env / bare for env, bare in zip(subject.env_blocks, subject.bare_blocks, strict=True)]
+    floor_ratios = [
+        floor / bare for floor, bare in zip(subject.floor_blocks, subject.bare_blocks, strict=True)
+    ]
     row: dict[str, Any] = {
         "config": subject.label,
         "kind": subject.kind,
@@ -254,6 +299,9 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
         "ratio_env_bare": float(np.median(ratios)),
         "ratio_min": min(ratios),
         "ratio_max": max(ratios),
+        "ratio_floor_bare": float(np.median(floor_ratios)),
+        "ratio_floor_min": min(floor_ratios),
+        "ratio_floor_max": max(floor_ratios),
         "real_time_factor_env": 1.0 / (env_step * subject.frame_rate),
         "real_time_factor_bare": 1.0 / (bare_step * subject.frame_rate),
         "ms_step": 1e3 * env_step,

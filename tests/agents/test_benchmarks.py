@@ -65,6 +65,7 @@ def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
         "steps_per_s_env",
         "steps_per_s_bare",
         "ratio_env_bare",
+        "ratio_floor_bare",
         "real_time_factor_env",
         "points_tracked_median",
         "points_valid_median",
@@ -79,8 +80,10 @@ def test_env_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
         rows = list(csv.DictReader(handle))
     assert [row["config"] for row in rows] == ["FlowNav-v0 (default)", "64×48", "FAST 30"]
     assert [row["fast_threshold"] for row in rows] == ["10", "10", "30"]
+    assert all(float(row["ratio_floor_bare"]) > 0 for row in rows)
     report = (tmp_path / "env_performance.md").read_text()
     assert "gym-pybullet-drones" in report and "## FAST threshold" in report
+    assert "The floor (bare loop + grayscale + FAST + one LK pass" in report
     assert "--fast-thresholds 30" in report
     software = machine.is_software_renderer(machine.gl_renderer())
     assert ("software OpenGL" in report) == software and ("hardware OpenGL" in report) != software

@@ -3,6 +3,7 @@ their curves (see :mod:`agents.evaluation.error_analysis`)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -18,6 +19,8 @@ from agents.evaluation.error_analysis import (
     tolerance_table,
     turning_and_rotation_error,
 )
+from agents.policies.base import LEARNED_AGENTS, TRAIN_SEED_MARK
+from flownav_env.settings import setting_range
 
 
 def _level(value: float | None) -> str:
@@ -78,6 +81,59 @@ def breaking_point_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
         for factor, side in keys
     ]
     return [markdown_table(["factor", "side", *agents], rows)]
+
+
+def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
+    """The learned agent on flow depths with the lowest clean failure rate (the sweep's agents only)."""
+    clean = {
+        r["agent"]: r["clean_failure"]
+        for r in table
+        if r["agent"].partition(TRAIN_SEED_MARK)[0] in LEARNED_AGENTS and is_flow_agent({"agent": r["agent"]})
+    }
+    return min(clean, key=lambda agent: (clean[agent], agent)) if clean else None
+
+
+def unbroken_reason(row: Mapping[str, Any]) -> str:
+    """Why a factor's levels flown did not break an agent: the factor's range ends there, the direction makes
+    the task easier, or the levels simply stop short (then more levels are needed)."""
+    farthest = row["levels"][-1]
+    try:
+        allowed = setting_range(row["factor"])
+    except ValueError:
+        allowed = None
+    end = None if allowed is None else (allowed.high if row["side"] == "above" else allowed.low)
+    if end is not None and math.isclose(farthest, end):
+        return (
+            f"flown to the end of the setting's range {allowed.interval}: nothing within it breaks the agent "
+            f"(worst {row['worst_failure']:.2f} at {row['worst_level']:g})"
+        )
+    if row["worst_failure"] <= row["clean_failure"]:
+        return (
+            f"this direction makes the task easier: no level fails more than clean (worst "
+            f"{row['worst_failure']:.2f} at {row['worst_level']:g})"
+        )
+    return (
+        f"not broken up to {farthest:g} (worst {row['worst_failure']:.2f} at {row['worst_level']:g}), short of "
+        "the range's end: more levels are needed"
+    )
+
+
+def unbroken_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The factors (and sides) that do not break the best learned flow agent, each with why."""
+    agent = best_learned_flow_agent(table)
+    if agent is None:
+        return []
+    rows = [r for r in table if r["agent"] == agent and r["breaking_level"] is None]
+    lines = [
+        f"### What does not break `{agent}`, the best learned flow agent, and why",
+        "",
+        f"Its clean failure: {next(r for r in table if r['agent'] == agent)['clean_failure']:.2f}.",
+        "",
+    ]
+    if not rows:
+        return [*lines, "Every factor flown breaks it on both sides flown.", ""]
+    lines += [f"- `{r['factor']}` ({r['side']}): {unbroken_reason(r)}." for r in rows]
+    return [*lines, ""]
 
 
 def turning_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -231,6 +287,7 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         "",
         *breaking_point_lines(table),
         "",
+        *unbroken_lines(table),
         "## Tolerance per agent and factor",
         "",
         "Scanning each factor outward from its neutral level: the largest level whose failure rate stays inside "

@@ -18,7 +18,12 @@ from agents.evaluation.error_analysis import (
     tolerance_table,
     turning_and_rotation_error,
 )
-from agents.evaluation.error_analysis_report import write_error_analysis
+from agents.evaluation.error_analysis_report import (
+    best_learned_flow_agent,
+    unbroken_lines,
+    unbroken_reason,
+    write_error_analysis,
+)
 
 
 def _cell(
@@ -250,3 +255,21 @@ def test_a_fit_that_separates_the_outcomes_is_refused_not_reported(tmp_path: Pat
     text = (tmp_path / "error_analysis.md").read_text()
     assert "- `ppo_flow@all`: no fit (the logistic fit on depth quality has no reliable estimate" in text
     assert "perfectly separated" in text and "| ppo_flow@all | 120 | const |" not in text
+
+
+def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
+    rows = _cell("ppo_flow@all", "clean", 0.0, 10) + _cell("ppo_robust@all", "clean", 0.0, 40)
+    rows += _cell("ppo_oracle@all", "clean", 0.0, 2)  # true depths: never the best *flow* agent
+    rows += _cell("ppo_flow@all", "brightness", 4.0, 12)  # the range's end, inside the clean interval
+    rows += _cell("ppo_flow@all", "obstacle_density", 0.06, 1)  # easier
+    rows += _cell("ppo_flow@all", "depth_noise", 0.2, 15)  # harder, but short of breaking
+    rows += _cell("ppo_flow@all", "forward_speed", 2.0, 60)  # breaks
+    table = tolerance_table(rows)
+    assert best_learned_flow_agent(table) == "ppo_flow@all"
+    reasons = {(r["factor"], r["side"]): unbroken_reason(r) for r in table if r["agent"] == "ppo_flow@all"}
+    assert reasons[("brightness", "above")].startswith("flown to the end of the setting's range [0.0, 4.0]")
+    assert reasons[("obstacle_density", "below")].startswith("this direction makes the task easier")
+    assert reasons[("depth_noise", "above")].endswith("short of the range's end: more levels are needed")
+    text = "\n".join(unbroken_lines(table))
+    assert "### What does not break `ppo_flow@all`" in text
+    assert "`forward_speed`" not in text  # it breaks, so it is not listed

@@ -120,8 +120,9 @@ def _reset_bare(subject: _Subject) -> None:
     mujoco.mj_forward(model, data)
 
 
-def _bare_block(subject: _Subject, steps: int) -> float:
-    """Seconds per step of the bare loop over ``steps`` steps (reset before, not timed)."""
+def _bare_block(subject: _Subject, steps: int, on_frame: Callable[[np.ndarray], None] | None = None) -> float:
+    """Seconds per step of the bare loop over ``steps`` steps (reset before, not timed); ``on_frame`` is timed
+    work done on each rendered frame (the floor loop's OpenCV work)."""
     import mujoco
 
     model = subject.env.unwrapped.physics.model
@@ -136,7 +137,9 @@ def _bare_block(subject: _Subject, steps: int) -> float:
     for _ in range(steps):
         for _ in range(substeps):
             mujoco.mj_step(model, data)
-        renderer.render(data, camera)
+        frame = renderer.render(data, camera)
+        if on_frame is not None:
+            on_frame(frame)
     return (time.perf_counter() - start) / steps
 
 
@@ -148,34 +151,22 @@ def _floor_block(subject: _Subject, steps: int) -> float:
     of this loop to the bare one is the least an env that runs the thesis's estimator can reach.
     """
     import cv2
-    import mujoco
 
     estimator = subject.env.unwrapped.estimator
     detector = cv2.FastFeatureDetector_create(estimator.fast_threshold, True)
     window = (estimator.win_size, estimator.win_size)
-    model = subject.env.unwrapped.physics.model
-    data, renderer, camera, substeps = (
-        subject.bare_data,
-        subject.bare_renderer,
-        subject.camera_id,
-        subject.substeps,
-    )
-    _reset_bare(subject)
-    previous = None
-    start = time.perf_counter()
-    for _ in range(steps):
-        for _ in range(substeps):
-            mujoco.mj_step(model, data)
-        gray = cv2.cvtColor(renderer.render(data, camera), cv2.COLOR_RGB2GRAY)
-        if previous is not None:
-            keypoints = detector.detect(previous)
-            if keypoints:
-                points = cv2.KeyPoint_convert(keypoints)[: estimator.max_points].reshape(-1, 1, 2)
-                cv2.calcOpticalFlowPyrLK(
-                    previous, gray, points, None, winSize=window, maxLevel=estimator.max_level
-                )
-        previous = gray
-    return (time.perf_counter() - start) / steps
+    previous: list[np.ndarray] = []
+
+    def track(frame: np.ndarray) -> None:
+        gray = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
+        if previous and (keypoints := detector.detect(previous[0])):
+            points = cv2.KeyPoint_convert(keypoints)[: estimator.max_points].reshape(-1, 1, 2)
+            cv2.calcOpticalFlowPyrLK(
+                previous[0], gray, points, None, winSize=window, maxLevel=estimator.max_level
+            )
+        previous[:] = [gray]
+
+    return _bare_block(subject, steps, on_frame=track)
 
 
 def _env_block(subject: _Subject, steps: int, seed: int, record: bool) -> float:

@@ -291,9 +291,8 @@ class FlowNavEnv(gym.Env):
         self._frame = frame.image
         self._min_clearance = self.physics.obstacle_clearance()
         self.estimator.reset()
-        self._depth_points = self.estimator.update(frame.gray, *frame.told_motion)
+        points = self._depth_points = self.estimator.update(frame.gray, *frame.told_motion)
         histogram = np.zeros(self.observation_space["depth_histogram"].shape, np.float32)
-        points = self._depth_points
         info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
         info |= {"clearance": self._min_clearance, "min_clearance": self._min_clearance}
         info |= estimator_info(points, np.zeros(0))
@@ -328,8 +327,7 @@ class FlowNavEnv(gym.Env):
         frame = self._sensor.capture(settings.sensor, self.np_random, fly, self._render_camera, first=False)
         self._frame = frame.image
         points = self.estimator.update(frame.gray, *frame.told_motion)
-        points = self._sensor.corrupt_points(settings, self.np_random, points)  # the depth errors
-        self._depth_points = points
+        points = self._depth_points = self._sensor.corrupt_points(settings, self.np_random, points)
         # True depth at the tracked points of the previous frame (NaN where a ray hits nothing).
         needs_truth = settings.depth_error_info or settings.obs_source != "flow"
         true_depth = np.zeros(0)

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from agents.evaluation.statistics import wilson_interval
+from agents.policies.base import base_agent_name
 from flownav_env.settings import EnvSettings
 
 # What the thesis concluded for each factor it varied (../shared/thesis-figures.md), for the tolerance table.
@@ -171,7 +172,7 @@ BLIND_AGENTS = ("straight",)
 def is_flow_agent(row: Mapping[str, Any]) -> bool:
     """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not
     an agent blind to the histogram)."""
-    if str(row["agent"]).partition("@")[0] in BLIND_AGENTS:
+    if base_agent_name(row["agent"]) in BLIND_AGENTS:
         return False
     settings = row.get("env_kwargs") or ""
     if settings:

@@ -19,7 +19,7 @@ from agents.evaluation.error_analysis import (
     tolerance_table,
     turning_and_rotation_error,
 )
-from agents.policies.base import LEARNED_AGENTS, TRAIN_SEED_MARK
+from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import setting_range
 
 
@@ -88,7 +88,7 @@ def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
     clean = {
         r["agent"]: r["clean_failure"]
         for r in table
-        if r["agent"].partition(TRAIN_SEED_MARK)[0] in LEARNED_AGENTS and is_flow_agent({"agent": r["agent"]})
+        if base_agent_name(r["agent"]) in LEARNED_AGENTS and is_flow_agent({"agent": r["agent"]})
     }
     return min(clean, key=lambda agent: (clean[agent], agent)) if clean else None
 

@@ -35,6 +35,12 @@ def split_agent_name(name: str) -> tuple[str, int | None]:
     return base, int(seed_text)
 
 
+def base_agent_name(name: str) -> str:
+    """The agent a run name belongs to, whatever follows the seed mark: ``ppo_flow@3`` and the sweep's pooled
+    ``ppo_flow@all`` → ``ppo_flow``; ``bee`` → ``bee``. Not validated (see :func:`split_agent_name`)."""
+    return str(name).partition(TRAIN_SEED_MARK)[0]
+
+
 def seeded_agent_name(agent: str, train_seed: int) -> str:
     """The name of training seed ``train_seed`` of the learned ``agent``: ``ppo_flow@3``."""
     return f"{agent}{TRAIN_SEED_MARK}{train_seed}"

@@ -4,6 +4,7 @@ randomisation and the run itself (``configs/ppo_*.yaml``)."""
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 from agents.common.config import env_setting_field, field_range, from_mapping
@@ -76,14 +77,30 @@ class TrainConfig:
     # Memory by frame stacking (SB3's VecFrameStack): the policy sees the observations of the last
     # ``frame_stack`` frames, each array stacked along its last axis; 1 = the current frame only.
     frame_stack: int = field_range(1, 16, default=1)
+    # A curriculum's later stage starts from an earlier stage's policy: a model zip, where ``{seed}`` stands
+    # for this run's seed (``results/policies/ppo_flow/seed_{seed}.zip``); empty = random initial weights.
+    # Only the policy's weights carry over: the optimiser, step count and evaluations start afresh.
+    init_from: str = ""
     ppo: PPOParams = field(default_factory=PPOParams)
 
     def validate(self) -> None:
+        if self.init_from:
+            try:
+                self.init_from.format(seed=0)
+            except (KeyError, IndexError, ValueError) as error:
+                raise ValueError(
+                    f"key 'init_from' may hold only the placeholder {{seed}}, got {self.init_from!r} ({error})"
+                ) from error
         if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
             raise ValueError(
                 f"keys 'frame_stack' ({self.frame_stack}) and 'ppo.lstm_hidden_size' ({self.ppo.lstm_hidden_size}) "
                 "are two kinds of memory: use one (frame_stack: 1 or lstm_hidden_size: 0)"
             )
+
+
+def init_source(config: TrainConfig) -> Path | None:
+    """The model zip ``config.init_from`` names for the run's seed, or None for random initial weights."""
+    return Path(config.init_from.format(seed=config.seed)) if config.init_from else None
 
 
 def checked_config(config: TrainConfig, source: str) -> TrainConfig:

@@ -21,12 +21,12 @@ from typing import Any
 
 from agents.common.machine import available_cores, code_version, cpu_model, gl_renderer
 from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
-from agents.training.config import TrainConfig, checked_config
+from agents.training.config import TrainConfig, checked_config, init_source
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
 from agents.training.interrupts import stop_signals_interrupt
 from agents.training.outputs import RunFiles
-from agents.training.saved_models import latest_checkpoint, save_atomically
+from agents.training.saved_models import latest_checkpoint, load_policy_weights, save_atomically
 from agents.training.shipping import ship_run
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
@@ -96,7 +96,26 @@ def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) 
     if resume:
         print(f"no checkpoint in {files.checkpoints}: starting fresh")
     model = new_model(config, envs, tensorboard_log=str(files.tensorboard))
+    source = init_source(config)
+    if source is not None:
+        saved = load_policy_weights(model, source)
+        print(f"starting from the weights of {source} ({saved.num_timesteps} steps)")
     return model, None
+
+
+def init_summary(config: TrainConfig) -> dict[str, Any] | None:
+    """For the record: the earlier stage a run started from (``init_from``), its steps and training minutes
+    (from the record beside it, when there is one), so a curriculum's cost per seed adds up."""
+    source = init_source(config)
+    if source is None:
+        return None
+    record = source.with_suffix(".json")
+    earlier = json.loads(record.read_text()) if record.is_file() else {}
+    return {
+        "path": str(source),
+        "timesteps": earlier.get("total_timesteps"),
+        "wall_minutes": earlier.get("total_wall_minutes"),
+    }
 
 
 def train(
@@ -212,7 +231,15 @@ def train(
         "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
         "gl_renderer": gl_renderer(),
     }
-    write_record(files, session, selected, model.num_timesteps, config_path, resumed=resume_step is not None)
+    write_record(
+        files,
+        session,
+        selected,
+        model.num_timesteps,
+        config_path,
+        resumed=resume_step is not None,
+        init=init_summary(config),
+    )
     print(f"saved {files.policy} after {model.num_timesteps} steps ({wall_minutes:.1f} min this session)")
     if ship_to is not None:
         if interrupted:
@@ -223,15 +250,28 @@ def train(
 
 
 def write_record(
-    files: RunFiles, session: dict, selected: str, total_timesteps: int, config_path: Path, *, resumed: bool
+    files: RunFiles,
+    session: dict,
+    selected: str,
+    total_timesteps: int,
+    config_path: Path,
+    *,
+    resumed: bool,
+    init: dict[str, Any] | None = None,
 ) -> None:
     """Append ``session`` to the run's record (a resumed run keeps its earlier sessions) and update the
-    totals over all sessions; written atomically."""
+    totals over all sessions, with the earlier stage's ``init`` (:func:`init_summary`) added to the cost;
+    written atomically."""
     record = json.loads(files.record.read_text()) if resumed and files.record.is_file() else {"sessions": []}
     record["sessions"].append(session)
     record["total_timesteps"] = int(total_timesteps)
     record["selected"] = selected
     record["total_wall_minutes"] = round(sum(s["wall_minutes"] for s in record["sessions"]), 1)
+    if init is not None:
+        record["init_from"] = init
+        record["total_wall_minutes_with_init"] = round(
+            record["total_wall_minutes"] + (init["wall_minutes"] or 0), 1
+        )
     record["command"] = f"flownav train --config {config_path}" + (" --resume" if resumed else "")
     temporary = files.record.with_suffix(".tmp")
     temporary.write_text(json.dumps(record, indent=2))

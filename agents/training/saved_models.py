@@ -111,3 +111,33 @@ def latest_checkpoint(directory: Path) -> Path | None:
             continue
         return path
     return None
+
+
+def load_policy_weights(model: Any, path: Path) -> SavedModel:
+    """Set ``model``'s policy weights to those saved in ``path`` (a curriculum's earlier stage); returns what
+    was read. The optimiser and step count stay ``model``'s own.
+
+    Raises:
+        FileNotFoundError, ValueError: as :func:`read_saved_model`; ValueError also when the saved weights
+            do not fit ``model``'s network (another observation, ``net_arch`` or memory); the message names
+            the file and the first mismatch.
+    """
+    saved = read_saved_model(path)
+    # Checked before loading: load_state_dict copies the tensors that fit before it raises on one that does not.
+    own = model.policy.state_dict()
+    mismatch = sorted(set(own) ^ set(saved.policy_state)) or [
+        name for name, value in own.items() if tuple(value.shape) != tuple(saved.policy_state[name].shape)
+    ]
+    if mismatch:
+        name = mismatch[0]
+        shapes = (
+            f"saved {tuple(saved.policy_state[name].shape)}, this network {tuple(own[name].shape)}"
+            if name in own and name in saved.policy_state
+            else ("only in the saved policy" if name in saved.policy_state else "only in this network")
+        )
+        raise ValueError(
+            f"{path}: its policy does not fit this config's network and observation ({name}: {shapes}); "
+            "init_from must name a policy trained with the same env observation, net_arch and memory"
+        )
+    model.policy.load_state_dict(saved.policy_state, strict=True)
+    return saved

@@ -20,6 +20,7 @@ from flownav_env.observation import (
     estimator_info,
     observation_space,
     observed_depths,
+    smoothed_near,
 )
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_command
@@ -115,14 +116,11 @@ class FlowNavEnv(gym.Env):
     | ``obstacle_density`` | 0.12 | field capsules per m² of the obstacle band, in [0, 1] |
     | ``obstacle_radius`` | 0.5 | capsule radius (m), in (0, 2] |
     | ``obstacle_height`` | 2.0 | capsule height (m), in (2·radius, 10] |
-    | ``field_length`` | 20.0 | start to goal line for field and corridor (m), in [5, 200] |
-    | ``field_width`` | 8.0 | width of the band holding field capsules (m), in [1, 100] |
-    | ``corridor_width`` | 2.5 | free width of a corridor (m), in (0, 20] |
-    | ``corridor_bend`` | 1.5 | largest sideways excursion of a corridor (m), in [0, 10] |
+    | ``field_length``, ``field_width`` | 20.0, 8.0 | start to goal line for field and corridor (m), in [5, 200]; width of the band holding field capsules (m), in [1, 100] |
+    | ``corridor_width``, ``corridor_bend`` | 2.5, 1.5 | free width of a corridor (m), in (0, 20]; its largest sideways excursion (m), in [0, 10] |
     | ``forward_speed`` | 1.0 | forward speed (m/s), in [0, 5]; 0 hovers |
     | ``frame_rate`` | 10.0 | camera frames = agent steps per second (Hz), in [1, 50] |
-    | ``flight_height`` | 1.0 | starting height (m), in [0.3, 5] |
-    | ``max_height`` | 1.8 | out of bounds above this height (m), in (``flight_height``, 20] |
+    | ``flight_height``, ``max_height`` | 1.0, 1.8 | starting height (m), in [0.3, 5]; out of bounds above ``max_height`` (m), in (``flight_height``, 20] |
     | ``lateral_bound`` | 6.0 | out of bounds beyond this sideways distance from the course axis (m), in (0, 100] |
     | ``camera_width``, ``camera_height`` | 160, 120 | camera resolution (px), each in [16, 1280] |
     | ``camera_fov_deg`` | 60 | vertical field of view (deg), in [10, 150] |
@@ -130,10 +128,10 @@ class FlowNavEnv(gym.Env):
     | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
     | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
     | ``observe_unresolved``, ``observe_counts``, ``observe_nearness``, ``observe_approach`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on), the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) or the ``approach`` key (how soon the drone reaches it at its forward speed) |
+    | ``near_smoothing`` | 1.0 | weight of the newest frame in ``nearness`` and ``approach``'s exponential average over the episode's frames, in (0, 1]; 1 = this frame only |
     | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]`` and ``info["depth_outlier_share"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
     | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
-    | ``max_lateral_speed`` | 1.0 | lateral speed at action 1 (m/s), in (0, 5] |
-    | ``max_vertical_speed`` | 0.5 | vertical speed at action 1 (m/s), in (0, 5] |
+    | ``max_lateral_speed``, ``max_vertical_speed`` | 1.0, 0.5 | lateral and vertical speed at action 1 (m/s), each in (0, 5] |
     | ``max_yaw_rate_deg`` | 45 | yaw rate at action 1 (deg/s), in (0, 360] |
     | ``progress_weight`` | 1.0 | reward per metre of progress, ≥ 0 |
     | ``success_bonus`` | 10.0 | reward on reaching the goal, ≥ 0 |
@@ -199,6 +197,7 @@ class FlowNavEnv(gym.Env):
         observe_counts: bool = False,
         observe_nearness: bool = False,
         observe_approach: bool = False,
+        near_smoothing: float = 1.0,
         depth_error_info: bool = True,
         depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
         max_lateral_speed: float = 1.0,
@@ -248,6 +247,7 @@ class FlowNavEnv(gym.Env):
         self._goal_x = self.layout_params.field_length
         self._frame: np.ndarray | None = None
         self._depth_points: DepthPoints | None = None
+        self._observed: dict[str, np.ndarray] | None = None  # the last observation, for near_smoothing
         self._min_clearance = math.inf
 
     @property
@@ -291,6 +291,7 @@ class FlowNavEnv(gym.Env):
         self._frame = frame.image
         self._min_clearance = self.physics.obstacle_clearance()
         self.estimator.reset()
+        self._observed = None
         points = self._depth_points = self.estimator.update(frame.gray, *frame.told_motion)
         histogram = np.zeros(self.observation_space["depth_histogram"].shape, np.float32)
         info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
@@ -397,4 +398,6 @@ class FlowNavEnv(gym.Env):
         self, histogram: np.ndarray, points: DepthPoints, depth: np.ndarray, counted: np.ndarray
     ) -> dict:
         state = drone_state(self.physics)
-        return assemble_observation(self.settings, self.intrinsics, histogram, state, points, depth, counted)
+        raw = assemble_observation(self.settings, self.intrinsics, histogram, state, points, depth, counted)
+        self._observed = smoothed_near(raw, self._observed, self.settings.near_smoothing)
+        return self._observed

@@ -31,6 +31,7 @@ NEAR_DEPTH_M = 0.5
 # ... and as an approach min(1, NEAR_TIME_S · v / d) at forward speed v: 1 within half a second of contact. With
 # NEAR_TIME_S · 1 m/s = NEAR_DEPTH_M the two agree at 1 m/s, the speed the env flies by default.
 NEAR_TIME_S = 0.5
+NEAR_KEYS = frozenset({"nearness", "approach"})
 
 STATE_FIELDS = (
     "forward_velocity",
@@ -135,6 +136,20 @@ def assemble_observation(
             # The floor keeps a zero depth at hover from giving 0 / 0.
             approach = NEAR_TIME_S * forward_speed / np.maximum(near, 1e-6)
             observation["approach"] = np.minimum(1.0, approach).astype(np.float32)
+    return observation
+
+
+def smoothed_near(
+    observation: dict[str, np.ndarray], previous: dict[str, np.ndarray] | None, weight: float
+) -> dict[str, np.ndarray]:
+    """``observation`` with its ``nearness`` and ``approach`` (where present) averaged over frames:
+    ``weight`` · this frame + (1 − ``weight``) · ``previous``'s average; as is on an episode's first frame
+    (``previous`` None) or with ``weight`` 1. A sector keeps a near surface for a few frames after the
+    estimator loses its points, as ``bee_robust``'s own smoothing does."""
+    if previous is None or weight >= 1.0:
+        return observation
+    for key in NEAR_KEYS.intersection(observation):
+        observation[key] = (weight * observation[key] + (1.0 - weight) * previous[key]).astype(np.float32)
     return observation
 
 

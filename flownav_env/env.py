@@ -116,11 +116,14 @@ class FlowNavEnv(gym.Env):
     | ``obstacle_density`` | 0.12 | field capsules per m² of the obstacle band, in [0, 1] |
     | ``obstacle_radius`` | 0.5 | capsule radius (m), in (0, 2] |
     | ``obstacle_height`` | 2.0 | capsule height (m), in (2·radius, 10] |
-    | ``field_length``, ``field_width`` | 20.0, 8.0 | start to goal line for field and corridor (m), in [5, 200]; width of the band holding field capsules (m), in [1, 100] |
-    | ``corridor_width``, ``corridor_bend`` | 2.5, 1.5 | free width of a corridor (m), in (0, 20]; its largest sideways excursion (m), in [0, 10] |
+    | ``field_length`` | 20.0 | start to goal line for field and corridor (m), in [5, 200] |
+    | ``field_width`` | 8.0 | width of the band holding field capsules (m), in [1, 100] |
+    | ``corridor_width`` | 2.5 | free width of a corridor (m), in (0, 20] |
+    | ``corridor_bend`` | 1.5 | largest sideways excursion of a corridor (m), in [0, 10] |
     | ``forward_speed`` | 1.0 | forward speed (m/s), in [0, 5]; 0 hovers |
     | ``frame_rate`` | 10.0 | camera frames = agent steps per second (Hz), in [1, 50] |
-    | ``flight_height``, ``max_height`` | 1.0, 1.8 | starting height (m), in [0.3, 5]; out of bounds above ``max_height`` (m), in (``flight_height``, 20] |
+    | ``flight_height`` | 1.0 | starting height (m), in [0.3, 5] |
+    | ``max_height`` | 1.8 | out of bounds above this height (m), in (``flight_height``, 20] |
     | ``lateral_bound`` | 6.0 | out of bounds beyond this sideways distance from the course axis (m), in (0, 100] |
     | ``camera_width``, ``camera_height`` | 160, 120 | camera resolution (px), each in [16, 1280] |
     | ``camera_fov_deg`` | 60 | vertical field of view (deg), in [10, 150] |

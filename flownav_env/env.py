@@ -137,8 +137,7 @@ class FlowNavEnv(gym.Env):
     | ``max_lateral_speed``, ``max_vertical_speed`` | 1.0, 0.5 | lateral and vertical speed at action 1 (m/s), each in (0, 5] |
     | ``max_yaw_rate_deg`` | 45 | yaw rate at action 1 (deg/s), in (0, 360] |
     | ``progress_weight`` | 1.0 | reward per metre of progress, ≥ 0 |
-    | ``success_bonus`` | 10.0 | reward on reaching the goal, ≥ 0 |
-    | ``collision_penalty`` | 10.0 | penalty on collision or leaving the bounds, ≥ 0 |
+    | ``success_bonus``, ``collision_penalty`` | 10.0, 10.0 | reward on reaching the goal; penalty on collision or leaving the bounds; each ≥ 0 |
     | ``control_cost_weight`` | 0.05 | weight of ‖action‖², ≥ 0 |
     | ``clearance_weight``, ``safe_clearance`` | 0.0, 0.5 | clearance shaping: the most a step closer than ``safe_clearance`` (m, in (0, 5]) to a capsule can cost, ≥ 0; 0 turns it off |
     | ``estimator_kwargs`` | None | keyword arguments of ``estimator.FlowDepthEstimator`` (method, thresholds, ...), over ``ENV_ESTIMATOR_DEFAULTS`` (``fast_threshold=10``) |
@@ -309,13 +308,8 @@ class FlowNavEnv(gym.Env):
             raise ValueError(f"action must be finite, got {action!r}")
         settings = self.settings
         x_before = self.physics.position()[0]
-        velocity_target = velocity_command(
-            self.physics.yaw(),
-            action,
-            self.forward_speed,
-            settings.max_lateral_speed,
-            settings.max_vertical_speed,
-        )
+        speeds = (self.forward_speed, settings.max_lateral_speed, settings.max_vertical_speed)
+        velocity_target = velocity_command(self.physics.yaw(), action, *speeds)
         collision = False
 
         def fly(jitter: np.ndarray) -> Pose:

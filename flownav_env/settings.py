@@ -196,9 +196,7 @@ class EnvSettings(SensorSettings):
     observe_counts: bool = _setting(False, Flag())
     observe_nearness: bool = _setting(False, Flag())
     observe_approach: bool = _setting(False, Flag())
-    near_smoothing: float = _setting(
-        1.0, Range(0.0, 1.0, low_open=True, meaning="newest frame's weight in nearness/approach")
-    )
+    near_smoothing: float = _setting(1.0, Range(0.0, 1.0, low_open=True, meaning="newest frame's weight"))
     depth_error_info: bool = _setting(True, Flag())
     obstacle_radius: float = _setting(0.5, Range(0.0, 2.0, low_open=True, unit="m", meaning="capsule radius"))
     obstacle_height: float = _setting(

@@ -139,18 +139,26 @@ def assemble_observation(
     return observation
 
 
+def exponential_average(newest: np.ndarray, average: np.ndarray, weight: float) -> np.ndarray:
+    """One step of an exponential average over frames: ``weight`` · ``newest`` + (1 − ``weight``) · ``average``."""
+    return weight * newest + (1.0 - weight) * average
+
+
 def smoothed_near(
     observation: dict[str, np.ndarray], previous: dict[str, np.ndarray] | None, weight: float
 ) -> dict[str, np.ndarray]:
-    """``observation`` with its ``nearness`` and ``approach`` (where present) averaged over frames:
-    ``weight`` · this frame + (1 − ``weight``) · ``previous``'s average; as is on an episode's first frame
-    (``previous`` None) or with ``weight`` 1. A sector keeps a near surface for a few frames after the
+    """A copy of ``observation`` with its ``nearness`` and ``approach`` (where present) averaged over frames
+    (:func:`exponential_average` with ``previous``'s average); ``observation`` itself on an episode's first
+    frame (``previous`` None) or with ``weight`` 1. A sector keeps a near surface for a few frames after the
     estimator loses its points, as ``bee_robust``'s own smoothing does."""
     if previous is None or weight >= 1.0:
         return observation
-    for key in NEAR_KEYS.intersection(observation):
-        observation[key] = (weight * observation[key] + (1.0 - weight) * previous[key]).astype(np.float32)
-    return observation
+    return {
+        key: exponential_average(value, previous[key], weight).astype(np.float32)
+        if key in NEAR_KEYS
+        else value
+        for key, value in observation.items()
+    }
 
 
 def drone_state(physics: FlowNavPhysics) -> np.ndarray:

@@ -23,6 +23,7 @@ import numpy as np
 
 from agents.policies.reactive import BeeAgent, bin_nearness, heights_and_headings
 from estimator import DEFAULT_BIN_EDGES
+from flownav_env.observation import exponential_average
 
 # What these agents need the env to observe, beyond its defaults (the runner adds it to every cell).
 REACTIVE_ENV_KWARGS: dict[str, dict[str, bool]] = {
@@ -106,7 +107,7 @@ class BeeRobustAgent(BeeAgent):
             starting = (
                 np.zeros(len(nearness), bool) if episode_start is None else np.asarray(episode_start, bool)
             )
-            blended = self.smoothing * nearness + (1.0 - self.smoothing) * state
+            blended = exponential_average(nearness, state, self.smoothing)
             nearness = np.where(starting.reshape(-1, 1, 1), nearness, blended)
         actions = self.centring_actions(self.steering_nearness(nearness, observation), observation)
         return (actions if batched else actions[0]), nearness

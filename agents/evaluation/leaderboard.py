@@ -159,7 +159,10 @@ def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> No
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figure, axis = plt.subplots(figsize=(7.5, 0.55 * len(table) + 1.4))
+    labels = [f"{r['agent']} ({r['runs']} run{'s' * (r['runs'] > 1)})" for r in table]
+    # The axis keeps ~5.5 in for its title and x label whatever the longest agent name takes beside it.
+    label_inches = 0.075 * max((len(label) for label in labels), default=0)
+    figure, axis = plt.subplots(figsize=(max(7.5, 5.5 + label_inches), 0.55 * len(table) + 1.4))
     for y, row in enumerate(table):
         colour = "tab:blue" if row["agent"] in LEARNED_AGENTS else "tab:gray"
         axis.errorbar(
@@ -172,9 +175,7 @@ def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> No
         )
         seeds = [r["failure_rate"] for r in seed_rows if r["agent"] == row["agent"] and r["train_seed"] != ""]
         axis.scatter(seeds, [y + 0.22] * len(seeds), marker="|", s=120, color=colour, alpha=0.8)
-    axis.set_yticks(
-        range(len(table)), [f"{r['agent']} ({r['runs']} run{'s' * (r['runs'] > 1)})" for r in table]
-    )
+    axis.set_yticks(range(len(table)), labels)
     axis.invert_yaxis()
     axis.set_xlim(0, 1)
     axis.set_xlabel("failure rate on the clean test layouts (collision, out of bounds or time limit)")

@@ -111,6 +111,26 @@ def test_the_manifest_lists_every_shipped_policy_with_its_hash() -> None:
     assert all(file_sha256(POLICIES_DIR / name) == digest for name, digest in manifest.items())
 
 
+def test_every_learned_agent_ships_five_verified_training_seeds_that_fly_with_their_own_env() -> None:
+    from agents.policies import LEARNED_AGENTS, trained_seeds
+
+    for name in LEARNED_AGENTS:
+        seeds = trained_seeds(name)
+        assert len(seeds) >= 3 and (name == "ppo_robust" or len(seeds) >= 5), (name, seeds)
+        manifest = read_manifest(POLICIES_DIR / name / MANIFEST_NAME)
+        assert {f"seed_{k}.zip" for k in seeds} <= set(manifest), name
+    # issue 16's winner reads the approach input it was trained on; its seeds act on a real env.
+    winner = "ppo_flow_course_approach_curriculum_slow"
+    assert agent_env_kwargs(f"{winner}@4")["observe_approach"] is True
+    env = gym.make("FlowNav-v0", **agent_env_kwargs(f"{winner}@0"), **SMALL)
+    observation, _ = env.reset(seed=TEST_SEED_START)
+    env.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnverifiedPolicyWarning)
+        actions = [load_agent(f"{winner}@{k}").predict(observation)[0] for k in trained_seeds(winner)]
+    assert all(a.shape == (3,) and np.all(np.abs(a) <= 1.0) for a in actions)
+
+
 def copy_policy(name: str, directory: Path, with_config: bool = True) -> Path:
     policy = directory / f"{name}.zip"
     shutil.copyfile(POLICIES_DIR / f"{name}.zip", policy)

@@ -111,7 +111,7 @@ def test_the_manifest_lists_every_shipped_policy_with_its_hash() -> None:
     assert all(file_sha256(POLICIES_DIR / name) == digest for name, digest in manifest.items())
 
 
-def test_every_learned_agent_ships_five_verified_training_seeds_that_fly_with_their_own_env() -> None:
+def test_every_learned_agent_ships_verified_training_seeds_that_fly_with_their_own_env() -> None:
     from agents.policies import LEARNED_AGENTS, trained_seeds
 
     for name in LEARNED_AGENTS:

@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 import pytest
+from helpers import tiny_train_config
 
 from agents.cli import main
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
@@ -16,7 +17,6 @@ from agents.evaluation.records import read_records
 from agents.policies import REACTIVE_AGENTS
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
-from tests.agents.test_training import tiny_train_config
 
 
 def test_ablation_layouts_are_validation_layouts() -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 import torch
+from helpers import tiny_train_config
 
 from agents.common.config import ConfigError, load_config
 from agents.training.config import TrainConfig, init_source
@@ -16,7 +17,6 @@ from agents.training.envs import build_envs, close_quietly
 from agents.training.outputs import RunFiles
 from agents.training.ppo import new_model, train
 from agents.training.saved_models import load_policy_weights, read_saved_model
-from tests.agents.test_training import tiny_train_config
 
 
 @pytest.fixture(scope="module")

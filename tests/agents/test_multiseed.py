@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from helpers import tiny_train_config
 
 from agents.cli import main
 from agents.common.seeds import (
@@ -19,7 +20,6 @@ from agents.common.seeds import (
 )
 from agents.training.multiseed import finished, parse_seeds, seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
-from tests.agents.test_training import tiny_train_config
 
 
 def test_seed_lists_take_ranges_and_lists_in_order_without_repeats() -> None:

@@ -10,6 +10,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from helpers import SMALL, tiny_train_config
 
 import flownav_env  # noqa: F401
 from agents.common.config import ConfigError
@@ -17,7 +18,6 @@ from agents.evaluation.episode import run_episode
 from agents.policies import load_agent
 from agents.training.outputs import RunFiles
 from agents.training.ppo import train
-from tests.agents.test_training import SMALL, tiny_train_config
 
 RECURRENT = {"n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16], "lstm_hidden_size": 8}
 

@@ -8,6 +8,7 @@ import warnings
 from pathlib import Path
 
 import pytest
+from helpers import tiny_train_config
 
 from agents.cli import main
 from agents.common.seeds import checkpoint_selection_seed
@@ -17,7 +18,6 @@ from agents.policies import UnverifiedPolicyWarning
 from agents.training.manifest import file_sha256
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
-from tests.agents.test_training import tiny_train_config
 
 
 def test_finalists_fly_fresh_validation_layouts_and_the_better_becomes_the_policy(tmp_path: Path) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from helpers import SMALL, tiny_train_config
 
 import flownav_env  # noqa: F401
 from agents.common.config import ConfigError
@@ -17,7 +18,6 @@ from agents.policies import load_agent
 from agents.policies.stacked import FrameStackedAgent
 from agents.training.outputs import RunFiles
 from agents.training.ppo import train
-from tests.agents.test_training import SMALL, tiny_train_config
 
 
 @pytest.fixture(scope="module")

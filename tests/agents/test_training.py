@@ -17,6 +17,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
+from helpers import SMALL, tiny_train_config
 
 import flownav_env  # noqa: F401
 from agents.common.config import ConfigError, check_env_kwargs, load_config
@@ -30,28 +31,6 @@ from agents.training.outputs import RunFiles
 from agents.training.ppo import train
 from agents.training.saved_models import latest_checkpoint, read_saved_model
 from agents.training.wrappers import SensorRandomization
-
-SMALL = {"camera_width": 96, "camera_height": 72}
-
-
-def tiny_train_config(
-    directory: Path, total: int, name: str = "tiny_ppo", **keys
-) -> tuple[TrainConfig, Path]:
-    config_path = directory / f"{name}_config.yaml"
-    content = {
-        "name": name,
-        "env_id": "FlowNavSingle-v0",
-        "env": SMALL,
-        "total_timesteps": total,
-        "n_envs": 1,
-        "checkpoint_every": 64,
-        "eval_every": 64,
-        "eval_episodes": 1,
-        "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
-        **keys,
-    }
-    config_path.write_text(yaml.safe_dump(content))
-    return load_config(config_path, TrainConfig), config_path
 
 
 @dataclass

@@ -1,0 +1,36 @@
+"""Helpers shared by several test modules: small env settings and a tiny training config.
+
+Test modules import them as ``from helpers import ...``: pytest puts ``tests/`` on the import path because
+``tests/conftest.py`` lives there, so this works under bare ``pytest`` as well as ``python -m pytest``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+
+from agents.common.config import load_config
+from agents.training.config import TrainConfig
+
+SMALL = {"camera_width": 96, "camera_height": 72}
+
+
+def tiny_train_config(
+    directory: Path, total: int, name: str = "tiny_ppo", **keys
+) -> tuple[TrainConfig, Path]:
+    config_path = directory / f"{name}_config.yaml"
+    content = {
+        "name": name,
+        "env_id": "FlowNavSingle-v0",
+        "env": SMALL,
+        "total_timesteps": total,
+        "n_envs": 1,
+        "checkpoint_every": 64,
+        "eval_every": 64,
+        "eval_episodes": 1,
+        "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
+        **keys,
+    }
+    config_path.write_text(yaml.safe_dump(content))
+    return load_config(config_path, TrainConfig), config_path

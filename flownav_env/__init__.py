@@ -13,6 +13,7 @@ Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``
 from __future__ import annotations
 
 import os
+from typing import Any
 
 # Headless by default: the offscreen renderer needs a GL backend picked before mujoco is imported. This is
 # the project's one place that picks it; a MUJOCO_GL already set (e.g. osmesa) wins.
@@ -31,10 +32,26 @@ ENV_IDS = {
     "FlowNavThree-v0": ({"layout": "three"}, 250),
 }
 
+
+def env_entry_point(**kwargs: Any) -> FlowNavEnv:
+    """The registered ids' entry point: ``FlowNavEnv(**kwargs)``.
+
+    A function rather than the class, because ``gymnasium.make`` reads an entry point's ``metadata``: on an
+    unsupported ``render_mode="human"`` it would build the env in ``"rgb_array"`` and wrap it in
+    ``HumanRendering``, which then fails at the first reset asking for pygame. Without ``metadata`` to read it
+    passes every kwarg through, and the env rejects a render mode it lacks when it is made.
+
+    Raises:
+        ValueError: A kwarg is outside its range, or ``render_mode`` is not one of
+            ``FlowNavEnv.metadata["render_modes"]``.
+    """
+    return FlowNavEnv(**kwargs)
+
+
 for _env_id, (_kwargs, _steps) in ENV_IDS.items():
     if _env_id not in registry:
         register(
-            id=_env_id, entry_point="flownav_env.env:FlowNavEnv", kwargs=_kwargs, max_episode_steps=_steps
+            id=_env_id, entry_point="flownav_env:env_entry_point", kwargs=_kwargs, max_episode_steps=_steps
         )
 
-__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv", "__version__"]
+__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv", "__version__", "env_entry_point"]

@@ -10,9 +10,9 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
 from estimator import DEFAULT_BIN_EDGES, DepthPoints, FlowDepthEstimator
+from flownav_env.actions import action_space, checked_action
 from flownav_env.observation import (
     assemble_observation,
     depth_histogram,
@@ -54,8 +54,9 @@ class FlowNavEnv(gym.Env):
     valid estimate but uses their true depth: *which* points the estimator delivers vs *how well* it measures.
 
     ## Action Space
-    ``Box(-1, 1, (3,), float32)``; values outside [-1, 1] are clipped. Positive values steer toward the right
-    and top of the camera image. Forward speed is not an action: the drone holds ``forward_speed``.
+    ``Box(-1, 1, (3,), float32)``; values outside [-1, 1] are clipped; any other shape (a (1, 3) batch too)
+    or a NaN or infinite value raises ValueError. Positive values steer toward the right and top of the camera
+    image. Forward speed is not an action: the drone holds ``forward_speed``.
 
     | Num | Action                  | Min | Max | Scaled to                        | Unit  |
     |-----|-------------------------|-----|-----|----------------------------------|-------|
@@ -244,7 +245,7 @@ class FlowNavEnv(gym.Env):
         self._sensor = SensorPipeline(settings.frame_rate)
 
         self.observation_space = observation_space(settings)
-        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.action_space = action_space()
 
         self._goal_x = self.layout_params.field_length
         self._frame: np.ndarray | None = None
@@ -303,9 +304,7 @@ class FlowNavEnv(gym.Env):
 
     def step(self, action):
         self._require_open("step")
-        action = np.clip(np.asarray(action, np.float64).reshape(3), -1.0, 1.0)
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action must be finite, got {action!r}")
+        action = checked_action(action)
         settings = self.settings
         x_before = self.physics.position()[0]
         speeds = (self.forward_speed, settings.max_lateral_speed, settings.max_vertical_speed)
@@ -361,6 +360,7 @@ class FlowNavEnv(gym.Env):
     def render(self) -> np.ndarray | None:
         """With ``render_mode="rgb_array"``: the camera frame with tracked points, flow vectors and depth-coloured
         circles (thesis Figs. 25–27; depths after the depth errors), beside a chase view; (240, 640, 3) uint8."""
+        self._require_open("render")
         if self.render_mode != "rgb_array" or self._frame is None:
             return None
         if self._view is None:

@@ -32,16 +32,28 @@ COMMANDS = {
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from agents import __version__
+    """The ``flownav`` parser: one subcommand per module of :data:`COMMANDS` that is installed.
 
-    parser = argparse.ArgumentParser(prog="flownav", description=__doc__.splitlines()[0])
+    Returns:
+        The parser; each subcommand's parsed arguments carry its ``run`` as ``handler``.
+    """
+    from agents import __version__
+    from agents.cli.help_text import ParagraphHelpFormatter, plain_text
+
+    parser = argparse.ArgumentParser(prog="flownav", description=plain_text(__doc__.splitlines()[0]))
     parser.add_argument("--version", action="version", version=f"flownav {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, module_name in COMMANDS.items():
         if importlib.util.find_spec(module_name) is None:
             continue
         module = importlib.import_module(module_name)
-        sub = commands.add_parser(name, help=module.HELP, description=module.__doc__)
+        # The docstrings are reStructuredText for the API docs; a terminal gets them as plain paragraphs.
+        sub = commands.add_parser(
+            name,
+            help=plain_text(module.HELP),
+            description=module.__doc__ and plain_text(module.__doc__),
+            formatter_class=ParagraphHelpFormatter,
+        )
         module.add_arguments(sub)
         sub.set_defaults(handler=module.run)
     return parser
@@ -56,6 +68,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         # Bad input is the user's to fix: one clear line, not a traceback.
         print(f"flownav {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:
+        # A full disk, a file-size limit, a read-only folder: the machine's to fix, said in one line. What
+        # was written before stays (every writer appends or replaces atomically).
+        print(f"flownav {args.command}: error: {describe_os_error(error)}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt as interrupt:
         # What was finished is on disk; the exception says where, when the command knows.
         print(
@@ -73,6 +90,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 2
+
+
+def describe_os_error(error: OSError) -> str:
+    """``error`` as one line naming the file: ``cannot write runs/x.csv: No space left on device``."""
+    reason = error.strerror or str(error) or type(error).__name__
+    if error.filename is None:
+        return reason
+    target = f"{error.filename}" + (f" -> {error.filename2}" if error.filename2 else "")
+    return f"{reason}: {target}"
 
 
 def _is_gymnasium_error(error: Exception) -> bool:

@@ -1,10 +1,14 @@
-"""Performance benchmarks that write their tables, CSVs and plots to ``results/``.
+"""Performance benchmarks that write their tables, CSVs and plots to ``--out``: by default ``{scratch_out}``, a
+scratch folder; ``--out results`` replaces the committed report.
 
 ``flownav bench estimator``: thesis Table 3 on a rendered 640×480 flight (points and ms per stage against the
 FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop).
+
 ``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
 render loop of the same scene, with the per-stage breakdown of a step.
+
 ``flownav bench train``: PPO training steps per second against the number of env workers.
+
 ``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights, and
 multi-frame depth (``baseline_frames``) on ICL-NUIM.
 
@@ -22,6 +26,8 @@ from agents.common.paths import CONFIGS_DIR
 
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
+if __doc__:  # None under python -OO
+    __doc__ = __doc__.replace("{scratch_out}", SCRATCH_OUT.as_posix())
 
 HELP = (
     "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution) and "

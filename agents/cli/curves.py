@@ -1,5 +1,5 @@
 """Compares training runs: the held-out evaluation return of each run against environment steps, in one
-figure (``flownav curves results/policies/ppo_flow_evaluations.npz ... --out results/learning_curves.png``).
+figure (``flownav curves runs/ppo_flow/evaluations.npz ... --out results/learning_curves.png``).
 Each input is the ``evaluations.npz`` an SB3 ``EvalCallback`` writes (``runs/<name>/evaluations.npz``, copied
 to ``results/policies/<name>_evaluations.npz``); a run is labelled by its file name."""
 
@@ -8,12 +8,18 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.common.paths import SCRATCH_DIR
+
 HELP = "plot the held-out evaluation return of training runs against steps, one line per run"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("evaluations", nargs="+", help="evaluations.npz files, one per run")
-    parser.add_argument("--out", default="results/learning_curves.png")
+    parser.add_argument(
+        "--out",
+        default=str(SCRATCH_DIR / "learning_curves.png"),
+        help="the figure (default: %(default)s; a path in results/ to publish)",
+    )
     parser.add_argument("--title", default="held-out evaluation")
 
 

@@ -2,16 +2,18 @@
 ``vfh``) and every shipped PPO agent on the same few held-out seeds of FlowNav-v0 and prints the comparison
 table (collision and success rates with Wilson 95 % intervals). A learned agent flies its shipped training
 seeds (``results/policies/<agent>/seed_<k>.zip``) in turn over the layouts, as the sweep does; one without
-any flies its single ``<agent>.zip`` if there is one, and says so. The full benchmark is ``flownav
-leaderboard`` and ``flownav sweep`` (results/benchmark.md)."""
+any flies its single ``<agent>.zip`` if there is one, and says so. A few episodes cannot rank agents, so the
+table comes with how few it rests on and where the full one is: ``results/leaderboard.md``, every agent on 300
+test layouts (``flownav leaderboard``; with ``flownav sweep``, results/benchmark.md)."""
 
 from __future__ import annotations
 
 import argparse
 import tempfile
 from pathlib import Path
+from typing import Any
 
-from agents.common.paths import POLICIES_DIR
+from agents.common.paths import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "short evaluation of the shipped policies and the baselines (the README's main job)"
@@ -33,8 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agents.evaluation.records import read_records
-    from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, execute, pooled_over_training_seeds
-    from agents.evaluation.statistics import format_summary, summarise
+    from agents.evaluation.runner import EpisodesInterrupted, execute
+    from agents.evaluation.statistics import summarise
+    from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds
     from agents.policies import REACTIVE_AGENTS, is_learned, policy_file
 
     if args.episodes < 1:
@@ -56,9 +59,27 @@ def run(args: argparse.Namespace) -> int:
             raise KeyboardInterrupt("the demo keeps no episodes; run it again to start over") from None
         rows = pooled_over_training_seeds(read_records(episodes))
         table = summarise(rows)
-    print(f"\n{args.env_id}, {args.episodes} held-out seeds per agent (from {TEST_SEED_START}):\n")
-    print(format_summary(table))
+    print(demo_report(table, args.env_id, args.episodes))
     return 0
+
+
+def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
+    """The demo's table (rows of :func:`~agents.evaluation.statistics.summarise`) without the columns that are
+    the same in every row, under a line saying how few episodes it rests on and where the full table is."""
+    from agents.evaluation.leaderboard import MIN_EPISODES
+    from agents.evaluation.statistics import format_summary
+
+    constant = [name for name in ("factor", "level") if len({row[name] for row in table}) <= 1]
+    widest = max((row["failure_ci_high"] - row["failure_ci_low"] for row in table), default=0.0)
+    plural = "" if episodes == 1 else "s"
+    return (
+        f"\n{env_id}, clean sensors, {episodes} held-out test layout{plural} per agent (layout seeds from "
+        f"{TEST_SEED_START:,}).\n"
+        f"Only {episodes} episode{plural} per agent: a quick look, not a ranking (the "
+        f"widest 95 % interval below spans {widest:.2f}). The full table, every agent on {MIN_EPISODES} test "
+        f"layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'} "
+        "(flownav leaderboard).\n\n" + format_summary(table, omit=constant)
+    )
 
 
 def learned_runs(policy_dir: Path) -> dict[str, list[str]]:

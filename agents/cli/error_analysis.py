@@ -8,6 +8,8 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.common.paths import RESULTS_DIR, SCRATCH_DIR
+
 HELP = (
     "tolerance table and dose-response fits from a sweep's episodes -> error_analysis.md, dose_response.png"
 )
@@ -16,13 +18,13 @@ HELP = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--episodes",
-        default="results/sweep_episodes.csv",
-        help="the sweep's episodes CSV (default results/sweep_episodes.csv)",
+        default=str(RESULTS_DIR / "sweep_episodes.csv"),
+        help="the sweep's episodes CSV (default: the repository's results/sweep_episodes.csv)",
     )
     parser.add_argument(
         "--out",
-        default="runs/error_analysis",
-        help="output folder (default runs/error_analysis; results to publish)",
+        default=str(SCRATCH_DIR / "error_analysis"),
+        help=f"output folder (default %(default)s; {RESULTS_DIR} to publish)",
     )
 
 

@@ -12,13 +12,14 @@ import argparse
 from pathlib import Path
 
 from agents.cli.arguments import add_env_argument
+from agents.common.paths import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
+    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP
 
     parser.add_argument(
         "--agent",
@@ -28,6 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "seeds in turn over the seeds, as the leaderboard does",
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
+    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
     parser.add_argument(
         "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
     )
@@ -41,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--out",
-        default="results/evaluations/episodes.csv",
+        default=str(SCRATCH_DIR / "evaluations" / "episodes.csv"),
         help="episodes CSV, appended and resumed (default: %(default)s)",
     )
     parser.add_argument(
@@ -56,15 +58,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agents.common.config import check_env_kwargs
+    from agents.common.folders import check_writable_folder
+    from agents.evaluation.csv_file import check_is_file_target
     from agents.evaluation.records import read_episodes, start_new_file
-    from agents.evaluation.runner import (
-        EpisodeTask,
-        execute,
-        pooled_over_training_seeds,
-        record_label,
-        rows_of,
-    )
+    from agents.evaluation.runner import execute
     from agents.evaluation.statistics import format_summary, summarise
+    from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
     from agents.policies import runs_to_fly, split_agent_name
 
     split_agent_name(args.agent)
@@ -89,10 +88,13 @@ def run(args: argparse.Namespace) -> int:
             args.env_id,
             tuple(sorted(env_kwargs.items())),
             args.policy,
+            trust_pickle=args.trust_pickle,
         )
         for index, seed in enumerate(range(args.seed_start, args.seed_start + args.episodes))
     ]
     out = Path(args.out)
+    check_is_file_target(out)
+    check_writable_folder(out.parent)  # before the first episode, not after it
     if args.overwrite:
         moved = start_new_file(out)
         if moved is not None:

@@ -8,17 +8,22 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.common.paths import CONFIGS_DIR, RESULTS_DIR, SCRATCH_DIR
+
 HELP = "sweep agents × sensor errors (collision rates with 95 %% CIs; resumable; local or Ray)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--config", default="configs/sweep.yaml", help="the sweep's YAML (default: %(default)s)"
+        "--config",
+        default=str(CONFIGS_DIR / "sweep.yaml"),
+        help="the sweep's YAML (default: the repository's configs/sweep.yaml)",
     )
     parser.add_argument(
         "--out",
-        default="results",
-        help="folder of sweep_episodes.csv, sweep.csv and the figure (default: %(default)s)",
+        default=str(SCRATCH_DIR / "sweep"),
+        help="folder of sweep_episodes.csv, sweep.csv, sweep.md and the figure (default: %(default)s; "
+        f"{RESULTS_DIR} to publish)",
     )
     parser.add_argument(
         "--episodes", type=int, help="override the config's episodes per cell (default: the config's)"

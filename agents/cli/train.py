@@ -8,10 +8,18 @@ checkpoints and TensorBoard logs. Shipping it to the policies folder that the be
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import shlex
+import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from agents.common.paths import POLICIES_DIR
 from agents.training.parking import PARKED_DIR
+
+if TYPE_CHECKING:
+    from agents.training.outputs import RunFiles
 
 HELP = "train a PPO policy from a YAML config into runs/<name>/ (resumable; --ship to publish it)"
 
@@ -61,8 +69,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=1,
         help="with --seeds and the local backend: train this many seeds at a time, each in one process that "
-        "steps its own envs (same rollouts; on 2 cores, 2 side by side train about 1.4x the steps per second "
-        "of one at a time, see results/training_performance.md). Default 1",
+        "steps its own envs (same rollouts; on a small machine more steps per second than one at a time: "
+        "results/training_performance.md measures how many more). Default 1",
     )
     parser.add_argument(
         "--park",
@@ -109,18 +117,84 @@ def run(args: argparse.Namespace) -> int:
     override(config, "total_timesteps", args.total_timesteps, "--total-timesteps")
     override(config, "max_minutes", args.max_minutes, "--max-minutes")
     check_env_kwargs(config.env, str(config_path))
+    if args.seeds is None and (args.backend != "local" or args.address is not None or args.parallel != 1):
+        raise ValueError("--backend, --address and --parallel apply to --seeds runs only")
+    _check_output_folders(args, config.name)
     if args.seeds is not None:
         return _train_seeds(args, config, config_path)
-    if args.backend != "local" or args.address is not None or args.parallel != 1:
-        raise ValueError("--backend, --address and --parallel apply to --seeds runs only")
+    command = command_line(args)
+    files = RunFiles.of(Path(args.runs_dir), config.name)
     train(
         config,
         config_path=config_path,
         resume=args.resume,
         runs_dir=Path(args.runs_dir),
         ship_to=Path(args.ship_to) if args.ship else None,
+        command=command,
     )
+    _raise_if_interrupted(files, command if args.resume else f"{command} --resume")
     return 0
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The ``flownav train`` command line that gave ``args``, for the training record: this process's own
+    arguments as typed when they are the ones parsed, else (``main`` called from code) every option that
+    differs from its default.
+
+    Args:
+        args: the parsed arguments of ``flownav train``.
+
+    Returns:
+        The command, quoted for a POSIX shell.
+    """
+    parser = argparse.ArgumentParser(add_help=False)
+    add_arguments(parser)
+    typed = sys.argv[1:]
+    if typed[:1] == ["train"]:
+        # A parse error here only means the process was started otherwise: keep its message off the terminal.
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.suppress(SystemExit):
+            parsed, extra = parser.parse_known_args(typed[1:])
+            if not extra and all(getattr(args, k, None) == v for k, v in vars(parsed).items()):
+                return shlex.join(["flownav", *typed])
+    defaults = vars(parser.parse_args(["--config", args.config]))
+    words = ["flownav", "train", "--config", str(args.config)]
+    for name, default in defaults.items():
+        value = getattr(args, name, default)
+        if name == "config" or value == default:
+            continue
+        option = "--" + name.replace("_", "-")
+        words += [option] if value is True else [option, str(value)]
+    return shlex.join(words)
+
+
+def _check_output_folders(args: argparse.Namespace, name: str) -> None:
+    """Every folder the run writes to takes files, before any env is built.
+
+    Raises:
+        ValueError: a folder that cannot be created or written, named with its option.
+    """
+    from agents.common.folders import check_writable_folder
+
+    check_writable_folder(Path(args.runs_dir) / name, "--runs-dir")
+    if args.ship:
+        ship_to = Path(args.ship_to) / name if args.seeds is not None else Path(args.ship_to)
+        check_writable_folder(ship_to, "--ship-to")
+    if args.park:
+        check_writable_folder(Path(args.parked_dir), "--parked-dir")
+
+
+def _raise_if_interrupted(files: RunFiles, resume_command: str) -> None:
+    """After a run: raise ``KeyboardInterrupt`` saying where the run stopped and how to resume, when its last
+    session was stopped by Ctrl-C or SIGTERM (``flownav`` then exits 130, as for every interrupted command).
+
+    Raises:
+        KeyboardInterrupt: the run's last session was interrupted.
+    """
+    from agents.training.run_record import interrupted_at
+
+    steps = interrupted_at(files)
+    if steps is not None:
+        raise KeyboardInterrupt(f"{files.run_dir} saved at {steps:,} steps; resume with: {resume_command}")
 
 
 def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
@@ -133,6 +207,7 @@ def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
         runs_dir=Path(args.runs_dir),
         ship_to=Path(args.ship_to) if args.ship else None,
         parked_dir=Path(args.parked_dir),
+        command=command_line(args),
     )
     if args.park:
         park_seeds(jobs)

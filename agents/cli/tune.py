@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.common.paths import SCRATCH_DIR
+
 HELP = "tune a reactive agent on training seeds (TPE search, then finalists on fresh layouts; resumable)"
 
 # Kept in step with agents.evaluation.tuning_study.TUNABLE_AGENTS (a test checks), without importing optuna
@@ -43,7 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
     )
     parser.add_argument("--env-id", default="FlowNav-v0", help="env id (default: %(default)s)")
-    parser.add_argument("--out", type=Path, help="output folder (default: results/tuning/<agent>)")
+    parser.add_argument(
+        "--out", type=Path, help=f"output folder (default: {SCRATCH_DIR}/tuning/<agent>; results/tuning/<agent> to publish)"
+    )
     parser.add_argument(
         "--overwrite",
         action="store_true",
@@ -57,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     budget = Budget(args.trials, args.search_episodes, args.finalists, args.final_episodes)
     result = tune(
         args.agent,
-        args.out or Path("results/tuning") / args.agent,
+        args.out or SCRATCH_DIR / "tuning" / args.agent,
         budget,
         env_id=args.env_id,
         workers=args.workers,

@@ -12,13 +12,14 @@ import sys
 import warnings
 from pathlib import Path
 
+from agents.common.paths import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "record an mp4 of an agent's episode with the flow overlay"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP
+    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP
 
     parser.add_argument(
         "--agent",
@@ -27,9 +28,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "its first shipped training seed)",
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
+    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
     parser.add_argument("--env-id", default="FlowNav-v0")
     parser.add_argument("--seed", type=int, default=TEST_SEED_START)
-    parser.add_argument("--out", help="mp4 path (default results/videos/<agent>_<env-id>_<seed>.mp4)")
+    parser.add_argument("--out", help=f"mp4 path (default {SCRATCH_DIR}/videos/<agent>_<env-id>_<seed>.mp4)")
     parser.add_argument("--max-steps", type=int, default=600)
 
 
@@ -40,13 +42,19 @@ def run(args: argparse.Namespace) -> int:
     args.agent = runs[0]
     if message:
         print(f"{message}; this video flies {args.agent}")
-    out = Path(args.out or f"results/videos/{args.agent}_{args.env_id}_{args.seed}.mp4")
+    out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{args.env_id}_{args.seed}.mp4")
     from agents.evaluation.video import record_episode
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         info = record_episode(
-            args.agent, args.env_id, args.seed, out, policy=args.policy, max_steps=args.max_steps
+            args.agent,
+            args.env_id,
+            args.seed,
+            out,
+            policy=args.policy,
+            max_steps=args.max_steps,
+            trust_pickle=args.trust_pickle,
         )
     for warning in caught:
         print(f"flownav video: warning: {warning.message}", file=sys.stderr)

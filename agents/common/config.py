@@ -42,9 +42,12 @@ def load_config(path: str | Path, schema: type[T]) -> T:
 
     Raises:
         FileNotFoundError: the file does not exist.
+        ValueError: the path is a directory.
         ConfigError: bad YAML, an unknown key, a wrong type or an out-of-range value.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"config {path} is a directory: give the path of a YAML file")
     if not path.is_file():
         raise FileNotFoundError(f"config file not found: {path}")
     try:

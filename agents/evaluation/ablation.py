@@ -19,20 +19,21 @@ from typing import Any
 import numpy as np
 
 from agents.common.config import check_env_kwargs, load_config
+from agents.common.folders import check_writable_folder
 from agents.common.paths import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import (
+from agents.evaluation.runner import execute
+from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.tasks import (
     EpisodeTask,
     cached_file_sha256,
-    execute,
     record_label,
     rows_of,
     set_aside_stale_episodes,
 )
-from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.config import TrainConfig
 from agents.training.curves import plot_grouped_learning_curves
@@ -100,6 +101,7 @@ def compare_configs(
                 f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
             )
     out = Path(out)
+    check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     rows, missing, curves = [], [], {}
     for config_path in config_paths:

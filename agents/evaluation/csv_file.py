@@ -88,46 +88,63 @@ def check_is_file_target(path: Path) -> None:
 def read_csv_content(path: Path, expected_headers: list[list[str]]) -> CsvContent:
     """The header and whole rows of the CSV at ``path``; a missing or empty file has neither.
 
-    Each physical line is parsed on its own (no field holds a line break), so a torn row cannot swallow the
-    rows after it. A row is kept if it has the header's field count and, where the header ends with
-    ``row_crc``, its checksum matches.
+    Each physical line is decoded and parsed on its own (no field holds a line break), so a torn row or a
+    flipped byte costs that row alone (skipped, its episode flown again), never the rows after it. A row is
+    kept if it is UTF-8, has the header's field count and, where the header ends with ``row_crc``, its
+    checksum matches.
 
     Raises:
-        ValueError: ``path`` is a directory, not UTF-8 text, or its header is none of ``expected_headers``;
-            the message names the file.
+        ValueError: ``path`` is a directory, or its first line is not UTF-8 text or none of
+            ``expected_headers``; the message names the file.
     """
     check_is_file_target(path)
     if not path.exists():
         return CsvContent()
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise ValueError(
-            f"{path} is not an episodes CSV (not UTF-8 text: {error.reason} at byte {error.start}); "
-            "give another file"
-        ) from None
-    lines = [line.rstrip("\r") for line in text.split("\n")]
+    lines = [line.rstrip(b"\r") for line in path.read_bytes().split(b"\n")]
     lines = [line for line in lines if line]
     if not lines:
         return CsvContent()
-    header = _parse_line(lines[0])
+    try:
+        first = lines[0].decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(
+            f"{path} is not an episodes CSV (its first line is not UTF-8 text: {error.reason} at byte "
+            f"{error.start}); give another file"
+        ) from None
+    header = _parse_line(first)
     if header not in expected_headers:
         raise ValueError(
-            f"{path} is not a FlowNav episodes CSV: its header starts {lines[0][:60]!r}, expected "
+            f"{path} is not a FlowNav episodes CSV: its header starts {first[:60]!r}, expected "
             f"'{','.join(LEGACY_FIELDS[:4])},...'; give another file"
         )
-    sealed = header[-1] == CHECKSUM_FIELD
     content = CsvContent(header=header)
     for line in lines[1:]:
-        values = _parse_line(line)
-        whole = values is not None and len(values) == len(header)
-        if whole and sealed:
-            whole = values[-1] == row_checksum(values[:-1])
-        if whole:
-            content.rows.append(dict(zip(header, values, strict=True)))
-        else:
+        row = parse_row(line, header)
+        if row is None:
             content.skipped += 1
+        else:
+            content.rows.append(row)
     return content
+
+
+def parse_row(line: bytes, header: list[str]) -> dict[str, str] | None:
+    """One line of the CSV (without its line end) keyed by ``header``; None for a torn or corrupt line: not
+    UTF-8, a field count other than the header's or, where the header ends with ``row_crc``, a checksum that
+    does not match."""
+    try:
+        values = _parse_line(line.decode("utf-8"))
+    except UnicodeDecodeError:
+        return None
+    if values is None or len(values) != len(header):
+        return None
+    if header[-1] == CHECKSUM_FIELD and values[-1] != row_checksum(values[:-1]):
+        return None
+    return dict(zip(header, values, strict=True))
+
+
+def csv_header(line: bytes) -> list[str]:
+    """The column names on a CSV's first line (without its line end); [] when it is not a CSV line."""
+    return _parse_line(line.decode("utf-8", "replace")) or []
 
 
 def _parse_line(line: str) -> list[str] | None:
@@ -138,14 +155,15 @@ def _parse_line(line: str) -> list[str] | None:
 
 
 @contextmanager
-def locked(path: Path) -> Iterator[io.BufferedRandom]:
-    """The file at ``path`` (created empty if missing), open for reading and appending under an exclusive
-    ``flock``. If another process replaced the file while this one waited, the new file is locked instead,
-    so nothing is appended to a file no longer at ``path``."""
+def locked(path: Path) -> Iterator[io.FileIO]:
+    """The file at ``path`` (created empty if missing), open unbuffered for reading and appending under an
+    exclusive ``flock``. If another process replaced the file while this one waited, the new file is locked
+    instead, so nothing is appended to a file no longer at ``path``. Unbuffered, so a failed write (a full
+    disk) raises once, where it happens, and closing has nothing left to flush."""
     check_is_file_target(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     while True:
-        handle = path.open("a+b")
+        handle = path.open("a+b", buffering=0)
         try:
             fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
             if path.exists() and os.stat(path).st_ino == os.fstat(handle.fileno()).st_ino:
@@ -155,29 +173,55 @@ def locked(path: Path) -> Iterator[io.BufferedRandom]:
             handle.close()  # closing releases the lock
 
 
-def append_line(path: Path, header_line: str, line: str, other_header_error: Callable[[], str]) -> None:
+def append_line(
+    path: Path,
+    header_line: str,
+    line: str,
+    other_header_error: Callable[[], str],
+    already_there: Callable[[io.FileIO], bool] | None = None,
+) -> bool:
     """Append ``line`` to the CSV at ``path`` under its lock, writing ``header_line`` first if the file is new
     or empty, and ending a torn last row first so it stays a line of its own (reading skips it). Flushed to
     disk before the lock is released, so an interrupted run loses at most the episode in flight.
 
+    Args:
+        already_there: called with the locked file once its header is checked; when it says the row is
+            there already (another run wrote the same episode), nothing is appended.
+
+    Returns:
+        Whether the line was appended.
+
     Raises:
         ValueError: the file holds another header; ``other_header_error()`` says why that is refused.
+        OSError: the write failed (a full disk, a file-size limit); the message names the file. What was
+            written before stays; a partly written row is skipped on reading.
     """
+    header = header_line.encode()
     with locked(path) as handle:
-        size = handle.seek(0, os.SEEK_END)
+        size = os.fstat(handle.fileno()).st_size
         prefix = b""
         if size == 0:
-            prefix = header_line.encode()
+            prefix = header
         else:
-            handle.seek(0)
-            if handle.readline().rstrip(b"\r\n") != header_line.rstrip(LINE_END).encode():
+            first = os.pread(handle.fileno(), len(header) + 1, 0).partition(b"\n")[0]
+            if first.rstrip(b"\r") != header.rstrip(b"\r\n"):
                 raise ValueError(other_header_error())
-            handle.seek(size - 1)
-            if handle.read(1) != b"\n":
+            if already_there is not None and already_there(handle):
+                return False
+            if os.pread(handle.fileno(), 1, size - 1) != b"\n":
                 prefix = b"\n"
-        handle.write(prefix + line.encode())  # one write: a reader sees whole rows or a torn last one
-        handle.flush()
-        os.fsync(handle.fileno())
+        try:
+            _write_all(handle.fileno(), prefix + line.encode())  # a reader sees whole rows or a torn last one
+            os.fsync(handle.fileno())
+        except OSError as error:
+            raise OSError(error.errno, f"cannot add an episode: {error.strerror}", str(path)) from None
+    return True
+
+
+def _write_all(descriptor: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(descriptor, view) :]
 
 
 def rewrite_locked(path: Path, keep_line: Callable[[str], bool]) -> int:
@@ -185,12 +229,13 @@ def rewrite_locked(path: Path, keep_line: Callable[[str], bool]) -> int:
     holding its lock meanwhile so no append is lost to the old file. Returns the lines dropped."""
     with locked(path) as handle:
         handle.seek(0)
-        lines = handle.read().decode("utf-8").splitlines(keepends=True)
+        # surrogateescape: a corrupt byte survives the round trip, so kept lines stay byte for byte
+        lines = handle.read().decode("utf-8", "surrogateescape").splitlines(keepends=True)
         if not lines:
             return 0
         kept = [lines[0]] + [line for line in lines[1:] if keep_line(line)]
         temporary = path.with_name(path.name + ".tmp")
-        temporary.write_text("".join(kept), newline="")
+        temporary.write_bytes("".join(kept).encode("utf-8", "surrogateescape"))
         os.replace(temporary, path)
         return len(lines) - len(kept)
 

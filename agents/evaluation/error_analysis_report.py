@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.common.folders import check_writable_folder
 from agents.common.tables import markdown_table, today
 from agents.evaluation.error_analysis import (
     dose_curve,
@@ -264,6 +265,7 @@ def plot_dose_response(
 def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: str) -> list[str]:
     """Write ``error_analysis.md`` and ``dose_response.png`` into ``out``; returns the report's lines."""
     out = Path(out)
+    check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     flow_agents = sorted({r["agent"] for r in rows if is_flow_agent(r)})
     fits: dict[str, Mapping[str, Any]] = {}

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary queries GL)
+from agents.common.folders import check_writable_folder
 from agents.common.machine import code_version, machine_summary
 from agents.common.paths import POLICIES_DIR
 from agents.common.seeds import TEST_SEED_START
@@ -34,8 +35,9 @@ from agents.evaluation.over_seeds import (
     success_outcomes,
 )
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import EpisodeTask, execute, rows_of
+from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.tasks import EpisodeTask, rows_of
 from agents.policies import (
     LEARNED_AGENTS,
     REACTIVE_AGENTS,
@@ -299,13 +301,18 @@ def run_leaderboard(
     """Fly (unless ``report_only``) and report the leaderboard into ``out``; returns the report's lines.
 
     Raises:
-        ValueError: ``episodes`` or ``workers`` below 1, an unknown agent, or a report with runs that have
-            not flown every layout.
+        ValueError: ``episodes`` below one block of layouts, ``workers`` below 1, an unknown agent, an
+            unwritable ``out``, or a report with runs that have not flown every layout.
     """
-    if episodes < 1 or workers < 1:
-        raise ValueError(f"--episodes and --workers must be >= 1, got {episodes} and {workers}")
+    if episodes < block:  # checked before flying: the intervals over runs need whole blocks of layouts
+        raise ValueError(
+            f"--episodes must be >= {block} (one block of layouts for the intervals over runs), got {episodes}"
+        )
+    if workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
     runs = leaderboard_runs(agents, policies_dir)
     out = Path(out)
+    check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / "leaderboard_episodes.csv"
     tasks = leaderboard_tasks(runs, episodes, policies_dir)

@@ -9,8 +9,11 @@ columns still read: their rows have None for the identity fields (unknown).
 
 from __future__ import annotations
 
+import io
+import os
+import sys
 from collections.abc import Iterable, Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -18,8 +21,10 @@ from agents.evaluation.csv_file import (
     CHECKSUM_FIELD,
     LEGACY_FIELDS,
     append_line,
+    csv_header,
     csv_line,
     move_aside,
+    parse_row,
     read_csv_content,
     rewrite_locked,
     sealed_line,
@@ -50,30 +55,37 @@ OVERWRITE_HINT = (
 @dataclass
 class EpisodesCsv:
     """An episodes CSV as read: its typed rows, how many lines were skipped as torn or corrupt, and whether
-    it predates episode identities (``legacy``: its rows cannot be told apart by settings)."""
+    it predates episode identities (``legacy``: its rows cannot be told apart by settings). ``duplicates``
+    counts rows dropped because an earlier row is the same episode (:func:`episode_identity`), as two runs
+    writing one file at once could leave: each episode counts once."""
 
     path: Path
     rows: list[dict[str, Any]]
     skipped: int = 0
     legacy: bool = False
+    duplicates: int = 0
 
 
-def append_record(path: Path, record: EpisodeRecord) -> None:
+def append_record(path: Path, record: EpisodeRecord) -> bool:
     """Append one row (with its checksum) and flush it to disk, so an interrupted run loses at most the
-    episode in flight; safe while other processes append to the same file.
+    episode in flight; safe while other processes append to the same file. Returns False, appending nothing,
+    when the file already holds the same episode (:func:`episode_identity`): another run wrote it first.
 
     Raises:
         ValueError: the file is not an episodes CSV of this format (a foreign or pre-identity header).
+        OSError: the disk is full or the file cannot be written; the message names it.
     """
     path = Path(path)
     columns = PREVIOUS_CSV_FIELDS if _first_line(path) == csv_line(PREVIOUS_CSV_FIELDS) else CSV_FIELDS
     row = asdict(record)
     values = [str(row[name]) for name in columns if name != CHECKSUM_FIELD]
-    append_line(
+    identity = episode_identity(row)
+    return append_line(
         path,
         csv_line(columns) + "\r\n",
         sealed_line(values),
         other_header_error=lambda: f"cannot add episodes to {path}: {_header_problem(path)}",
+        already_there=lambda handle: identity in flown_episodes(path, handle),
     )
 
 
@@ -112,13 +124,32 @@ def read_episodes(path: Path) -> EpisodesCsv:
     path = Path(path)
     content = read_csv_content(path, _READABLE_HEADERS)
     episodes = EpisodesCsv(path, [], content.skipped, legacy=content.header == LEGACY_FIELDS)
+    seen: set[tuple] = set()
     for raw in content.rows:
         row = _typed(raw)
         if row is None:
             episodes.skipped += 1
+        elif (identity := episode_identity(row)) in seen:
+            episodes.duplicates += 1
         else:
+            seen.add(identity)
             episodes.rows.append(row)
+    if episodes.duplicates:
+        _say_once(
+            f"{path}: {episodes.duplicates} duplicate rows dropped (the same episode with the same settings "
+            "written twice, as runs writing one file at once could); each episode counts once"
+        )
     return episodes
+
+
+_SAID: set[str] = set()
+
+
+def _say_once(message: str) -> None:
+    """Print ``message`` to stderr the first time this process meets it: a file is read several times a run."""
+    if message not in _SAID:
+        _SAID.add(message)
+        print(message, file=sys.stderr)
 
 
 def read_records(path: Path) -> list[dict[str, Any]]:
@@ -160,9 +191,49 @@ def episode_key(row: Mapping[str, Any]) -> tuple[str, str, float, int]:
     return (row["agent"], row["factor"], float(row["level"]), int(row["seed"]))
 
 
-def completed_keys(rows: Iterable[Mapping[str, Any]]) -> set[tuple[str, str, float, int]]:
-    """(agent, factor, level, seed) of finished episodes, whatever their settings."""
-    return {episode_key(r) for r in rows}
+def episode_identity(row: Mapping[str, Any]) -> tuple:
+    """Everything that makes a row the episode it is: its :func:`episode_key` and :func:`row_identity`.
+    Works on typed rows, on a line's text values and on a record's fields alike."""
+    return (*episode_key(row), row_identity(row))
+
+
+@dataclass
+class _EpisodeIndex:
+    """The episodes of one CSV as far as it has been read: reading resumes at ``offset`` while the file is
+    the same (``inode``) and has not shrunk, so checking before each episode costs only the new rows."""
+
+    inode: int = -1
+    offset: int = 0
+    header: list[str] | None = None
+    flown: set[tuple] = field(default_factory=set)
+
+    def update(self, handle: io.FileIO) -> None:
+        stat = os.fstat(handle.fileno())
+        if stat.st_ino != self.inode or stat.st_size < self.offset:
+            self.inode, self.offset, self.header, self.flown = stat.st_ino, 0, None, set()
+        data = os.pread(handle.fileno(), stat.st_size - self.offset, self.offset)
+        whole = data[: data.rfind(b"\n") + 1]  # a last row still being written is read next time
+        self.offset += len(whole)
+        for line in whole.split(b"\n"):
+            line = line.rstrip(b"\r")
+            if not line:
+                continue
+            if self.header is None:
+                self.header = csv_header(line)
+            elif (raw := parse_row(line, self.header)) is not None:
+                self.flown.add(episode_identity(raw))
+
+
+_INDEXES: dict[str, _EpisodeIndex] = {}
+
+
+def flown_episodes(path: Path, handle: io.FileIO) -> set[tuple]:
+    """The :func:`episode_identity` of every whole row in the CSV at ``path``, whose lock the caller holds
+    (``handle``, from :func:`~agents.evaluation.csv_file.locked`); rows read on an earlier call are not read
+    again."""
+    index = _INDEXES.setdefault(str(Path(path).resolve()), _EpisodeIndex())
+    index.update(handle)
+    return index.flown
 
 
 def drop_agents(path: Path, agents: Iterable[str]) -> int:

@@ -1,132 +1,33 @@
-"""Episode tasks that run anywhere: in this process, a local process pool or a Ray worker.
+"""Flying episode tasks anywhere: in this process, a local process pool or a Ray worker.
 
-A task names an agent, a sensor factor and its level, and a seed; the worker keeps one env and agent per
-(agent, env settings) so that consecutive tasks of a cell do not rebuild the MuJoCo model or GL context.
-Every record is stamped with its task's identity (env id, full env settings, agent parameters, policy hash)
-and the code version; a resumed run skips only episodes flown with the same identity and refuses a CSV whose
-rows were flown with other settings under the same (agent, factor, level, seed).
+The worker keeps one env and agent per (agent, env settings) so that consecutive tasks of a cell do not
+rebuild the MuJoCo model or GL context. Which tasks a run still has to fly, and the identity each record is
+stamped with, is :mod:`agents.evaluation.tasks`' business. Runs writing one CSV at once share the work: each
+local task is claimed under the CSV's lock just before it flies (:mod:`agents.evaluation.claims`), and each
+record is appended only if the CSV does not hold its episode yet, so no episode is counted twice.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import signal
+import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from agents.common.machine import code_version
-from agents.common.paths import POLICIES_DIR
-from agents.evaluation.csv_file import move_aside
+from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
-from agents.evaluation.records import (
-    IDENTITY_FIELDS,
-    OVERWRITE_HINT,
-    append_record,
-    episode_key,
-    predates_identities,
-    read_episodes,
-    row_identity,
-)
-from agents.policies import (
-    agent_env_kwargs,
-    agent_parameters,
-    is_learned,
-    load_agent,
-    policy_file,
-    split_agent_name,
-)
+from agents.evaluation.records import append_record, episode_identity, read_episodes
+from agents.evaluation.tasks import EpisodeTask, canonical_json, pending_tasks
+from agents.policies import load_agent
 from agents.training.interrupts import stop_signals_interrupt
-from agents.training.manifest import file_sha256
 from flownav_env.limits import episode_step_limit
 
-
-def canonical_json(value: Any) -> str:
-    """``value`` as JSON with sorted keys and no spaces: equal settings give equal text."""
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), default=str)
-
-
-_HASHES: dict[tuple[str, int, int], str] = {}
-
-
-def cached_file_sha256(path: Path) -> str:
-    """:func:`~agents.training.manifest.file_sha256` of the file ("" if there is none), cached while its size
-    and mtime stay the same: every episode record carries its policy's hash."""
-    try:
-        stat = path.stat()
-    except OSError:
-        return ""
-    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-    if key not in _HASHES:
-        _HASHES[key] = file_sha256(path)
-    return _HASHES[key]
-
-
-def record_label(env_kwargs: dict[str, Any]) -> tuple[str, float]:
-    """(factor, level) of the records flown with ``env_kwargs``: ``clean`` for defaults, the kwarg and its value
-    for one numeric setting (as in the sweep), else every setting spelled out, so different settings never share
-    a row key."""
-    if not env_kwargs:
-        return "clean", 0.0
-    if len(env_kwargs) == 1:
-        ((key, value),) = env_kwargs.items()
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return key, float(value)
-    return ",".join(f"{k}={v}" for k, v in sorted(env_kwargs.items())), 0.0
-
-
-@dataclass(frozen=True)
-class EpisodeTask:
-    """One episode to fly: who, with which env kwargs, from which seed; ``factor``/``level`` label the record."""
-
-    agent: str
-    factor: str
-    level: float
-    seed: int
-    env_id: str = "FlowNav-v0"
-    env_kwargs: tuple[tuple[str, Any], ...] = ()
-    policy: str | None = None  # a learned agent's .zip; None: its file in <repo>/results/policies/
-    bee_params: tuple[tuple[str, float], ...] = field(default=())
-
-    def policy_path(self) -> Path | None:
-        """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
-        if not is_learned(self.agent):
-            return None
-        return policy_file(self.agent, self.policy, directory=POLICIES_DIR)
-
-    def env_settings(self) -> dict[str, Any]:
-        """The env kwargs to fly with: the agent's own (a learned agent keeps what it was trained with, such
-        as oracle observations), then this task's on top."""
-        return {**agent_env_kwargs(self.agent, self.policy_path()), **dict(self.env_kwargs)}
-
-    def identity(self) -> dict[str, str]:
-        """What defines this task's episode beyond its (agent, factor, level, seed): the
-        :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
-        policy = self.policy_path()
-        return {
-            "env_id": self.env_id,
-            "env_kwargs": canonical_json(self.env_settings()),
-            "agent_params": canonical_json(agent_parameters(self.agent, **dict(self.bee_params))),
-            "policy_sha256": "" if policy is None else cached_file_sha256(policy),
-        }
-
-
-def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:
-    """Each task's identity as a tuple in IDENTITY_FIELDS order, computed once per distinct setting (a sweep
-    has thousands of tasks but only agents × cells settings, and a learned agent's reads files)."""
-    cache: dict[str, tuple[str, ...]] = {}
-    result = []
-    for task in tasks:
-        setting = canonical_json([task.agent, task.env_id, task.env_kwargs, task.policy, task.bee_params])
-        if setting not in cache:
-            identity = task.identity()
-            cache[setting] = tuple(identity[name] for name in IDENTITY_FIELDS)
-        result.append(cache[setting])
-    return result
-
+# How often a run that is done checks whether another run has written the episodes it claimed.
+AWAIT_POLL_S = 0.5
 
 # One env per worker (the settings of the cell it flies) and the agents flown in it lately: a learned agent
 # written <agent>@all flies layout i with training seed i mod k, so consecutive tasks alternate between k
@@ -150,11 +51,13 @@ def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
         _ENV.clear()
         limit = episode_step_limit(task.env_id, settings)
         _ENV[env_key] = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
-    agent_key = (task.agent, task.policy, task.bee_params)
+    agent_key = (task.agent, task.policy, task.bee_params, task.trust_pickle)
     if agent_key not in _AGENTS:
         if len(_AGENTS) >= MAX_CACHED_AGENTS:
             del _AGENTS[next(iter(_AGENTS))]  # the oldest
-        _AGENTS[agent_key] = load_agent(task.agent, task.policy_path(), **dict(task.bee_params))
+        _AGENTS[agent_key] = load_agent(
+            task.agent, task.policy_path(), trust_pickle=task.trust_pickle, **dict(task.bee_params)
+        )
     return _ENV[env_key], _AGENTS[agent_key]
 
 
@@ -174,107 +77,11 @@ def run_task(task: EpisodeTask) -> EpisodeRecord:
     return dataclasses.replace(record, **task.identity(), code_version=_code_version())
 
 
-def pending_tasks(tasks: list[EpisodeTask], csv_path: Path) -> list[EpisodeTask]:
-    """The tasks whose episode is not in the CSV yet (what a resumed run still has to fly).
-
-    Raises:
-        ValueError: the CSV predates episode identities, or holds an episode of one of the tasks flown with
-            other settings (resuming would mix the two), or two tasks share a key but not their settings.
-    """
-    csv_path = Path(csv_path)
-    episodes = read_episodes(csv_path)
-    if episodes.legacy:
-        raise ValueError(predates_identities(csv_path))
-    identities = _identities(tasks)
-    wanted: dict[tuple, tuple[str, ...]] = {}
-    for task, identity in zip(tasks, identities, strict=True):
-        key = episode_key(vars(task))
-        if wanted.setdefault(key, identity) != identity:
-            raise ValueError(f"two tasks are episode {_describe(key)} but with different settings")
-    flown: dict[tuple, set[tuple[str, ...] | None]] = {}
-    for row in episodes.rows:
-        flown.setdefault(episode_key(row), set()).add(row_identity(row))
-    todo = []
-    for task, identity in zip(tasks, identities, strict=True):
-        found = flown.get(episode_key(vars(task)), set())
-        if identity in found:
-            continue
-        if found:
-            raise ValueError(_conflict(csv_path, episode_key(vars(task)), identity, found))
-        todo.append(task)
-    return todo
-
-
-def set_aside_stale_episodes(tasks: list[EpisodeTask], csv_path: Path, why: str) -> Path | None:
-    """Move ``csv_path`` aside (``<name>.bak-<time>``) when it holds an episode of one of ``tasks`` flown with
-    other settings, and say so with ``why``; returns where it went, or None when nothing was stale.
-
-    For episodes that only ever stand for the current code's agent (a re-tuned reactive reference, a run's
-    current finalists), where :func:`pending_tasks` would refuse to mix them. Nothing is deleted.
-    """
-    csv_path = Path(csv_path)
-    if not csv_path.is_file():
-        return None
-    wanted = {
-        episode_key(vars(task)): identity for task, identity in zip(tasks, _identities(tasks), strict=True)
-    }
-    stale = sorted(
-        {
-            str(row["agent"])
-            for row in read_episodes(csv_path).rows
-            if episode_key(row) in wanted and row_identity(row) != wanted[episode_key(row)]
-        }
-    )
-    if not stale:
-        return None
-    backup = move_aside(csv_path)
-    print(
-        f"{csv_path} holds episodes of {', '.join(stale)} flown with other settings ({why}); moved to {backup}"
-    )
-    return backup
-
-
-def _describe(key: tuple[str, str, float, int]) -> str:
-    agent, factor, level, seed = key
-    return f"({agent}, {factor}, level {level:g}, seed {seed})"
-
-
-def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set) -> str:
-    there = next(iter(found))
-    differences = ", ".join(
-        f"{name} {old!r} there, {new!r} now"
-        for name, old, new in zip(IDENTITY_FIELDS, there or (None,) * len(identity), identity, strict=True)
-        if old != new
-    )
-    retrained = "policy_sha256" in differences
-    return (
-        f"{path} already holds episode {_describe(key)} flown with other settings ({differences}); "
-        f"resuming would mix them. To fly these settings, {OVERWRITE_HINT}"
-        + (
-            f"; after retraining, flownav sweep --refly {key[0]} flies just that agent again"
-            if retrained
-            else ""
-        )
-    )
-
-
-def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Rows with each learned agent's training seeds (``ppo_flow@3``) relabelled as the agent, so that a
-    summary gives the agent one row over its seeds."""
-    return [{**row, "agent": split_agent_name(row["agent"])[0]} for row in rows]
-
-
-def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows that are episodes of ``tasks``: same (agent, factor, level, seed) and the same identity, or
-    an unknown one (a CSV from before identities), so a report never mixes in episodes of other settings."""
-    wanted = {
-        episode_key(vars(task)): identity for task, identity in zip(tasks, _identities(tasks), strict=True)
-    }
-    return [
-        row
-        for row in rows
-        if episode_key(row) in wanted and row_identity(row) in (None, wanted[episode_key(row)])
-    ]
+def run_claimed_task(csv_path: Path, task: EpisodeTask) -> tuple[EpisodeTask, str, EpisodeRecord | None]:
+    """Fly the task if this process gets its claim on ``csv_path`` (:func:`claim_episode`); returns the task,
+    what the claim found, and the record (None when the episode was left to the CSV or another run)."""
+    found = claim_episode(csv_path, episode_identity({**vars(task), **task.identity()}))
+    return task, found, run_task(task) if found == MINE else None
 
 
 class EpisodesInterrupted(KeyboardInterrupt):
@@ -303,7 +110,7 @@ def execute(
         description: progress-bar label.
 
     Returns:
-        The number of episodes flown in this call.
+        The number of episodes flown and added in this call (not those another run flew meanwhile).
 
     Raises:
         ValueError: a bad backend or worker count, or a CSV that cannot be resumed (see :func:`pending_tasks`).
@@ -322,16 +129,20 @@ def execute(
     if not todo:
         return 0
     progress = tqdm(total=len(todo), desc=description, unit="episode")
-    results = _results(todo, backend, workers, address)
+    results = _results(todo, csv_path, backend, workers, address)
     flown = 0
     try:
         # SIGTERM too: killed mid-sweep, the parent would die with its pool's workers still sending results
         # into a closed pipe, each printing a traceback.
         with stop_signals_interrupt():
-            for record in results:
-                append_record(csv_path, record)
-                flown += 1
+            elsewhere = []
+            for task, found, record in results:
+                if found == CLAIMED:
+                    elsewhere.append(task)
+                    continue
+                flown += record is not None and append_record(csv_path, record)
                 progress.update()
+            flown += _await_other_runs(elsewhere, csv_path, progress)
     except KeyboardInterrupt:
         results.close()  # stops the pool or Ray before the message, whichever line Ctrl-C hit
         progress.close()
@@ -343,7 +154,33 @@ def execute(
     finally:
         results.close()
         progress.close()
-    return len(todo)
+        release_claims(csv_path)
+    if flown < len(todo):
+        print(
+            f"{len(todo) - flown} of these episodes were flown by another run writing {csv_path} at the same "
+            "time; each is in the file once"
+        )
+    return flown
+
+
+def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: Any) -> int:
+    """Wait until the episodes another run claimed are in the CSV, so this run's report counts them too;
+    fly here any whose claimant stopped without writing it. Returns the number flown here."""
+    flown = 0
+    while tasks:
+        waiting = []
+        for task in tasks:
+            _, found, record = run_claimed_task(csv_path, task)
+            if found == CLAIMED:
+                waiting.append(task)
+                continue
+            flown += record is not None and append_record(csv_path, record)
+            progress.update()
+        if waiting:
+            progress.set_postfix_str(f"waiting for {len(waiting)} episodes another run is flying")
+            time.sleep(AWAIT_POLL_S)
+        tasks = waiting
+    return flown
 
 
 def _ignore_interrupts() -> None:
@@ -353,13 +190,15 @@ def _ignore_interrupts() -> None:
 
 
 def _results(
-    todo: list[EpisodeTask], backend: str, workers: int, address: str | None
-) -> Iterator[EpisodeRecord]:
-    if backend == "ray":
-        yield from _ray_results(todo, address, workers)
+    todo: list[EpisodeTask], csv_path: Path, backend: str, workers: int, address: str | None
+) -> Iterator[tuple[EpisodeTask | None, str, EpisodeRecord | None]]:
+    """(task, what its claim found, its record) per task; the task only where it is needed (CLAIMED)."""
+    if backend == "ray":  # Ray workers may not see this machine's files: the append check alone guards
+        for record in _ray_results(todo, address, workers):
+            yield None, MINE, record
     elif workers == 1:
         for task in todo:
-            yield run_task(task)
+            yield run_claimed_task(csv_path, task)
     else:
         import multiprocessing
 
@@ -368,7 +207,7 @@ def _results(
         pool = context.Pool(workers, initializer=_ignore_interrupts)
         try:
             # Tasks are ordered by cell, so chunks keep each worker on one env for a while.
-            yield from pool.imap_unordered(run_task, todo, chunksize=1)
+            yield from pool.imap_unordered(functools.partial(run_claimed_task, csv_path), todo, chunksize=1)
             pool.close()
         finally:
             pool.terminate()  # also on Ctrl-C or close(): no worker flies on unseen

@@ -18,13 +18,8 @@ from typing import Any
 
 from agents.common.seeds import checkpoint_selection_seed
 from agents.evaluation.records import read_records
-from agents.evaluation.runner import (
-    EpisodeTask,
-    cached_file_sha256,
-    execute,
-    rows_of,
-    set_aside_stale_episodes,
-)
+from agents.evaluation.runner import execute
+from agents.evaluation.tasks import EpisodeTask, cached_file_sha256, rows_of, set_aside_stale_episodes
 from agents.training.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 from agents.training.saved_models import latest_checkpoint

@@ -65,17 +65,35 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
     return table
 
 
-def format_summary(table: list[Mapping[str, Any]]) -> str:
-    """The summary as a Markdown table."""
-    header = (
-        "| agent | factor | level | episodes | failure rate [95 % CI] | success rate [95 % CI] | "
-        "collision rate [95 % CI] | out of bounds | median progress (m) |"
+SUMMARY_COLUMNS = ("agent", "factor", "level", "episodes")
+"""The leading columns of :func:`format_summary`, the ones a caller may omit; the rates always show."""
+
+
+def format_summary(table: list[Mapping[str, Any]], *, omit: Iterable[str] = ()) -> str:
+    """The summary as a Markdown table.
+
+    Args:
+        table: rows of :func:`summarise`.
+        omit: leading columns to leave out (of :data:`SUMMARY_COLUMNS`), such as a ``factor`` and ``level``
+            that are the same in every row.
+
+    Raises:
+        ValueError: ``omit`` names something that is not one of those columns.
+    """
+    omit = set(omit)
+    if not omit <= set(SUMMARY_COLUMNS):
+        raise ValueError(f"omit must name columns of {', '.join(SUMMARY_COLUMNS)}, got {sorted(omit)}")
+    leading = [name for name in SUMMARY_COLUMNS if name not in omit]
+    header = "".join(f"| {name} " for name in leading) + (
+        "| failure rate [95 % CI] | success rate [95 % CI] | collision rate [95 % CI] | out of bounds | "
+        "median progress (m) |"
     )
-    lines = [header, "|---|---|---|---|---|---|---|---|---|"]
+    lines = [header, "|" + "---|" * (len(leading) + 5)]
     for r in table:
+        cells = {"agent": r["agent"], "factor": r["factor"], "level": f"{r['level']:g}", "episodes": r["episodes"]}
         lines.append(
-            f"| {r['agent']} | {r['factor']} | {r['level']:g} | {r['episodes']} | "
-            f"{r['failure_rate']:.2f} [{r['failure_ci_low']:.2f}, {r['failure_ci_high']:.2f}] | "
+            "".join(f"| {cells[name]} " for name in leading)
+            + f"| {r['failure_rate']:.2f} [{r['failure_ci_low']:.2f}, {r['failure_ci_high']:.2f}] | "
             f"{r['success_rate']:.2f} [{r['success_ci_low']:.2f}, {r['success_ci_high']:.2f}] | "
             f"{r['collision_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
             f"{r['out_of_bounds'] / r['episodes']:.2f} | {r['median_progress_m']:.1f} |"

@@ -21,10 +21,11 @@ from pathlib import Path
 from typing import Any, Literal
 
 from agents.common.config import check_env_kwargs, field_range, load_config
+from agents.common.folders import check_writable_folder
 from agents.common.paths import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
 from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
-from agents.evaluation.runner import EpisodeTask, execute, pending_tasks, rows_of
+from agents.evaluation.runner import execute
 from agents.evaluation.statistics import format_summary
 from agents.evaluation.sweep_report import (
     comparison_markdown,
@@ -32,6 +33,7 @@ from agents.evaluation.sweep_report import (
     write_report,
     write_summary,
 )
+from agents.evaluation.tasks import EpisodeTask, pending_tasks, rows_of
 from agents.policies import (
     LEARNED_AGENTS,
     is_learned,
@@ -245,6 +247,7 @@ def run_sweep(
         )
     if overwrite and report_only:
         raise ValueError("--overwrite starts a new episodes CSV; it cannot be combined with --report-only")
+    check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     episodes_csv = out / "sweep_episodes.csv"
     if overwrite:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from agents.common.folders import check_writable_folder
 from agents.evaluation.records import start_new_file
 from agents.evaluation.tuning_study import (
     MIN_FINAL_EPISODES,
@@ -98,6 +99,7 @@ def tune(
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"--workers must be an integer >= 1, got {workers!r}")
     out = Path(out)
+    check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / "episodes.csv"
     if overwrite and (moved := start_new_file(csv_path)) is not None:

@@ -11,6 +11,7 @@ from agents.policies.base import (
 )
 from agents.policies.learned import (
     POLICY_OPTION_HELP,
+    TRUST_PICKLE_HELP,
     LoadedPolicy,
     agent_env_kwargs,
     agent_parameters,
@@ -20,23 +21,29 @@ from agents.policies.learned import (
     policy_file,
     runs_to_fly,
     shipped_seed_runs,
+    single_policy_file,
     trained_seeds,
 )
 from agents.policies.loading import UnverifiedPolicyWarning
+from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
 from agents.policies.robust import BeeRobustAgent, BeeTTCAgent, VFHAgent, quantile_nearness
+from agents.policies.seeds import TrainingSeedsAgent
 
 __all__ = [
     "AGENT_NAMES",
     "LEARNED_AGENTS",
+    "OBSERVATION_KEY_SETTINGS",
     "POLICY_OPTION_HELP",
     "REACTIVE_AGENTS",
+    "TRUST_PICKLE_HELP",
     "Agent",
     "BeeAgent",
     "BeeRobustAgent",
     "BeeTTCAgent",
     "LoadedPolicy",
     "StraightAgent",
+    "TrainingSeedsAgent",
     "UnverifiedPolicyWarning",
     "VFHAgent",
     "agent_env_kwargs",
@@ -52,6 +59,7 @@ __all__ = [
     "sector_nearness",
     "seeded_agent_name",
     "shipped_seed_runs",
+    "single_policy_file",
     "split_agent_name",
     "trained_seeds",
 ]

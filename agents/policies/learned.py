@@ -1,6 +1,7 @@
 """Learned agents: where a trained policy is stored, the env settings it was trained with, and loading any
 agent by name (a reactive one is built, a learned one is loaded from its ``.zip``, see
-:mod:`agents.policies.loading`)."""
+:mod:`agents.policies.loading`; a learned one named without a training seed flies its shipped seeds in turn,
+see :mod:`agents.policies.seeds`)."""
 
 from __future__ import annotations
 
@@ -16,29 +17,46 @@ from agents.policies.base import Agent, is_learned, seeded_agent_name, split_age
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
+from agents.policies.seeds import TrainingSeedsAgent
 from agents.training.config import TrainConfig
 
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
 
 POLICY_OPTION_HELP = (
-    "PPO policy .zip (default results/policies/<agent>.zip in the repository). Only load policies you "
-    "trust: a zip without its training config (.yaml) beside it is loaded with PPO.load, which unpickles it "
-    "and can run code; with the config, only its parameters are read. A policy not listed with its hash in "
-    "its folder's MANIFEST.sha256 loads with a warning"
+    "PPO policy .zip (default: the agent's shipped training seeds, results/policies/<agent>/seed_<k>.zip in "
+    "the repository). Only its parameters are read, from the training config (.yaml) beside it; a zip without "
+    "one is refused, since loading it would unpickle it and can run code (--trust-pickle allows that). A "
+    "policy not listed with its hash in its folder's MANIFEST.sha256 loads with a warning"
 )
 """The ``--policy`` help of every command that loads a policy, so each says what loading one risks."""
 
+TRUST_PICKLE_HELP = (
+    "load a --policy zip that has no training config beside it with PPO.load, which unpickles it and so runs "
+    "any code it holds: only for a file you trust"
+)
+"""The ``--trust-pickle`` help of every command that takes ``--policy``."""
+
 
 def policy_file(name: str, path: str | Path | None = None, directory: str | Path = POLICIES_DIR) -> Path:
-    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<name>.zip``, or
-    ``<directory>/<agent>/seed_<k>.zip`` for a training seed ``<agent>@<k>``; the default directory is the
-    repository's ``results/policies/``, whatever the current directory."""
+    """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<agent>/seed_<k>.zip``
+    for a training seed ``<agent>@<k>``; for an agent named alone, its first shipped training seed's file if it
+    has any (where one file must stand for it: its env settings, a task's policy), else its single
+    :func:`single_policy_file`. The default directory is the repository's ``results/policies/``, whatever the
+    current directory."""
     if path:
         return Path(path)
     agent, train_seed = split_agent_name(name)
     if train_seed is None:
-        return Path(directory) / f"{agent}.zip"
+        seeds = trained_seeds(agent, directory)
+        if not seeds:
+            return single_policy_file(agent, directory)
+        train_seed = seeds[0]
     return Path(directory) / agent / f"seed_{train_seed}.zip"
+
+
+def single_policy_file(agent: str, directory: str | Path = POLICIES_DIR) -> Path:
+    """``<directory>/<agent>.zip``: where an agent trained without training seeds keeps its one policy."""
+    return Path(directory) / f"{agent}.zip"
 
 
 def trained_seeds(agent: str, policies_dir: str | Path = POLICIES_DIR) -> list[int]:
@@ -62,7 +80,7 @@ def default_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> tuple[l
     shipped it is not what the benchmark reports, so it only flies when named with ``--policy``.
     """
     names = shipped_seed_runs(agent, policies_dir)
-    single = policy_file(agent, directory=policies_dir)
+    single = single_policy_file(agent, policies_dir)
     if names:
         seeds = ", ".join(str(split_agent_name(name)[1]) for name in names)
         where = Path(policies_dir) / agent
@@ -106,21 +124,32 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     return dict(load_config(config_path, TrainConfig).env)
 
 
-def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: float) -> Agent:
+def load_agent(
+    name: str, policy_path: str | Path | None = None, *, trust_pickle: bool = False, **bee_params: float
+) -> Agent:
     """The agent called ``name`` (see :data:`~agents.policies.base.AGENT_NAMES`).
+
+    A learned agent named without a training seed or a ``policy_path`` is every training seed shipped in the
+    repository's ``results/policies/<agent>/``, one per episode in turn
+    (:class:`~agents.policies.seeds.TrainingSeedsAgent`), as the benchmark flies it; an agent without
+    training seeds loads its single ``results/policies/<agent>.zip``.
 
     Args:
         name: agent name; ``<learned agent>@<k>`` for training seed k.
-        policy_path: for PPO agents, the ``.zip`` to load; defaults to ``results/policies/<name>.zip``.
-            Only its parameters are read when its training config lies beside it; a policy its folder's
-            ``MANIFEST.sha256`` does not vouch for loads with an :class:`UnverifiedPolicyWarning`.
+        policy_path: for PPO agents, the ``.zip`` to load instead of the shipped ones. Only its parameters
+            are read, from the training config beside it; a policy its folder's ``MANIFEST.sha256`` does not
+            vouch for loads with an :class:`UnverifiedPolicyWarning`.
+        trust_pickle: load a zip without a training config beside it with ``PPO.load`` (unpickling, which
+            runs any code in it); without this such a zip raises a ValueError.
         bee_params: overrides of a reactive agent's gains (its dataclass fields).
 
     Raises:
-        ValueError: unknown name, or a policy file that is not a readable policy (the message names it).
+        ValueError: unknown name, a policy file that is not a readable policy or has no config beside it
+            (unless ``trust_pickle``), or training seeds trained with different env settings; the message
+            names the file.
         FileNotFoundError: a PPO policy file is missing.
     """
-    base, _ = split_agent_name(name)
+    base, train_seed = split_agent_name(name)
     if name == "straight":
         return StraightAgent()
     if name == "bee":
@@ -132,11 +161,32 @@ def load_agent(name: str, policy_path: str | Path | None = None, **bee_params: f
     if name == "vfh":
         return VFHAgent(**bee_params)
     if is_learned(name):
+        if policy_path is None and train_seed is None:
+            return _shipped_agent(base, trust_pickle)
         path = policy_file(name, policy_path)
         if not path.is_file():
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
-        return load_policy_file(path)
+        return load_policy_file(path, trust_pickle=trust_pickle)
     raise AssertionError(f"agent {base!r} is in AGENT_NAMES but has no constructor here")
+
+
+def _shipped_agent(agent: str, trust_pickle: bool) -> Agent:
+    runs, message = default_runs(agent, POLICIES_DIR)
+    if not runs:
+        raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")
+    if runs == [agent]:  # no training seeds, a single policy
+        return load_policy_file(single_policy_file(agent, POLICIES_DIR), trust_pickle=trust_pickle)
+    files = {run: policy_file(run, directory=POLICIES_DIR) for run in runs}
+    # One env serves every seed, so they must agree on it (agent_env_kwargs reads the first seed's).
+    settings = {run: agent_env_kwargs(run, path) for run, path in files.items()}
+    if len({repr(sorted(env.items())) for env in settings.values()}) > 1:
+        raise ValueError(
+            f"the training seeds of {agent} in {POLICIES_DIR / agent}/ were trained with different env "
+            f"settings ({settings}): name one, such as {runs[0]}"
+        )
+    return TrainingSeedsAgent(
+        [(run, load_policy_file(path, trust_pickle=trust_pickle)) for run, path in files.items()]
+    )
 
 
 def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:

@@ -4,18 +4,20 @@
 policy zip can run a shell command. A FlowNav policy is a ``MultiInputPolicy`` whose network is fixed by the
 training config saved beside its zip (``<name>.yaml``) and whose spaces are those of the env that config
 names, so the policy is rebuilt from those and only its parameters are read from the zip (``policy.pth``,
-with ``torch.load(weights_only=True)``). Only a zip without a config beside it falls back to ``PPO.load``,
-with a warning. Every load is checked against the checksum manifest of the zip's folder.
+with ``torch.load(weights_only=True)``). A zip without a config beside it is refused unless the caller opts in
+(``trust_pickle=True``, ``--trust-pickle``): only then is it loaded with ``PPO.load``. Every load is checked
+against the checksum manifest of the zip's folder, and every loaded policy checks that an observation has each
+key it reads (:mod:`agents.policies.observation_keys`).
 """
 
 from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Any
 
 from agents.common.config import ConfigError, load_config
 from agents.policies.base import Agent
+from agents.policies.observation_keys import CheckedPolicy, ObservationKeyCheck
 from agents.policies.stacked import FrameStackedAgent, stacked_space
 from agents.training.algorithms import algorithm_class, network_kwargs, policy_alias
 from agents.training.config import TrainConfig
@@ -37,12 +39,14 @@ def training_config_beside(path: Path) -> TrainConfig | None:
     return load_config(config_path, TrainConfig) if config_path.is_file() else None
 
 
-def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
+def policy_from_parameters(saved: SavedModel, config: TrainConfig, config_path: Path | None = None) -> Agent:
     """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, or MultiInputLstmPolicy
     for a recurrent run, with its ``net_arch`` and ``log_std_init``; spaces from ``config``'s env) holding the
     parameters of ``saved``. Its ``predict``
     gives the same actions as ``PPO.load(path).predict``; a policy trained on stacked frames comes wrapped
-    in a :class:`~agents.policies.stacked.FrameStackedAgent` that keeps the stack.
+    in a :class:`~agents.policies.stacked.FrameStackedAgent` that keeps the stack, any other in a
+    :class:`~agents.policies.observation_keys.CheckedPolicy`. Either raises a ValueError naming a missing
+    observation key and the env setting that gives it (``config_path``: where the config was read, for it).
 
     Raises:
         ValueError: the zip's network does not match the config's; the message names the file.
@@ -77,21 +81,37 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig) -> Any:
             f"{saved.path}: its parameters do not fit the network of the config beside it: {error}"
         ) from error
     policy.set_training_mode(False)
+    check = ObservationKeyCheck(observation_space.spaces, saved.path, config_path)
     if config.frame_stack > 1:
-        return FrameStackedAgent(policy, config.frame_stack, observation_space)
-    return policy
+        return FrameStackedAgent(policy, config.frame_stack, observation_space, check)
+    return CheckedPolicy(policy, check)
 
 
-def load_policy_file(path: Path) -> Agent:
-    """The policy stored in ``path``, loaded without unpickling when its training config lies beside it;
-    warns (:class:`UnverifiedPolicyWarning`) when its folder's manifest does not list it with this hash.
+def load_policy_file(path: Path, *, trust_pickle: bool = False) -> Agent:
+    """The policy stored in ``path``, loaded without unpickling from the training config beside it; warns
+    (:class:`UnverifiedPolicyWarning`) when its folder's manifest does not list it with this hash.
+
+    Args:
+        path: the policy ``.zip``.
+        trust_pickle: load a zip without a config beside it with ``PPO.load``, which unpickles it and so runs
+            any code it holds; without this, such a zip is refused before anything in it is read.
 
     Raises:
         FileNotFoundError: no such file.
-        ValueError: not a readable stable-baselines3 policy, a bad config beside it, or parameters that do
-            not fit; the message names the file and what is wrong.
+        ValueError: no config beside it (unless ``trust_pickle``), not a readable stable-baselines3 policy, a
+            bad config beside it, or parameters that do not fit; the message names the file and what is wrong.
     """
     path = Path(path)
+    config_path = path.with_suffix(".yaml")
+    if not path.is_file():
+        raise FileNotFoundError(f"policy file not found: {path}")
+    if not config_path.is_file() and not trust_pickle:
+        # Refused before the zip is opened: the only way to load it would run what it holds.
+        raise ValueError(
+            f"{path} has no training config beside it (expected {config_path}), and loading it without one "
+            "would unpickle it, which runs any code the file holds: put the training config it was trained "
+            f"with at {config_path}, or, for a file you trust, pass --trust-pickle (trust_pickle=True in Python)"
+        )
     saved = read_saved_model(path)
     try:
         config = training_config_beside(path)
@@ -99,29 +119,28 @@ def load_policy_file(path: Path) -> Agent:
         raise ValueError(f"{path}: the training config beside it is invalid: {error}") from error
     problem = manifest_problem(path)
     if config is None:
-        warnings.warn(
-            UnverifiedPolicyWarning(
-                f"{path} has no training config beside it ({path.with_suffix('.yaml').name}): loading the "
-                "whole model with PPO.load, which unpickles it and so runs any code the file holds"
-                + (f"; {problem}" if problem else "")
-            ),
-            stacklevel=3,
-        )
+        if problem:
+            warnings.warn(
+                UnverifiedPolicyWarning(f"{problem} (unpickled with PPO.load, as trust_pickle asked)"),
+                stacklevel=3,
+            )
         return _load_pickled(path)
     if problem:
         warnings.warn(
             UnverifiedPolicyWarning(f"{problem} (only its parameters are read, no code from it runs)"),
             stacklevel=3,
         )
-    return policy_from_parameters(saved, config)
+    return policy_from_parameters(saved, config, config_path)
 
 
 def _load_pickled(path: Path) -> Agent:
     from stable_baselines3 import PPO
 
     try:
-        return PPO.load(path, device="cpu")
+        model = PPO.load(path, device="cpu")
     except Exception as error:  # SB3 raises assertion, key and value errors for files it cannot use
         raise ValueError(
             f"{path} could not be loaded as a PPO model: {type(error).__name__}: {error}"
         ) from error
+    keys = getattr(model.observation_space, "spaces", {})
+    return CheckedPolicy(model, ObservationKeyCheck(keys, path, None))

@@ -8,6 +8,7 @@ evaluation exactly the stacks it saw in training.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -22,12 +23,20 @@ def stacked_space(space: spaces.Space, frame_stack: int) -> spaces.Space:
 
 
 class FrameStackedAgent:
-    """SB3's ``predict`` over the last ``frame_stack`` observations of one env, the stack kept as ``state``."""
+    """SB3's ``predict`` over the last ``frame_stack`` observations of one env, the stack kept as ``state``;
+    ``check`` (if given) sees each observation first, before a missing key fails inside the stack."""
 
-    def __init__(self, policy: Any, frame_stack: int, observation_space: spaces.Dict) -> None:
+    def __init__(
+        self,
+        policy: Any,
+        frame_stack: int,
+        observation_space: spaces.Dict,
+        check: Callable[[Any], None] | None = None,
+    ) -> None:
         self.policy = policy
         self.frame_stack = frame_stack
         self.observation_space = observation_space
+        self.check = check
 
     def predict(
         self,
@@ -38,6 +47,8 @@ class FrameStackedAgent:
     ) -> tuple[np.ndarray, Any]:
         from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
+        if self.check is not None:
+            self.check(observation)
         batched = {key: np.asarray(value)[None] for key, value in observation.items()}
         starting = state is None or (episode_start is not None and bool(np.asarray(episode_start).any()))
         if starting:

@@ -131,3 +131,29 @@ def override(config: TrainConfig, name: str, value: float | None, option: str) -
     if (low is not None and value < low) or (high is not None and value > high):
         raise ValueError(f"{option} must be in [{low}, {high}] (the config's {name} range), got {value}")
     setattr(config, name, value)
+
+
+def rollout_note(config: TrainConfig, steps_done: int) -> str | None:
+    """The line that says how far learning really goes when it is not ``total_timesteps``, else None.
+
+    PPO learns from whole rollouts of ``n_steps × n_envs`` steps, so it trains on to the end of the rollout
+    that reaches ``total_timesteps``: a budget below one rollout still trains a whole one.
+
+    Args:
+        config: the run's config.
+        steps_done: the steps already trained (a resumed run's count), from which the rollouts are counted.
+
+    Returns:
+        One line naming the budget, the rollout and the steps it will train, or None when they agree.
+    """
+    rollout = config.ppo.n_steps * config.n_envs
+    remaining = config.total_timesteps - steps_done
+    if remaining <= 0 or remaining % rollout == 0:
+        return None
+    end = steps_done + -(-remaining // rollout) * rollout
+    relation = "is less than one rollout" if remaining < rollout else "is not a whole number of rollouts"
+    resumed = f" after the resumed {steps_done:,}" if steps_done else ""
+    return (
+        f"total_timesteps {config.total_timesteps:,} {relation} of {rollout:,} steps (n_steps "
+        f"{config.ppo.n_steps} × n_envs {config.n_envs}){resumed}: training {'to ' if steps_done else ''}{end:,}"
+    )

@@ -16,8 +16,6 @@ stopped.
 
 from __future__ import annotations
 
-import json
-import os
 import queue
 import re
 from collections.abc import Iterator
@@ -27,10 +25,12 @@ from typing import Any
 
 import yaml
 
+from agents.common.folders import write_text_atomically
 from agents.common.seeds import MAX_RUN_SEED
 from agents.training.config import TrainConfig
 from agents.training.outputs import RunFiles
 from agents.training.parking import discard, park, parked_files, restore
+from agents.training.run_record import interrupted_at
 
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
 # Most seeds trained at once by the local backend; each wants a core or more.
@@ -68,6 +68,7 @@ class SeedJob:
     runs_dir: Path
     ship_to: Path | None
     parked_dir: Path | None = None
+    command: str | None = None  # the command line that trains the seeds, for the record
 
     @property
     def files(self) -> RunFiles:
@@ -89,12 +90,16 @@ def seed_jobs(
     runs_dir: Path,
     ship_to: Path | None,
     parked_dir: Path | None = None,
+    command: str | None = None,
 ) -> list[SeedJob]:
     """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds; seeds parked
-    in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty."""
+    in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty;
+    ``command`` is the command line recorded in each seed's record."""
     seed_ship_to = Path(ship_to) / config.name if ship_to is not None else None
     return [
-        SeedJob(replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to, parked_dir)
+        SeedJob(
+            replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to, parked_dir, command
+        )
         for seed in seeds
     ]
 
@@ -115,9 +120,7 @@ def write_seed_config(job: SeedJob) -> Path:
         f"# {job.source_config.name} with seed {job.config.seed}, written by\n"
         f"# flownav train --config {job.source_config} --seeds {job.config.seed}\n"
     )
-    temporary = files.config.with_suffix(".tmp")
-    temporary.write_text(header + yaml.safe_dump(mapping, sort_keys=False))
-    os.replace(temporary, files.config)
+    write_text_atomically(files.config, header + yaml.safe_dump(mapping, sort_keys=False))
     return files.config
 
 
@@ -146,11 +149,14 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
         files=job.files,
         in_process_envs=side_by_side,
         progress_bar=not side_by_side,
+        command=job.command,
     )
-    if json.loads(job.files.record.read_text())["sessions"][-1]["interrupted"]:
+    steps = interrupted_at(job.files)
+    if steps is not None:
         # Stop here rather than start the next seed: the same command resumes this one.
         raise KeyboardInterrupt(
-            f"seed {job.config.seed} saved at its last step; run the same command to resume"
+            f"seed {job.config.seed} saved at {steps:,} steps in {job.files.run_dir}; run the same command "
+            "to resume"
         )
     if job.parked is not None:
         discard(job.parked)

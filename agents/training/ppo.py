@@ -1,10 +1,11 @@
 """Trains a PPO policy on FlowNav from a YAML config (``flownav train --config configs/ppo_flow.yaml``).
 
-Read top to bottom: check the config; build ``n_envs`` environments in subprocesses (with sensor errors
-randomised per episode for a robust policy); build PPO, or resume it from the newest readable checkpoint; learn
-with a progress bar, TensorBoard logs, atomic checkpoints, an evaluation on held-out seeds that carries over
-resumes, and a wall-clock budget; then, Ctrl-C or not, select the policy and write it with its config, record
-and learning curve.
+Read top to bottom: check the config and that the output folders take files; build ``n_envs`` environments in
+subprocesses (with sensor errors randomised per episode for a robust policy); build PPO, or resume it from the
+newest readable checkpoint; record the session's start; learn with a progress bar, TensorBoard logs, atomic
+checkpoints, an evaluation on held-out seeds that carries over resumes, and a wall-clock budget; then, Ctrl-C
+or not, select the policy and write it with its config, learning curve and the session's end in the record.
+A failed write (full disk) ends the run with that one error, after closing the env workers.
 
 Everything goes to ``runs/<name>/`` (see :class:`agents.training.outputs.RunFiles`). Shipping to
 ``results/policies/`` is a separate step (``--ship``, ``--ship-only``; :mod:`agents.training.shipping`).
@@ -15,17 +16,19 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import time
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
+from agents.common.folders import check_writable_folder, named_os_error, naming_file
 from agents.common.machine import available_cores, code_version, cpu_model, gl_renderer
 from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
-from agents.training.config import TrainConfig, checked_config, init_source
+from agents.training.config import TrainConfig, checked_config, init_source, rollout_note
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
 from agents.training.interrupts import stop_signals_interrupt
 from agents.training.outputs import RunFiles
+from agents.training.run_record import FAILED, FINISHED, INTERRUPTED, SessionRecord
 from agents.training.saved_models import latest_checkpoint, load_policy_weights, save_atomically
 from agents.training.shipping import ship_run
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
@@ -34,8 +37,9 @@ from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
     """The run's learning curve: mean held-out return (and its min–max band) against steps."""
     temporary = output.with_name(f"{output.stem}.tmp.png")
-    plot_learning_curves({"mean return (held-out seeds)": evaluations}, temporary, title)
-    os.replace(temporary, output)
+    with naming_file(output):
+        plot_learning_curves({"mean return (held-out seeds)": evaluations}, temporary, title)
+        os.replace(temporary, output)
 
 
 def select_policy(model: Any, files: RunFiles) -> str:
@@ -49,8 +53,9 @@ def select_policy(model: Any, files: RunFiles) -> str:
     if files.best_model.is_file() and files.best_info.is_file():
         best = json.loads(files.best_info.read_text())
         temporary = files.policy.with_name(f"{files.policy.stem}.tmp.zip")
-        shutil.copyfile(files.best_model, temporary)
-        os.replace(temporary, files.policy)
+        with naming_file(files.policy):
+            shutil.copyfile(files.best_model, temporary)
+            os.replace(temporary, files.policy)
         return f"best held-out eval: mean return {best['mean_return']:.2f} at {best['timesteps']} steps"
     save_atomically(model, files.policy)
     return f"last: {model.num_timesteps} steps"
@@ -118,108 +123,9 @@ def init_summary(config: TrainConfig) -> dict[str, Any] | None:
     }
 
 
-def train(
-    config: TrainConfig,
-    *,
-    config_path: Path,
-    resume: bool,
-    runs_dir: Path,
-    ship_to: Path | None = None,
-    files: RunFiles | None = None,
-    in_process_envs: bool = False,
-    progress_bar: bool = True,
-) -> Path:
-    """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
-    training seeds); returns the run's policy path.
-
-    ``in_process_envs`` steps the envs in this process instead of one worker each (the same rollouts, see
-    :func:`agents.training.envs.build_envs`), for seeds trained side by side; ``progress_bar=False`` prints a
-    line every ``checkpoint_every`` steps instead, where several runs share one terminal.
-
-    Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
-    shipped deliberately later, with :func:`agents.training.shipping.ship_run`).
-
-    Raises:
-        ValueError: a config value outside its range (``total_timesteps`` 0, say), or a fresh start in a
-            folder holding an earlier run (see :func:`_build_model`).
-    """
-    import torch
-    from stable_baselines3.common.callbacks import CallbackList
-
-    from agents.training.callbacks import (
-        AtomicCheckpointCallback,
-        ProgressLines,
-        ResumableEvalCallback,
-        WallClockBudget,
-    )
-
-    config = checked_config(config, source=str(config_path))
-    torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
-    files = files or RunFiles.of(runs_dir, config.name)
-    envs, eval_env = build_envs(config, in_process=in_process_envs)
-    try:
-        model, resume_step = _build_model(config, envs, files, resume)
-        per_env = max(1, config.n_envs)
-        callbacks = CallbackList(
-            [
-                AtomicCheckpointCallback(
-                    max(1, config.checkpoint_every // per_env),
-                    str(files.checkpoints),
-                    name_prefix=config.name,
-                ),
-                ResumableEvalCallback(
-                    eval_env,
-                    files,
-                    resume_step,
-                    n_eval_episodes=config.eval_episodes,
-                    eval_freq=max(1, config.eval_every // per_env),
-                    deterministic=True,
-                    verbose=0,
-                ),
-                WallClockBudget(config.max_minutes),
-            ]
-        )
-        if not progress_bar:
-            callbacks.callbacks.append(
-                ProgressLines(config.checkpoint_every, f"{config.name} seed {config.seed}")
-            )
-    except BaseException:
-        close_quietly(envs)
-        close_quietly(eval_env)
-        raise
-    started = time.perf_counter()
-    steps_before = model.num_timesteps
-    interrupted = False
-    try:
-        with stop_signals_interrupt():
-            model.learn(
-                max(0, config.total_timesteps - model.num_timesteps),
-                callback=callbacks,
-                progress_bar=progress_bar,
-                reset_num_timesteps=resume_step is None,
-                tb_log_name=config.name,
-            )
-    except KeyboardInterrupt:
-        # Ctrl-C or SIGTERM ends this session early; what was learned is still saved below.
-        interrupted = True
-        print(f"interrupted at {model.num_timesteps} steps: saving; --resume continues from here")
-    finally:
-        # Interrupted or not, keep what was learned: the checkpoint is the resume point.
-        save_atomically(model, files.checkpoints / f"{config.name}_{model.num_timesteps}_steps.zip")
-        close_quietly(envs)
-        close_quietly(eval_env)
-    wall_minutes = (time.perf_counter() - started) / 60.0
-
-    selected = select_policy(model, files)
-    if Path(config_path).resolve() != files.config.resolve():
-        shutil.copyfile(config_path, files.config)
-    if files.evaluations.exists():
-        plot_learning_curve(files.evaluations, files.curve, config.name)
-    session = {
-        "steps_this_session": int(model.num_timesteps - steps_before),
-        "wall_minutes": round(wall_minutes, 1),
-        "steps_per_second": round((model.num_timesteps - steps_before) / max(wall_minutes * 60, 1e-9), 1),
-        "interrupted": interrupted,
+def session_facts(config: TrainConfig, in_process_envs: bool) -> dict[str, Any]:
+    """What a session runs with, for its entry in the record: the budget, the machine and the code."""
+    return {
         "total_timesteps_asked": config.total_timesteps,
         "max_minutes": config.max_minutes,
         "cpu": cpu_model(),
@@ -231,48 +137,176 @@ def train(
         "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
         "gl_renderer": gl_renderer(),
     }
-    write_record(
-        files,
-        session,
-        selected,
-        model.num_timesteps,
-        config_path,
-        resumed=resume_step is not None,
-        init=init_summary(config),
-    )
-    print(f"saved {files.policy} after {model.num_timesteps} steps ({wall_minutes:.1f} min this session)")
+
+
+def train(
+    config: TrainConfig,
+    *,
+    config_path: Path,
+    resume: bool,
+    runs_dir: Path,
+    ship_to: Path | None = None,
+    files: RunFiles | None = None,
+    in_process_envs: bool = False,
+    progress_bar: bool = True,
+    command: str | None = None,
+) -> Path:
+    """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
+    training seeds); returns the run's policy path.
+
+    ``in_process_envs`` steps the envs in this process instead of one worker each (the same rollouts, see
+    :func:`agents.training.envs.build_envs`), for seeds trained side by side; ``progress_bar=False`` prints a
+    line every ``checkpoint_every`` steps instead, where several runs share one terminal. ``command`` is the
+    command line recorded for the session (default: ``flownav train --config <config_path>``).
+
+    Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
+    shipped deliberately later, with :func:`agents.training.shipping.ship_run`); whether it was, the record
+    says (:func:`agents.training.run_record.interrupted_at`).
+
+    Raises:
+        ValueError: a config value outside its range (``total_timesteps`` 0, say), an output folder that
+            cannot be written, or a fresh start in a folder holding an earlier run (see :func:`_build_model`).
+        OSError: a write failed while training (full disk, file-size limit); it names the file, the
+            checkpoints written before stay, and the env workers are closed.
+    """
+    import torch
+
+    config = checked_config(config, source=str(config_path))
+    files = files or RunFiles.of(runs_dir, config.name)
+    for folder in (files.run_dir, ship_to):
+        if folder is not None:
+            check_writable_folder(folder)
+    files.run_dir.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
+    envs, eval_env = build_envs(config, in_process=in_process_envs)
+    # Workers ignore stop signals, so one left open would keep the process from exiting: close them whatever
+    # happens.
+    try:
+        model, resume_step = _build_model(config, envs, files, resume)
+        record = SessionRecord(
+            files,
+            session_facts(config, in_process_envs),
+            command=command or f"flownav train --config {config_path}" + (" --resume" if resume else ""),
+            keep_earlier=resume,
+            steps_at_start=model.num_timesteps,
+            init=init_summary(config),
+        )
+        callbacks = _callbacks(config, eval_env, files, resume_step, record, progress_bar)
+        status = _learn(model, config, files, record, callbacks, resume_step, progress_bar)
+    finally:
+        close_quietly(envs)
+        close_quietly(eval_env)
+
+    try:
+        selected = select_policy(model, files)
+        if Path(config_path).resolve() != files.config.resolve():
+            with naming_file(files.config):
+                shutil.copyfile(config_path, files.config)
+        if files.evaluations.exists():
+            plot_learning_curve(files.evaluations, files.curve, config.name)
+        record.end(status, model.num_timesteps, selected=selected)
+    except Exception as error:
+        with suppress(Exception):  # the record says why, where the disk still takes it
+            record.end(FAILED, model.num_timesteps, error=f"{type(error).__name__}: {error}")
+        raise
+    print(f"saved {files.policy} after {model.num_timesteps} steps ({record.wall_minutes:.1f} min this session)")
     if ship_to is not None:
-        if interrupted:
+        if status == INTERRUPTED:
             print(f"interrupted: not shipping; ship it later with --ship-only --config {config_path}")
         else:
             ship_run(files, ship_to)
     return files.policy
 
 
-def write_record(
+def _callbacks(
+    config: TrainConfig,
+    eval_env: Any,
     files: RunFiles,
-    session: dict,
-    selected: str,
-    total_timesteps: int,
-    config_path: Path,
-    *,
-    resumed: bool,
-    init: dict[str, Any] | None = None,
-) -> None:
-    """Append ``session`` to the run's record (a resumed run keeps its earlier sessions) and update the
-    totals over all sessions, with the earlier stage's ``init`` (:func:`init_summary`) added to the cost;
-    written atomically."""
-    record = json.loads(files.record.read_text()) if resumed and files.record.is_file() else {"sessions": []}
-    record["sessions"].append(session)
-    record["total_timesteps"] = int(total_timesteps)
-    record["selected"] = selected
-    record["total_wall_minutes"] = round(sum(s["wall_minutes"] for s in record["sessions"]), 1)
-    if init is not None:
-        record["init_from"] = init
-        record["total_wall_minutes_with_init"] = round(
-            record["total_wall_minutes"] + (init["wall_minutes"] or 0), 1
-        )
-    record["command"] = f"flownav train --config {config_path}" + (" --resume" if resumed else "")
-    temporary = files.record.with_suffix(".tmp")
-    temporary.write_text(json.dumps(record, indent=2))
-    os.replace(temporary, files.record)
+    resume_step: int | None,
+    record: SessionRecord,
+    progress_bar: bool,
+) -> Any:
+    """Checkpoints (each updating the record), the held-out evaluation, the wall-clock budget and, without a
+    progress bar, progress lines."""
+    from stable_baselines3.common.callbacks import CallbackList
+
+    from agents.training.callbacks import (
+        AtomicCheckpointCallback,
+        ProgressLines,
+        ResumableEvalCallback,
+        WallClockBudget,
+    )
+
+    per_env = max(1, config.n_envs)
+    callbacks = [
+        AtomicCheckpointCallback(
+            max(1, config.checkpoint_every // per_env),
+            str(files.checkpoints),
+            name_prefix=config.name,
+            on_save=record.progress,
+        ),
+        ResumableEvalCallback(
+            eval_env,
+            files,
+            resume_step,
+            n_eval_episodes=config.eval_episodes,
+            eval_freq=max(1, config.eval_every // per_env),
+            deterministic=True,
+            verbose=0,
+        ),
+        WallClockBudget(config.max_minutes),
+    ]
+    if not progress_bar:
+        callbacks.append(ProgressLines(config.checkpoint_every, f"{config.name} seed {config.seed}"))
+    return CallbackList(callbacks)
+
+
+def _learn(
+    model: Any,
+    config: TrainConfig,
+    files: RunFiles,
+    record: SessionRecord,
+    callbacks: Any,
+    resume_step: int | None,
+    progress_bar: bool,
+) -> str:
+    """Learn up to ``total_timesteps`` and save the final checkpoint, the resume point; returns the session's
+    status, :data:`FINISHED` or :data:`INTERRUPTED` (Ctrl-C or SIGTERM).
+
+    Raises:
+        OSError: a write failed (full disk, file-size limit), naming the file (the run's folder when the
+            writer did not say); the session is recorded as failed where the disk still allows.
+    """
+    note = rollout_note(config, model.num_timesteps)
+    if note is not None:
+        print(note)
+    record.restart_clock()
+    try:
+        with stop_signals_interrupt():
+            model.learn(
+                max(0, config.total_timesteps - model.num_timesteps),
+                callback=callbacks,
+                progress_bar=progress_bar,
+                reset_num_timesteps=resume_step is None,
+                tb_log_name=config.name,
+            )
+    except KeyboardInterrupt:
+        # Ctrl-C or SIGTERM ends this session early; what was learned is still saved.
+        print(f"interrupted at {model.num_timesteps} steps: saving; --resume continues from here")
+        _save_checkpoint(model, config, files)
+        return INTERRUPTED
+    except BaseException as error:
+        # Keep what can still be kept; a second failure (the same full disk) must not hide the first.
+        with suppress(Exception):
+            _save_checkpoint(model, config, files)
+        with suppress(Exception):
+            record.end(FAILED, model.num_timesteps, error=f"{type(error).__name__}: {error}")
+        if isinstance(error, OSError) and not isinstance(error, ConnectionError):
+            raise named_os_error(error, files.run_dir) from None
+        raise
+    _save_checkpoint(model, config, files)
+    return FINISHED
+
+
+def _save_checkpoint(model: Any, config: TrainConfig, files: RunFiles) -> None:
+    save_atomically(model, files.checkpoints / f"{config.name}_{model.num_timesteps}_steps.zip")

@@ -13,6 +13,7 @@ import os
 import shutil
 from pathlib import Path
 
+from agents.common.folders import check_writable_folder
 from agents.training.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 
@@ -26,6 +27,7 @@ def ship_run(files: RunFiles, ship_to: Path) -> list[Path]:
 
     Raises:
         FileNotFoundError: the run has no policy, config or record (train it first).
+        ValueError: ``ship_to`` cannot be created or written.
     """
     for required in (files.policy, files.config, files.record):
         if not required.is_file():
@@ -33,6 +35,7 @@ def ship_run(files: RunFiles, ship_to: Path) -> list[Path]:
                 f"run {files.run_dir} has no {required.name}: train it first (flownav train --config ...)"
             )
     ship_to = Path(ship_to)
+    check_writable_folder(ship_to, "--ship-to")
     ship_to.mkdir(parents=True, exist_ok=True)
     copies = {source: ship_to / name for source, name in files.shipped_names().items() if source.is_file()}
     stale = [ship_to / name for source, name in files.shipped_names().items() if not source.is_file()]

@@ -126,3 +126,49 @@ def test_version_and_scratch_defaults_of_report_writers(capsys) -> None:
     assert parser.parse_args(["bench", "env"]).out == Path("runs/bench")
     assert parser.parse_args(["bench", "estimator"]).out == Path("runs/bench")
     assert parser.parse_args(["replicate"]).out == Path("runs/thesis")
+
+
+def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypatch, capsys) -> None:
+    # The runner is replaced by one that writes made-up records: the table's shape is under test, not flying.
+    from agents.cli import main
+    from agents.common.paths import RESULTS_DIR
+    from agents.evaluation import runner
+    from agents.evaluation.episode import EpisodeRecord
+    from agents.evaluation.records import append_record
+
+    def made_up(tasks, csv_path, **kwargs) -> int:
+        for task in tasks:
+            success = task.agent != "straight"
+            fields = dict.fromkeys(("time_s", "path_length_m", "mean_points_valid", "episode_return"), 1.0)
+            record = EpisodeRecord(
+                agent=task.agent, factor=task.factor, level=task.level, seed=task.seed, collision=not success,
+                success=success, out_of_bounds=False, truncated=False, progress_m=30.0, steps=10,
+                min_clearance_m=0.5, median_depth_error=0.1, **fields,
+            )  # fmt: skip
+            append_record(csv_path, record)
+        return len(tasks)
+
+    monkeypatch.setattr(runner, "execute", made_up)
+    assert main(["demo", "--episodes", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "Only 5 episodes per agent: a quick look, not a ranking (the widest 95 % interval below spans 0.43)" in out
+    assert f"every agent on 300 test layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'}" in out
+    table = [line for line in out.splitlines() if line.startswith("|")]
+    assert table[0].startswith("| agent | episodes | failure rate [95 % CI] |")  # no constant factor, level
+    assert any(line.startswith("| ppo_flow | 5 | 0.00 [0.00, 0.43] |") for line in table)  # seeds pooled
+    assert len(table) == 2 + 9 and "clean" not in out.split("| agent |")[1]
+
+
+def test_demo_keeps_factor_and_level_columns_that_differ() -> None:
+    from agents.cli.demo import demo_report
+    from agents.evaluation.statistics import summarise
+
+    rows = [
+        {"agent": "bee", "factor": factor, "level": level, "seed": seed, "collision": False, "success": True}
+        | {"out_of_bounds": False, "progress_m": 30.0, "min_clearance_m": 0.5}
+        for factor, level in (("clean", 0.0), ("brightness", 0.5))
+        for seed in range(2)
+    ]
+    report = demo_report(summarise(rows), "FlowNav-v0", 2)
+    assert "| agent | factor | level | episodes |" in report and "| bee | brightness | 0.5 | 2 |" in report
+    assert "Only 2 episodes per agent" in report

@@ -11,8 +11,9 @@ import yaml
 import flownav_env  # noqa: F401
 from agents.common.seeds import TEST_SEED_START
 from agents.evaluation.records import drop_agents, read_records
-from agents.evaluation.runner import EpisodeTask, execute, pending_tasks, run_task
+from agents.evaluation.runner import execute, run_task
 from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.tasks import EpisodeTask, pending_tasks
 from agents.policies import agent_env_kwargs
 
 SMALL = {"camera_width": 96, "camera_height": 72}
@@ -91,9 +92,9 @@ def test_video_writes_an_mp4(tmp_path: Path) -> None:
     [
         (
             "evaluate",
-            ["(default: 20)", "(default: FlowNav-v0)", "(default: results/evaluations/episodes.csv)"],
+            ["(default: 20)", "(default: FlowNav-v0)", "(default: runs/evaluations/episodes.csv)"],
         ),
-        ("sweep", ["(default: configs/sweep.yaml)", "(default: results)", "(default: the config's)"]),
+        ("sweep", ["(default: the repository's configs/sweep.yaml)", "(default: runs/sweep;", "(default: the config's)"]),
         ("demo", ["(default: 5)", "(default: 2)"]),
     ],
 )
@@ -183,13 +184,13 @@ def test_evaluate_flies_a_learned_agents_shipped_training_seeds_from_another_fol
 
 def test_evaluate_flies_the_single_policy_only_when_asked(tmp_path: Path, monkeypatch) -> None:
     from agents.cli import main
-    from agents.common.paths import POLICIES_DIR
+    from agents.common.paths import RESULTS_DIR
     from agents.evaluation import runner
 
     flown: list[EpisodeTask] = []
     monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
     monkeypatch.chdir(tmp_path)
-    single = str(POLICIES_DIR / "ppo_flow.zip")
+    single = str(RESULTS_DIR / "sweep_thesis_range" / "policies" / "ppo_flow.zip")  # the pre-seed policy
     assert main(["evaluate", "--agent", "ppo_flow", "--policy", single, "--episodes", "2"]) == 0
     assert [(task.agent, task.policy) for task in flown] == [("ppo_flow", single)] * 2
 

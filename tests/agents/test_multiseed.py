@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -195,7 +196,11 @@ def test_sigterm_saves_the_seed_and_stops_before_the_next_even_in_the_background
     process.send_signal(signal.SIGTERM)
     output, _ = process.communicate(timeout=120)
     assert process.returncode == 130, output
-    assert "seed 0 saved at its last step; run the same command to resume" in output
+    assert re.search(
+        rf"interrupted: seed 0 saved at [\d,]+ steps in {re.escape(str(files.run_dir))}; run the same command "
+        "to resume",
+        output,
+    ), output
     record = json.loads(files.record.read_text())
     assert record["sessions"][-1]["interrupted"] is True
     assert not (runs_dir / "stopped" / "seed_1").exists()

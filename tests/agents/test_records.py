@@ -87,12 +87,13 @@ def test_a_torn_last_row_is_skipped_wherever_it_was_cut(tmp_path: Path) -> None:
     cut_after_last_comma = whole[: whole.rindex(",") + 1]
     cut_inside_last_field = whole[:-3]
     tampered = whole.replace("3.87", "9.87")
-    for torn in (cut_after_last_comma, cut_inside_last_field, tampered):
+    for offset, torn in enumerate((cut_after_last_comma, cut_inside_last_field, tampered), start=1):
         with path.open("a", newline="") as handle:
             handle.write(torn)  # an interrupted write: no line end
-        append_record(path, replace(RECORD, seed=RECORD.seed + 1))  # ends the torn line, adds a whole row
+        # ends the torn line, adds a whole row
+        append_record(path, replace(RECORD, seed=RECORD.seed + offset))
     episodes = read_episodes(path)
-    assert [r["seed"] for r in episodes.rows] == [RECORD.seed] + [RECORD.seed + 1] * 3
+    assert [r["seed"] for r in episodes.rows] == [RECORD.seed + offset for offset in range(4)]
     assert episodes.skipped == 3
 
 
@@ -154,7 +155,7 @@ def test_processes_appending_to_a_new_csv_at_once_write_one_header_and_whole_row
             b"name,score\r\nalice,3\r\n",
             r"foreign.csv is not a FlowNav episodes CSV: its header starts 'name,score'",
         ),
-        (b"\x89PNG\r\n\x1a\n\x00\xff\xfe", r"foreign.csv is not an episodes CSV \(not UTF-8 text"),
+        (b"\x89PNG\r\n\x1a\n\x00\xff\xfe", r"foreign.csv is not an episodes CSV \(its first line is not UTF-8 text"),
         (None, r"foreign.csv is a directory, not an episodes CSV"),
     ],
 )
@@ -199,3 +200,55 @@ def test_drop_agents_keeps_checksummed_rows_readable(tmp_path: Path) -> None:
     append_record(path, replace(RECORD, agent="bee"))
     assert drop_agents(path, ["bee"]) == 1
     assert [r["agent"] for r in read_records(path)] == ["straight"]
+
+
+def test_a_flipped_byte_costs_only_its_own_row(tmp_path: Path) -> None:
+    path = tmp_path / "episodes.csv"
+    for offset in range(3):
+        append_record(path, replace(RECORD, seed=RECORD.seed + offset))
+    data = bytearray(path.read_bytes())
+    second_row = data.index(b"\n", data.index(b"\n") + 1) + 1
+    data[second_row + 3] = 0xFF  # not UTF-8 any more: before, the whole file was refused
+    path.write_bytes(bytes(data))
+    episodes = read_episodes(path)
+    assert [row["seed"] for row in episodes.rows] == [RECORD.seed, RECORD.seed + 2]
+    assert episodes.skipped == 1
+    # Rewriting the file (dropping an agent) keeps the corrupt row's bytes as they were.
+    assert drop_agents(path, ["bee"]) == 0
+    assert path.read_bytes() == bytes(data)
+    # Appending still works, and the corrupt row's episode can be flown again.
+    append_record(path, replace(RECORD, seed=RECORD.seed + 1))
+    assert sorted(row["seed"] for row in read_episodes(path).rows) == [RECORD.seed + k for k in range(3)]
+
+
+def test_a_full_disk_is_one_error_naming_the_file_and_keeps_the_rows(tmp_path: Path) -> None:
+    """A real file-size limit (RLIMIT_FSIZE) in a child process: the append fails with EFBIG."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "episodes.csv"
+    append_record(path, RECORD)
+    before = path.read_bytes()
+    script = (
+        "import resource, signal, sys\n"
+        "from dataclasses import replace\n"
+        "from pathlib import Path\n"
+        "from agents.evaluation.records import append_record\n"
+        "from tests_record import RECORD\n"
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+        f"resource.setrlimit(resource.RLIMIT_FSIZE, ({len(before) + 10}, resource.RLIM_INFINITY))\n"
+        "try:\n"
+        f"    append_record(Path({str(path)!r}), replace(RECORD, seed=RECORD.seed + 1))\n"
+        "except OSError as error:\n"
+        "    print(error)\n"
+        "    sys.exit(3)\n"
+    )
+    (tmp_path / "tests_record.py").write_text(
+        f"from math import nan\nfrom agents.evaluation.episode import EpisodeRecord\nRECORD = {RECORD!r}\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 3, result.stderr
+    assert "cannot add an episode: File too large" in result.stdout and str(path) in result.stdout
+    assert read_records(path)[0]["seed"] == RECORD.seed  # what was written stays readable

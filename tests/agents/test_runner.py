@@ -16,12 +16,8 @@ from agents.evaluation import runner
 from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.records import append_record, read_episodes, read_records
-from agents.evaluation.runner import (
-    EpisodesInterrupted,
-    EpisodeTask,
-    execute,
-    pending_tasks,
-)
+from agents.evaluation.runner import EpisodesInterrupted, execute
+from agents.evaluation.tasks import EpisodeTask, pending_tasks
 from flownav_env.limits import episode_step_limit
 
 SMALL = (("camera_height", 72), ("camera_width", 96))
@@ -45,11 +41,10 @@ def test_records_carry_the_full_settings_they_were_flown_with(tmp_path: Path) ->
     # Every parameter of a reactive agent, its defaults too, so a re-tuned default is a different episode.
     assert record.agent_params == '{"flight_height":1.0,"heading_gain":1.5,"height_gain":2.0}'
     assert record.policy_sha256 == "" and record.code_version
-    identity = EpisodeTask("ppo_flow", "clean", 0.0, 0).identity()
+    identity = EpisodeTask("ppo_flow@0", "clean", 0.0, 0).identity()
     assert identity["env_kwargs"] == '{"obs_source":"flow"}'  # the policy's training settings are included
-    assert (
-        identity["policy_sha256"] == hashlib.sha256((POLICIES_DIR / "ppo_flow.zip").read_bytes()).hexdigest()
-    )
+    shipped = POLICIES_DIR / "ppo_flow" / "seed_0.zip"
+    assert identity["policy_sha256"] == hashlib.sha256(shipped.read_bytes()).hexdigest()
 
 
 @pytest.mark.parametrize(

@@ -19,7 +19,8 @@ import csv
 import math
 from pathlib import Path
 
-from agents.evaluation.runner import EpisodeTask, execute
+from agents.evaluation.runner import execute
+from agents.evaluation.tasks import EpisodeTask
 
 GOLDEN = Path(__file__).resolve().parents[1] / "data" / "same_seed_episodes.csv"
 TASKS = [

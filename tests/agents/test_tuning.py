@@ -15,7 +15,8 @@ from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation import runner
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.records import episode_key, read_records
-from agents.evaluation.runner import EpisodesInterrupted, EpisodeTask, canonical_json
+from agents.evaluation.runner import EpisodesInterrupted
+from agents.evaluation.tasks import EpisodeTask, canonical_json
 from agents.evaluation.tuning import TuningResult, tune, verdict
 from agents.evaluation.tuning_study import (
     SEARCH_SPACES,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import imageio.v2 as imageio
+import numpy as np
 import pytest
 
 
@@ -31,3 +32,19 @@ def test_commands_that_load_a_policy_say_what_loading_risks(capsys) -> None:
         with pytest.raises(SystemExit):
             main([command, "--help"])
         assert "unpickles" in " ".join(capsys.readouterr().out.split())
+
+
+def test_a_video_carries_the_agents_memory_from_step_to_step(tmp_path: Path, monkeypatch) -> None:
+    # A frame-stacked or recurrent policy keeps its memory in predict's state, told where the episode starts.
+    from agents.evaluation import video
+
+    calls = []
+
+    class Remembering:
+        def predict(self, observation, state=None, episode_start=None, deterministic=True):
+            calls.append((state, None if episode_start is None else bool(np.asarray(episode_start).any())))
+            return np.zeros(3, np.float32), len(calls)
+
+    monkeypatch.setattr(video, "load_agent", lambda *args, **kwargs: Remembering())
+    video.record_episode("bee", "FlowNavSingle-v0", 0, tmp_path / "m.mp4", max_steps=4)
+    assert calls == [(None, True), (1, False), (2, False), (3, False)]

@@ -1,0 +1,162 @@
+"""The training record (``runs/<name>/<name>.json``): the run's sessions, its totals and the selected policy.
+
+A session is written into the record when it starts and updated at each checkpoint and when it ends, so a
+session stopped outright (``kill -9``, a lost machine, a disk too full to take even the record) still shows:
+its ``ended`` stays null and its status ``"running"``, until the next session of the run marks it
+``"killed"``. Each session keeps the command that started it, every option included.
+
+``total_timesteps`` and ``selected`` describe the policy file written at a session's end, so they only change
+then (:meth:`agents.training.outputs.RunFiles.trained_steps` decides from them whether a seed is finished).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from datetime import datetime, timezone
+from typing import Any
+
+from agents.common.folders import write_text_atomically
+from agents.training.outputs import RunFiles
+
+# A session's status: running until it ends as finished, interrupted (Ctrl-C, SIGTERM) or failed (an error);
+# one that never wrote its end is marked killed by the next session.
+RUNNING, FINISHED, INTERRUPTED, FAILED, KILLED = "running", "finished", "interrupted", "failed", "killed"
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def read_record(files: RunFiles) -> dict[str, Any] | None:
+    """The run's record, or None when there is none or it does not read as a record (a warning says so)."""
+    if not files.record.is_file():
+        return None
+    try:
+        record = json.loads(files.record.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        print(f"warning: {files.record} is unreadable, starting a new record: {error}")
+        return None
+    if not isinstance(record, dict) or not isinstance(record.get("sessions"), list):
+        print(f"warning: {files.record} holds no list of sessions, starting a new record")
+        return None
+    return record
+
+
+def last_session(files: RunFiles) -> dict[str, Any]:
+    """The newest session in the run's record; empty when there is none."""
+    record = read_record(files)
+    return record["sessions"][-1] if record and record["sessions"] else {}
+
+
+def interrupted_at(files: RunFiles) -> int | None:
+    """The step count at which Ctrl-C or SIGTERM stopped the run's last session (and its checkpoint was saved),
+    or None when that session was not interrupted."""
+    session = last_session(files)
+    if session.get("status") != INTERRUPTED:
+        return None
+    return int(session["steps_at_start"]) + int(session["steps_this_session"])
+
+
+class SessionRecord:
+    """This session's entry in the run's record, written at once and kept up to date.
+
+    Args:
+        files: the run.
+        facts: what the session is run with (machine, code, config values), stored in its entry.
+        command: the command line that started the session.
+        keep_earlier: continue the record of earlier sessions (a resumed run) instead of starting anew.
+        steps_at_start: the model's step count when the session starts.
+        init: the earlier stage the run started from (:func:`agents.training.ppo.init_summary`), or None.
+
+    Raises:
+        OSError: the record could not be written; it names the file.
+    """
+
+    def __init__(
+        self,
+        files: RunFiles,
+        facts: dict[str, Any],
+        *,
+        command: str,
+        keep_earlier: bool,
+        steps_at_start: int,
+        init: dict[str, Any] | None = None,
+    ) -> None:
+        self.files = files
+        self.init = init
+        self.steps_at_start = int(steps_at_start)
+        self.started = time.perf_counter()
+        self.record = (read_record(files) if keep_earlier else None) or {"sessions": []}
+        for earlier in self.record["sessions"]:
+            if earlier.get("status") == RUNNING:  # it never wrote its end: killed outright
+                earlier.update(status=KILLED, interrupted=True)
+        self.session: dict[str, Any] = {
+            "started": _now(),
+            "ended": None,
+            "status": RUNNING,
+            "command": command,
+            "steps_at_start": self.steps_at_start,
+            "steps_this_session": 0,
+            "wall_minutes": 0.0,
+            "steps_per_second": 0.0,
+            "interrupted": None,
+            **facts,
+        }
+        self.record["sessions"].append(self.session)
+        self.record["command"] = command
+        self.write()
+
+    def restart_clock(self) -> None:
+        """Count the session's minutes from now: the time learning starts, after the envs and model are built."""
+        self.started = time.perf_counter()
+
+    @property
+    def wall_minutes(self) -> float:
+        """Minutes since the clock started."""
+        return (time.perf_counter() - self.started) / 60.0
+
+    def progress(self, steps: int) -> None:
+        """Record the steps (the model's count, ``steps``) and minutes so far; at each checkpoint.
+
+        Raises:
+            OSError: the record could not be written; it names the file.
+        """
+        minutes = self.wall_minutes
+        done = int(steps) - self.steps_at_start
+        self.session.update(
+            steps_this_session=done,
+            wall_minutes=round(minutes, 1),
+            steps_per_second=round(done / max(minutes * 60, 1e-9), 1),
+        )
+        self.write()
+
+    def end(self, status: str, steps: int, *, selected: str | None = None, error: str | None = None) -> None:
+        """Record the session's end: its ``status``, its steps and, when it wrote the run's policy, the policy's
+        steps and how it was ``selected``; ``error`` says why a failed session failed.
+
+        Raises:
+            OSError: the record could not be written; it names the file.
+        """
+        self.session.update(ended=_now(), status=status, interrupted=status != FINISHED)
+        if error is not None:
+            self.session["error"] = error
+        if selected is not None:
+            self.record["total_timesteps"] = int(steps)
+            self.record["selected"] = selected
+        self.progress(steps)
+
+    def write(self) -> None:
+        """Write the record with its totals over all sessions, atomically.
+
+        Raises:
+            OSError: the record could not be written; it names the file.
+        """
+        record = self.record
+        record["total_wall_minutes"] = round(sum(s.get("wall_minutes") or 0 for s in record["sessions"]), 1)
+        if self.init is not None:
+            record["init_from"] = self.init
+            record["total_wall_minutes_with_init"] = round(
+                record["total_wall_minutes"] + (self.init["wall_minutes"] or 0), 1
+            )
+        write_text_atomically(self.files.record, json.dumps(record, indent=2))

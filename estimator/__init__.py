@@ -6,7 +6,7 @@ numpy and OpenCV only: no MuJoCo, Gymnasium or torch here.
 
 Public API:
     :class:`CameraIntrinsics`, :class:`FlowDepthEstimator`, :class:`DepthPoints`, :func:`sector_histogram`,
-    :func:`sector_fraction`, :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.evaluation`.
+    :func:`sector_fraction`, :data:`DEFAULT_BIN_EDGES`. The evaluation on RGB-D sequences is in :mod:`estimator.accuracy`.
 """
 
 from importlib.metadata import PackageNotFoundError, version

@@ -30,7 +30,7 @@ def camera_motion_between(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Motion between two camera poses as the estimator wants it: ``X_next = R @ X_prev + t``.
 
-    Not :func:`estimator.evaluation.relative_motion`, which takes 4×4 camera-to-world matrices.
+    Not :func:`estimator.accuracy.relative_motion`, which takes 4×4 camera-to-world matrices.
 
     Args:
         rotation_prev, rotation_next: world-from-camera rotations (3, 3).

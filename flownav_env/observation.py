@@ -18,7 +18,7 @@ from estimator import (
     sector_histogram,
     sector_near_depth,
 )
-from estimator.evaluation import OUTLIER_RELATIVE_ERROR, relative_depth_error
+from estimator.accuracy import OUTLIER_RELATIVE_ERROR, relative_depth_error
 from flownav_env.settings import EnvSettings
 
 if TYPE_CHECKING:

@@ -10,8 +10,11 @@ from pathlib import Path
 
 import yaml
 
-from agents.common.config import load_config
-from agents.training.config import TrainConfig
+from agents.common.yaml_config import load_config
+from agents.training.train_config import TrainConfig
+
+# The real third-party images with ground truth, in ../shared beside the repository.
+TESTDATA = Path(__file__).resolve().parents[2] / "shared" / "testdata"
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 

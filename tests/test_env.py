@@ -390,7 +390,7 @@ def test_depth_error_info_can_be_skipped_where_only_flow_is_observed() -> None:
 def test_estimator_info_counts_depths_off_by_more_than_half_as_outliers() -> None:
     from types import SimpleNamespace
 
-    from estimator.evaluation import OUTLIER_RELATIVE_ERROR
+    from estimator.accuracy import OUTLIER_RELATIVE_ERROR
     from flownav_env.observation import estimator_info
 
     true_depth = np.array([2.0, 2.0, 2.0, 2.0, 2.0, np.nan])

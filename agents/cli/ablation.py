@@ -1,5 +1,5 @@
 """``flownav ablation``: training configs compared over their seeds on validation layouts (issue 16's levers),
-see :mod:`agents.evaluation.ablation`."""
+see :mod:`agents.studies.ablation`."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from agents.cli.arguments import add_env_argument
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
 
@@ -49,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.evaluation.ablation import compare_configs
+    from agents.studies.ablation import compare_configs
     from agents.training.multiseed import parse_seeds
 
     if args.workers < 1:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.common.paths import CONFIGS_DIR
+from agents.common.locations import CONFIGS_DIR
 
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
@@ -143,7 +143,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
     if args.target == "estimator":
-        from agents.benchmarks.estimator_report import run_estimator_benchmark
+        from agents.studies.perf.estimator_speed_report import run_estimator_benchmark
 
         paths = run_estimator_benchmark(
             frames=args.frames,
@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
     elif args.target == "yield":
-        from agents.benchmarks.depth_yield import DEFAULT_SETTINGS, run_depth_yield
+        from agents.studies.perf.depth_yield import DEFAULT_SETTINGS, run_depth_yield
 
         paths = run_depth_yield(
             args.frames,
@@ -171,9 +171,9 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
     elif args.target == "train":
-        from agents.benchmarks.training import run_training_benchmark
-        from agents.common.config import load_config
-        from agents.training.config import TrainConfig
+        from agents.common.yaml_config import load_config
+        from agents.studies.perf.training_speed import run_training_benchmark
+        from agents.training.train_config import TrainConfig
 
         paths = run_training_benchmark(
             load_config(args.config, TrainConfig),
@@ -186,7 +186,7 @@ def run(args: argparse.Namespace) -> int:
             side_by_side=args.side_by_side,
         )
     else:
-        from agents.benchmarks.env_report import run_env_benchmark
+        from agents.studies.perf.env_speed_report import run_env_benchmark
 
         paths = run_env_benchmark(
             resolutions=args.resolutions,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.common.paths import SCRATCH_DIR
+from agents.common.locations import SCRATCH_DIR
 
 HELP = "plot the held-out evaluation return of training runs against steps, one line per run"
 

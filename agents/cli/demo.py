@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from agents.common.paths import POLICIES_DIR, RESULTS_DIR
+from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "short evaluation of the shipped policies and the baselines (the README's main job)"

@@ -1,5 +1,5 @@
 """``flownav error-analysis``: how estimation errors cause failures, from a sweep's episodes: the tolerance table
-per agent and factor and the dose-response fits (see :mod:`agents.evaluation.error_analysis`)."""
+per agent and factor and the dose-response fits (see :mod:`agents.studies.error_analysis`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.common.paths import RESULTS_DIR, SCRATCH_DIR
+from agents.common.locations import RESULTS_DIR, SCRATCH_DIR
 
 HELP = (
     "tolerance table and dose-response fits from a sweep's episodes -> error_analysis.md, dose_response.png"
@@ -29,9 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.evaluation.error_analysis_report import write_error_analysis
     from agents.evaluation.records import read_records
     from agents.evaluation.sweep import pool_every_seed
+    from agents.studies.error_analysis_report import write_error_analysis
 
     episodes = Path(args.episodes)
     if not episodes.is_file():

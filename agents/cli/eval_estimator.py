@@ -24,7 +24,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from estimator import CameraIntrinsics
-    from estimator.evaluation import evaluate_sequence, format_error_table
+    from estimator.accuracy import evaluate_sequence, format_error_table
 
     intrinsics = CameraIntrinsics(
         fx=args.fx, fy=args.fy, cx=args.cx, cy=args.cy, width=args.width, height=args.height

@@ -12,7 +12,7 @@ import argparse
 from pathlib import Path
 
 from agents.cli.arguments import add_env_argument
-from agents.common.paths import SCRATCH_DIR
+from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
@@ -57,8 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.config import check_env_kwargs
     from agents.common.folders import check_writable_folder
+    from agents.common.yaml_config import check_env_kwargs
     from agents.evaluation.csv_file import check_is_file_target
     from agents.evaluation.records import read_episodes, start_new_file
     from agents.evaluation.runner import execute

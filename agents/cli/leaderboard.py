@@ -8,7 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.common.paths import POLICIES_DIR, RESULTS_DIR
+from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 
 HELP = "fly every agent (learned ones over their training seeds) on the test layouts; write the leading table"
 

@@ -1,4 +1,4 @@
-"""``flownav replicate``: the thesis's estimator experiments replayed in FlowNav (see :mod:`agents.thesis`)."""
+"""``flownav replicate``: the thesis's estimator experiments replayed in FlowNav (see :mod:`agents.studies.thesis`)."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import argparse
 import time
 from pathlib import Path
 
-from agents.common.paths import CONFIGS_DIR, RESULTS_DIR
+from agents.common.locations import CONFIGS_DIR, RESULTS_DIR
 
 HELP = "reproduce the thesis's estimator experiments (record/playback, Tables 2-3, test-sets C-H)"
 
 DEFAULT_CONFIGS = CONFIGS_DIR / "thesis"
 # Runs land in a scratch folder unless asked: the committed results/thesis/ is replaced only on purpose.
 DEFAULT_OUT = Path("runs") / "thesis"
-# Kept in step with agents.thesis.experiments.EXPERIMENTS (a test checks); listed here so --help stays instant.
+# Kept in step with agents.studies.thesis.experiments.EXPERIMENTS (a test checks); listed here so --help stays instant.
 EXPERIMENT_NAMES = ("straight", "rotation", "translation", "random6dof", "three_capsule")
 
 
@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the selected experiments, then rewrite the README from all results in ``--out``."""
-    from agents.thesis.report import run_experiment, write_readme
+    from agents.studies.thesis.report import run_experiment, write_readme
 
     names = args.only or list(EXPERIMENT_NAMES)
     started = time.perf_counter()

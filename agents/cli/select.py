@@ -1,12 +1,12 @@
 """``flownav select``: each finished training seed's policy chosen among finalists on 50 more validation layouts
-(see :mod:`agents.evaluation.selection`), optionally shipped again."""
+(see :mod:`agents.studies.selection`), optionally shipped again."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
 
 HELP = "choose each finished seed's policy among its finalists on 50 more validation layouts (resumable)"
 
@@ -25,12 +25,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.config import load_config
-    from agents.evaluation.selection import select_finalist
-    from agents.training.config import TrainConfig
+    from agents.common.yaml_config import load_config
+    from agents.studies.selection import select_finalist
     from agents.training.multiseed import parse_seeds
     from agents.training.outputs import RunFiles
     from agents.training.shipping import ship_run
+    from agents.training.train_config import TrainConfig
 
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")

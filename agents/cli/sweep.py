@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.common.paths import CONFIGS_DIR, RESULTS_DIR, SCRATCH_DIR
+from agents.common.locations import CONFIGS_DIR, RESULTS_DIR, SCRATCH_DIR
 
 HELP = "sweep agents × sensor errors (collision rates with 95 %% CIs; resumable; local or Ray)"
 

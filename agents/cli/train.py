@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
 from agents.training.parking import PARKED_DIR
 
 if TYPE_CHECKING:
@@ -89,11 +89,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.config import check_env_kwargs, load_config
-    from agents.training.config import TrainConfig, override
+    from agents.common.yaml_config import check_env_kwargs, load_config
     from agents.training.outputs import RunFiles
     from agents.training.ppo import train
     from agents.training.shipping import ship_run
+    from agents.training.train_config import TrainConfig, override
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)

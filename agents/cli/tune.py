@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.common.paths import SCRATCH_DIR
+from agents.common.locations import SCRATCH_DIR
 
 HELP = "tune a reactive agent on training seeds (TPE search, then finalists on fresh layouts; resumable)"
 
-# Kept in step with agents.evaluation.tuning_study.TUNABLE_AGENTS (a test checks), without importing optuna
+# Kept in step with agents.studies.tuning_study.TUNABLE_AGENTS (a test checks), without importing optuna
 # and the agents for `flownav --help`.
 TUNABLE_AGENTS = ("bee", "bee_robust", "vfh")
 
@@ -56,7 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.evaluation.tuning import Budget, tune
+    from agents.studies.tuning import Budget, tune
 
     budget = Budget(args.trials, args.search_episodes, args.finalists, args.final_episodes)
     result = tune(

@@ -12,7 +12,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from agents.common.paths import SCRATCH_DIR
+from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
 
 HELP = "record an mp4 of an agent's episode with the flow overlay"
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     if message:
         print(f"{message}; this video flies {args.agent}")
     out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{args.env_id}_{args.seed}.mp4")
-    from agents.evaluation.video import record_episode
+    from agents.studies.video import record_episode
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -7,7 +7,7 @@ import platform
 import subprocess
 from pathlib import Path
 
-from agents.common.paths import REPO_ROOT
+from agents.common.locations import REPO_ROOT
 
 
 def cpu_model() -> str:
@@ -23,39 +23,6 @@ def cpu_model() -> str:
 def available_cores() -> int:
     """Logical cores this process may use."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-
-
-SOFTWARE_RASTERISERS = ("llvmpipe", "softpipe", "swrast", "lavapipe", "software")
-
-
-def gl_renderer() -> str:
-    """The OpenGL renderer MuJoCo draws with (see :func:`flownav_env.rendering.gl_renderer_name`).
-
-    Recorded with every result because rendered pixels, and so the estimator's corners, differ slightly
-    between renderers.
-    """
-    from flownav_env.rendering import gl_renderer_name
-
-    return gl_renderer_name()
-
-
-def is_software_renderer(renderer: str) -> bool:
-    """Whether a renderer name from :func:`gl_renderer` is a CPU rasteriser (rendering then dominates a step)."""
-    return any(word in renderer.lower() for word in SOFTWARE_RASTERISERS)
-
-
-def machine_summary() -> str:
-    """One line: CPU, cores, Python, MuJoCo and OpenCV versions, the GL backend and its renderer."""
-    import cv2
-    import mujoco
-
-    import flownav_env  # noqa: F401  (picks the GL backend before mujoco is imported)
-
-    return (
-        f"{cpu_model()}, {available_cores()} cores, Python {platform.python_version()}, "
-        f"MuJoCo {mujoco.__version__}, OpenCV {cv2.__version__}, MUJOCO_GL={os.environ.get('MUJOCO_GL')} "
-        f"({gl_renderer()})"
-    )
 
 
 def code_version() -> str:

@@ -35,16 +35,3 @@ def training_env_seed(run_seed: int) -> int:
 def checkpoint_selection_seed(run_seed: int) -> int:
     """The first layout seed of training run ``run_seed``'s held-out evaluation env (a validation seed)."""
     return VALIDATION_SEED_START + run_seed * RUN_SEED_STRIDE
-
-
-def seed_range(seed: int) -> str:
-    """``"training"``, ``"validation"`` or ``"test"``: the range ``seed`` belongs to.
-
-    Raises:
-        ValueError: a negative seed (no range holds it).
-    """
-    if seed < 0:
-        raise ValueError(f"seed must be >= 0, got {seed}")
-    if seed < VALIDATION_SEED_START:
-        return "training"
-    return "validation" if seed < TEST_SEED_START else "test"

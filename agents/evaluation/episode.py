@@ -24,7 +24,7 @@ class EpisodeRecord:
 
     Depth quality, over the steps with ground truth: ``median_depth_error`` is the median of the per-step
     median relative errors, ``mean_depth_outlier_share`` the mean per-step share of valid depths off by more
-    than half (``estimator.evaluation.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth, or (the
+    than half (``estimator.accuracy.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth, or (the
     outlier share) in files written before it was recorded.
     """
 

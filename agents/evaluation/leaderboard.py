@@ -21,8 +21,8 @@ import numpy as np
 
 import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary queries GL)
 from agents.common.folders import check_writable_folder
-from agents.common.machine import code_version, machine_summary
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
+from agents.common.machine import code_version
 from agents.common.seeds import TEST_SEED_START
 from agents.common.tables import markdown_table, today, write_csv
 from agents.evaluation.over_seeds import (
@@ -34,6 +34,7 @@ from agents.evaluation.over_seeds import (
     runs_and_layouts_interval,
     success_outcomes,
 )
+from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval

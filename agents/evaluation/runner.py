@@ -17,13 +17,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
 from agents.evaluation.records import append_record, episode_identity, read_episodes
 from agents.evaluation.tasks import EpisodeTask, canonical_json, pending_tasks
 from agents.policies import load_agent
-from agents.training.interrupts import stop_signals_interrupt
 from flownav_env.limits import episode_step_limit
 
 # How often a run that is done checks whether another run has written the episodes it claimed.

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from agents.common.config import check_env_kwargs, field_range, load_config
 from agents.common.folders import check_writable_folder
-from agents.common.paths import REPO_ROOT
+from agents.common.locations import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
+from agents.common.yaml_config import check_env_kwargs, field_range, load_config
 from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import format_summary

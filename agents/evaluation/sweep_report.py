@@ -7,7 +7,8 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from agents.common.machine import code_version, machine_summary
+from agents.common.machine import code_version
+from agents.evaluation.provenance import machine_summary
 from agents.evaluation.statistics import format_summary, summarise
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
+from agents.common.manifest import file_sha256
 from agents.evaluation.csv_file import move_aside
 from agents.evaluation.records import (
     IDENTITY_FIELDS,
@@ -30,7 +31,6 @@ from agents.policies import (
     policy_file,
     split_agent_name,
 )
-from agents.training.manifest import file_sha256
 
 
 def canonical_json(value: Any) -> str:
@@ -42,7 +42,7 @@ _HASHES: dict[tuple[str, int, int], str] = {}
 
 
 def cached_file_sha256(path: Path) -> str:
-    """:func:`~agents.training.manifest.file_sha256` of the file ("" if there is none), cached while its size
+    """:func:`~agents.common.manifest.file_sha256` of the file ("" if there is none), cached while its size
     and mtime stay the same: every episode record carries its policy's hash."""
     try:
         stat = path.stat()

@@ -11,14 +11,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from agents.common.config import load_config
-from agents.common.paths import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR
+from agents.common.yaml_config import load_config
 from agents.policies.base import Agent, is_learned, seeded_agent_name, split_agent_name
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
 from agents.policies.seeds import TrainingSeedsAgent
-from agents.training.config import TrainConfig
+from agents.training.train_config import TrainConfig
 
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
 

@@ -15,14 +15,14 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from agents.common.config import ConfigError, load_config
+from agents.common.manifest import manifest_problem
+from agents.common.saved_models import SavedModel, read_saved_model
+from agents.common.yaml_config import ConfigError, load_config
 from agents.policies.base import Agent
 from agents.policies.observation_keys import CheckedPolicy, ObservationKeyCheck
 from agents.policies.stacked import FrameStackedAgent, stacked_space
 from agents.training.algorithms import algorithm_class, network_kwargs, policy_alias
-from agents.training.config import TrainConfig
-from agents.training.manifest import manifest_problem
-from agents.training.saved_models import SavedModel, read_saved_model
+from agents.training.train_config import TrainConfig
 
 
 class UnverifiedPolicyWarning(UserWarning):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import asdict
 from typing import Any
 
-from agents.training.config import PPOParams
+from agents.training.train_config import PPOParams
 
 # Fields of PPOParams that shape the policy network rather than the algorithm.
 _NETWORK_FIELDS = ("net_arch", "log_std_init", "lstm_hidden_size")

@@ -14,8 +14,8 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 
 from agents.common.folders import naming_file, write_text_atomically
+from agents.common.saved_models import read_saved_model, save_atomically
 from agents.training.outputs import RunFiles
-from agents.training.saved_models import read_saved_model, save_atomically
 
 
 class AtomicCheckpointCallback(CheckpointCallback):

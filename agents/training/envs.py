@@ -12,9 +12,9 @@ from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
+from agents.common.interrupts import ignore_stop_signals
 from agents.common.seeds import checkpoint_selection_seed, training_env_seed
-from agents.training.config import TrainConfig
-from agents.training.interrupts import ignore_stop_signals
+from agents.training.train_config import TrainConfig
 from flownav_env.limits import episode_step_limit
 
 

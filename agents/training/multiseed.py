@@ -27,10 +27,10 @@ import yaml
 
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import MAX_RUN_SEED
-from agents.training.config import TrainConfig
 from agents.training.outputs import RunFiles
 from agents.training.parking import discard, park, parked_files, restore
 from agents.training.run_record import interrupted_at
+from agents.training.train_config import TrainConfig
 
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
 # Most seeds trained at once by the local backend; each wants a core or more.
@@ -227,7 +227,7 @@ def _died(job: SeedJob, exit_code: int | None) -> str:
 def _seed_process(index: int, job: SeedJob, results: Any) -> None:
     """One seed trained side by side, in its own process: its outcome goes to ``results`` as ``(index, policy
     path or None, error or None)``."""
-    from agents.training.interrupts import ignore_ctrl_c
+    from agents.common.interrupts import ignore_ctrl_c
 
     ignore_ctrl_c()
     try:
@@ -247,7 +247,7 @@ def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
     """
     import multiprocessing
 
-    from agents.training.interrupts import stop_signals_interrupt
+    from agents.common.interrupts import stop_signals_interrupt
 
     context = multiprocessing.get_context("forkserver")
     results = context.Queue()

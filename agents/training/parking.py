@@ -13,9 +13,9 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from agents.common.paths import RESULTS_DIR
+from agents.common.locations import RESULTS_DIR
+from agents.common.saved_models import latest_checkpoint
 from agents.training.outputs import RunFiles
-from agents.training.saved_models import latest_checkpoint
 
 PARKED_DIR = RESULTS_DIR / "unfinished"
 

@@ -21,16 +21,17 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.folders import check_writable_folder, named_os_error, naming_file
-from agents.common.machine import available_cores, code_version, cpu_model, gl_renderer
+from agents.common.interrupts import stop_signals_interrupt
+from agents.common.machine import available_cores, code_version, cpu_model
+from agents.common.saved_models import latest_checkpoint, load_policy_weights, save_atomically
 from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
-from agents.training.config import TrainConfig, checked_config, init_source, rollout_note
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
-from agents.training.interrupts import stop_signals_interrupt
 from agents.training.outputs import RunFiles
 from agents.training.run_record import FAILED, FINISHED, INTERRUPTED, SessionRecord
-from agents.training.saved_models import latest_checkpoint, load_policy_weights, save_atomically
 from agents.training.shipping import ship_run
+from agents.training.train_config import TrainConfig, checked_config, init_source, rollout_note
+from flownav_env.rendering import gl_renderer_name
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 
@@ -135,7 +136,7 @@ def session_facts(config: TrainConfig, in_process_envs: bool) -> dict[str, Any]:
         # What the policy saw depends on these as much as on the config: record them per session.
         "code": code_version(),
         "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
-        "gl_renderer": gl_renderer(),
+        "gl_renderer": gl_renderer_name(),
     }
 
 

@@ -14,7 +14,7 @@ import shutil
 from pathlib import Path
 
 from agents.common.folders import check_writable_folder
-from agents.training.manifest import record_in_manifest
+from agents.common.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 
 

@@ -1,0 +1,249 @@
+"""Training configs compared over their seeds on validation layouts (``flownav ablation``): the issue-16 table of
+what each lever buys, decided without touching a test layout.
+
+Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``, or, where
+that folder is gone (a new checkout), the seed's shipped policy ``results/policies/<name>/seed_<k>.zip``; every run
+flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEED_START`) into its own CSV,
+``<out>/<name>/seed_<k>.csv`` (resumable). Per config: the failure rate over runs × layouts with a two-level
+bootstrap interval, each seed's failure rate, and the learning curves of its seeds. Reactive reference agents
+(``--reference bee_robust``) fly the same layouts once, into ``<out>/reference/<agent>.csv``, for a row with a
+Wilson interval: a lever is worth shipping only if it beats what needs no training.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common.folders import check_writable_folder
+from agents.common.locations import POLICIES_DIR
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
+from agents.common.tables import markdown_table, today
+from agents.common.yaml_config import check_env_kwargs, load_config
+from agents.evaluation.over_seeds import runs_and_layouts_interval
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import execute
+from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.tasks import (
+    EpisodeTask,
+    cached_file_sha256,
+    record_label,
+    rows_of,
+    set_aside_stale_episodes,
+)
+from agents.policies.base import REACTIVE_AGENTS
+from agents.training.curves import plot_grouped_learning_curves
+from agents.training.outputs import RunFiles
+from agents.training.train_config import TrainConfig
+
+# Any learned agent name loads a policy file with the env settings of the config beside it; the name only
+# labels the rows, and each run has its own CSV, so one name serves every config.
+RUN_LABEL = "ppo_flow"
+
+
+def ablation_tasks(
+    policy: Path | None, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
+) -> list[EpisodeTask]:
+    """One run's episodes on validation layouts ``ABLATION_SEED_START ..``: clean, or with the env settings
+    ``env`` on top of the run's own (issue 16's robustness conditions, such as ``obstacle_density=0.18``).
+    ``policy`` None: a reactive ``agent``.
+
+    Raises:
+        ValueError: so many episodes that they would reach the test layouts.
+    """
+    if episodes < 1 or ABLATION_SEED_START + episodes > TEST_SEED_START:
+        raise ValueError(
+            f"--episodes must be in [1, {TEST_SEED_START - ABLATION_SEED_START}] (validation layouts from "
+            f"{ABLATION_SEED_START:,}), got {episodes}"
+        )
+    seeds = range(ABLATION_SEED_START, ABLATION_SEED_START + episodes)
+    env = dict(env or {})
+    factor, level = record_label(env)
+    settings = tuple(sorted(env.items()))
+    policy_path = str(policy) if policy is not None else None
+    return [
+        EpisodeTask(agent, factor, level, seed, env_kwargs=settings, policy=policy_path) for seed in seeds
+    ]
+
+
+def compare_configs(
+    config_paths: Sequence[Path],
+    seeds: Sequence[int],
+    out: Path,
+    *,
+    runs_dir: Path = Path("runs"),
+    policies_dir: Path | None = POLICIES_DIR,
+    episodes: int = 100,
+    workers: int = 2,
+    report_only: bool = False,
+    command: str = "flownav ablation",
+    reference_agents: Sequence[str] = (),
+    env: Mapping[str, Any] | None = None,
+) -> list[str]:
+    """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
+    ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
+    policy shipped to ``policies_dir`` (None: runs only); one that is neither is listed as missing, not flown.
+    ``env``: FlowNavEnv settings every run and reference agent flies with (default: clean). Its episodes are
+    labelled with the setting, so they never count with another condition's in the same CSV; ``ablation.md``
+    reports the condition asked, so give each condition its own ``out`` to keep each report.
+
+    Raises:
+        ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
+            reactive.
+    """
+    env = check_env_kwargs(dict(env or {}), "command line", key="--env")
+    for agent in reference_agents:
+        if agent not in REACTIVE_AGENTS:
+            raise ValueError(
+                f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
+            )
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows, missing, curves = [], [], {}
+    for config_path in config_paths:
+        config = load_config(Path(config_path), TrainConfig)
+        name = config.name
+        outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
+        for seed in seeds:
+            files = seed_files(runs_dir, policies_dir, name, seed, config.total_timesteps)
+            if files is None:
+                steps = RunFiles.of_seed(runs_dir, name, seed).trained_steps()
+                unfinished = f" (unfinished: {steps:,} of {config.total_timesteps:,} steps)" if steps else ""
+                missing.append(f"{name} seed {seed}{unfinished}")
+                continue
+            tasks = ablation_tasks(files.policy, episodes, env)
+            flown = _fly(tasks, out / name / f"seed_{seed}.csv", workers, report_only, f"{name} seed {seed}")
+            if len(flown) < episodes:
+                missing.append(f"{name} seed {seed} ({len(flown)} of {episodes} episodes)")
+                continue
+            by_seed = {int(r["seed"]): r for r in flown}
+            outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
+            per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
+            for key in counts:
+                counts[key] += sum(bool(r[key]) for r in flown)
+            evaluations = files.evaluations
+            if not evaluations.is_file():  # a shipped seed: its evaluations beside the policy
+                evaluations = files.run_dir / files.shipped_names()[files.evaluations]
+            if evaluations.is_file():
+                curves.setdefault(name, {})[f"seed {seed}"] = evaluations
+        if outcomes:
+            rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
+    for agent in reference_agents:
+        tasks = ablation_tasks(None, episodes, env, agent=agent)
+        reference_csv = out / "reference" / f"{agent}.csv"
+        if not report_only:
+            set_aside_stale_episodes(
+                tasks, reference_csv, f"{agent}'s parameters have changed; flying it anew"
+            )
+        flown = _fly(tasks, reference_csv, workers, report_only, f"{agent} (reference)")
+        if len(flown) < episodes:
+            missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
+            continue
+        rows.append(_reference_row(agent, flown))
+    lines = _report(rows, missing, seeds, episodes, command, env)
+    if curves:
+        plot_grouped_learning_curves(
+            curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
+        )
+        lines += ["", "![learning curves](ablation_curves.png)"]
+    (out / "ablation.md").write_text("\n".join(lines) + "\n")
+    return lines
+
+
+def seed_files(
+    runs_dir: Path, policies_dir: Path | None, name: str, seed: int, total_timesteps: int
+) -> RunFiles | None:
+    """The files of finished training seed ``seed`` of config ``name``: its shipped files (``<policies_dir>/
+    <name>/seed_<k>.*``, the same names without the run folder) unless its run folder holds another finished
+    policy (it trained on or was selected since shipping), then the run folder's; None when neither holds a
+    finished one. A run folder stopped short of ``total_timesteps`` never counts: its policy is whatever the
+    interruption saved. The shipped copy is the one its folder's manifest vouches for."""
+    run = RunFiles.of_seed(runs_dir, name, seed)
+    run_finished = run.trained_steps() >= total_timesteps
+    shipped = RunFiles(Path(policies_dir) / name, run.name) if policies_dir is not None else None
+    if shipped is not None and shipped.policy.is_file():
+        if not run_finished or cached_file_sha256(run.policy) == cached_file_sha256(shipped.policy):
+            return shipped
+    return run if run_finished else None
+
+
+def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:
+    success = float(outcomes.mean())
+    if len(outcomes) > 1:
+        low, high = runs_and_layouts_interval(outcomes)
+        interval = f"[{1 - high:.2f}, {1 - low:.2f}]"
+    else:
+        interval = "(one seed)"
+    total = outcomes.size
+    return [
+        name,
+        len(outcomes),
+        total,
+        f"{1 - success:.2f} {interval}",
+        f"{success:.2f}",
+        f"{counts['collision'] / total:.2f}",
+        f"{counts['out_of_bounds'] / total:.2f}",
+        ", ".join(f"{seed}: {rate:.2f}" for seed, rate in per_seed),
+    ]
+
+
+def _fly(
+    tasks: list[EpisodeTask], csv_path: Path, workers: int, report_only: bool, description: str
+) -> list[dict[str, Any]]:
+    """Fly ``tasks`` into ``csv_path`` (resumably; nothing with ``report_only``) and return their records."""
+    csv_path.parent.mkdir(parents=True, exist_ok=True)
+    if not report_only:
+        execute(tasks, csv_path, workers=workers, description=description)
+    return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+
+
+def _reference_row(agent: str, flown: list[dict[str, Any]]) -> list[Any]:
+    total = len(flown)
+    failures = sum(not bool(row["success"]) for row in flown)
+    low, high = wilson_interval(failures, total)
+    return [
+        f"{agent} (reactive, reference)",
+        "-",
+        total,
+        f"{failures / total:.2f} [{low:.2f}, {high:.2f}]",
+        f"{1 - failures / total:.2f}",
+        f"{sum(bool(row['collision']) for row in flown) / total:.2f}",
+        f"{sum(bool(row['out_of_bounds']) for row in flown) / total:.2f}",
+        "-",
+    ]
+
+
+def _report(
+    rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str, env: dict[str, Any]
+) -> list[str]:
+    condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
+    lines = [
+        "# Ablations on validation layouts",
+        "",
+        f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
+        f"{ABLATION_SEED_START + episodes - 1:,} ({condition}), never a test layout; seeds asked: "
+        f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
+        "two-level bootstrap (runs, then layouts within each run); a reactive reference row's is Wilson's over its "
+        "layouts.",
+        "",
+        markdown_table(
+            [
+                "config",
+                "seeds",
+                "episodes",
+                "failure rate [95 % CI]",
+                "success",
+                "collision",
+                "out of bounds",
+                "failure per seed",
+            ],
+            rows,
+        ),
+    ]
+    if missing:
+        lines += ["", "Not flown (not trained, or cut short): " + "; ".join(missing) + "."]
+    return lines

@@ -1,0 +1,207 @@
+"""One playback of a camera path through every estimator variant, with ground truth by ray casting."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from agents.studies.thesis.attitude import AttitudeRotationError
+from agents.studies.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
+from flownav_env.playback import play_back
+
+
+@dataclass
+class RunResult:
+    """One playback through both estimators.
+
+    Attributes:
+        methods: Per method (and x-flow / y-flow variants) the per-frame dicts of :func:`depth_metrics`, each
+            with ``points`` too.
+        references: (frames - 1, M) ground-truth z-depth of each capsule's surface facing the camera (at the
+            camera's height on the capsule's axis), NaN where off-screen or hidden; one row per estimated frame.
+        timings: Per method, per stage, the per-frame seconds (``DepthPoints.timings``).
+        render_s: Seconds per rendered frame.
+        residuals: Per frame the tracked points' p1, p2 and tracked mask (thesis estimator), the told and true
+            rotations and the camera's world-from-camera rotation (its attitude) when it was rendered.
+    """
+
+    methods: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    references: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    timings: dict[str, dict[str, list[float]]] = field(default_factory=dict)
+    render_s: list[float] = field(default_factory=list)
+    residuals: list[dict[str, np.ndarray]] = field(default_factory=list)
+
+
+def _reference_depths(world: Any, intrinsics: Any, rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+    # The line the thesis plots each obstacle against: the capsule surface straight in front of its axis, at
+    # the camera's height, where that point is in view and not hidden behind another capsule.
+    layout = world.layout
+    axis_z = np.clip(position[2], layout.obstacle_radius, layout.obstacle_height - layout.obstacle_radius)
+    depths = np.full(len(world.obstacles), np.nan)
+    for k, (x, y) in enumerate(world.obstacles):
+        camera_point = rotation.T @ (np.array([x, y, axis_z]) - position)
+        if camera_point[2] <= 0:
+            continue
+        ray = np.array([camera_point[0] / camera_point[2], camera_point[1] / camera_point[2], 1.0])
+        pixel = intrinsics.denormalize(ray[None, :2])[0]
+        if not (0 <= pixel[0] <= intrinsics.width - 1 and 0 <= pixel[1] <= intrinsics.height - 1):
+            continue
+        depth = world.true_depth(ray[None], rotation, position)
+        hit = position + rotation @ (ray * depth[0])
+        if np.isfinite(depth[0]) and world.label_points(hit[None])[0] == k:
+            depths[k] = depth[0]
+    return depths
+
+
+def run_playback(
+    path: Any,
+    world: Any,
+    settings: Any,
+    estimator_kwargs: dict[str, Any],
+    *,
+    component_variants: bool = False,
+    keep_residuals: bool = False,
+    attitude_error: float = 0.0,
+    progress: bool = True,
+    description: str = "",
+) -> RunResult:
+    """Play a path back through the renderer into both estimators and compare every depth with the truth.
+
+    Args:
+        path: :class:`flownav_env.playback.CameraPath`.
+        world: :class:`flownav_env.playback.PlaybackWorld` built from the path.
+        settings: :class:`flownav_env.playback.PlaybackSettings`.
+        estimator_kwargs: :class:`estimator.FlowDepthEstimator` kwargs (without ``method``).
+        component_variants: Also compute x-flow-only and y-flow-only depths from the thesis estimator's tracks.
+        keep_residuals: Keep p1, p2, the told and true rotations and the attitude per frame.
+        attitude_error: Tell rotations built from absolute attitudes whose Euler angles each carry up to this
+            relative error (:class:`agents.studies.thesis.attitude.AttitudeRotationError`), in place of the told
+            rotation of ``settings``; its draws come from their own generator seeded with ``settings.seed``.
+        progress: Show a tqdm progress bar.
+        description: Label of the progress bar.
+
+    Returns:
+        A :class:`RunResult`.
+    """
+    from tqdm import tqdm
+
+    from estimator import CameraIntrinsics, FlowDepthEstimator
+    from estimator.geometry import solve_depth, valid_depth_mask
+
+    intrinsics = CameraIntrinsics.from_fov(world.width, world.height, world.fov_deg)
+    estimators = {m: FlowDepthEstimator(intrinsics, method=m, **estimator_kwargs) for m in METHODS}
+    reference = estimators["thesis"]
+    names = list(METHODS) + (list(COMPONENT_VARIANTS) if component_variants else [])
+    result = RunResult(methods={name: [] for name in names}, timings={m: {} for m in METHODS})
+    references = []
+    previous_pose = None
+    if settings.distance_per_frame is not None:
+        total = math.floor(path.arc_length()[-1] / settings.distance_per_frame + 1e-9) + 1
+    else:
+        total = len(path)
+    if settings.max_frames is not None:
+        total = min(total, settings.max_frames)
+    frames = play_back(path, world, settings)
+    attitude = AttitudeRotationError(attitude_error, np.random.default_rng([settings.seed, 1]))
+    bar = tqdm(total=total, desc=description, disable=not progress, leave=False)
+    while True:
+        # Timed by hand around next(): the generator places the camera and renders inside it.
+        start = time.perf_counter()
+        frame = next(frames, None)
+        if frame is None:
+            break
+        result.render_s.append(time.perf_counter() - start)
+        bar.update()
+        image = frame.image
+        told_rotation, told_translation = frame.told_motion
+        if attitude_error > 0:
+            told_rotation = attitude.told_rotation(frame.rotation, first=frame.index == 0)
+        outputs = {m: estimators[m].update(image, told_rotation, told_translation) for m in METHODS}
+        if previous_pose is None:
+            previous_pose = (frame.rotation, frame.position)
+            continue
+        rotation_prev, position_prev = previous_pose
+        references.append(_reference_depths(world, intrinsics, rotation_prev, position_prev))
+        truth_cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+        def truth(
+            points: np.ndarray, rotation_prev=rotation_prev, position_prev=position_prev, cache=truth_cache
+        ):
+            key = points.tobytes()
+            if key not in cache:
+                rays = intrinsics.rays(points)
+                depth = world.true_depth(rays, rotation_prev, position_prev)
+                hits = position_prev + (rays * depth[:, None]) @ rotation_prev.T
+                cache[key] = (depth, world.label_points(hits))
+            return cache[key]
+
+        for method, points in outputs.items():
+            true_depth, labels = truth(points.points)
+            result.methods[method].append(
+                {
+                    "points": points.points,
+                    "depth": points.depth,
+                    "valid": points.valid,
+                    "true_depth": true_depth,
+                    "labels": labels,
+                    "tracked": points.num_tracked,
+                }
+            )
+            for stage, seconds in points.timings.items():
+                result.timings[method].setdefault(stage, []).append(seconds)
+        thesis_points = outputs["thesis"]
+        if component_variants:
+            normalized_prev = intrinsics.normalize(thesis_points.points)
+            normalized_next = intrinsics.normalize(thesis_points.next_points)
+            true_depth, labels = truth(thesis_points.points)
+            # The epipolar check of the full solution guards the single-component depths against mistracks.
+            full = solve_depth(
+                normalized_prev, normalized_next, told_rotation, told_translation, intrinsics.focal_scale
+            )
+            epipolar_ok = valid_depth_mask(full, 0.0, reference.max_epipolar_error_px)
+            for component, name in enumerate(COMPONENT_VARIANTS):
+                depth, parallax = component_depth(
+                    normalized_prev,
+                    normalized_next,
+                    told_rotation,
+                    told_translation,
+                    intrinsics.focal_scale,
+                    component,
+                )
+                with np.errstate(invalid="ignore"):
+                    valid = (
+                        thesis_points.tracked
+                        & epipolar_ok
+                        & (parallax >= reference.min_parallax_px)
+                        & np.isfinite(depth)
+                        & (depth > 0)
+                    )
+                result.methods[name].append(
+                    {
+                        "points": thesis_points.points,
+                        "depth": depth,
+                        "valid": valid,
+                        "true_depth": true_depth,
+                        "labels": labels,
+                        "tracked": thesis_points.num_tracked,
+                    }
+                )
+        if keep_residuals:
+            result.residuals.append(
+                {
+                    "points": thesis_points.points,
+                    "next_points": thesis_points.next_points,
+                    "tracked": thesis_points.tracked,
+                    "rotation": told_rotation,
+                    "true_rotation": frame.true_motion[0],
+                    "attitude": frame.rotation,
+                }
+            )
+        previous_pose = (frame.rotation, frame.position)
+    bar.close()
+    result.references = np.asarray(references).reshape(len(references), len(world.obstacles))
+    return result

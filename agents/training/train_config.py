@@ -1,0 +1,159 @@
+"""A training run's YAML, as typed dataclasses: the PPO hyperparameters, the per-episode sensor
+randomisation and the run itself (``configs/ppo_*.yaml``)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from agents.common.seeds import MAX_RUN_SEED
+from agents.common.yaml_config import env_setting_field, field_range, from_mapping
+
+
+@dataclass
+class PPOParams:
+    """stable-baselines3 PPO hyperparameters (see its docs); ``net_arch`` sizes both actor and critic."""
+
+    learning_rate: float = field_range(1e-6, 1.0, default=3e-4)
+    n_steps: int = field_range(8, 100_000, default=512)
+    batch_size: int = field_range(8, 100_000, default=256)
+    n_epochs: int = field_range(1, 100, default=10)
+    gamma: float = field_range(0.0, 1.0, default=0.99)
+    gae_lambda: float = field_range(0.0, 1.0, default=0.95)
+    clip_range: float = field_range(0.01, 1.0, default=0.2)
+    ent_coef: float = field_range(0.0, 1.0, default=0.0)
+    net_arch: list[int] = field_range(1, 4096, default_factory=lambda: [64, 64])
+    # Initial log standard deviation of the Gaussian actions: 0 (std 1) on a [-1, 1] action box is mostly
+    # clipped, bang-bang exploration that crashes early; lower starts calmer.
+    log_std_init: float = field_range(-5.0, 2.0, default=0.0)
+    # 0: a feed-forward policy (PPO). Above 0: an LSTM of this many units after the shared features
+    # (sb3-contrib's RecurrentPPO), so the policy can remember what left the view.
+    lstm_hidden_size: int = field_range(0, 1024, default=0)
+
+
+@dataclass
+class Randomization:
+    """Per-episode uniform ranges [low, high] of the sensor and course variables; empty = fixed."""
+
+    rotation_error: list[float] = env_setting_field("rotation_error", default_factory=list)
+    translation_error: list[float] = env_setting_field("translation_error", default_factory=list)
+    attitude_jitter_deg: list[float] = env_setting_field("attitude_jitter_deg", default_factory=list)
+    brightness: list[float] = env_setting_field("brightness", default_factory=list)
+    rotation_bias: list[float] = env_setting_field("rotation_bias", default_factory=list)
+    translation_bias: list[float] = env_setting_field("translation_bias", default_factory=list)
+    rotation_drift: list[float] = env_setting_field("rotation_drift", default_factory=list)
+    translation_drift: list[float] = env_setting_field("translation_drift", default_factory=list)
+    rotation_noise_deg: list[float] = env_setting_field("rotation_noise_deg", default_factory=list)
+    translation_noise_m: list[float] = env_setting_field("translation_noise_m", default_factory=list)
+    depth_noise: list[float] = env_setting_field("depth_noise", default_factory=list)
+    depth_outliers: list[float] = env_setting_field("depth_outliers", default_factory=list)
+    depth_dropout: list[float] = env_setting_field("depth_dropout", default_factory=list)
+    # The course, drawn before each reset (the time limit is set for the slowest speed).
+    forward_speed: list[float] = env_setting_field("forward_speed", default_factory=list)
+    obstacle_density: list[float] = env_setting_field("obstacle_density", default_factory=list)
+
+    def validate(self) -> None:
+        for name, bounds in asdict(self).items():
+            if bounds and (len(bounds) != 2 or bounds[0] > bounds[1]):
+                raise ValueError(f"key 'randomize.{name}' must be [low, high] with low <= high, got {bounds}")
+
+
+@dataclass
+class TrainConfig:
+    """A training run. Every key of the YAML file maps to a field here."""
+
+    name: str
+    env_id: str = "FlowNav-v0"
+    env: dict[str, Any] = field(default_factory=dict)
+    randomize: Randomization = field(default_factory=Randomization)
+    total_timesteps: int = field_range(1, 100_000_000, default=400_000)
+    n_envs: int = field_range(1, 64, default=2)
+    seed: int = field_range(0, MAX_RUN_SEED, default=0)  # the run's seed: PPO's and its env workers'
+    max_minutes: float = field_range(0.1, 10_000.0, default=60.0)
+    checkpoint_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_every: int = field_range(1, 100_000_000, default=20_000)
+    eval_episodes: int = field_range(1, 1000, default=10)
+    # Memory by frame stacking (SB3's VecFrameStack): the policy sees the observations of the last
+    # ``frame_stack`` frames, each array stacked along its last axis; 1 = the current frame only.
+    frame_stack: int = field_range(1, 16, default=1)
+    # A curriculum's later stage starts from an earlier stage's policy: a model zip, where ``{seed}`` stands
+    # for this run's seed (``results/policies/ppo_flow/seed_{seed}.zip``); empty = random initial weights.
+    # Only the policy's weights carry over: the optimiser, step count and evaluations start afresh.
+    init_from: str = ""
+    ppo: PPOParams = field(default_factory=PPOParams)
+
+    def validate(self) -> None:
+        if self.init_from:
+            try:
+                self.init_from.format(seed=0)
+            except (KeyError, IndexError, ValueError) as error:
+                raise ValueError(
+                    f"key 'init_from' may hold only the placeholder {{seed}}, got {self.init_from!r} ({error})"
+                ) from error
+        if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
+            raise ValueError(
+                f"keys 'frame_stack' ({self.frame_stack}) and 'ppo.lstm_hidden_size' ({self.ppo.lstm_hidden_size}) "
+                "are two kinds of memory: use one (frame_stack: 1 or lstm_hidden_size: 0)"
+            )
+
+
+def init_source(config: TrainConfig) -> Path | None:
+    """The model zip ``config.init_from`` names for the run's seed, or None for random initial weights."""
+    return Path(config.init_from.format(seed=config.seed)) if config.init_from else None
+
+
+def checked_config(config: TrainConfig, source: str) -> TrainConfig:
+    """``config`` validated again as if loaded from a file, for values set after loading (command-line
+    overrides, code); returns the validated copy.
+
+    Raises:
+        ConfigError (a ValueError): a value outside its field's range, naming ``source`` and the key.
+    """
+    return from_mapping(asdict(config), TrainConfig, source=source)
+
+
+def field_bounds(name: str) -> tuple[float | None, float | None]:
+    """The [low, high] range declared on the TrainConfig field ``name``, for messages about overrides."""
+    (match,) = [f for f in fields(TrainConfig) if f.name == name]
+    return match.metadata["range"]
+
+
+def override(config: TrainConfig, name: str, value: float | None, option: str) -> None:
+    """Set ``config.<name>`` from the command-line ``option`` when given, checked against the field's range.
+
+    Raises:
+        ValueError: ``value`` outside the range; the message names the option and the range.
+    """
+    if value is None:
+        return
+    low, high = field_bounds(name)
+    if (low is not None and value < low) or (high is not None and value > high):
+        raise ValueError(f"{option} must be in [{low}, {high}] (the config's {name} range), got {value}")
+    setattr(config, name, value)
+
+
+def rollout_note(config: TrainConfig, steps_done: int) -> str | None:
+    """The line that says how far learning really goes when it is not ``total_timesteps``, else None.
+
+    PPO learns from whole rollouts of ``n_steps × n_envs`` steps, so it trains on to the end of the rollout
+    that reaches ``total_timesteps``: a budget below one rollout still trains a whole one.
+
+    Args:
+        config: the run's config.
+        steps_done: the steps already trained (a resumed run's count), from which the rollouts are counted.
+
+    Returns:
+        One line naming the budget, the rollout and the steps it will train, or None when they agree.
+    """
+    rollout = config.ppo.n_steps * config.n_envs
+    remaining = config.total_timesteps - steps_done
+    if remaining <= 0 or remaining % rollout == 0:
+        return None
+    end = steps_done + -(-remaining // rollout) * rollout
+    relation = "is less than one rollout" if remaining < rollout else "is not a whole number of rollouts"
+    resumed = f" after the resumed {steps_done:,}" if steps_done else ""
+    return (
+        f"total_timesteps {config.total_timesteps:,} {relation} of {rollout:,} steps (n_steps "
+        f"{config.ppo.n_steps} × n_envs {config.n_envs}){resumed}: training {'to ' if steps_done else ''}{end:,}"
+    )

@@ -1,0 +1,167 @@
+"""Ablations: every trained seed of each config flies the same validation layouts into its own CSV; missing
+seeds are listed, not flown; the episode budget never reaches the test layouts."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+from helpers import tiny_train_config
+
+from agents.cli import main
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.evaluation.records import read_records
+from agents.policies import REACTIVE_AGENTS
+from agents.studies.ablation import ablation_tasks, compare_configs, seed_files
+from agents.training.multiseed import seed_jobs, train_seeds
+from agents.training.outputs import RunFiles
+
+
+def test_ablation_layouts_are_validation_layouts() -> None:
+    tasks = ablation_tasks(Path("p.zip"), 3)
+    assert [t.seed for t in tasks] == [ABLATION_SEED_START + i for i in range(3)]
+    assert VALIDATION_SEED_START <= ABLATION_SEED_START and tasks[-1].seed < TEST_SEED_START
+    with pytest.raises(
+        ValueError,
+        match=r"--episodes must be in \[1, 100000\] \(validation layouts from 900,000\), got 100001",
+    ):
+        ablation_tasks(Path("p.zip"), 100_001)
+
+
+def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tmp_path: Path) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir = tmp_path / "runs"
+    train_seeds(seed_jobs(config, [0, 2], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    out = tmp_path / "ablation"
+    lines = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, workers=1)
+    text = "\n".join(lines)
+    assert "| lever | 2 | 4 |" in text and "Not flown (not trained, or cut short): lever seed 1." in text
+    for seed in (0, 2):
+        rows = read_records(out / "lever" / f"seed_{seed}.csv")
+        assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]
+    assert (out / "ablation.md").read_text() == "\n".join(lines) + "\n"
+    # Reporting again flies nothing and says the same.
+    again = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, report_only=True)
+    assert again[4:] == lines[4:]
+    # The same runs judged as seeds of a longer config: cut short, so not flown, and the report says so.
+    (tmp_path / "longer").mkdir()
+    _, longer = tiny_train_config(tmp_path / "longer", total=640, name="lever")
+    cut = "\n".join(
+        compare_configs([longer], [0], tmp_path / "cut", runs_dir=runs_dir, episodes=2, workers=1)
+    )
+    trained = RunFiles.of_seed(runs_dir, "lever", 0).trained_steps()
+    assert (
+        f"lever seed 0 (unfinished: {trained:,} of 640 steps)" in cut
+        and not (tmp_path / "cut" / "lever").exists()
+    )
+
+
+def test_a_seed_whose_run_folder_is_gone_flies_its_shipped_policy(tmp_path: Path) -> None:
+    import shutil
+
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir, policies = tmp_path / "runs", tmp_path / "policies"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=policies))
+    # While the run folder holds the policy it shipped, the shipped copy (vouched for by its manifest) flies.
+    steps = config.total_timesteps
+    assert seed_files(runs_dir, policies, "lever", 0, steps).policy == policies / "lever" / "seed_0.zip"
+    run_policy = runs_dir / "lever" / "seed_0" / "seed_0.zip"
+    run_policy.write_bytes(run_policy.read_bytes() + b"\0")  # as if it trained on after shipping
+    assert seed_files(runs_dir, policies, "lever", 0, steps).policy == run_policy
+    # A run stopped short never counts: with more steps asked of it, the shipped policy flies, or nothing.
+    assert seed_files(runs_dir, policies, "lever", 0, 10 * steps).policy == policies / "lever" / "seed_0.zip"
+    assert seed_files(runs_dir, None, "lever", 0, 10 * steps) is None
+    shutil.rmtree(runs_dir)  # a new checkout: runs/ is not committed, the shipped policy is
+    out = tmp_path / "ablation"
+    lines = compare_configs(
+        [config_path], [0, 1], out, runs_dir=runs_dir, policies_dir=policies, episodes=2, workers=1
+    )
+    text = "\n".join(lines)
+    assert "| lever | 1 | 2 |" in text and "lever seed 1." in text
+    assert len(read_records(out / "lever" / "seed_0.csv")) == 2
+    assert (out / "ablation_curves.png").is_file()  # drawn from the shipped evaluations
+    # Without a policies folder only run folders count.
+    nothing = compare_configs(
+        [config_path], [0], tmp_path / "none", runs_dir=runs_dir, policies_dir=None, episodes=2, workers=1
+    )
+    assert "lever seed 0" in "\n".join(nothing)
+
+
+def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) -> None:
+    _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    assert main(["ablation", "--configs", str(config_path), "--workers", "0", "--out", str(tmp_path)]) == 2
+    assert "--workers must be >= 1, got 0" in capsys.readouterr().err
+    assert main(["ablation", "--configs", str(config_path), "--seeds", "3-1", "--out", str(tmp_path)]) == 2
+    assert "--seeds takes N, N-M (N <= M)" in capsys.readouterr().err
+
+
+def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path, monkeypatch, capsys) -> None:
+    from tests.agents.test_runner import with_other_defaults
+
+    from agents.policies.reactive import StraightAgent
+
+    _, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    out = tmp_path / "ablation"
+    lines = compare_configs(
+        [config_path],
+        [0],
+        out,
+        runs_dir=tmp_path / "runs",
+        episodes=2,
+        workers=1,
+        reference_agents=["straight"],
+    )
+    text = "\n".join(lines)
+    assert "| straight (reactive, reference) | - | 2 |" in text
+    rows = read_records(out / "reference" / "straight.csv")
+    assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]
+    # Its defaults re-tuned since: the old episodes are moved aside and the agent flies anew.
+    monkeypatch.setattr(
+        StraightAgent, "__init__", with_other_defaults(StraightAgent.__init__, heading_gain=0.5)
+    )
+    compare_configs([config_path], [0], out, runs_dir=tmp_path / "runs", episodes=2, workers=1,
+                    reference_agents=["straight"])  # fmt: skip
+    assert "straight's parameters have changed; flying it anew" in capsys.readouterr().out
+    assert len(list((out / "reference").glob("straight.csv.bak-*"))) == 1
+    rows = read_records(out / "reference" / "straight.csv")
+    assert len(rows) == 2 and {json.loads(r["agent_params"])["heading_gain"] for r in rows} == {0.5}
+    with pytest.raises(
+        ValueError,
+        match=re.escape(f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got 'ppo_flow'"),
+    ):
+        compare_configs([config_path], [0], out, episodes=2, reference_agents=["ppo_flow"])
+
+
+def test_a_condition_flies_every_run_and_reference_with_its_env_settings(tmp_path: Path, capsys) -> None:
+    config, config_path = tiny_train_config(tmp_path, total=64, name="lever")
+    runs_dir = tmp_path / "runs"
+    train_seeds(seed_jobs(config, [0], config_path=config_path, runs_dir=runs_dir, ship_to=None))
+    out = tmp_path / "dense"
+    lines = compare_configs(
+        [config_path],
+        [0],
+        out,
+        runs_dir=runs_dir,
+        episodes=2,
+        workers=1,
+        reference_agents=["straight"],
+        env={"obstacle_density": 0.18},
+    )
+    assert "(obstacle_density=0.18), never a test layout" in lines[2]
+    for csv_path in (out / "lever" / "seed_0.csv", out / "reference" / "straight.csv"):
+        rows = read_records(csv_path)
+        assert {(r["factor"], float(r["level"])) for r in rows} == {("obstacle_density", 0.18)}
+        assert all(json.loads(r["env_kwargs"])["obstacle_density"] == 0.18 for r in rows)
+    # Clean episodes in the same folder are other rows, never counted with the condition's.
+    clean = compare_configs([config_path], [0], out, runs_dir=runs_dir, episodes=2, workers=1)
+    assert "(clean sensors), never a test layout" in clean[2] and "| lever | 1 | 2 |" in "\n".join(clean)
+    assert len(read_records(out / "lever" / "seed_0.csv")) == 4
+    # A bad setting is named with its range before anything flies.
+    command = ["ablation", "--configs", str(config_path), "--env", "obstacle_density=-1", "--out", str(out)]
+    assert main(command) == 2
+    assert "obstacle_density must be in [0.0, 1.0], got -1" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*command[:3], "--env", "density", "--out", str(out)])
+    assert "argument --env: expected KEY=VALUE, got 'density'" in capsys.readouterr().err

@@ -26,7 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         required=True,
         help=f"who flies: {', '.join(AGENT_NAMES)}, or a training seed of a learned one (ppo_flow@3 flies "
         "results/policies/ppo_flow/seed_3.zip); a learned agent named alone flies its shipped training "
-        "seeds in turn over the seeds, as the leaderboard does",
+        "seeds in turn over the seeds, as the leaderboard does; or an agent of your own, "
+        "my_pkg.my_module:make_agent or path/to/file.py:make_agent (a callable returning an object with "
+        "stable-baselines3's predict, or such an object)",
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
@@ -64,9 +66,13 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.runner import execute
     from agents.evaluation.statistics import format_summary, summarise
     from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
-    from agents.policies import runs_to_fly, split_agent_name
+    from agents.policies import load_agent, runs_to_fly, split_agent_name
+    from agents.policies.external import canonical_spec, is_external_name
 
     split_agent_name(args.agent)
+    if is_external_name(args.agent):  # resolved here, so a bad one fails before anything flies
+        args.agent = canonical_spec(args.agent)
+        load_agent(args.agent)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seed_start < TEST_SEED_START:

@@ -17,13 +17,19 @@ TRAIN_SEED_MARK = "@"
 
 
 def split_agent_name(name: str) -> tuple[str, int | None]:
-    """``"ppo_flow@3"`` → ``("ppo_flow", 3)``; ``"bee"`` → ``("bee", None)``.
+    """``"ppo_flow@3"`` → ``("ppo_flow", 3)``; ``"bee"`` → ``("bee", None)``; an outside agent
+    (``my_module:make_agent``) → itself and None.
 
     Raises:
         ValueError: an unknown agent, a training seed on a reactive agent, or a seed that is not an integer >= 0.
     """
+    if ":" in str(name):  # written outside FlowNav (agents.policies.external)
+        return str(name), None
     base, mark, seed_text = str(name).partition(TRAIN_SEED_MARK)
-    allowed = f"one of {', '.join(AGENT_NAMES)}, or <learned agent>@<training seed> such as ppo_flow@0"
+    allowed = (
+        f"one of {', '.join(AGENT_NAMES)}, <learned agent>@<training seed> such as ppo_flow@0, or an agent "
+        "of your own as module.path:callable or path/to/file.py:callable"
+    )
     if base not in AGENT_NAMES:
         raise ValueError(f"agent must be {allowed}, got {name!r}")
     if not mark:

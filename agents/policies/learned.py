@@ -14,6 +14,12 @@ from typing import Any
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
 from agents.policies.base import Agent, is_learned, seeded_agent_name, split_agent_name
+from agents.policies.external import (
+    external_env_settings,
+    external_parameters,
+    is_external_name,
+    load_external_agent,
+)
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
@@ -116,6 +122,8 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
     the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
     """
+    if is_external_name(name):
+        return dict(external_env_settings(name))
     if not is_learned(name):
         return dict(REACTIVE_ENV_KWARGS.get(split_agent_name(name)[0], {}))
     config_path = policy_file(name, path).with_suffix(".yaml")
@@ -135,7 +143,9 @@ def load_agent(
     training seeds loads its single ``results/policies/<agent>.zip``.
 
     Args:
-        name: agent name; ``<learned agent>@<k>`` for training seed k.
+        name: agent name; ``<learned agent>@<k>`` for training seed k; ``module.path:callable`` or
+            ``path/to/file.py:callable`` for an agent written outside FlowNav
+            (:mod:`agents.policies.external`).
         policy_path: for PPO agents, the ``.zip`` to load instead of the shipped ones. Only its parameters
             are read, from the training config beside it; a policy its folder's ``MANIFEST.sha256`` does not
             vouch for loads with an :class:`UnverifiedPolicyWarning`.
@@ -150,6 +160,8 @@ def load_agent(
         FileNotFoundError: a PPO policy file is missing.
     """
     base, train_seed = split_agent_name(name)
+    if is_external_name(name):
+        return load_external_agent(name)
     if name == "straight":
         return StraightAgent()
     if name == "bee":
@@ -200,6 +212,8 @@ def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
     """
     if is_learned(name):
         return dict(overrides)
+    if is_external_name(name):
+        return {**external_parameters(name), **overrides}
     try:
         agent = load_agent(name, **overrides)
     except TypeError as error:  # an unknown field: the dataclass names it

@@ -20,10 +20,10 @@ HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP
+    from agents.policies.sb3_models import SB3_ALGORITHMS
 
     parser.add_argument(
         "--agent",
-        required=True,
         help=f"who flies: {', '.join(AGENT_NAMES)}, or a training seed of a learned one (ppo_flow@3 flies "
         "results/policies/ppo_flow/seed_3.zip); a learned agent named alone flies its shipped training "
         "seeds in turn over the seeds, as the leaderboard does; or an agent of your own, "
@@ -32,6 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
+    parser.add_argument(
+        "--algo",
+        choices=SB3_ALGORITHMS,
+        help="with --policy and no --agent: a stable-baselines3 model of this algorithm, trained anywhere on a "
+        "FlowNav env (only its parameters are read where its network can be rebuilt without unpickling)",
+    )
     parser.add_argument(
         "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
     )
@@ -68,11 +74,18 @@ def run(args: argparse.Namespace) -> int:
     from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
     from agents.policies import load_agent, runs_to_fly, split_agent_name
     from agents.policies.external import canonical_spec, is_external_name
+    from agents.policies.sb3_models import is_sb3_model_name, sb3_model_name
 
+    if args.algo:
+        if args.agent or not args.policy:
+            raise ValueError("--algo goes with --policy model.zip and without --agent (the model is the agent)")
+        args.agent, args.policy = sb3_model_name(args.algo, args.policy), None
+    if not args.agent:
+        raise ValueError("give --agent (or --policy model.zip --algo ALGO)")
     split_agent_name(args.agent)
     if is_external_name(args.agent):  # resolved here, so a bad one fails before anything flies
-        args.agent = canonical_spec(args.agent)
-        load_agent(args.agent)
+        args.agent = args.agent if is_sb3_model_name(args.agent) else canonical_spec(args.agent)
+        load_agent(args.agent, trust_pickle=args.trust_pickle)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seed_start < TEST_SEED_START:

@@ -23,6 +23,12 @@ from agents.policies.external import (
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
+from agents.policies.sb3_models import (
+    is_sb3_model_name,
+    load_sb3_model,
+    sb3_model_env_settings,
+    sb3_model_parameters,
+)
 from agents.policies.seeds import TrainingSeedsAgent
 from agents.training.train_config import TrainConfig
 
@@ -122,6 +128,8 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
     the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
     """
+    if is_sb3_model_name(name):
+        return sb3_model_env_settings(name)
     if is_external_name(name):
         return dict(external_env_settings(name))
     if not is_learned(name):
@@ -160,6 +168,8 @@ def load_agent(
         FileNotFoundError: a PPO policy file is missing.
     """
     base, train_seed = split_agent_name(name)
+    if is_sb3_model_name(name):
+        return load_sb3_model(name, trust_pickle=trust_pickle)
     if is_external_name(name):
         return load_external_agent(name)
     if name == "straight":
@@ -212,6 +222,8 @@ def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
     """
     if is_learned(name):
         return dict(overrides)
+    if is_sb3_model_name(name):
+        return {**sb3_model_parameters(name), **overrides}
     if is_external_name(name):
         return {**external_parameters(name), **overrides}
     try:

@@ -1,5 +1,6 @@
 """``env_performance.md`` and its figure: steps per second per resolution and FAST threshold against the bare
-loop, the per-stage breakdown of a step, and the reasoning behind the env's default resolution and threshold."""
+loop, the per-stage breakdown of a step, and the reasoning behind the env's default resolution and threshold. The prose is ``templates/env_performance.md``;
+:func:`env_report_values` computes every figure and verdict it states."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import numpy as np
 
 from agents.common.machine import available_cores
 from agents.common.tables import markdown_table, today, write_csv
+from agents.common.templates import render_template
 from agents.evaluation.provenance import gl_renderer, is_software_renderer
 from agents.studies.perf.env_speed import (
     DEFAULT_RESOLUTIONS,
@@ -24,6 +26,10 @@ from agents.studies.perf.env_speed import (
     measure_env,
 )
 from agents.studies.perf.timing import hardware_summary
+
+TEMPLATES = Path(__file__).with_name("templates")
+# The camera resolution of gym-pybullet-drones' reported real-time factor (PYBULLET_DRONES_RTF).
+PYBULLET_DRONES_VISION = (64, 48)
 
 
 def run_env_benchmark(
@@ -62,7 +68,7 @@ def run_env_benchmark(
         csv_path, [{k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()} for row in rows]
     )
     plot_env_performance(rows[1:], plot_path)
-    md_path.write_text(_report(rows, command, steps, repeats, elapsed))
+    md_path.write_text(env_report(rows, command, steps, repeats, elapsed))
     return [md_path, csv_path, plot_path]
 
 
@@ -109,21 +115,85 @@ def plot_env_performance(rows: list[dict[str, Any]], path: Path) -> None:
     plt.close(figure)
 
 
-def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, elapsed: float) -> str:
-    table = markdown_table(
-        [
-            "config",
-            "FAST",
-            "steps/s env",
-            "steps/s bare",
-            "env/bare",
-            "floor/bare",
-            "real-time × env",
-            "real-time × bare",
-            "points tracked",
-            "points valid",
-            "depth err. %",
-        ],
+def env_report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, elapsed: float) -> str:
+    """``env_performance.md``: :func:`env_report_values` on this machine, filled into the template.
+
+    Args:
+        rows: :func:`measure_env`'s rows, the default config first.
+        command: the command line that made the rows.
+        steps, repeats: the benchmark's settings.
+        elapsed: seconds the benchmark took.
+
+    Returns:
+        The Markdown report.
+    """
+    renderer = gl_renderer()
+    values = env_report_values(
+        rows,
+        command,
+        steps,
+        repeats,
+        elapsed,
+        generated=today(),
+        hardware=hardware_summary(renderer),
+        software_renderer=is_software_renderer(renderer),
+        cores=available_cores(),
+    )
+    return render_template(TEMPLATES / "env_performance.md", values)
+
+
+def env_report_values(
+    rows: list[dict[str, Any]],
+    command: str,
+    steps: int,
+    repeats: int,
+    elapsed: float,
+    *,
+    generated: str,
+    hardware: str,
+    software_renderer: bool,
+    cores: int,
+) -> dict[str, str | bool]:
+    """Every figure, table and verdict of the env report, computed from the measured rows.
+
+    Args:
+        rows, command, steps, repeats, elapsed: see :func:`env_report`.
+        generated: the report's time stamp.
+        hardware: the machine's Markdown list (:func:`hardware_summary`).
+        software_renderer: whether MuJoCo rendered on the CPU.
+        cores: the cores the benchmark could use.
+
+    Returns:
+        The values of ``templates/env_performance.md``: text fields and section conditions.
+    """
+    default = rows[0]
+    return {
+        "generated": generated,
+        "command": command,
+        "elapsed": f"{elapsed:.0f}",
+        "steps": str(steps),
+        "repeats": str(repeats),
+        "hardware": hardware,
+        "software_renderer": bool(software_renderer),
+        "cores": str(cores),
+        "frame_rate": f"{default['frame_rate']:.0f}",
+        "substeps": str(default["substeps"]),
+        "depth_error_share": f"{100 * default['steps_with_depth_error']:.0f}",
+        "table": _speed_table(rows),
+        "stage_table": _stage_table(rows),
+        **_choice_values(rows),
+        **_threshold_values(rows),
+        **_ratio_target_values(rows),
+        **_real_time_values(rows),
+    }
+
+
+def _speed_table(rows: list[dict[str, Any]]) -> str:
+    """Steps per second, ratios, real-time factors and estimator output per configuration."""
+    header = ["config", "FAST", "steps/s env", "steps/s bare", "env/bare", "floor/bare", "real-time × env"]
+    header += ["real-time × bare", "points tracked", "points valid", "depth err. %"]
+    return markdown_table(
+        header,
         [
             [
                 row["config"],
@@ -141,7 +211,11 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
             for row in rows
         ],
     )
-    stage_table = markdown_table(
+
+
+def _stage_table(rows: list[dict[str, Any]]) -> str:
+    """Each stage's median ms per step and share of the step, per configuration."""
+    return markdown_table(
         ["config", "step ms", "physics + controller", "render", "estimator", "ground-truth ray cast", "rest"],
         [
             [
@@ -155,108 +229,10 @@ def _report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, 
             for row in rows
         ],
     )
-    default = rows[0]
-    ratios = [row["ratio_env_bare"] for row in rows]
-    renderer = gl_renderer()
-    software = is_software_renderer(renderer)
-    choice = _choice_text(rows, software)
-    smallest = min(
-        [row for row in rows if row["kind"] == "resolution"] or rows,
-        key=lambda row: row["width"] * row["height"],
-    )
-    return f"""# Env performance: steps/s per camera resolution
-
-Generated {today()} by
-
-```
-{command}
-```
-
-in {elapsed:.0f} s on the machine below. Absolute rates depend on it and on whatever else ran at the time, so the
-env and the bare loop were alternated block by block in the same process, and the ratio is taken block by block
-before the median over {repeats} blocks.
-
-{hardware_summary(renderer)}
-
-## Set-up
-- Env: `gymnasium.make("FlowNav-v0", camera_width=W, camera_height=H)` (the default row: no kwargs), field
-  layout, {default["frame_rate"]:.0f} frames/s, {default["substeps"]} physics substeps per step. A fixed
-  scripted flight (`agents.studies.perf.flight.scripted_action`), identical at every resolution because the camera
-  does not act on the dynamics; episodes end on collision/goal/time limit and restart with the next seed
-  (resets not timed). Per block {steps} steps; steps/s = steps / summed step time, median over {repeats} blocks.
-- Bare loop, same model and scene (`env.unwrapped.physics.model`, its own `MjData`): per step
-  `mujoco.mj_step` × {default["substeps"]} + `Renderer.update_scene` + `render()` of the front camera at the
-  same resolution; rotors held at hover thrust, no controller, no estimator, no ground truth.
-- Floor loop: the bare loop plus the bare OpenCV work that any estimator with the env's settings must do per
-  frame: `cv2.cvtColor` to gray, FAST (the env's threshold) on the previous frame, one
-  `cv2.calcOpticalFlowPyrLK` pass (the env's window and pyramid levels) into the current frame; no backward
-  check, no depth stage, no controller, histogram or reward. "floor/bare" is the least env/bare an env that runs
-  the thesis's estimator on these frames can reach. The three loops alternate block by block.
-- Real-time factor = simulated seconds per wall second = steps/s ÷ frame rate.
-- Points tracked / valid: `info["points_tracked"]` / `info["points_valid"]`, median over all recorded steps;
-  depth error: median over steps of `info["depth_error_median"]` (median relative error of the valid depths
-  against the ray-cast truth; present on {100 * default["steps_with_depth_error"]:.0f} % of the steps).
-- Stage split: the env's own objects timed from outside (wrappers around `physics.advance`, the camera
-  renderer's `render`, `estimator.update` and `physics.ray_depths`); "rest" = the step minus those (sensor
-  model and camera mount, relative motion, histogram, state, reward, Gymnasium wrappers).
-
-## Steps per second and estimator output
-
-{table}
-
-## Where a step's time goes (median ms per step, share of the step)
-
-{stage_table}
-
-![time per stage and estimator output per resolution](env_performance.png)
-
-## Default resolution
-
-{choice}
-{_threshold_text(rows)}
-## Targets
-- env/bare ≤ {TARGET_RATIO}: {min(ratios):.2f}–{max(ratios):.2f} over the configurations →
-  **{"met" if max(ratios) <= TARGET_RATIO else "missed"}**{" (met for " + ", ".join(r["config"] for r in rows if r["ratio_env_bare"] <= TARGET_RATIO) + ")" if min(ratios) <= TARGET_RATIO < max(ratios) else ""}.
-  {_floor_text(rows)}
-- Real-time factor ≥ {TARGET_REAL_TIME_FACTOR:.0f}×: default config {default["real_time_factor_env"]:.1f}× →
-  **{"met" if default["real_time_factor_env"] >= TARGET_REAL_TIME_FACTOR else "missed"}**; the bare MuJoCo loop
-  itself reaches {default["real_time_factor_bare"]:.1f}× here, so the ceiling is set by rendering, not by FlowNav.
-- gym-pybullet-drones reports {PYBULLET_DRONES_RTF}× real time for one drone with 64×48 vision (on its authors'
-  hardware, not measured here). FlowNav at {smallest["config"]}: {smallest["real_time_factor_env"]:.1f}×
-  (bare loop {smallest["real_time_factor_bare"]:.1f}×) on {available_cores()} cores with {"software" if software else "hardware"} OpenGL; a like-for-like
-  comparison needs both on the same machine.
-
-Files: `env_performance.csv` (all columns, including the per-block min/max ratio), `env_performance.png`.
-"""
 
 
-def _floor_text(rows: list[dict[str, Any]]) -> str:
-    """Whether the ratio target is reachable at all: the floor loop (bare + FAST + one LK pass) against it."""
-    default = rows[0]
-    floor = default["ratio_floor_bare"]
-    bare_ms = 1e3 / default["steps_per_s_bare"]
-    own = default["ratio_env_bare"] - floor
-    spread = f"{default['ratio_floor_min']:.2f}–{default['ratio_floor_max']:.2f} over blocks"
-    if floor >= TARGET_RATIO:
-        verdict = (
-            f"at or above {TARGET_RATIO}: no env that runs a FAST + LK estimator on these frames can meet the "
-            "target"
-        )
-    else:
-        margin = TARGET_RATIO - floor
-        verdict = (
-            f"which leaves {margin:.2f} of a bare step ({margin * bare_ms:.2f} ms) for everything FlowNav adds to "
-            f"the bare OpenCV work; it adds {own:.2f} ({own * bare_ms:.2f} ms)"
-        )
-    return (
-        f"The floor (bare loop + grayscale + FAST + one LK pass, nothing of FlowNav's own) is {floor:.2f}× the "
-        f"bare loop at the default config ({spread}), {verdict}: the backward check, depth stage, controller, "
-        "sensor model, histogram, reward and ground truth."
-    )
-
-
-def _choice_text(rows: list[dict[str, Any]], software_renderer: bool) -> str:
-    """The default-resolution paragraph: each candidate against the current default, and the criteria."""
+def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+    """The default-resolution choice: each candidate against the current default, and the criteria."""
     default = rows[0]
     candidates = [row for row in rows if row["kind"] == "resolution"]
     same = [
@@ -266,17 +242,12 @@ def _choice_text(rows: list[dict[str, Any]], software_renderer: bool) -> str:
     min_valid = MIN_VALID_PER_SECTOR * default["histogram_sectors"]
 
     def meets(row: dict[str, Any]) -> bool:
-        return (
+        return bool(
             row["depth_error_median_pct"] <= MAX_DEPTH_ERROR_PCT and row["points_valid_median"] >= min_valid
         )
 
     table = markdown_table(
-        [
-            "resolution",
-            "steps/s vs current default",
-            "valid points vs current default",
-            "meets both criteria",
-        ],
+        ["resolution", "steps/s vs current default", "valid points vs current default", "meets both criteria"],
         [
             [
                 row["config"],
@@ -288,34 +259,27 @@ def _choice_text(rows: list[dict[str, Any]], software_renderer: bool) -> str:
         ],
     )
     passing = [row for row in candidates if meets(row)]
-    smallest = min(passing, key=lambda row: row["width"] * row["height"]) if passing else None
-    verdict = (
-        f"The smallest candidate meeting both is **{smallest['config']}**"
-        if smallest is not None
-        else "No candidate meets both"
-    )
-    cost_note = (
-        "Rendering costs a large fixed time per frame here (software OpenGL), so larger frames are cheap in "
-        "relative terms; on a GPU renderer the estimator's share, which grows with the point count, weighs more."
-        if software_renderer
-        else "Rendering is on a GPU here, so the estimator's share of a step, which grows with the point count, "
-        "sets the cost of larger frames."
-    )
-    return f"""Criteria: median depth error ≤ {MAX_DEPTH_ERROR_PCT:.0f} % (the env's accuracy requirement) and a median of
-at least {MIN_VALID_PER_SECTOR:.0f} valid points per histogram sector ({default["histogram_sectors"]} sectors →
-{min_valid:.0f} points), at the highest steps/s. Current default: {default["width"]}×{default["height"]}.
-
-{table}
-
-{verdict}. {cost_note}"""
+    values: dict[str, str | bool] = {
+        "max_depth_error": f"{MAX_DEPTH_ERROR_PCT:.0f}",
+        "min_valid_per_sector": f"{MIN_VALID_PER_SECTOR:.0f}",
+        "sectors": str(default["histogram_sectors"]),
+        "min_valid": f"{min_valid:.0f}",
+        "default_width": str(default["width"]),
+        "default_height": str(default["height"]),
+        "choice_table": table,
+        "any_candidate_meets": bool(passing),
+    }
+    if passing:
+        values["smallest_meeting"] = min(passing, key=lambda row: row["width"] * row["height"])["config"]
+    return values
 
 
-def _threshold_text(rows: list[dict[str, Any]]) -> str:
-    """The FAST-threshold paragraph: each threshold against the default config, at the default resolution."""
+def _threshold_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+    """The FAST-threshold section: each threshold against the default config, at the default resolution."""
     default = rows[0]
     thresholds = [row for row in rows if row["kind"] == "fast_threshold"]
     if not thresholds:
-        return ""
+        return {"has_thresholds": False}
     table = markdown_table(
         ["FAST threshold", "steps/s vs default", "valid points", "valid points vs default", "depth err. %"],
         [
@@ -329,13 +293,59 @@ def _threshold_text(rows: list[dict[str, Any]]) -> str:
             for row in sorted([default, *thresholds], key=lambda row: row["fast_threshold"])
         ],
     )
-    return f"""
-## FAST threshold
+    return {
+        "has_thresholds": True,
+        "default_threshold": str(default["fast_threshold"]),
+        "threshold_table": table,
+    }
 
-At the default resolution, against the default config (FAST threshold {default["fast_threshold"]}, the env's
-`ENV_ESTIMATOR_DEFAULTS`). All these rows render the same frames, so their bare loops are the same work:
-"steps/s vs default" is the default's env/bare ratio over the row's, each ratio taken block by block against
-a bare loop run next to it, which cancels most of the load from other jobs on the machine.
 
-{table}
-"""
+def _ratio_target_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+    """The env/bare target over the configurations, and whether the floor loop (bare + FAST + one LK pass)
+    leaves it reachable at all."""
+    default = rows[0]
+    ratios = [row["ratio_env_bare"] for row in rows]
+    floor = default["ratio_floor_bare"]
+    values: dict[str, str | bool] = {
+        "target_ratio": str(TARGET_RATIO),
+        "ratio_low": f"{min(ratios):.2f}",
+        "ratio_high": f"{max(ratios):.2f}",
+        "ratio_met": bool(max(ratios) <= TARGET_RATIO),
+        "ratio_met_for_some": bool(min(ratios) <= TARGET_RATIO < max(ratios)),
+        "ratio_met_configs": ", ".join(row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO),
+        "floor": f"{floor:.2f}",
+        "floor_low": f"{default['ratio_floor_min']:.2f}",
+        "floor_high": f"{default['ratio_floor_max']:.2f}",
+        "floor_reaches_target": bool(floor >= TARGET_RATIO),
+    }
+    if floor < TARGET_RATIO:
+        bare_ms = 1e3 / default["steps_per_s_bare"]
+        margin = TARGET_RATIO - floor
+        own = default["ratio_env_bare"] - floor
+        values.update(
+            margin=f"{margin:.2f}",
+            margin_ms=f"{margin * bare_ms:.2f}",
+            own=f"{own:.2f}",
+            own_ms=f"{own * bare_ms:.2f}",
+        )
+    return values
+
+
+def _real_time_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+    """The real-time target at the default config, and the smallest resolution beside gym-pybullet-drones."""
+    default = rows[0]
+    smallest = min(
+        [row for row in rows if row["kind"] == "resolution"] or rows,
+        key=lambda row: row["width"] * row["height"],
+    )
+    return {
+        "target_real_time": f"{TARGET_REAL_TIME_FACTOR:.0f}",
+        "default_real_time": f"{default['real_time_factor_env']:.1f}",
+        "real_time_met": bool(default["real_time_factor_env"] >= TARGET_REAL_TIME_FACTOR),
+        "default_real_time_bare": f"{default['real_time_factor_bare']:.1f}",
+        "pybullet_real_time": str(PYBULLET_DRONES_RTF),
+        "pybullet_vision": "×".join(map(str, PYBULLET_DRONES_VISION)),
+        "smallest_config": smallest["config"],
+        "smallest_real_time": f"{smallest['real_time_factor_env']:.1f}",
+        "smallest_real_time_bare": f"{smallest['real_time_factor_bare']:.1f}",
+    }

@@ -1,0 +1,163 @@
+"""The speed reports fill templates from computed values: fixed rows give the golden Markdown, claims follow the
+data, the templates hold no typed figures, and an installed package ships them.
+
+The golden files in ``data/`` were written by the f-string writers these replaced (same rows, pinned machine
+facts), with their three typed figures replaced by the values now derived from the rows.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from agents.common.templates import render_template
+from agents.studies.perf import env_speed_report, estimator_speed_report
+
+DATA = Path(__file__).with_name("data")
+GENERATED = "2026-12-02 14:25 UTC"
+HARDWARE = "- Python 3.11.7 on Linux\n- CPU: a test CPU; `nproc` = 2"
+
+
+def estimator_case(name: str) -> dict[str, Any]:
+    return json.loads((DATA / "estimator_report_inputs.json").read_text(encoding="utf-8"))[name]
+
+
+def env_case(name: str) -> dict[str, Any]:
+    return json.loads((DATA / "env_report_inputs.json").read_text(encoding="utf-8"))[name]
+
+
+def render_estimator(case: dict[str, Any]) -> str:
+    values = estimator_speed_report.estimator_report_values(
+        case["rows"],
+        case["depth_rows"],
+        case["flight"],
+        case["command"],
+        case["repeats"],
+        case["loop_frames"],
+        case["elapsed"],
+        defaults=case["defaults"],
+        generated=GENERATED,
+        hardware=HARDWARE,
+    )
+    return render_template(estimator_speed_report.TEMPLATES / "estimator_performance.md", values)
+
+
+def render_env(case: dict[str, Any]) -> str:
+    values = env_speed_report.env_report_values(
+        case["rows"],
+        case["command"],
+        case["steps"],
+        case["repeats"],
+        case["elapsed"],
+        generated=GENERATED,
+        hardware=HARDWARE,
+        software_renderer=case["software"],
+        cores=case["cores"],
+    )
+    return render_template(env_speed_report.TEMPLATES / "env_performance.md", values)
+
+
+def as_numpy(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows as the benchmarks make them: numpy scalars, whose comparisons give numpy bools."""
+    return [{key: np.float64(value) if type(value) is float else value for key, value in row.items()} for row in rows]
+
+
+@pytest.mark.parametrize("name", ["full", "edge"])
+def test_estimator_report_reproduces_the_golden_file(name: str) -> None:
+    expected = (DATA / f"estimator_performance_{name}.md").read_text(encoding="utf-8")
+    case = estimator_case(name)
+    assert render_estimator(case) == expected
+    case["rows"], case["depth_rows"] = as_numpy(case["rows"]), as_numpy(case["depth_rows"])
+    assert render_estimator(case) == expected
+
+
+@pytest.mark.parametrize("name", ["full", "edge"])
+def test_env_report_reproduces_the_golden_file(name: str) -> None:
+    expected = (DATA / f"env_performance_{name}.md").read_text(encoding="utf-8")
+    case = env_case(name)
+    assert render_env(case) == expected
+    case["rows"] = as_numpy(case["rows"])
+    assert render_env(case) == expected
+
+
+def test_estimator_claims_follow_the_data() -> None:
+    case = estimator_case("full")
+    default = next(row for row in case["rows"] if row["fast_threshold"] == 20)
+    assert "FB on (default) 1.27× → **met** (range 1.21–1.43×, met in 6 of 7 rows)" in render_estimator(case)
+    default["ratio_fb_on"] = 1.5
+    assert "FB on (default) 1.50× → **missed** (range 1.21–1.50×, met in 5 of 7 rows)" in render_estimator(case)
+    case["depth_rows"][-1]["speedup_vs_loop_numpy"] = 1.0
+    assert "The speed-up does not grow with the point count here." in render_estimator(case)
+
+
+def test_env_claims_follow_the_data() -> None:
+    case = env_case("full")
+    report = render_env(case)
+    assert "**missed**." in report and "The smallest candidate meeting both is **128×96**" in report
+    for row in case["rows"]:
+        row["ratio_env_bare"] = 1.1
+    case["rows"][2]["points_valid_median"] = 50.0
+    case["rows"][2]["depth_error_median_pct"] = 4.0
+    report = render_env(case)
+    assert "env/bare ≤ 1.3: 1.10–1.10 over the configurations →\n  **met**.\n" in report
+    assert "The smallest candidate meeting both is **96×72**" in report
+
+
+def test_the_full_writers_fill_their_templates_on_this_machine(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The real estimator defaults and machine facts, so a drift between a writer and its template shows here.
+    monkeypatch.setattr(env_speed_report, "gl_renderer", lambda: "llvmpipe (test)")
+    monkeypatch.setattr(env_speed_report, "hardware_summary", lambda renderer=None: HARDWARE)
+    monkeypatch.setattr(estimator_speed_report, "hardware_summary", lambda renderer=None: HARDWARE)
+    case = estimator_case("full")
+    report = estimator_speed_report.estimator_report(
+        case["rows"], case["depth_rows"], case["flight"], case["command"], 3, 10, 38.0
+    )
+    assert report.startswith("# Estimator performance") and "(method `" in report
+    case = env_case("edge")
+    report = env_speed_report.env_report(case["rows"], case["command"], 3, 1, 7.0)
+    assert "with software OpenGL" in report
+
+
+# Labels the prose may name: thesis tables and figures, issue numbers, the unit of FPS and an operation count
+# in a formula. Every other number is a field's (names such as `cv2` are code, not numbers).
+ALLOWED_NUMBERS = ("Table 3", "Figs. 39–40", "issue 13", "1000 / total ms", "×2 +")
+
+
+@pytest.mark.parametrize("path", sorted(estimator_speed_report.TEMPLATES.glob("*.md")), ids=lambda p: p.name)
+def test_templates_hold_no_typed_figures(path: Path) -> None:
+    prose = re.sub(r"\{\{.*?\}\}", "", path.read_text(encoding="utf-8"))
+    for label in ALLOWED_NUMBERS:
+        prose = prose.replace(label, "")
+    assert re.findall(r".{0,30}(?<![\w.])\d+(?:\.\d+)?(?!\w).{0,30}", prose) == []
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib")
+def test_templates_ship_as_package_data() -> None:
+    import tomllib
+
+    pyproject = Path(estimator_speed_report.__file__).parents[3] / "pyproject.toml"
+    package_data = tomllib.loads(pyproject.read_text(encoding="utf-8"))["tool"]["setuptools"]["package-data"]
+    package = Path(estimator_speed_report.__file__).parent
+    shipped = {path for pattern in package_data["agents.studies.perf"] for path in package.glob(pattern)}
+    assert set(estimator_speed_report.TEMPLATES.glob("*")) == shipped
+    assert shipped >= {env_speed_report.TEMPLATES / "env_performance.md"}
+
+
+def test_an_edited_template_that_drifts_from_its_values_fails(tmp_path: Path) -> None:
+    template = tmp_path / "estimator_performance.md"
+    text = (estimator_speed_report.TEMPLATES / "estimator_performance.md").read_text(encoding="utf-8")
+    template.write_text(text.replace("{{agreement_pct}}", "100.00"), encoding="utf-8")
+    case = copy.deepcopy(estimator_case("full"))
+    values = estimator_speed_report.estimator_report_values(
+        case["rows"], case["depth_rows"], case["flight"], case["command"], 3, 10, 1.0,
+        defaults=case["defaults"], generated=GENERATED, hardware=HARDWARE,
+    )  # fmt: skip
+    with pytest.raises(ValueError, match=r"template 'estimator_performance\.md': value 'agreement_pct' is not used"):
+        render_template(template, values)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -53,21 +54,9 @@ def sector_histogram(
         ValueError: A shape, dtype or length does not match, a valid point has a non-finite position or
             depth, or ``image_size``, ``sectors`` or ``bin_edges`` is malformed.
     """
-    width, height = _as_pair("image_size", image_size, "(width, height)")
-    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
-    edges = _as_bin_edges(bin_edges)
+    grid = SectorGrid(image_size, sectors, bin_edges)
     points, depth, valid = _as_point_arrays(points, depth, valid)
-    bins = len(edges) - 1
-
-    sector, inside = _sector_index(points[valid], (width, height), (rows, cols))
-    counted_depth = depth[valid][inside]
-    depth_bin = np.clip(np.searchsorted(edges, counted_depth, side="right") - 1, 0, bins - 1)
-    counts = np.bincount(sector * bins + depth_bin, minlength=rows * cols * bins).reshape(rows, cols, bins)
-
-    per_sector = counts.sum(axis=2, keepdims=True)
-    histogram = np.zeros(counts.shape, dtype=np.float32)
-    np.divide(counts, per_sector, out=histogram, where=per_sector > 0, casting="unsafe")
-    return histogram
+    return grid.histogram(grid.locate(points), depth, valid)
 
 
 def sector_fraction(
@@ -97,8 +86,7 @@ def sector_fraction(
         ValueError: A shape, dtype or length does not match, an ``among`` point has a non-finite position, or
             ``image_size`` or ``sectors`` is malformed.
     """
-    width, height = _as_pair("image_size", image_size, "(width, height)")
-    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    grid = SectorGrid(image_size, sectors)
     points, _, among = _as_point_arrays(points, None, among, mask_name="among")
     selected = np.asarray(selected)
     if selected.shape != among.shape or selected.dtype != np.bool_:
@@ -106,12 +94,7 @@ def sector_fraction(
             f"selected must be a bool (N,) array like among ({among.shape}), got shape {selected.shape} and "
             f"dtype {selected.dtype}"
         )
-    sector, inside = _sector_index(points[among], (width, height), (rows, cols))
-    totals = np.bincount(sector, minlength=rows * cols)
-    hits = np.bincount(sector, weights=selected[among][inside], minlength=rows * cols)
-    fraction = np.zeros(rows * cols, dtype=np.float32)
-    np.divide(hits, totals, out=fraction, where=totals > 0, casting="unsafe")
-    return fraction.reshape(rows, cols)
+    return grid.fraction(grid.locate(points), selected, among)
 
 
 def sector_counts(
@@ -129,11 +112,9 @@ def sector_counts(
         ValueError: A shape, dtype or length does not match, a counted point has a non-finite position, or
             ``image_size`` or ``sectors`` is malformed.
     """
-    width, height = _as_pair("image_size", image_size, "(width, height)")
-    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    grid = SectorGrid(image_size, sectors)
     points, _, counted = _as_point_arrays(points, None, counted, mask_name="counted")
-    sector, _ = _sector_index(points[counted], (width, height), (rows, cols))
-    return np.bincount(sector, minlength=rows * cols).astype(np.float32).reshape(rows, cols)
+    return grid.counts(grid.locate(points), counted)
 
 
 def sector_near_depth(
@@ -163,34 +144,96 @@ def sector_near_depth(
     """
     if isinstance(quantile, bool) or not isinstance(quantile, (int, float)) or not 0.0 <= quantile <= 1.0:
         raise ValueError(f"quantile must be a number in [0, 1], got {quantile!r}")
-    width, height = _as_pair("image_size", image_size, "(width, height)")
-    rows, cols = _as_pair("sectors", sectors, "(rows, cols)")
+    grid = SectorGrid(image_size, sectors)
     points, depth, valid = _as_point_arrays(points, depth, valid)
-    sector, inside = _sector_index(points[valid], (width, height), (rows, cols))
-    depths = depth[valid][inside]
-    order = np.lexsort((depths, sector))
-    counts = np.bincount(sector, minlength=rows * cols)
-    starts = np.cumsum(counts) - counts
-    rank = np.maximum((quantile * (counts - 1)).astype(np.intp), np.minimum(1, counts - 1))
-    occupied = counts > 0
-    near = np.full(rows * cols, np.inf)
-    near[occupied] = depths[order][starts[occupied] + rank[occupied]]
-    return near.astype(np.float32).reshape(rows, cols)
+    return grid.near_depth(grid.locate(points), depth, valid, quantile)
 
 
-def _sector_index(
-    points: np.ndarray, image_size: tuple[int, int], sectors: tuple[int, int]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Flat sector index (row-major) of each point inside the image, and which points are inside."""
-    width, height = image_size
-    rows, cols = sectors
-    u = points[:, 0].astype(np.float64) + 0.5
-    v = points[:, 1].astype(np.float64) + 0.5
-    inside = (u >= 0.0) & (u < width) & (v >= 0.0) & (v < height)
-    # min() guards the float edge case u * cols / width rounding up to cols for u just below width.
-    column = np.minimum((u[inside] * cols / width).astype(np.intp), cols - 1)
-    row = np.minimum((v[inside] * rows / height).astype(np.intp), rows - 1)
-    return row * cols + column, inside
+class SectorGrid:
+    """One camera's sector grid and depth bins, checked once, for a caller that bins many frames of the same
+    camera (the FlowNav env, every step) where the functions above would check the same arguments each time.
+
+    :meth:`locate` finds each point's sector once per frame; every product of that frame (histogram, fraction,
+    counts, near depth) reuses it. The methods trust their arrays (the functions above check them): (N,)
+    bool masks, (N,) depths finite where counted. Their results equal the functions' for the same input.
+
+    Args:
+        image_size, sectors, bin_edges: As :func:`sector_histogram`.
+
+    Raises:
+        ValueError: As :func:`sector_histogram` for these three arguments.
+    """
+
+    def __init__(
+        self,
+        image_size: tuple[int, int],
+        sectors: tuple[int, int] = DEFAULT_SECTORS,
+        bin_edges: Any = DEFAULT_BIN_EDGES,
+    ) -> None:
+        self.image_size = _as_pair("image_size", image_size, "(width, height)")
+        self.sectors = _as_pair("sectors", sectors, "(rows, cols)")
+        self.bin_edges = _as_bin_edges(bin_edges)
+        self.bin_edges.flags.writeable = False
+        self.shape = (*self.sectors, len(self.bin_edges) - 1)
+
+    def locate(self, points: np.ndarray) -> np.ndarray:
+        """(N,) flat sector index (row-major) of each of the (N, 2) ``points``; -1 outside the image (or not
+        finite)."""
+        width, height = self.image_size
+        rows, cols = self.sectors
+        u = points[:, 0].astype(np.float64) + 0.5
+        v = points[:, 1].astype(np.float64) + 0.5
+        inside = (u >= 0.0) & (u < width) & (v >= 0.0) & (v < height)
+        # min() guards the float edge case u * cols / width rounding up to cols for u just below width.
+        column = np.minimum((u[inside] * cols / width).astype(np.intp), cols - 1)
+        row = np.minimum((v[inside] * rows / height).astype(np.intp), rows - 1)
+        sector = np.full(len(u), -1, np.intp)
+        sector[inside] = row * cols + column
+        return sector
+
+    def histogram(self, sector: np.ndarray, depth: np.ndarray, counted: np.ndarray) -> np.ndarray:
+        """:func:`sector_histogram` of the ``counted`` points, whose sectors :meth:`locate` gave."""
+        keep = counted & (sector >= 0)
+        bins = self.shape[2]
+        depth = np.asarray(depth, np.float64)[keep]
+        depth_bin = np.clip(np.searchsorted(self.bin_edges, depth, side="right") - 1, 0, bins - 1)
+        counts = np.bincount(sector[keep] * bins + depth_bin, minlength=math.prod(self.shape))
+        counts = counts.reshape(self.shape)
+        per_sector = counts.sum(axis=2, keepdims=True)
+        histogram = np.zeros(self.shape, dtype=np.float32)
+        np.divide(counts, per_sector, out=histogram, where=per_sector > 0, casting="unsafe")
+        return histogram
+
+    def fraction(self, sector: np.ndarray, selected: np.ndarray, among: np.ndarray) -> np.ndarray:
+        """:func:`sector_fraction`: per sector, the share of the ``among`` points that are ``selected``."""
+        keep = among & (sector >= 0)
+        count = math.prod(self.sectors)
+        totals = np.bincount(sector[keep], minlength=count)
+        hits = np.bincount(sector[keep], weights=selected[keep], minlength=count)
+        fraction = np.zeros(count, dtype=np.float32)
+        np.divide(hits, totals, out=fraction, where=totals > 0, casting="unsafe")
+        return fraction.reshape(self.sectors)
+
+    def counts(self, sector: np.ndarray, counted: np.ndarray) -> np.ndarray:
+        """:func:`sector_counts`: how many ``counted`` points each sector holds."""
+        keep = counted & (sector >= 0)
+        counts = np.bincount(sector[keep], minlength=math.prod(self.sectors))
+        return counts.astype(np.float32).reshape(self.sectors)
+
+    def near_depth(
+        self, sector: np.ndarray, depth: np.ndarray, counted: np.ndarray, quantile: float = 0.1
+    ) -> np.ndarray:
+        """:func:`sector_near_depth` of the ``counted`` points (``quantile`` unchecked here)."""
+        keep = counted & (sector >= 0)
+        sector, depths = sector[keep], np.asarray(depth, np.float64)[keep]
+        order = np.lexsort((depths, sector))
+        counts = np.bincount(sector, minlength=math.prod(self.sectors))
+        starts = np.cumsum(counts) - counts
+        rank = np.maximum((quantile * (counts - 1)).astype(np.intp), np.minimum(1, counts - 1))
+        occupied = counts > 0
+        near = np.full(len(counts), np.inf)
+        near[occupied] = depths[order][starts[occupied] + rank[occupied]]
+        return near.astype(np.float32).reshape(self.sectors)
 
 
 def _as_pair(name: str, value: Any, meaning: str) -> tuple[int, int]:

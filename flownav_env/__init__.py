@@ -7,7 +7,8 @@
 | ``FlowNavSingle-v0``    | single     | 200                |
 | ``FlowNavThree-v0``     | three      | 250                |
 
-Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``.
+Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``: the settings
+(:class:`flownav_env.settings.EnvSettings`' fields, or ``settings=`` a whole ``EnvSettings``) and ``render_mode``.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from gymnasium.envs.registration import register, registry  # noqa: E402  (after
 
 from estimator import __version__  # noqa: E402
 from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)
+from flownav_env.settings import EnvSettings  # noqa: E402
 
 ENV_IDS = {
     "FlowNav-v0": ({"layout": "field"}, 400),
@@ -41,10 +43,20 @@ def env_entry_point(**kwargs: Any) -> FlowNavEnv:
     ``HumanRendering``, which then fails at the first reset asking for pygame. Without ``metadata`` to read it
     passes every kwarg through, and the env rejects a render mode it lacks when it is made.
 
+    Every id passes its ``layout`` as a keyword, which would override the layout of a whole ``settings=``:
+    a ``settings.layout`` other than the id's is refused rather than silently replaced.
+
     Raises:
-        ValueError: A kwarg is outside its range, or ``render_mode`` is not one of
-            ``FlowNavEnv.metadata["render_modes"]``.
+        ValueError: A kwarg is unknown or outside its range, ``settings.layout`` is not the id's layout, or
+            ``render_mode`` is not one of ``FlowNavEnv.metadata["render_modes"]``.
     """
+    settings, layout = kwargs.get("settings"), kwargs.get("layout")
+    if layout is not None and getattr(settings, "layout", layout) != layout:
+        ids = {id_kwargs["layout"]: env_id for env_id, (id_kwargs, _) in ENV_IDS.items()}
+        raise ValueError(
+            f"settings.layout is {settings.layout!r} but this env id flies layout {layout!r}: make "
+            f"{ids.get(settings.layout, 'the id of that layout')} or pass layout={settings.layout!r} as well"
+        )
     return FlowNavEnv(**kwargs)
 
 
@@ -54,4 +66,4 @@ for _env_id, (_kwargs, _steps) in ENV_IDS.items():
             id=_env_id, entry_point="flownav_env:env_entry_point", kwargs=_kwargs, max_episode_steps=_steps
         )
 
-__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "FlowNavEnv", "__version__", "env_entry_point"]
+__all__ = ["DEFAULT_GL_BACKEND", "ENV_IDS", "EnvSettings", "FlowNavEnv", "__version__", "env_entry_point"]

@@ -3,35 +3,26 @@ optical flow."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
-from dataclasses import fields
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 
-from estimator import DEFAULT_BIN_EDGES, DepthPoints, FlowDepthEstimator
+from estimator import DepthPoints, FlowDepthEstimator
 from flownav_env.actions import action_space, checked_action
-from flownav_env.observation import (
-    assemble_observation,
-    depth_histogram,
-    drone_state,
-    estimator_info,
-    observation_space,
-    observed_depths,
-    smoothed_near,
-)
+from flownav_env.env_arguments import settings_property, with_settings
+from flownav_env.observation import estimator_info
 from flownav_env.physics import FlowNavPhysics
-from flownav_env.quadrotor import ControllerGains, QuadrotorParams, velocity_command
+from flownav_env.quadrotor import ControllerGains, QuadrotorParams
 from flownav_env.rendering import VIEW_PANEL_SIZE, CameraRenderer, camera_panel
-from flownav_env.rewards import reward_terms
-from flownav_env.scene import LAYOUT_FUNCTIONS, LayoutParams, material_names
-from flownav_env.sensor import Pose, SensorPipeline
-from flownav_env.settings import Choice, EnvSettings, settings_property, with_sensor_settings
+from flownav_env.scene import LayoutParams
+from flownav_env.sensor import SensorPipeline
+from flownav_env.settings import EnvSettings
+from flownav_env.settings_check import RENDER_MODES, check_render_mode, settings_with
+from flownav_env.task import FlowNavTask
 
 
-@with_sensor_settings
+@with_settings
 class FlowNavEnv(gym.Env):
     r"""
     ## Description
@@ -48,7 +39,7 @@ class FlowNavEnv(gym.Env):
     The sensor model carries the thesis's test variables: camera attitude jitter (known to the system),
     distance per frame (``forward_speed`` / ``frame_rate``), scene brightness, and relative errors on the
     rotation and translation the estimator is told; beside them, real sensors' errors on the told motion and on
-    the estimated depths (bias, drift, noise floor, outliers, dropout: :mod:`flownav_env.settings`).
+    the estimated depths (bias, drift, noise floor, outliers, dropout: :mod:`flownav_env.sensor_errors`).
     ``obs_source="oracle"`` replaces the estimated depths by the true depths at the same tracked points
     (ray-cast), separating estimator error from policy error; ``"oracle_valid"`` keeps only the points with a
     valid estimate but uses their true depth: *which* points the estimator delivers vs *how well* it measures.
@@ -113,38 +104,14 @@ class FlowNavEnv(gym.Env):
     ## Arguments
     | Argument | Default | Meaning |
     |---|---|---|
-    | ``layout`` | ``"field"`` | ``"field"``, ``"corridor"``, ``"single"`` (thesis Fig. 14) or ``"three"`` (Fig. 41) |
-    | ``obstacle_density`` | 0.12 | field capsules per m² of the obstacle band, in [0, 1] |
-    | ``obstacle_radius`` | 0.5 | capsule radius (m), in (0, 2] |
-    | ``obstacle_height`` | 2.0 | capsule height (m), in (2·radius, 10] |
-    | ``field_length`` | 20.0 | start to goal line for field and corridor (m), in [5, 200] |
-    | ``field_width`` | 8.0 | width of the band holding field capsules (m), in [1, 100] |
-    | ``corridor_width`` | 2.5 | free width of a corridor (m), in (0, 20] |
-    | ``corridor_bend`` | 1.5 | largest sideways excursion of a corridor (m), in [0, 10] |
-    | ``forward_speed`` | 1.0 | forward speed (m/s), in [0, 5]; 0 hovers |
-    | ``frame_rate`` | 10.0 | camera frames = agent steps per second (Hz), in [1, 50] |
-    | ``flight_height`` | 1.0 | starting height (m), in [0.3, 5] |
-    | ``max_height`` | 1.8 | out of bounds above this height (m), in (``flight_height``, 20] |
-    | ``lateral_bound`` | 6.0 | out of bounds beyond this sideways distance from the course axis (m), in (0, 100] |
-    | ``camera_width``, ``camera_height`` | 160, 120 | camera resolution (px), each in [16, 1280] |
-    | ``camera_fov_deg`` | 60 | vertical field of view (deg), in [10, 150] |
-    {sensor_rows}
-    | ``obs_source`` | ``"flow"`` | ``"flow"`` (estimator), ``"oracle"`` (true depth at the tracked points) or ``"oracle_valid"`` (true depth at the points with a valid estimate) |
-    | ``histogram_sectors`` | (3, 5) | sector rows, columns, each in [1, 32] |
-    | ``observe_unresolved``, ``observe_counts``, ``observe_nearness``, ``observe_approach`` | False | add the ``unresolved`` key (where the estimator tracks points it cannot range: a histogram counts only ranged points, so it cannot tell a lone near point in open space from a wall), the ``point_counts`` key (how much each sector's histogram rests on), the ``nearness`` key (how near each sector's nearest surface is; a histogram spreads it over bins) or the ``approach`` key (how soon the drone reaches it at its forward speed) |
-    | ``near_smoothing`` | 1.0 | weight of the newest frame in ``nearness`` and ``approach``'s exponential average over the episode's frames, in (0, 1]; 1 = this frame only |
-    | ``depth_error_info`` | True | ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]`` and ``info["depth_outlier_share"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only flow observations are used, as in training |
-    | ``depth_bin_edges`` | ``estimator.DEFAULT_BIN_EDGES`` | increasing depth bin edges (m) |
-    | ``max_lateral_speed``, ``max_vertical_speed`` | 1.0, 0.5 | lateral and vertical speed at action 1 (m/s), each in (0, 5] |
-    | ``max_yaw_rate_deg`` | 45 | yaw rate at action 1 (deg/s), in (0, 360] |
-    | ``progress_weight`` | 1.0 | reward per metre of progress, ≥ 0 |
-    | ``success_bonus``, ``collision_penalty`` | 10.0, 10.0 | reward on reaching the goal; penalty on collision or leaving the bounds; each ≥ 0 |
-    | ``control_cost_weight`` | 0.05 | weight of ‖action‖², ≥ 0 |
-    | ``clearance_weight``, ``safe_clearance`` | 0.0, 0.5 | clearance shaping: the most a step closer than ``safe_clearance`` (m, in (0, 5]) to a capsule can cost, ≥ 0; 0 turns it off |
-    | ``estimator_kwargs`` | None | keyword arguments of ``estimator.FlowDepthEstimator`` (method, thresholds, ...), over ``ENV_ESTIMATOR_DEFAULTS`` (``fast_threshold=10``) |
-    | ``texture_seed`` | 0 | seed of the procedural textures (the world's look) |
-    | ``physics_timestep`` | 0.004 | MuJoCo timestep (s), in [0.0005, 0.005] (physics ≥ 200 Hz) |
+    | ``settings`` | None | an :class:`~flownav_env.settings.EnvSettings` holding every setting below; None for the defaults. Any setting given by keyword overrides its field (with ``gymnasium.make`` the id's ``layout`` is such a keyword) |
+    {setting_rows}
     | ``render_mode`` | None | ``"rgb_array"``: camera view with the flow overlay beside a chase view |
+
+    The settings are the fields of :class:`~flownav_env.settings.EnvSettings`, which declares each one's
+    default, allowed values and meaning once (the rows above are made from it); an unknown keyword raises
+    ValueError naming it and the known ones. :func:`flownav_env.settings_check.check_env_kwargs` checks a
+    mapping of them (a config's ``env:``) the same way without building an env.
 
     Between episodes, :meth:`set_sensor` and :meth:`set_course` change what training randomises. The default
     resolution (160×120) and FAST threshold (10) were measured: ``results/env_performance.md``.
@@ -154,7 +121,7 @@ class FlowNavEnv(gym.Env):
       camera's near plane is at 5 cm (it was 1.22 m, and nearer capsules rendered hollow): results differ.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES), "render_fps": 10}
 
     layout = settings_property("layout")
     obs_source = settings_property("obs_source")
@@ -164,66 +131,10 @@ class FlowNavEnv(gym.Env):
     substeps = settings_property("substeps")
 
     def __init__(
-        self,
-        layout: str = "field",
-        obstacle_density: float = 0.12,
-        obstacle_radius: float = 0.5,
-        obstacle_height: float = 2.0,
-        field_length: float = 20.0,
-        field_width: float = 8.0,
-        corridor_width: float = 2.5,
-        corridor_bend: float = 1.5,
-        forward_speed: float = 1.0,
-        frame_rate: float = 10.0,
-        flight_height: float = 1.0,
-        max_height: float = 1.8,
-        lateral_bound: float = 6.0,
-        camera_width: int = 160,
-        camera_height: int = 120,
-        camera_fov_deg: float = 60.0,
-        attitude_jitter_deg: float = 0.0,
-        brightness: float = 1.0,
-        rotation_error: float = 0.0,
-        translation_error: float = 0.0,
-        rotation_bias: float = 0.0,
-        translation_bias: float = 0.0,
-        rotation_drift: float = 0.0,
-        translation_drift: float = 0.0,
-        rotation_noise_deg: float = 0.0,
-        translation_noise_m: float = 0.0,
-        depth_noise: float = 0.0,
-        depth_outliers: float = 0.0,
-        depth_dropout: float = 0.0,
-        obs_source: str = "flow",
-        histogram_sectors: Sequence[int] = (3, 5),
-        observe_unresolved: bool = False,
-        observe_counts: bool = False,
-        observe_nearness: bool = False,
-        observe_approach: bool = False,
-        near_smoothing: float = 1.0,
-        depth_error_info: bool = True,
-        depth_bin_edges: Sequence[float] = tuple(DEFAULT_BIN_EDGES),
-        max_lateral_speed: float = 1.0,
-        max_vertical_speed: float = 0.5,
-        max_yaw_rate_deg: float = 45.0,
-        progress_weight: float = 1.0,
-        success_bonus: float = 10.0,
-        collision_penalty: float = 10.0,
-        control_cost_weight: float = 0.05,
-        clearance_weight: float = 0.0,
-        safe_clearance: float = 0.5,
-        estimator_kwargs: Mapping[str, Any] | None = None,
-        texture_seed: int = 0,
-        physics_timestep: float = 0.004,
-        render_mode: str | None = None,
+        self, settings: EnvSettings | None = None, render_mode: str | None = None, **overrides: Any
     ) -> None:
-        # Every argument but render_mode is a setting (a test keeps the two lists equal).
-        arguments = dict(locals())
-        if render_mode is not None:
-            Choice(tuple(self.metadata["render_modes"])).check("render_mode", render_mode)
-        self.render_mode = render_mode
-        self.settings = EnvSettings(**{item.name: arguments[item.name] for item in fields(EnvSettings)})
-        settings = self.settings
+        self.render_mode = check_render_mode(render_mode)
+        self.settings = settings = settings_with(settings, overrides)
         self.intrinsics = settings.intrinsics()
         self.estimator = FlowDepthEstimator(self.intrinsics, **settings.estimator_arguments())
         self.physics = FlowNavPhysics(
@@ -241,17 +152,12 @@ class FlowNavEnv(gym.Env):
         )
         self._view: CameraRenderer | None = None
         self._closed = False
-        self._materials = len(material_names())
         self._sensor = SensorPipeline(settings.frame_rate)
-
-        self.observation_space = observation_space(settings)
+        self.task = FlowNavTask(settings, self.intrinsics)
+        self.observation_space = self.task.observation_space
         self.action_space = action_space()
-
-        self._goal_x = self.layout_params.field_length
         self._frame: np.ndarray | None = None
         self._depth_points: DepthPoints | None = None
-        self._observed: dict[str, np.ndarray] | None = None  # the last observation, for near_smoothing
-        self._min_clearance = math.inf
 
     @property
     def depth_bin_edges(self) -> np.ndarray:  # as a float64 array (m)
@@ -280,82 +186,45 @@ class FlowNavEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         self._require_open("reset")
         super().reset(seed=seed)
-        rng = self.np_random
-        positions, self._goal_x = LAYOUT_FUNCTIONS[self.layout](rng, self.layout_params)
-        self.physics.place_obstacles(positions, rng.integers(self._materials, size=len(positions)))
-        start = np.array([0.0, 0.0, self.settings.flight_height])
-        self.physics.reset_drone(start, 0.0, np.array([self.forward_speed, 0.0, 0.0]))
-
-        def mount_camera(jitter: np.ndarray) -> Pose:
-            self.physics.set_camera_mount(jitter)
-            return self.physics.camera_pose()
-
-        frame = self._sensor.capture(self.settings.sensor, rng, mount_camera, self._render_camera, first=True)
-        self._frame = frame.image
-        self._min_clearance = self.physics.obstacle_clearance()
+        settings, rng, physics = self.settings, self.np_random, self.physics
+        self.task.initialize_episode(physics, settings, rng)
+        # The first frame is jittered too (a draw after the course's), though it tells no motion.
+        physics.set_camera_mount(self._sensor.jitter(settings.sensor, rng))
+        self._frame = self._camera.render(physics.data, physics.camera_id)
+        motion = self._sensor.start(physics.camera_pose())
         self.estimator.reset()
-        self._observed = None
-        points = self._depth_points = self.estimator.update(frame.gray, *frame.told_motion)
-        histogram = np.zeros(self.observation_space["depth_histogram"].shape, np.float32)
-        info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
-        info |= {"clearance": self._min_clearance, "min_clearance": self._min_clearance}
-        info |= estimator_info(points, np.zeros(0))
-        return self._observation(histogram, points, points.depth, np.zeros(len(points.points), bool)), info
+        points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
+        observation = self.task.observe(physics, settings, points, np.zeros(0))
+        return observation, self.task.start_info() | estimator_info(points, np.zeros(0))
 
     def step(self, action):
         self._require_open("step")
         action = checked_action(action)
-        settings = self.settings
-        x_before = self.physics.position()[0]
-        speeds = (self.forward_speed, settings.max_lateral_speed, settings.max_vertical_speed)
-        velocity_target = velocity_command(self.physics.yaw(), action, *speeds)
-        collision = False
-
-        def fly(jitter: np.ndarray) -> Pose:
-            nonlocal collision
-            collision = self.physics.advance(
-                velocity_target,
-                -action[2] * settings.max_yaw_rate,
-                settings.substeps,
-                camera_disturbance=jitter,
-            )
-            return self.physics.camera_pose()
-
-        frame = self._sensor.capture(settings.sensor, self.np_random, fly, self._render_camera, first=False)
-        self._frame = frame.image
-        points = self.estimator.update(frame.gray, *frame.told_motion)
-        points = self._depth_points = self._sensor.corrupt_points(settings, self.np_random, points)
-        # True depth at the tracked points of the previous frame (NaN where a ray hits nothing).
-        needs_truth = settings.depth_error_info or settings.obs_source != "flow"
+        settings, rng, physics, task = self.settings, self.np_random, self.physics, self.task
+        x_before = physics.position()[0]
+        velocity_target, yaw_rate = task.command(physics, settings, action)
+        # The flight draws nothing, so a seed's draws keep their order: jitter, told motion, depth errors.
+        jitter = self._sensor.jitter(settings.sensor, rng)
+        collision = physics.advance(velocity_target, yaw_rate, settings.substeps, camera_disturbance=jitter)
+        self._frame = self._camera.render(physics.data, physics.camera_id)
+        motion = self._sensor.motion(settings.sensor, rng, physics.camera_pose())
+        points = self.estimator.update(self._frame, *motion.told_motion)
+        points = self._depth_points = self._sensor.corrupt_points(settings, rng, points)
         true_depth = np.zeros(0)
-        if needs_truth:
-            true_depth = self.physics.ray_depths(self.intrinsics.rays(points.points), *frame.previous_pose)
-        depth, valid = observed_depths(settings.obs_source, points, true_depth)
-        histogram = depth_histogram(settings, self.intrinsics, points, depth, valid)
-
-        position = self.physics.position()
-        clearance = self.physics.obstacle_clearance()
-        self._min_clearance = min(self._min_clearance, clearance)
-        success = bool(position[0] >= self._goal_x and not collision)
-        out_of_bounds = bool(abs(position[1]) > settings.lateral_bound or position[2] > settings.max_height)
-        progress = float(position[0] - x_before)
-        terms = reward_terms(settings, progress, success, collision or out_of_bounds, action, clearance)
+        if settings.needs_true_depth:
+            # The points are the last frame's keypoints: their rays leave from its pose (NaN: nothing hit).
+            true_depth = physics.ray_depths(self.intrinsics.rays(points.points), *motion.previous_pose)
+        observation = task.observe(physics, settings, points, true_depth)
+        outcome = task.outcome(physics, settings, x_before, collision)
+        terms = task.reward(settings, outcome, action)
         info = {
-            "collision": collision,
-            "success": success,
-            "out_of_bounds": out_of_bounds,
-            "progress": float(position[0]),
-            "clearance": clearance,
-            "min_clearance": self._min_clearance,
-            "position": position,
-            "true_rotation": frame.true_motion[0],
-            "true_translation": frame.true_motion[1],
+            **outcome.info(),
+            "true_rotation": motion.true_motion[0],
+            "true_translation": motion.true_motion[1],
             **estimator_info(points, true_depth),
             **terms,
         }
-        observation = self._observation(histogram, points, depth, valid)
-        terminated = collision or success or out_of_bounds
-        return observation, float(sum(terms.values())), terminated, False, info
+        return observation, float(sum(terms.values())), outcome.terminated, False, info
 
     def render(self) -> np.ndarray | None:
         """With ``render_mode="rgb_array"``: the camera frame with tracked points, flow vectors and depth-coloured
@@ -387,14 +256,3 @@ class FlowNavEnv(gym.Env):
         # A closed env would quietly make a new GL context; a closed env is a bug in the caller.
         if self._closed:
             raise RuntimeError(f"{method}() called on a closed FlowNavEnv; make a new env instead")
-
-    def _render_camera(self) -> np.ndarray:
-        return self._camera.render(self.physics.data, self.physics.camera_id)
-
-    def _observation(
-        self, histogram: np.ndarray, points: DepthPoints, depth: np.ndarray, counted: np.ndarray
-    ) -> dict:
-        state = drone_state(self.physics)
-        raw = assemble_observation(self.settings, self.intrinsics, histogram, state, points, depth, counted)
-        self._observed = smoothed_near(raw, self._observed, self.settings.near_smoothing)
-        return self._observed

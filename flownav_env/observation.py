@@ -10,15 +10,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from gymnasium import spaces
 
-from estimator import (
-    CameraIntrinsics,
-    DepthPoints,
-    sector_counts,
-    sector_fraction,
-    sector_histogram,
-    sector_near_depth,
-)
+from estimator import DepthPoints
 from estimator.accuracy import OUTLIER_RELATIVE_ERROR, relative_depth_error
+from estimator.histogram import SectorGrid
 from flownav_env.settings import EnvSettings
 
 if TYPE_CHECKING:
@@ -80,55 +74,28 @@ def observed_depths(
     return points.depth, points.valid
 
 
-def depth_histogram(
-    settings: EnvSettings,
-    intrinsics: CameraIntrinsics,
-    points: DepthPoints,
-    depth: np.ndarray,
-    counted: np.ndarray,
-) -> np.ndarray:
-    """The ``depth_histogram`` observation of the counted points."""
-    return sector_histogram(
-        points.points,
-        depth,
-        counted,
-        intrinsics.image_size,
-        sectors=settings.histogram_sectors,
-        bin_edges=np.asarray(settings.depth_bin_edges, np.float64),
-    )
-
-
 def assemble_observation(
     settings: EnvSettings,
-    intrinsics: CameraIntrinsics,
-    histogram: np.ndarray,
+    grid: SectorGrid,
     state: np.ndarray,
     points: DepthPoints,
     depth: np.ndarray,
     counted: np.ndarray,
 ) -> dict[str, np.ndarray]:
-    """The observation dict; ``unresolved`` (tracked points left uncounted, per sector), ``point_counts``
-    (how many points a sector's histogram counts, as ``1 - exp(-n / COUNT_SCALE)``), ``nearness`` and
-    ``approach`` (a sector's robust near depth over a distance, and over the distance flown in
-    :data:`NEAR_TIME_S`) only when asked for."""
-    observation = {"depth_histogram": histogram, "state": state}
+    """The observation dict of the ``counted`` points (depths ``depth``): ``depth_histogram`` and ``state``;
+    ``unresolved`` (tracked points left uncounted, per sector), ``point_counts`` (how many points a sector's
+    histogram counts, as ``1 - exp(-n / COUNT_SCALE)``), ``nearness`` and ``approach`` (a sector's robust near
+    depth over a distance, and over the distance flown in :data:`NEAR_TIME_S`) only when asked for. The
+    points' sectors are found once (``grid``: the env's sectors and bins) and shared by every key."""
+    sector = grid.locate(points.points)
+    observation = {"depth_histogram": grid.histogram(sector, depth, counted), "state": state}
     if settings.observe_unresolved:
-        observation["unresolved"] = sector_fraction(
-            points.points,
-            points.tracked & ~counted,
-            points.tracked,
-            intrinsics.image_size,
-            sectors=settings.histogram_sectors,
-        )
+        observation["unresolved"] = grid.fraction(sector, points.tracked & ~counted, points.tracked)
     if settings.observe_counts:
-        counts = sector_counts(
-            points.points, counted, intrinsics.image_size, sectors=settings.histogram_sectors
-        )
+        counts = grid.counts(sector, counted)
         observation["point_counts"] = (1.0 - np.exp(-counts / COUNT_SCALE)).astype(np.float32)
     if settings.observe_nearness or settings.observe_approach:
-        near = sector_near_depth(
-            points.points, depth, counted, intrinsics.image_size, sectors=settings.histogram_sectors
-        )
+        near = grid.near_depth(sector, depth, counted)
         if settings.observe_nearness:
             observation["nearness"] = np.minimum(1.0, NEAR_DEPTH_M / near).astype(np.float32)
         if settings.observe_approach:

@@ -1,7 +1,8 @@
 """MuJoCo physics of the FlowNav world with named accessors (dm_control style) instead of raw indices.
 
 Owns the ``MjModel``/``MjData`` pair, the quadrotor's inner controller, the obstacle pool and the forward
-camera's mount. Knows nothing of rewards, observations or the estimator.
+camera's mount. Knows nothing of rewards, observations or the estimator: what is asked of the drone in this
+world is the task's (:mod:`flownav_env.task`).
 """
 
 from __future__ import annotations

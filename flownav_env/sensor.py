@@ -3,29 +3,27 @@ sensing order that the env and playback share.
 
 These are the thesis's test variables (§5.2.1, §5.2.4–5.2.5): attitude jitter is a real disturbance of the
 camera that the system knows about; rotation and translation errors corrupt only what the estimator is told.
-Beside them, the error models of real sensors (:mod:`flownav_env.errors`; defined in
-:mod:`flownav_env.settings`): a constant or drifting scale bias and an absolute noise floor on the told
-motion, and noise, outliers and dropout on the estimated depths.
+Beside them, the error models of real sensors (defined, with their maths, in :mod:`flownav_env.sensor_errors`):
+a constant or drifting scale bias and an absolute noise floor on the told motion, and noise, outliers and
+dropout on the estimated depths.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-import cv2
 import numpy as np
 
 from estimator import DepthPoints
 from flownav_env.camera import camera_motion_between
-from flownav_env.errors import (
+from flownav_env.rotations import rotation_from_vector, vector_from_rotation
+from flownav_env.sensor_errors import (
     add_motion_noise,
     corrupt_depths,
     outlier_depth_range,
     scale_motion,
     walk_bias,
 )
-from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.settings import BIAS_LIMIT, EnvSettings, SensorSettings
 
 Pose = tuple[np.ndarray, np.ndarray]
@@ -69,14 +67,11 @@ def jitter_rotation(jitter_deg: float, rng: np.random.Generator) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class SensorFrame:
-    """One captured camera frame and the motion that led to it.
+class FrameMotion:
+    """The camera's motion up to one frame: the truth and what the estimator is told.
 
     Attributes:
-        image: RGB frame (H, W, 3) uint8.
-        gray: The same frame in grey levels (H, W) uint8, what the estimator reads.
-        pose: ``(R, p)``: world-from-camera rotation (OpenCV axes, jitter included) and position it was
-            rendered from.
+        pose: ``(R, p)``: world-from-camera rotation (OpenCV axes, jitter included) and position of the frame.
         previous_pose: The pose of the frame before (``pose`` itself on a first frame).
         true_motion: ``(R, t)`` from the previous camera to this one (``X_this = R X_prev + t``); identity
             and zero on a first frame.
@@ -85,8 +80,6 @@ class SensorFrame:
         bias: The ``(rotation, translation)`` scale bias applied to ``told_motion`` (0 on a first frame).
     """
 
-    image: np.ndarray
-    gray: np.ndarray
     pose: Pose
     previous_pose: Pose
     true_motion: Pose
@@ -95,19 +88,22 @@ class SensorFrame:
 
 
 class SensorPipeline:
-    """The per-frame sensing order, written once for the env and for playback.
+    """The sensor's part of each frame, written once for the env and for playback, which call it in this order:
 
-    Per frame: draw the attitude jitter, move the camera (the caller decides how: fly the drone or place it),
-    render, take the true motion since the previous captured frame, and corrupt it into the told motion
-    (:meth:`capture`); the caller feeds the estimator (it may run several on one frame), and the env then
-    passes the estimated depths through the depth errors (:meth:`corrupt_points`) before the histogram. The
-    random draws come in this order from the caller's generator, so a seed fixes them: jitter, relative
+    1. :meth:`jitter`: draw the camera mount's disturbance; the caller turns the camera by it as it moves the
+       camera (flies the drone, or places it), then renders the frame;
+    2. :meth:`start` (a sequence's first frame) or :meth:`motion`: the true motion since the previous frame
+       and the told motion, with its errors;
+    3. the caller feeds the estimator (it may run several on one frame); the env then passes the estimated
+       depths through the depth errors (:meth:`corrupt_points`) before the histogram.
+
+    The random draws come in this order from the caller's generator, so a seed fixes them: jitter, relative
     errors, bias walk (rotation, translation), noise floor (rotation, translation), then depth noise,
-    outliers and dropout; each only when its setting is non-zero.
+    outliers and dropout; each only when its setting is non-zero. Nothing here moves or renders the camera.
 
-    The one per-episode state is the random walk of the biases (:mod:`flownav_env.settings`), restarted at 0
-    by every first frame; the applied bias is the current ``rotation_bias``/``translation_bias`` setting plus
-    the walk, clipped to ±:data:`~flownav_env.settings.BIAS_LIMIT`.
+    The one per-episode state is the random walk of the biases (:mod:`flownav_env.sensor_errors`), restarted
+    at 0 by every first frame; the applied bias is the current ``rotation_bias``/``translation_bias`` setting
+    plus the walk, clipped to ±:data:`~flownav_env.settings.BIAS_LIMIT`.
 
     Args:
         frame_rate: Frames per second of the captured sequence, Hz: a bias's walk steps every 1/frame_rate s.
@@ -123,49 +119,36 @@ class SensorPipeline:
         self._previous_pose: Pose | None = None
         self._walk = (0.0, 0.0)
 
-    def capture(
-        self,
-        sensor: SensorSettings,
-        rng: np.random.Generator,
-        move_camera: Callable[[np.ndarray], Pose],
-        render: Callable[[], np.ndarray],
-        first: bool,
-    ) -> SensorFrame:
-        """Capture one frame.
+    @staticmethod
+    def jitter(sensor: SensorSettings, rng: np.random.Generator) -> np.ndarray:
+        """The camera mount's disturbance for the coming frame, a (3, 3) rotation in the camera's own axes
+        (:func:`jitter_rotation`; the identity, without a draw, when ``attitude_jitter_deg`` is 0)."""
+        return jitter_rotation(sensor.attitude_jitter_deg, rng)
 
-        Args:
-            sensor: The sensor variables for this frame.
-            rng: The generator of the jitter and the motion errors.
-            move_camera: Moves the camera for this frame with the given (3, 3) jitter rotation (in the
-                camera's own axes) and returns the camera's resulting world pose ``(R, p)``.
-            render: Renders the RGB frame from the camera's current pose.
-            first: Whether this frame starts a sequence (no previous frame: no motion, no error draws; the
-                bias walk restarts).
+    def start(self, pose: Pose) -> FrameMotion:
+        """The first frame of a sequence, taken from ``pose``: no motion, no error draws; the bias walk
+        restarts."""
+        self._previous_pose, self._walk = pose, (0.0, 0.0)
+        still = (np.eye(3), np.zeros(3))
+        return FrameMotion(pose, pose, still, still)
+
+    def motion(self, sensor: SensorSettings, rng: np.random.Generator, pose: Pose) -> FrameMotion:
+        """The next frame, taken from ``pose``: its true motion since the previous frame and the motion the
+        estimator is told (relative errors, bias walk, noise floor; drawn from ``rng`` in that order).
 
         Raises:
-            ValueError: ``first`` is False but no frame was captured before.
+            ValueError: No sequence was started (:meth:`start`).
         """
-        if not first and self._previous_pose is None:
-            raise ValueError("the first frame of a sequence must be captured with first=True")
-        pose = move_camera(jitter_rotation(sensor.attitude_jitter_deg, rng))
-        image = render()
-        bias = (0.0, 0.0)
-        if first:
-            previous = pose
-            true_motion = told_motion = (np.eye(3), np.zeros(3))
-            self._walk = (0.0, 0.0)
-        else:
-            previous = self._previous_pose
-            true_motion = camera_motion_between(*previous, *pose)
-            told_motion = corrupt_motion(*true_motion, sensor.rotation_error, sensor.translation_error, rng)
-            bias = self._step_bias(sensor, rng)
-            told_motion = scale_motion(*told_motion, 1.0 + bias[0], 1.0 + bias[1])
-            told_motion = add_motion_noise(
-                *told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng
-            )
+        previous = self._previous_pose
+        if previous is None:
+            raise ValueError("a sequence's first frame must go through start() before motion()")
+        true_motion = camera_motion_between(*previous, *pose)
+        told_motion = corrupt_motion(*true_motion, sensor.rotation_error, sensor.translation_error, rng)
+        bias = self._step_bias(sensor, rng)
+        told_motion = scale_motion(*told_motion, 1.0 + bias[0], 1.0 + bias[1])
+        told_motion = add_motion_noise(*told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng)
         self._previous_pose = pose
-        gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
-        return SensorFrame(image, gray, pose, previous, true_motion, told_motion, bias)
+        return FrameMotion(pose, previous, true_motion, told_motion, bias)
 
     def _step_bias(self, sensor: SensorSettings, rng: np.random.Generator) -> tuple[float, float]:
         """Walk the biases one frame on and return the applied ``(rotation, translation)`` bias."""
@@ -184,9 +167,10 @@ class SensorPipeline:
         """The estimator's points with the depth errors on their valid depths, as the observation sees them.
 
         Only flow observations (``settings.obs_source == "flow"``) get them: the oracles observe true depths.
-        The valid depths get :func:`~flownav_env.errors.corrupt_depths`, the outliers drawn over the range of
-        the histogram's bin edges (:func:`~flownav_env.errors.outlier_depth_range`); a dropped point's row is
-        removed altogether, so it is neither counted nor left as a tracked point without a depth.
+        The valid depths get :func:`~flownav_env.sensor_errors.corrupt_depths`, the outliers drawn over the
+        range of the histogram's bin edges (:func:`~flownav_env.sensor_errors.outlier_depth_range`); a
+        dropped point's row is removed altogether, so it is neither counted nor left as a tracked point
+        without a depth.
 
         Returns:
             ``points`` itself when no depth error applies (nothing drawn); else a new :class:`DepthPoints`.

@@ -37,3 +37,12 @@ def tiny_train_config(
     }
     config_path.write_text(yaml.safe_dump(content))
     return load_config(config_path, TrainConfig), config_path
+
+
+def with_other_defaults(init, **defaults):
+    """``init`` with other defaults for some keyword arguments: a re-tuned dataclass."""
+
+    def patched(self, **kwargs):
+        init(self, **{**defaults, **kwargs})
+
+    return patched

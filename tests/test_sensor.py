@@ -3,6 +3,8 @@ the depth errors on the estimator's points, and the env's set_sensor."""
 
 from __future__ import annotations
 
+import inspect
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -14,23 +16,18 @@ from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor import SensorPipeline, corrupt_motion, jitter_rotation
 from flownav_env.settings import EnvSettings, SensorSettings
 
-IMAGE = np.zeros((4, 6, 3), np.uint8)
 SMALL = {"camera_width": 64, "camera_height": 48}
 TURN = rotation_from_vector([0.01, 0.03, -0.02])
 
 
 def _fly(pipeline: SensorPipeline, sensor: SensorSettings, rng: np.random.Generator, frames: int) -> list:
-    """Capture ``frames`` frames along a path that turns by TURN and moves 0.1 m forward per frame."""
-    pose = [np.eye(3), np.zeros(3)]
-
-    def move(jitter: np.ndarray):
-        return pose[0], pose[1]
-
-    captured = [pipeline.capture(sensor, rng, move, lambda: IMAGE, first=True)]
+    """The motions of ``frames`` frames along a path that turns by TURN and moves 0.1 m forward per frame."""
+    pose = (np.eye(3), np.zeros(3))
+    motions = [pipeline.start(pose)]
     for _ in range(frames - 1):
-        pose = [pose[0] @ TURN.T, pose[1] + pose[0] @ TURN.T @ np.array([0.0, 0.0, 0.1])]
-        captured.append(pipeline.capture(sensor, rng, move, lambda: IMAGE, first=False))
-    return captured
+        pose = (pose[0] @ TURN.T, pose[1] + pose[0] @ TURN.T @ np.array([0.0, 0.0, 0.1]))
+        motions.append(pipeline.motion(sensor, rng, pose))
+    return motions
 
 
 def test_kernels_draw_nothing_when_off() -> None:
@@ -53,20 +50,17 @@ def test_corruption_stays_within_the_relative_error() -> None:
 def test_pipeline_order_motion_and_draws() -> None:
     sensor = SensorSettings(attitude_jitter_deg=2.0, rotation_error=0.1, translation_error=0.1)
     poses = [(np.eye(3), np.zeros(3)), (rotation_from_vector([0, 0.02, 0]), np.array([0.0, 0.0, 0.1]))]
-    jitters: list[np.ndarray] = []
-
-    def move(jitter: np.ndarray):
-        jitters.append(jitter)
-        return poses[len(jitters) - 1]
-
     pipeline, rng = SensorPipeline(), np.random.default_rng(5)
-    first = pipeline.capture(sensor, rng, move, lambda: IMAGE, first=True)
-    second = pipeline.capture(sensor, rng, move, lambda: IMAGE, first=False)
+    # The caller's order: jitter, (move the camera, render), the frame's motion.
+    jitters = [pipeline.jitter(sensor, rng)]
+    first = pipeline.start(poses[0])
+    jitters.append(pipeline.jitter(sensor, rng))
+    second = pipeline.motion(sensor, rng, poses[1])
     np.testing.assert_array_equal(first.true_motion[0], np.eye(3))
-    assert first.told_motion is first.true_motion and first.gray.shape == (4, 6)
+    assert first.told_motion is first.true_motion and first.previous_pose is poses[0]
     expected = camera_motion_between(*poses[0], *poses[1])
     np.testing.assert_array_equal(second.true_motion[0], expected[0])
-    assert second.previous_pose is poses[0]
+    assert second.previous_pose is poses[0] and second.pose is poses[1]
     # The same generator replayed by hand: jitter, jitter, then the two error draws.
     replay = np.random.default_rng(5)
     np.testing.assert_array_equal(jitters[0], jitter_rotation(2.0, replay))
@@ -76,10 +70,16 @@ def test_pipeline_order_motion_and_draws() -> None:
 
 
 def test_pipeline_needs_a_first_frame() -> None:
-    with pytest.raises(ValueError, match="must be captured with first=True"):
-        SensorPipeline().capture(
-            SensorSettings(), np.random.default_rng(), lambda j: None, lambda: IMAGE, False
-        )
+    with pytest.raises(ValueError, match=r"^a sequence's first frame must go through start\(\) before motion\(\)$"):
+        SensorPipeline().motion(SensorSettings(), np.random.default_rng(), (np.eye(3), np.zeros(3)))
+
+
+def test_the_pipeline_takes_poses_not_callbacks() -> None:
+    # Issue 30: the env moves and renders the camera itself; the sensor is handed the result, never a callback.
+    for method in (SensorPipeline.jitter, SensorPipeline.start, SensorPipeline.motion):
+        annotations = inspect.signature(method).parameters.values()
+        assert not any("Callable" in str(parameter.annotation) for parameter in annotations), method
+    assert not hasattr(SensorPipeline, "capture")
 
 
 def test_env_set_sensor_checks_and_applies() -> None:
@@ -133,7 +133,7 @@ def test_drift_walks_the_bias_from_its_setting_and_restarts_at_every_first_frame
     # The same draws by hand: one normal per frame, standard deviation drift * sqrt(1 / frame_rate).
     replay = np.random.default_rng(5).normal(0.0, 0.5 * np.sqrt(1 / 20.0), 5)
     np.testing.assert_allclose(biases, 0.1 + np.cumsum(replay), rtol=1e-12)
-    restarted = pipeline.capture(sensor, rng, lambda jitter: (np.eye(3), np.zeros(3)), lambda: IMAGE, True)
+    restarted = pipeline.start((np.eye(3), np.zeros(3)))
     assert restarted.bias == (0.0, 0.0) and pipeline._walk == (0.0, 0.0)
     # However far the walk goes, the applied bias stays within ±0.9 (a scale never flips sign).
     far = _fly(SensorPipeline(), SensorSettings(translation_bias=0.8, translation_drift=1.0), rng, 200)
@@ -144,8 +144,8 @@ def test_the_noise_floor_moves_the_told_motion_of_a_still_camera() -> None:
     still = (np.eye(3), np.zeros(3))
     pipeline, rng = SensorPipeline(), np.random.default_rng(6)
     sensor = SensorSettings(rotation_noise_deg=1.0, translation_noise_m=0.01)
-    pipeline.capture(sensor, rng, lambda jitter: still, lambda: IMAGE, first=True)
-    frame = pipeline.capture(sensor, rng, lambda jitter: still, lambda: IMAGE, first=False)
+    pipeline.start(still)
+    frame = pipeline.motion(sensor, rng, still)
     np.testing.assert_array_equal(frame.true_motion[1], np.zeros(3))
     replay = np.random.default_rng(6)
     noise_vector = np.deg2rad(replay.normal(0.0, 1.0, 3))

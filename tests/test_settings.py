@@ -1,5 +1,5 @@
-"""flownav_env.settings: one rule per setting, the messages they raise, and agreement with the env's
-constructor and its documented Arguments table."""
+"""flownav_env.settings: one declaration per setting (default, rule, meaning), the messages the rules raise,
+the env's constructor and Arguments table made from it, and the pure checks of flownav_env.settings_check."""
 
 from __future__ import annotations
 
@@ -12,17 +12,16 @@ import numpy as np
 import pytest
 
 from flownav_env import FlowNavEnv
+from flownav_env.env_arguments import setting_rows
+from flownav_env.setting_rules import Range
 from flownav_env.settings import (
     DEPTH_ERROR_FIELDS,
     ENV_ESTIMATOR_DEFAULTS,
     SENSOR_FIELDS,
     EnvSettings,
-    Range,
     SensorSettings,
-    check_setting,
-    sensor_argument_rows,
-    setting_range,
 )
+from flownav_env.settings_check import check_setting, setting_range
 
 # The sensor error models beside the thesis's variables (issue 15): each one's range and a value outside it.
 ERROR_MODELS = {
@@ -119,18 +118,15 @@ def test_sensor_rules_are_the_env_rules() -> None:
     assert all(sensor_rules[name] is env_rules[name] for name in SENSOR_FIELDS)
 
 
-def test_settings_mirror_the_env_constructor() -> None:
-    parameters = dict(inspect.signature(FlowNavEnv.__init__).parameters)
-    del parameters["self"], parameters["render_mode"]
-    assert set(parameters) == {f.name for f in fields(EnvSettings)}
-    defaults = EnvSettings()
-    for name, parameter in parameters.items():
-        default = parameter.default
-        expected = getattr(defaults, name)
-        assert expected == {} if default is None else check_setting(name, default) == expected, name
+def test_the_env_constructor_lists_no_setting_by_hand() -> None:
+    # Issue 30: EnvSettings is the one declaration; the env takes it whole, or any of its fields by keyword.
+    parameters = inspect.signature(FlowNavEnv.__init__).parameters
+    assert list(parameters) == ["self", "settings", "render_mode", "overrides"]
+    assert parameters["overrides"].kind is inspect.Parameter.VAR_KEYWORD
 
 
-def test_every_range_appears_in_the_arguments_table() -> None:
+def _arguments_table() -> dict[str, str]:
+    """FlowNavEnv's Arguments table: each documented name and its row."""
     table = FlowNavEnv.__doc__[FlowNavEnv.__doc__.index("## Arguments") :]
     rows = {}
     for line in table.splitlines()[3:]:
@@ -138,13 +134,28 @@ def test_every_range_appears_in_the_arguments_table() -> None:
             break
         for name in re.findall(r"``(\w+)``", line.split("|")[1]):
             rows[name] = line
+    return rows
+
+
+def test_the_arguments_table_is_made_from_the_fields() -> None:
+    rows = _arguments_table()
+    assert list(rows) == ["settings", *(f.name for f in fields(EnvSettings)), "render_mode"]
+    assert "{setting_rows}" not in FlowNavEnv.__doc__ and setting_rows() in FlowNavEnv.__doc__
+    for item in fields(EnvSettings):
+        assert item.metadata["meaning"] and item.metadata["meaning"] in rows[item.name], item.name
+        assert item.metadata["rule"].describe() in rows[item.name], item.name
+    assert '| ``layout`` | ``"field"`` |' in rows["layout"] and "| (3, 5) |" in rows["histogram_sectors"]
+
+
+def test_every_range_appears_in_the_arguments_table() -> None:
+    rows = _arguments_table()
     for item in fields(EnvSettings):
         rule = item.metadata["rule"]
         if not isinstance(rule, Range):
             continue
         row = rows[item.name]
         if rule.low_from is not None:
-            assert f"{rule.high:g}]" in row, item.name
+            assert f"``{rule.low_from}``, {rule.high:g}]" in row, item.name
         elif math.isinf(rule.high):
             assert f"≥ {rule.low:g}" in row, item.name
         else:
@@ -178,8 +189,20 @@ def test_depth_errors_are_on_only_when_one_is_set() -> None:
     assert not SensorSettings(rotation_bias=0.5, rotation_noise_deg=1.0).depth_errors
 
 
-def test_the_sensor_rows_of_the_arguments_table_come_from_the_rules() -> None:
-    rows = sensor_argument_rows().split("\n    ")
-    assert [re.match(r"\| ``(\w+)`` \|", row).group(1) for row in rows] == list(SENSOR_FIELDS)
-    assert "{sensor_rows}" not in FlowNavEnv.__doc__
-    assert all(row in FlowNavEnv.__doc__ for row in rows)
+def test_estimator_arguments_are_checked_by_value_when_the_settings_are_made() -> None:
+    # Values too, not only names: a config's estimator_kwargs fail at the check, before any env is built.
+    with pytest.raises(ValueError, match=r"^fast_threshold must be an integer with 1 <= fast_threshold <= 255"):
+        EnvSettings(estimator_kwargs={"fast_threshold": 0})
+    with pytest.raises(ValueError, match=r"^estimator_kwargs has unknown keys \['wind'\]; allowed: method, "):
+        EnvSettings(estimator_kwargs={"wind": 1})
+    assert dict(EnvSettings(estimator_kwargs={"fast_threshold": 5}).estimator_kwargs) == {"fast_threshold": 5}
+
+
+def test_settings_pickle_and_copy_for_worker_processes() -> None:
+    # A whole EnvSettings is a FlowNavEnv keyword now, and keywords travel to vector-env workers.
+    import copy
+    import pickle
+
+    settings = EnvSettings(estimator_kwargs={"fast_threshold": 5}, forward_speed=2.0)
+    assert pickle.loads(pickle.dumps(settings)) == settings == copy.deepcopy(settings)
+    assert pickle.loads(pickle.dumps(settings)).estimator_arguments() == {"fast_threshold": 5}

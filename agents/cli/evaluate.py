@@ -66,7 +66,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agents.common.folders import check_writable_folder
-    from agents.common.yaml_config import check_env_kwargs
     from agents.evaluation.csv_file import check_is_file_target
     from agents.evaluation.records import read_episodes, start_new_file
     from agents.evaluation.runner import execute
@@ -75,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from agents.policies import load_agent, runs_to_fly, split_agent_name
     from agents.policies.external import canonical_spec, is_external_name
     from agents.policies.sb3_models import is_sb3_model_name, sb3_model_name
+    from flownav_env.settings_check import check_env_kwargs
 
     if args.algo:
         if args.agent or not args.policy:

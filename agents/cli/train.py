@@ -89,11 +89,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.yaml_config import check_env_kwargs, load_config
+    from agents.common.yaml_config import load_config
     from agents.training.outputs import RunFiles
     from agents.training.ppo import train
     from agents.training.shipping import ship_run
     from agents.training.train_config import TrainConfig, override
+    from flownav_env.settings_check import check_env_kwargs
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)

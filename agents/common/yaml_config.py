@@ -13,7 +13,6 @@ validation, so the config surface of the env is its constructor, documented once
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import math
 import types
 import typing
@@ -174,26 +173,6 @@ def _check_with(value: Any, check: Callable[[str, Any], Any] | None, source: str
             raise ConfigError(f"{source}: key '{key}': {error}") from error
 
 
-def check_env_kwargs(env_kwargs: Mapping[str, Any], source: str, key: str = "env") -> dict[str, Any]:
-    """Check ``env:`` keys against :class:`flownav_env.FlowNavEnv` by building (not stepping) one env.
-
-    Raises:
-        ConfigError: an unknown kwarg, or a value the env rejects; the message names the file and the key.
-    """
-    from flownav_env import FlowNavEnv
-
-    allowed = set(inspect.signature(FlowNavEnv.__init__).parameters) - {"self"}
-    for name in env_kwargs:
-        if name not in allowed:
-            raise ConfigError(f"{source}: unknown key '{key}.{name}' (not a FlowNavEnv argument)")
-    try:
-        FlowNavEnv(**env_kwargs).close()
-    except ValueError as error:
-        bad = str(error).split(" ", 1)[0]
-        raise ConfigError(f"{source}: key '{key}.{bad}': {error}") from error
-    return dict(env_kwargs)
-
-
 def field_range(low: float | None = None, high: float | None = None, **kwargs: Any) -> Any:
     """A dataclass field whose value (or each of its items) must lie in [low, high]."""
     return dataclasses.field(metadata={"range": (low, high)}, **kwargs)
@@ -201,17 +180,5 @@ def field_range(low: float | None = None, high: float | None = None, **kwargs: A
 
 def checked_field(check: Callable[[str, Any], Any], **kwargs: Any) -> Any:
     """A dataclass field whose value (or each of its items) must pass ``check(name, value)``, which raises
-    ValueError otherwise: for ranges owned elsewhere, such as :class:`flownav_env.settings.Range.check`."""
+    ValueError otherwise: for ranges owned elsewhere, such as a setting's rule in the env (``flownav_env.settings_check.setting_check``)."""
     return dataclasses.field(metadata={"check": check}, **kwargs)
-
-
-def env_setting_field(setting: str, **kwargs: Any) -> Any:
-    """A dataclass field holding a value of FlowNavEnv's setting ``setting`` (or a list of them), checked
-    against the range :mod:`flownav_env.settings` owns for it, so no config writes that range again."""
-
-    def check(_: str, value: Any) -> Any:
-        from flownav_env.settings import check_setting
-
-        return check_setting(setting, value)
-
-    return checked_field(check, **kwargs)

@@ -23,7 +23,7 @@ from typing import Any, Literal
 from agents.common.folders import check_writable_folder
 from agents.common.locations import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
-from agents.common.yaml_config import check_env_kwargs, field_range, load_config
+from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import format_summary
@@ -41,7 +41,7 @@ from agents.policies import (
     shipped_seed_runs,
     split_agent_name,
 )
-from flownav_env.settings import check_setting
+from flownav_env.settings_check import check_env_kwargs, check_setting
 
 # ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
 ALL_SEEDS = "@all"

@@ -22,7 +22,7 @@ from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
-from agents.common.yaml_config import check_env_kwargs, load_config
+from agents.common.yaml_config import load_config
 from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
@@ -38,6 +38,7 @@ from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
+from flownav_env.settings_check import check_env_kwargs
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
 # labels the rows, and each run has its own CSV, so one name serves every config.

@@ -21,7 +21,7 @@ from agents.studies.error_analysis import (
     tolerance_table,
     turning_and_rotation_error,
 )
-from flownav_env.settings import setting_range
+from flownav_env.settings_check import setting_range
 
 
 def _level(value: float | None) -> str:

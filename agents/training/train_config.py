@@ -8,8 +8,14 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.seeds import MAX_RUN_SEED
-from agents.common.yaml_config import env_setting_field, field_range, from_mapping
+from agents.common.yaml_config import checked_field, field_range, from_mapping
+from flownav_env.settings_check import setting_check
 
+
+def env_setting_field(setting: str, **kwargs: Any) -> Any:
+    """A config field holding a value of FlowNavEnv's setting ``setting`` (or a list of them), checked against
+    the rule the env owns for it, so no config writes that range again."""
+    return checked_field(setting_check(setting), **kwargs)
 
 @dataclass
 class PPOParams:

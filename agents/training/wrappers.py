@@ -8,7 +8,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS, check_setting
+from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS
+from flownav_env.settings_check import check_setting
 
 
 class SensorRandomization(gym.Wrapper):

@@ -5,15 +5,18 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from flownav_env.playback.path import CameraPath, resample_by_distance
 from flownav_env.playback.world import PlaybackWorld
-from flownav_env.sensor import Pose, SensorPipeline
-from flownav_env.settings import DEPTH_ERROR_FIELDS, SENSOR_FIELDS, Range, SensorSettings, check_setting
+from flownav_env.sensor import SensorPipeline
+from flownav_env.setting_rules import Range
+from flownav_env.settings import DEPTH_ERROR_FIELDS, SENSOR_FIELDS, SensorSettings
+from flownav_env.settings_check import check_setting
 
-# Metres per frame a path may be resampled to.
-DISTANCE_PER_FRAME = Range(0.0, 10.0, low_open=True, unit="m", meaning="distance travelled per frame")
+# Metres per frame (distance travelled per frame) a path may be resampled to.
+DISTANCE_PER_FRAME = Range(0.0, 10.0, low_open=True, unit="m")
 
 
 @dataclass(frozen=True)
@@ -32,7 +35,7 @@ class PlaybackSettings:
             translation_noise_m: The told motion's bias, its drift (stepping every 1/``frame_rate`` of the
             played path) and its noise floor, as the env's settings of the same names define them.
         depth_noise, depth_outliers, depth_dropout: Refused unless 0: playback runs no estimator (its
-            callers do), so it has no depths to corrupt; apply :func:`flownav_env.errors.corrupt_depths`
+            callers do), so it has no depths to corrupt; apply :func:`flownav_env.sensor_errors.corrupt_depths`
             to the estimates, or fly the env.
         max_frames: Most frames to play (from the start), an integer >= 2, or None for all.
         seed: Seed of the jitter and motion errors; the same seed gives the same playback.
@@ -67,7 +70,7 @@ class PlaybackSettings:
             if getattr(self, name) != 0:
                 raise ValueError(
                     f"{name} must be 0 in playback, got {getattr(self, name)!r}: playback runs no estimator, "
-                    "so it has no depths to corrupt (apply flownav_env.errors.corrupt_depths to the "
+                    "so it has no depths to corrupt (apply flownav_env.sensor_errors.corrupt_depths to the "
                     "estimates, or fly the env)"
                 )
         if self.max_frames is not None and (
@@ -134,10 +137,10 @@ def play_back(path: CameraPath, world: PlaybackWorld, settings: PlaybackSettings
     world.set_brightness(settings.brightness)
     sensor, pipeline = settings.sensor, SensorPipeline(path.frame_rate)
     for index, (rotation, position) in enumerate(zip(path.rotations(), path.positions, strict=True)):
-
-        def place_camera(jitter: np.ndarray, rotation=rotation, position=position) -> Pose:
-            world.set_camera_pose(rotation @ jitter, position)
-            return world.camera_pose()
-
-        frame = pipeline.capture(sensor, rng, place_camera, world.render, first=index == 0)
-        yield PlaybackFrame(index, frame.image, *frame.pose, frame.true_motion, frame.told_motion, frame.gray)
+        # The camera at the recorded pose, turned by the jitter about its own centre.
+        world.set_camera_pose(rotation @ pipeline.jitter(sensor, rng), position)
+        image = world.render()
+        pose = world.camera_pose()
+        motion = pipeline.start(pose) if index == 0 else pipeline.motion(sensor, rng, pose)
+        gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+        yield PlaybackFrame(index, image, *motion.pose, motion.true_motion, motion.told_motion, gray)

@@ -11,7 +11,7 @@ from flownav_env.playback.path import CameraPath
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams
 from flownav_env.rendering import CameraRenderer
 from flownav_env.scene import LayoutParams, material_names
-from flownav_env.settings import check_setting, setting_range
+from flownav_env.settings_check import check_setting, setting_range
 
 
 class PlaybackWorld:

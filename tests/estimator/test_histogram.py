@@ -190,3 +190,31 @@ def test_sector_near_depth_rejects_a_quantile_outside_zero_to_one(quantile) -> N
     points, depth, valid = _random_points(10)
     with pytest.raises(ValueError, match=r"quantile must be a number in \[0, 1\], got"):
         sector_near_depth(points, depth, valid, IMAGE_SIZE, quantile=quantile)
+
+
+def test_a_sector_grid_gives_the_functions_results_from_one_located_frame() -> None:
+    # Issue 30: the env checks its grid once and locates each frame's points once for every product.
+    from estimator.histogram import SectorGrid
+
+    points, depth, valid = _random_points(400, seed=3)
+    points[::7] = [-5.0, 700.0]  # outside the image
+    points[~valid] = np.nan  # an untracked point may have no position at all
+    depth[~valid] = np.nan
+    selected = np.random.default_rng(4).random(400) < 0.5
+    grid = SectorGrid(IMAGE_SIZE, (3, 4), (0.0, 2.0, 5.0, 11.0))
+    sector = grid.locate(points)
+    assert np.all(sector[~valid] == -1) and np.all(sector[::7] == -1)
+    np.testing.assert_array_equal(
+        grid.histogram(sector, depth, valid),
+        sector_histogram(points, depth, valid, IMAGE_SIZE, (3, 4), (0.0, 2.0, 5.0, 11.0)),
+    )
+    np.testing.assert_array_equal(
+        grid.fraction(sector, selected, valid), sector_fraction(points, selected, valid, IMAGE_SIZE, (3, 4))
+    )
+    np.testing.assert_array_equal(grid.counts(sector, valid), sector_counts(points, valid, IMAGE_SIZE, (3, 4)))
+    np.testing.assert_array_equal(
+        grid.near_depth(sector, depth, valid, 0.2), sector_near_depth(points, depth, valid, IMAGE_SIZE, (3, 4), 0.2)
+    )
+    assert grid.shape == (3, 4, 3) and not grid.bin_edges.flags.writeable
+    with pytest.raises(ValueError, match=r"^bin_edges must be strictly increasing, got \[0.0, 2.0, 1.0\]$"):
+        SectorGrid(IMAGE_SIZE, (3, 4), (0.0, 2.0, 1.0))

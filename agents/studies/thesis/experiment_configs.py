@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from agents.common.yaml_config import checked_field, env_setting_field, field_range
+from agents.common.yaml_config import checked_field, field_range
+from agents.training.train_config import env_setting_field
 from flownav_env.playback import DISTANCE_PER_FRAME
 
 

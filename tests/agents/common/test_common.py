@@ -8,9 +8,10 @@ import pytest
 
 import flownav_env  # noqa: F401
 from agents.common.locations import CONFIGS_DIR
-from agents.common.yaml_config import ConfigError, check_env_kwargs, load_config
+from agents.common.yaml_config import ConfigError, load_config
 from agents.evaluation.sweep import SWEEP_FACTORS, SweepConfig
 from agents.training.train_config import TrainConfig
+from flownav_env.settings_check import check_env_kwargs
 
 
 def test_config_file_errors(tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from helpers import with_other_defaults
 
 import flownav_env  # noqa: F401
 from agents.common.locations import POLICIES_DIR
@@ -84,15 +85,6 @@ def test_a_reactive_agents_new_defaults_are_not_its_old_episodes(tmp_path: Path,
     monkeypatch.setattr(BeeAgent, "__init__", with_other_defaults(BeeAgent.__init__, yaw_gain=0.123))
     with pytest.raises(ValueError, match=r"agent_params .*there, .*\"yaw_gain\":0.123\}' now"):
         pending_tasks([bee], path)
-
-
-def with_other_defaults(init, **defaults):
-    """``init`` with other defaults for some keyword arguments: a re-tuned dataclass."""
-
-    def patched(self, **kwargs):
-        init(self, **{**defaults, **kwargs})
-
-    return patched
 
 
 def test_bee_gains_and_policy_content_are_part_of_an_episode(tmp_path: Path) -> None:

@@ -22,7 +22,7 @@ from pathlib import Path
 from agents.evaluation.runner import execute
 from agents.evaluation.tasks import EpisodeTask
 
-GOLDEN = Path(__file__).resolve().parents[1] / "data" / "same_seed_episodes.csv"
+GOLDEN = Path(__file__).resolve().parents[2] / "data" / "same_seed_episodes.csv"
 TASKS = [
     *(
         EpisodeTask(agent, "clean", 0.0, seed)

@@ -98,7 +98,7 @@ def test_the_command_refuses_bad_workers_and_seed_lists(tmp_path: Path, capsys) 
 
 
 def test_a_reactive_reference_flies_the_same_layouts_once(tmp_path: Path, monkeypatch, capsys) -> None:
-    from tests.agents.test_runner import with_other_defaults
+    from helpers import with_other_defaults
 
     from agents.policies.reactive import StraightAgent
 

@@ -36,7 +36,7 @@ def test_commands_that_load_a_policy_say_what_loading_risks(capsys) -> None:
 
 def test_a_video_carries_the_agents_memory_from_step_to_step(tmp_path: Path, monkeypatch) -> None:
     # A frame-stacked or recurrent policy keeps its memory in predict's state, told where the episode starts.
-    from agents.evaluation import video
+    from agents.studies import video
 
     calls = []
 

@@ -23,7 +23,7 @@ import flownav_env  # noqa: F401
 from agents.common.manifest import MANIFEST_NAME, file_sha256, read_manifest
 from agents.common.saved_models import latest_checkpoint, read_saved_model
 from agents.common.seeds import TEST_SEED_START
-from agents.common.yaml_config import ConfigError, check_env_kwargs, load_config
+from agents.common.yaml_config import ConfigError, load_config
 from agents.policies import UnverifiedPolicyWarning, load_agent
 from agents.training import callbacks
 from agents.training.envs import IgnoringInterrupts, close_quietly
@@ -31,6 +31,7 @@ from agents.training.outputs import RunFiles
 from agents.training.ppo import train
 from agents.training.train_config import TrainConfig
 from agents.training.wrappers import SensorRandomization
+from flownav_env.settings_check import check_env_kwargs
 
 
 @dataclass
@@ -268,7 +269,7 @@ def test_train_config_errors_name_the_file_and_the_key(tmp_path: Path, content: 
 
     path = tmp_path / "bad.yaml"
     path.write_text(yaml.safe_dump(content))
-    with pytest.raises(ConfigError, match=message) as error:
+    with pytest.raises(ValueError, match=message) as error:
         config = load_config(path, TrainConfig)
         check_env_kwargs(config.env, str(path))
     assert str(path) in str(error.value)

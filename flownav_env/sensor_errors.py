@@ -1,11 +1,33 @@
 """Sensor error models as pure functions on arrays: what the drone is told about its motion, and what the
 estimator's depths become before the observation counts them.
 
-The settings that drive them, with their ranges, are :data:`flownav_env.settings.SENSOR_RULES` (whose module
-docstring defines each model); :class:`flownav_env.sensor.SensorPipeline` applies them in the per-frame
-order and keeps the one piece of per-episode state, the drifting bias. Every function takes the episode's
-generator and draws from it only when its error is non-zero: at zero the inputs come back unchanged (the same
-objects) and the generator is untouched.
+The settings that drive them, with their ranges, are the fields of :class:`flownav_env.settings.SensorSettings`;
+:class:`flownav_env.sensor.SensorPipeline` applies them in the per-frame order and keeps the one piece of
+per-episode state, the drifting bias. Every function takes the episode's generator and draws from it only when
+its error is non-zero: at zero the inputs come back unchanged (the same objects) and the generator is
+untouched, so at the defaults an episode is the same as before these settings existed. Four kinds of error:
+
+* **Per-frame relative error** (the thesis's): ``rotation_error``, ``translation_error``
+  (:func:`flownav_env.sensor.corrupt_motion`).
+* **Constant bias** (a mis-calibrated gyro or odometry: a scale error): the told rotation angle (axis
+  unchanged) is scaled by ``1 + b_r``, the told translation by ``1 + b_t``, where ``b`` starts at
+  ``rotation_bias``/``translation_bias`` at every reset. With ``rotation_drift``/``translation_drift`` > 0
+  the bias walks: ``b_k = b + w_k`` with ``w_0 = 0`` at reset and ``w_k = w_{k-1} + N(0, drift² · Δt)``
+  drawn before frame k's told motion (Δt = 1/frame_rate s), so ``drift`` is the bias's standard deviation
+  after one second of flight. The applied bias is held inside [-0.9, 0.9] (a scale never vanishes or flips
+  sign); the walk itself is not.
+* **Absolute noise floor** (a gyro is noisy even when the drone does not turn): per frame, a rotation whose
+  axis-angle vector is N(0, ``rotation_noise_deg``²) per axis is composed onto the told rotation (on the
+  left: in the new camera's axes), and N(0, ``translation_noise_m``²) per axis is added to the told
+  translation. Order: relative error, bias, then noise.
+* **Depth errors**, independent of their cause, on the estimator's valid depths before the histogram (flow
+  observations only; the oracles' true depths are left alone): log-normal noise ``depth · exp(N(0,
+  depth_noise²))``, then a fraction ``depth_outliers`` replaced by depths drawn log-uniformly over the
+  histogram's range (:func:`outlier_depth_range`), then a fraction ``depth_dropout`` removed: those points
+  are simply gone (from the histogram, the ``unresolved`` share and ``info``), not counted as tracked points
+  without a depth. ``info["points_tracked"]``, ``["points_valid"]`` and ``["depth_error_median"]`` then
+  describe the corrupted depths, what the agent sees, so that a sweep's depth error says how wrong the
+  observation was (with the errors at 0 they are the estimator's own).
 """
 
 from __future__ import annotations

@@ -1,28 +1,35 @@
-"""The rules a FlowNav setting obeys: each checks a value, normalises it and names what is wrong.
+"""The rules a FlowNav setting obeys: each checks a value, normalises it, names what is wrong and describes
+what it allows (for FlowNavEnv's Arguments table).
 
-:mod:`flownav_env.settings` attaches one rule to every setting (in the dataclass field's metadata) and checks
-them all on construction; the rules live here so that the settings module holds only the settings. Error
-messages name the parameter, the value received and the allowed values.
+:mod:`flownav_env.settings` declares every setting as a dataclass field carrying its default, its rule and its
+meaning (:func:`setting_field`) and checks them all on construction; the rules live here so that the
+settings module holds only the settings. Error messages name the parameter, the value received and the
+allowed values.
 """
 
 from __future__ import annotations
 
 import inspect
 import math
-import types
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Protocol
 
 import numpy as np
 
-from estimator import FlowDepthEstimator
+from estimator import CameraIntrinsics, FlowDepthEstimator
+
+_PROBE_CAMERA = CameraIntrinsics.from_fov(16, 16, 60.0)
 
 
 class Rule(Protocol):
     """What a setting's metadata holds: a check that returns the value in its stored form."""
 
     def check(self, name: str, value: Any) -> Any: ...
+
+    def describe(self) -> str:
+        """What the rule allows, as the Arguments table writes it."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -39,7 +46,6 @@ class Range:
     high_open: bool = False
     integer: bool = False
     unit: str = ""
-    meaning: str = ""
     low_from: str | None = None
     low_scale: float = 1.0
 
@@ -47,6 +53,20 @@ class Range:
     def interval(self) -> str:
         """The interval as the error messages and the docs write it, e.g. ``(0.0, 5.0]``."""
         return f"{'(' if self.low_open else '['}{self.low}, {self.high}{')' if self.high_open else ']'}"
+
+    def describe(self) -> str:
+        """E.g. ``in (0, 5] m/s``, ``in (2 · ``obstacle_radius``, 10] m`` or ``≥ 0``."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.low_from is not None:
+            scale = "" if self.low_scale == 1.0 else f"{self.low_scale:g} · "
+            low = f"{scale}``{self.low_from}``"
+        elif math.isinf(self.high):
+            return f"≥ {self.low:g}{unit}"
+        else:
+            low = f"{self.low:g}"
+        kind = "an integer " if self.integer else ""
+        opened, closed = "(" if self.low_open else "[", ")" if self.high_open else "]"
+        return f"{kind}in {opened}{low}, {self.high:g}{closed}{unit}"
 
     def resolved(self, other: float) -> Range:
         """This range with its low end taken from the setting it depends on, whose value is ``other``."""
@@ -82,7 +102,9 @@ class Choice:
     """One of a fixed set of values."""
 
     options: tuple[Any, ...]
-    meaning: str = ""
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(f'``"{option}"``' for option in self.options)
 
     def check(self, name: str, value: Any) -> Any:
         if value not in self.options:
@@ -94,7 +116,8 @@ class Choice:
 class Flag:
     """True or False (NumPy booleans too, stored as ``bool``)."""
 
-    meaning: str = ""
+    def describe(self) -> str:
+        return "True or False"
 
     def check(self, name: str, value: Any) -> bool:
         if not isinstance(value, (bool, np.bool_)):
@@ -106,7 +129,8 @@ class Flag:
 class AnyInteger:
     """Any integer, e.g. a seed."""
 
-    meaning: str = ""
+    def describe(self) -> str:
+        return "any integer"
 
     def check(self, name: str, value: Any) -> int:
         if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
@@ -119,7 +143,9 @@ class Sectors:
     """A (rows, cols) pair, each inside ``each``."""
 
     each: Range
-    meaning: str = ""
+
+    def describe(self) -> str:
+        return f"(rows, cols), each {self.each.describe()}"
 
     def check(self, name: str, value: Any) -> tuple[int, int]:
         if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
@@ -131,7 +157,8 @@ class Sectors:
 class BinEdges:
     """Increasing finite depths >= 0 m, at least two, stored as a tuple of floats."""
 
-    meaning: str = ""
+    def describe(self) -> str:
+        return "at least two increasing depths ≥ 0 m"
 
     def check(self, name: str, value: Any) -> tuple[float, ...]:
         edges = np.asarray(value, np.float64)
@@ -146,28 +173,54 @@ class BinEdges:
         return tuple(float(edge) for edge in edges)
 
 
+class FrozenMapping(Mapping[str, Any]):
+    """A read-only mapping that, unlike ``types.MappingProxyType``, pickles and copies: settings travel to
+    worker processes inside ``gymnasium.make``'s keywords."""
+
+    __slots__ = ("_items",)
+
+    def __init__(self, items: Mapping[str, Any]) -> None:
+        self._items = dict(items)
+
+    def __getitem__(self, key: str) -> Any:
+        return self._items[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __repr__(self) -> str:
+        return repr(self._items)
+
+
 @dataclass(frozen=True)
 class EstimatorArguments:
-    """None or a mapping of :class:`estimator.FlowDepthEstimator` keyword arguments (their values the
-    estimator checks itself), stored read-only."""
+    """None or a mapping of :class:`estimator.FlowDepthEstimator` keyword arguments, stored read-only. Their
+    values are checked by building an estimator on a small probe camera (none of its arguments' ranges
+    depends on the camera), so the message is the estimator's own."""
 
-    meaning: str = ""
+    def describe(self) -> str:
+        return "None or a mapping of ``estimator.FlowDepthEstimator`` keyword arguments"
 
     def check(self, name: str, value: Any) -> Mapping[str, Any]:
         if value is None:
-            return types.MappingProxyType({})
+            return FrozenMapping({})
         if not isinstance(value, Mapping):
             raise ValueError(f"{name} must be a mapping of FlowDepthEstimator arguments, got {value!r}")
         allowed = [key for key in inspect.signature(FlowDepthEstimator).parameters if key != "intrinsics"]
         unknown = sorted(set(value) - set(allowed))
         if unknown:
             raise ValueError(f"{name} has unknown keys {unknown}; allowed: {', '.join(allowed)}")
-        return types.MappingProxyType(dict(value))
+        FlowDepthEstimator(_PROBE_CAMERA, **value)
+        return FrozenMapping(value)
 
 
-def setting_field(default: Any, rule: Rule) -> Any:
-    """A settings dataclass field with its default and the rule that checks it."""
-    return field(default=default, metadata={"rule": rule})
+def setting_field(default: Any, rule: Rule, meaning: str) -> Any:
+    """A settings dataclass field: its default, the rule that checks it and what it means (one line of
+    FlowNavEnv's Arguments table), declared together once."""
+    return field(default=default, metadata={"rule": rule, "meaning": meaning})
 
 
 def check_fields(settings: Any) -> None:

@@ -1,4 +1,4 @@
-"""flownav_env.errors: each sensor error model does what its setting says, on arrays, with a seeded generator;
+"""flownav_env.sensor_errors: each sensor error model does what its setting says, on arrays, with a seeded generator;
 at zero it draws nothing and returns its inputs unchanged."""
 
 from __future__ import annotations
@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from estimator import DEFAULT_BIN_EDGES
-from flownav_env.errors import (
+from flownav_env.rotations import rotation_from_vector, vector_from_rotation
+from flownav_env.sensor_errors import (
     add_motion_noise,
     corrupt_depths,
     outlier_depth_range,
     scale_motion,
     walk_bias,
 )
-from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 
 ROTATION_VECTOR = np.array([0.02, -0.05, 0.01])
 

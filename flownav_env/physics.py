@@ -10,7 +10,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from flownav_env.camera import opencv_camera_pose
+from flownav_env.camera_convention import opencv_camera_pose
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams, VelocityController
 from flownav_env.scene import (
     PARKED_GROUP,

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from estimator import DepthPoints
-from flownav_env.camera import camera_motion_between
+from flownav_env.camera_convention import camera_motion_between
 from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor_errors import (
     add_motion_noise,

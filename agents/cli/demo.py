@@ -34,10 +34,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds
     from agents.evaluation.records import read_records
     from agents.evaluation.runner import EpisodesInterrupted, execute
     from agents.evaluation.statistics import summarise
-    from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds
     from agents.policies import REACTIVE_AGENTS, is_learned, policy_file
 
     if args.episodes < 1:

@@ -67,10 +67,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from agents.common.folders import check_writable_folder
     from agents.evaluation.csv_file import check_is_file_target
+    from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
     from agents.evaluation.records import read_episodes, start_new_file
     from agents.evaluation.runner import execute
     from agents.evaluation.statistics import format_summary, summarise
-    from agents.evaluation.tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
     from agents.policies import load_agent, runs_to_fly, split_agent_name
     from agents.policies.external import canonical_spec, is_external_name
     from agents.policies.sb3_models import is_sb3_model_name, sb3_model_name

@@ -25,6 +25,7 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.machine import code_version
 from agents.common.seeds import TEST_SEED_START
 from agents.common.tables import markdown_table, today, write_csv
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.over_seeds import (
     LAYOUT_BLOCK,
     block_scores,
@@ -38,7 +39,6 @@ from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
-from agents.evaluation.tasks import EpisodeTask, rows_of
 from agents.policies import (
     LEARNED_AGENTS,
     REACTIVE_AGENTS,

@@ -2,7 +2,7 @@
 
 The worker keeps one env and agent per (agent, env settings) so that consecutive tasks of a cell do not
 rebuild the MuJoCo model or GL context. Which tasks a run still has to fly, and the identity each record is
-stamped with, is :mod:`agents.evaluation.tasks`' business. Runs writing one CSV at once share the work: each
+stamped with, is :mod:`agents.evaluation.episode_tasks`' business. Runs writing one CSV at once share the work: each
 local task is claimed under the CSV's lock just before it flies (:mod:`agents.evaluation.claims`), and each
 record is appended only if the CSV does not hold its episode yet, so no episode is counted twice.
 """
@@ -21,8 +21,8 @@ from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
+from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, pending_tasks
 from agents.evaluation.records import append_record, episode_identity, read_episodes
-from agents.evaluation.tasks import EpisodeTask, canonical_json, pending_tasks
 from agents.policies import load_agent
 from flownav_env.limits import episode_step_limit
 

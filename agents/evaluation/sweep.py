@@ -24,6 +24,7 @@ from agents.common.folders import check_writable_folder
 from agents.common.locations import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
 from agents.common.yaml_config import field_range, load_config
+from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import format_summary
@@ -33,7 +34,6 @@ from agents.evaluation.sweep_report import (
     write_report,
     write_summary,
 )
-from agents.evaluation.tasks import EpisodeTask, pending_tasks, rows_of
 from agents.policies import (
     LEARNED_AGENTS,
     is_learned,

@@ -28,7 +28,7 @@ from agents.policies.loading import UnverifiedPolicyWarning
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from agents.policies.reactive import BeeAgent, StraightAgent, bin_nearness, sector_nearness
 from agents.policies.robust import BeeRobustAgent, BeeTTCAgent, VFHAgent, quantile_nearness
-from agents.policies.seeds import TrainingSeedsAgent
+from agents.policies.training_seeds import TrainingSeedsAgent
 
 __all__ = [
     "AGENT_NAMES",

@@ -1,7 +1,7 @@
 """Learned agents: where a trained policy is stored, the env settings it was trained with, and loading any
 agent by name (a reactive one is built, a learned one is loaded from its ``.zip``, see
 :mod:`agents.policies.loading`; a learned one named without a training seed flies its shipped seeds in turn,
-see :mod:`agents.policies.seeds`)."""
+see :mod:`agents.policies.training_seeds`)."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ from agents.policies.sb3_models import (
     sb3_model_env_settings,
     sb3_model_parameters,
 )
-from agents.policies.seeds import TrainingSeedsAgent
+from agents.policies.training_seeds import TrainingSeedsAgent
 from agents.training.train_config import TrainConfig
 
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
@@ -147,7 +147,7 @@ def load_agent(
 
     A learned agent named without a training seed or a ``policy_path`` is every training seed shipped in the
     repository's ``results/policies/<agent>/``, one per episode in turn
-    (:class:`~agents.policies.seeds.TrainingSeedsAgent`), as the benchmark flies it; an agent without
+    (:class:`~agents.policies.training_seeds.TrainingSeedsAgent`), as the benchmark flies it; an agent without
     training seeds loads its single ``results/policies/<agent>.zip``.
 
     Args:

@@ -23,17 +23,17 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.common.yaml_config import load_config
-from agents.evaluation.over_seeds import runs_and_layouts_interval
-from agents.evaluation.records import read_records
-from agents.evaluation.runner import execute
-from agents.evaluation.statistics import wilson_interval
-from agents.evaluation.tasks import (
+from agents.evaluation.episode_tasks import (
     EpisodeTask,
     cached_file_sha256,
     record_label,
     rows_of,
     set_aside_stale_episodes,
 )
+from agents.evaluation.over_seeds import runs_and_layouts_interval
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import execute
+from agents.evaluation.statistics import wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles

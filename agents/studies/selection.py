@@ -19,9 +19,9 @@ from typing import Any
 from agents.common.manifest import record_in_manifest
 from agents.common.saved_models import latest_checkpoint
 from agents.common.seeds import checkpoint_selection_seed
+from agents.evaluation.episode_tasks import EpisodeTask, cached_file_sha256, rows_of, set_aside_stale_episodes
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.tasks import EpisodeTask, cached_file_sha256, rows_of, set_aside_stale_episodes
 from agents.training.outputs import RunFiles
 
 FINALIST_EPISODES = 50

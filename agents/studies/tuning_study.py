@@ -25,10 +25,10 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.seeds import VALIDATION_SEED_START
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import summarise
-from agents.evaluation.tasks import EpisodeTask, rows_of
 from agents.policies import BeeAgent, BeeRobustAgent, VFHAgent
 
 # name -> (low, high, log scale). Written once: the study, the report and the tests read it from here. A

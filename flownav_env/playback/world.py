@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from flownav_env.camera import MUJOCO_FROM_OPENCV
+from flownav_env.camera_convention import MUJOCO_FROM_OPENCV
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.playback.path import CameraPath
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams

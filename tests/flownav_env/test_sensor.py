@@ -11,7 +11,7 @@ import pytest
 
 from estimator import DepthPoints
 from flownav_env import FlowNavEnv
-from flownav_env.camera import camera_motion_between
+from flownav_env.camera_convention import camera_motion_between
 from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor import SensorPipeline, corrupt_motion, jitter_rotation
 from flownav_env.settings import EnvSettings, SensorSettings

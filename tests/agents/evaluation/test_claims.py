@@ -26,10 +26,10 @@ from agents.evaluation.claims import (
 )
 from agents.evaluation.csv_file import LINE_END
 from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.records import append_record, episode_identity, read_episodes
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import summarise
-from agents.evaluation.tasks import EpisodeTask
 
 SMALL = (("camera_height", 72), ("camera_width", 96))
 TASKS = [EpisodeTask("straight", "clean", 0.0, TEST_SEED_START + k, "FlowNavSingle-v0", SMALL) for k in range(4)]

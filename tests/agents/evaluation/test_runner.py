@@ -16,9 +16,9 @@ from agents.common.seeds import TEST_SEED_START
 from agents.evaluation import runner
 from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks
 from agents.evaluation.records import append_record, read_episodes, read_records
 from agents.evaluation.runner import EpisodesInterrupted, execute
-from agents.evaluation.tasks import EpisodeTask, pending_tasks
 from flownav_env.limits import episode_step_limit
 
 SMALL = (("camera_height", 72), ("camera_width", 96))

@@ -19,8 +19,8 @@ import csv
 import math
 from pathlib import Path
 
+from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.runner import execute
-from agents.evaluation.tasks import EpisodeTask
 
 GOLDEN = Path(__file__).resolve().parents[2] / "data" / "same_seed_episodes.csv"
 TASKS = [

@@ -14,9 +14,9 @@ import flownav_env  # noqa: F401  (before mujoco)
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation import runner
 from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.episode_tasks import EpisodeTask, canonical_json
 from agents.evaluation.records import episode_key, read_records
 from agents.evaluation.runner import EpisodesInterrupted
-from agents.evaluation.tasks import EpisodeTask, canonical_json
 from agents.studies.tuning import TuningResult, tune, verdict
 from agents.studies.tuning_study import (
     SEARCH_SPACES,

@@ -12,8 +12,6 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-TEXTURE_KINDS = ("wood", "metal", "stone")
-
 
 def value_noise(
     rng: np.random.Generator, size: int, octaves: tuple[int, ...] = (4, 8, 16, 32, 64)

@@ -7,6 +7,11 @@
 | ``FlowNavSingle-v0``    | single     | 200                |
 | ``FlowNavThree-v0``     | three      | 250                |
 
+The benchmark suite's tiers (:mod:`flownav_env.tiers`, frozen under ``SUITE_VERSION``) are registered too:
+``FlowNavHard-v0``, ``FlowNavNoisy-v0`` and ``FlowNavHardNoisy-v0``, field layouts with 400 steps, each
+fixing the course and sensor settings its :class:`~flownav_env.tiers.Tier` states (``clean`` is
+``FlowNav-v0``).
+
 Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``: the settings
 (:class:`flownav_env.settings.EnvSettings`' fields, or ``settings=`` a whole ``EnvSettings``) and ``render_mode``.
 """
@@ -26,12 +31,18 @@ from gymnasium.envs.registration import register, registry  # noqa: E402  (after
 from estimator import __version__  # noqa: E402
 from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)
 from flownav_env.settings import EnvSettings  # noqa: E402
+from flownav_env.tiers import TIERS  # noqa: E402
 
 ENV_IDS = {
     "FlowNav-v0": ({"layout": "field"}, 400),
     "FlowNavCorridor-v0": ({"layout": "corridor"}, 400),
     "FlowNavSingle-v0": ({"layout": "single"}, 200),
     "FlowNavThree-v0": ({"layout": "three"}, 250),
+    **{
+        tier.env_id: ({"layout": "field", **tier.settings}, 400)
+        for tier in TIERS.values()
+        if tier.env_id != "FlowNav-v0"
+    },
 }
 
 

@@ -20,6 +20,7 @@ from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor_errors import (
     add_motion_noise,
     corrupt_depths,
+    lagged_attitude,
     outlier_depth_range,
     scale_motion,
     walk_bias,
@@ -117,6 +118,7 @@ class SensorPipeline:
             raise ValueError(f"frame_rate must be > 0 Hz, got {frame_rate!r}")
         self.frame_interval = 1.0 / frame_rate
         self._previous_pose: Pose | None = None
+        self._previous_told_attitude: np.ndarray | None = None
         self._walk = (0.0, 0.0)
 
     @staticmethod
@@ -129,6 +131,7 @@ class SensorPipeline:
         """The first frame of a sequence, taken from ``pose``: no motion, no error draws; the bias walk
         restarts."""
         self._previous_pose, self._walk = pose, (0.0, 0.0)
+        self._previous_told_attitude = pose[0]
         still = (np.eye(3), np.zeros(3))
         return FrameMotion(pose, pose, still, still)
 
@@ -143,10 +146,20 @@ class SensorPipeline:
         if previous is None:
             raise ValueError("a sequence's first frame must go through start() before motion()")
         true_motion = camera_motion_between(*previous, *pose)
-        told_motion = corrupt_motion(*true_motion, sensor.rotation_error, sensor.translation_error, rng)
+        told_motion = true_motion
+        if sensor.imu_time_offset_ms > 0:
+            lag = sensor.imu_time_offset_ms / 1000.0 / self.frame_interval
+            told_attitude = lagged_attitude(previous[0], pose[0], lag)
+            told_motion = camera_motion_between(
+                self._previous_told_attitude, previous[1], told_attitude, pose[1]
+            )
+            self._previous_told_attitude = told_attitude
+        told_motion = corrupt_motion(*told_motion, sensor.rotation_error, sensor.translation_error, rng)
         bias = self._step_bias(sensor, rng)
         told_motion = scale_motion(*told_motion, 1.0 + bias[0], 1.0 + bias[1])
-        told_motion = add_motion_noise(*told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng)
+        told_motion = add_motion_noise(
+            *told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng
+        )
         self._previous_pose = pose
         return FrameMotion(pose, previous, true_motion, told_motion, bias)
 

@@ -20,6 +20,11 @@ untouched, so at the defaults an episode is the same as before these settings ex
   axis-angle vector is N(0, ``rotation_noise_deg``²) per axis is composed onto the told rotation (on the
   left: in the new camera's axes), and N(0, ``translation_noise_m``²) per axis is added to the told
   translation. Order: relative error, bias, then noise.
+* **Camera-IMU time offset** (unsynchronised clocks): the attitude told for a frame is the camera's
+  ``imu_time_offset_ms`` earlier, interpolated between this frame and the one before (:func:`lagged_attitude`),
+  and the told motion is the motion between those lagged attitudes (the positions are the true ones). Turning
+  at a steady rate, the lag cancels; a change of turn rate (a manoeuvre, a gust) becomes a rotation error of
+  about the change times the offset. It comes first: the other errors act on the lagged motion. No draw.
 * **Depth errors**, independent of their cause, on the estimator's valid depths before the histogram (flow
   observations only; the oracles' true depths are left alone): log-normal noise ``depth · exp(N(0,
   depth_noise²))``, then a fraction ``depth_outliers`` replaced by depths drawn log-uniformly over the
@@ -151,3 +156,14 @@ def corrupt_depths(
         depths[replaced] = np.exp(rng.uniform(math.log(low), math.log(high), int(replaced.sum())))
     keep = rng.random(count) >= dropout if dropout > 0 else np.ones(count, bool)
     return depths, keep
+
+
+def lagged_attitude(previous: np.ndarray, current: np.ndarray, lag: float) -> np.ndarray:
+    """The attitude a clock ``lag`` frames late reports for ``current``: the geodesic interpolation from
+    ``previous`` (a frame earlier) toward ``current``, ``lag`` of the way back (0: ``current``; capped at 1:
+    ``previous``). Both are world-from-camera rotations (3, 3)."""
+    lag = min(max(lag, 0.0), 1.0)
+    if lag == 0.0:
+        return current
+    step = vector_from_rotation(previous.T @ current)
+    return previous @ rotation_from_vector((1.0 - lag) * step)

@@ -105,6 +105,13 @@ class SensorSettings:
         Range(0.0, 0.5, unit="m"),
         "absolute noise floor of the told translation: N(0, this²) per axis added every frame",
     )
+    imu_time_offset_ms: float = _setting(
+        0.0,
+        Range(0.0, 100.0, unit="ms"),
+        "camera-IMU time offset: the attitude the estimator is told for a frame is the camera's this long "
+        "before it, interpolated between frames (capped at one frame interval), so a change of turn rate "
+        "becomes a rotation error",
+    )
     depth_noise: float = _setting(
         0.0,
         Range(0.0, 2.0),
@@ -174,12 +181,14 @@ class EnvSettings(SensorSettings):
     observe_nearness: bool = _setting(
         False,
         Flag(),
-        _OBSERVE + "``nearness``: how near each sector's nearest surface is (a histogram spreads it over bins)",
+        _OBSERVE
+        + "``nearness``: how near each sector's nearest surface is (a histogram spreads it over bins)",
     )
     observe_approach: bool = _setting(
         False,
         Flag(),
-        _OBSERVE + "``approach``: how soon the drone reaches each sector's nearest surface at its forward speed",
+        _OBSERVE
+        + "``approach``: how soon the drone reaches each sector's nearest surface at its forward speed",
     )
     near_smoothing: float = _setting(
         1.0,
@@ -190,8 +199,8 @@ class EnvSettings(SensorSettings):
     depth_error_info: bool = _setting(
         True,
         Flag(),
-        "ray-cast the true depth of the tracked points each step for ``info[\"depth_error_median\"]`` and "
-        "``info[\"depth_outlier_share\"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only "
+        'ray-cast the true depth of the tracked points each step for ``info["depth_error_median"]`` and '
+        '``info["depth_outlier_share"]`` (off by > 50 %); False skips it (about 0.3 ms per step) where only '
         "flow observations are used, as in training",
     )
     obstacle_radius: float = _setting(0.5, Range(0.0, 2.0, low_open=True, unit="m"), "capsule radius")
@@ -206,7 +215,9 @@ class EnvSettings(SensorSettings):
     field_length: float = _setting(
         20.0, Range(5.0, 200.0, unit="m"), "start to goal line for field and corridor"
     )
-    field_width: float = _setting(8.0, Range(1.0, 100.0, unit="m"), "width of the band holding field capsules")
+    field_width: float = _setting(
+        8.0, Range(1.0, 100.0, unit="m"), "width of the band holding field capsules"
+    )
     corridor_width: float = _setting(
         2.5, Range(0.0, 20.0, low_open=True, unit="m"), "free width of a corridor"
     )
@@ -214,9 +225,7 @@ class EnvSettings(SensorSettings):
         1.5, Range(0.0, 10.0, unit="m"), "largest sideways excursion of a corridor"
     )
     forward_speed: float = _setting(1.0, Range(0.0, 5.0, unit="m/s"), "forward speed; 0 hovers")
-    frame_rate: float = _setting(
-        10.0, Range(1.0, 50.0, unit="Hz"), "camera frames = agent steps per second"
-    )
+    frame_rate: float = _setting(10.0, Range(1.0, 50.0, unit="Hz"), "camera frames = agent steps per second")
     flight_height: float = _setting(1.0, Range(0.3, 5.0, unit="m"), "starting height")
     max_height: float = _setting(
         1.8,

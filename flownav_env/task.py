@@ -171,7 +171,9 @@ class FlowNavTask:
         success = bool(position[0] >= self.goal_x and not collision)
         out_of_bounds = bool(abs(position[1]) > settings.lateral_bound or position[2] > settings.max_height)
         progress = float(position[0] - x_before)
-        return StepOutcome(collision, success, out_of_bounds, position, progress, clearance, self.min_clearance)
+        return StepOutcome(
+            collision, success, out_of_bounds, position, progress, clearance, self.min_clearance
+        )
 
     @staticmethod
     def reward(settings: EnvSettings, outcome: StepOutcome, action: np.ndarray) -> dict[str, float]:

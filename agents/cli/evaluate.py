@@ -78,7 +78,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.algo:
         if args.agent or not args.policy:
-            raise ValueError("--algo goes with --policy model.zip and without --agent (the model is the agent)")
+            raise ValueError(
+                "--algo goes with --policy model.zip and without --agent (the model is the agent)"
+            )
         args.agent, args.policy = sb3_model_name(args.algo, args.policy), None
     if not args.agent:
         raise ValueError("give --agent (or --policy model.zip --algo ALGO)")

@@ -1,5 +1,10 @@
 """``flownav leaderboard``: every agent on the same clean test layouts, learned agents over all their shipped
-training seeds; writes the leading table of the benchmark (see :mod:`agents.evaluation.leaderboard`)."""
+training seeds; writes the clean tier's 300-layout history table (see :mod:`agents.evaluation.leaderboard`).
+
+With ``--include score.csv`` (repeatable) it flies nothing: it sets the rows ``flownav score`` wrote beside the
+published suite table (``results/suite.csv``), tier by tier, and writes ``suite_with_included.md`` and ``.csv``
+into ``--out``. Rows of another suite version are refused.
+"""
 
 from __future__ import annotations
 
@@ -37,9 +42,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--report-only", action="store_true", help="fly nothing: report the episodes already in --out"
     )
+    parser.add_argument(
+        "--include",
+        action="append",
+        default=[],
+        metavar="CSV",
+        help="a score.csv from flownav score to set beside the published suite table (repeatable; flies nothing)",
+    )
+    parser.add_argument(
+        "--suite",
+        default=str(RESULTS_DIR / "suite.csv"),
+        help="the published suite table --include adds to (default: %(default)s)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.include:
+        return _include(args)
     from agents.evaluation.leaderboard import run_leaderboard
 
     agents = [name.strip() for name in args.agents.split(",") if name.strip()]
@@ -54,4 +73,32 @@ def run(args: argparse.Namespace) -> int:
         command=command.strip(),
     )
     print("\n".join(lines))
+    return 0
+
+
+def _include(args: argparse.Namespace) -> int:
+    from agents.common.folders import check_writable_folder, write_text_atomically
+    from agents.evaluation.suite import write_summary_csv
+    from agents.evaluation.suite_report import merge_rows, plot_suite, read_suite_csv, tier_tables
+
+    published = read_suite_csv(Path(args.suite))
+    included = [row for path in args.include for row in read_suite_csv(Path(path))]
+    rows = merge_rows(published, included)
+    out = Path(args.out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    lines = [
+        f"# The suite table with {len(included)} included rows",
+        "",
+        f"Published rows from `{args.suite}`; included rows from {', '.join(f'`{p}`' for p in args.include)}.",
+        "",
+        *tier_tables(rows),
+    ]
+    write_text_atomically(out / "suite_with_included.md", "\n".join(lines) + "\n")
+    write_summary_csv(
+        out / "suite_with_included.csv", [{k: v for k, v in r.items() if k != "included"} for r in rows]
+    )
+    plot_suite(rows, out / "suite_with_included.png")
+    print("\n".join(lines))
+    print(f"written to {out / 'suite_with_included.md'}")
     return 0

@@ -46,7 +46,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--env-id", default="FlowNav-v0", help="env id (default: %(default)s)")
     parser.add_argument(
-        "--out", type=Path, help=f"output folder (default: {SCRATCH_DIR}/tuning/<agent>; results/tuning/<agent> to publish)"
+        "--out",
+        type=Path,
+        help=f"output folder (default: {SCRATCH_DIR}/tuning/<agent>; results/tuning/<agent> to publish)",
     )
     parser.add_argument(
         "--overwrite",

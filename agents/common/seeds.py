@@ -6,6 +6,16 @@
 | validation | ``[VALIDATION_SEED_START, TEST_SEED_START)`` | every decision: checkpoint choice during training, thresholds, ablations (from ``ABLATION_SEED_START``) |
 | test | ``[TEST_SEED_START, ...)`` | only the reported tables (evaluation, sweeps, the demo) |
 
+Sub-ranges with one use each:
+
+| sub-range | seeds | used for |
+|---|---|---|
+| ablation (validation) | ``ABLATION_SEED_START ..`` (900,000-900,099 used) | issue 16's lever search |
+| confirmation (validation) | ``CONFIRMATION_SEED_START ..`` | confirming a pick on layouts its search never saw |
+| tier calibration (validation) | ``TIER_CALIBRATION_SEED_START ..`` | choosing the suite's tier settings |
+| sensor pilot (validation) | ``SENSOR_PILOT_SEED_START ..`` | trying versions of the realistic sensor before freezing it |
+| suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
+
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
 used to pick anything.
 """
@@ -25,6 +35,26 @@ MAX_RUN_SEED = VALIDATION_SEED_START // RUN_SEED_STRIDE - 1
 # Validation layouts for comparing training runs and ablations (``flownav ablation``): past the starts of the
 # checkpoint-selection streams of run seeds below 400 (checkpoint_selection_seed), and before the test range.
 ABLATION_SEED_START = 900_000
+# Fresh validation layouts for confirming a selection made on the ablation layouts (issue 33).
+CONFIRMATION_SEED_START = 910_000
+# Validation layouts on which the suite's tiers are calibrated (flownav suite calibrate).
+TIER_CALIBRATION_SEED_START = 920_000
+# Validation layouts on which versions of the suite's realistic sensor were tried (sensor_pilot_episodes.csv).
+SENSOR_PILOT_SEED_START = 930_000
+# The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
+SUITE_SEED_START = 2_000_000
+SUITE_LAYOUTS = 300
+
+
+def suite_seeds(layouts: int = SUITE_LAYOUTS) -> range:
+    """The first ``layouts`` frozen test layouts of the suite.
+
+    Raises:
+        ValueError: ``layouts`` is not between 1 and :data:`SUITE_LAYOUTS`.
+    """
+    if isinstance(layouts, bool) or not isinstance(layouts, int) or not 1 <= layouts <= SUITE_LAYOUTS:
+        raise ValueError(f"suite layouts must be an integer in [1, {SUITE_LAYOUTS}], got {layouts!r}")
+    return range(SUITE_SEED_START, SUITE_SEED_START + layouts)
 
 
 def training_env_seed(run_seed: int) -> int:

@@ -144,7 +144,9 @@ def _parse(text: str, name: str) -> tuple[list[str | _Field | _Section], set[str
             else:
                 open_sections[-1].in_else = True
         elif tag in ("else", "end"):
-            raise ValueError(f"template {name!r}: {{{{{tag}}}}} outside any {{{{if}}}} section on line {line}")
+            raise ValueError(
+                f"template {name!r}: {{{{{tag}}}}} outside any {{{{if}}}} section on line {line}"
+            )
         elif _NAME.fullmatch(tag) and tag != "if":
             current.append(_Field(tag, line))
             mentioned.add(tag)
@@ -155,7 +157,9 @@ def _parse(text: str, name: str) -> tuple[list[str | _Field | _Section], set[str
             )
     if open_sections:
         unclosed = open_sections[-1]
-        raise ValueError(f"template {name!r}: {{{{if {unclosed.name}}}}} on line {unclosed.line} has no {{{{end}}}}")
+        raise ValueError(
+            f"template {name!r}: {{{{if {unclosed.name}}}}} on line {unclosed.line} has no {{{{end}}}}"
+        )
     root.append(text[position:])
     return root, mentioned
 

@@ -112,7 +112,9 @@ def claim_episode(csv_path: Path, identity: tuple) -> str:
             mine = holder is not None and holder.host == socket.gethostname() and holder.pid == os.getpid()
             if holder is not None and not mine and holder.is_live(time.time()):
                 return CLAIMED
-            os.write(descriptor, f"{socket.gethostname()} {os.getpid()} {time.time():.0f} {digest}\n".encode())
+            os.write(
+                descriptor, f"{socket.gethostname()} {os.getpid()} {time.time():.0f} {digest}\n".encode()
+            )
         finally:
             os.close(descriptor)
     return MINE

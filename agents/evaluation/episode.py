@@ -49,8 +49,10 @@ class EpisodeRecord:
     agent_params: str = ""
     policy_sha256: str = ""
     code_version: str = ""
-    # Last, and defaulted: files written before it existed keep their columns (records.PREVIOUS_CSV_FIELDS).
+    # Last, and defaulted: files written before them keep their columns (records.EARLIER_CSV_FIELDS).
     mean_depth_outlier_share: float = math.nan
+    # The benchmark suite's version (flownav_env.tiers.SUITE_VERSION) for episodes of the suite, else "".
+    suite_version: str = ""
 
 
 def run_episode(

@@ -81,6 +81,8 @@ class EpisodeTask:
     bee_params: tuple[tuple[str, float], ...] = field(default=())
     # Load a policy zip without its config by unpickling it (runs its code): the user's explicit opt-in.
     trust_pickle: bool = False
+    # The suite version its record carries (flownav_env.tiers.SUITE_VERSION) when it is an episode of the suite.
+    suite_version: str = ""
 
     def policy_path(self) -> Path | None:
         """The learned agent's policy file (wherever the command runs from); None for reactive agents."""

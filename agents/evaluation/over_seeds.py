@@ -96,7 +96,20 @@ def success_outcomes(
     Raises:
         ValueError: a run that has not flown one of the layouts (its name and the first missing seed).
     """
-    flown = {(row["agent"], int(row["seed"])): bool(row["success"]) for row in rows}
+    return episode_outcomes(rows, runs, layouts, "success")
+
+
+def episode_outcomes(
+    rows: Iterable[Mapping[str, Any]], runs: Sequence[str], layouts: Sequence[int], outcome: str
+) -> np.ndarray:
+    """Whether each run's episode on each layout had ``outcome`` (1) or not (0): (runs, layouts). ``outcome``
+    is a record's boolean column (``success``, ``collision``, ``out_of_bounds``) or ``failure`` (not success).
+
+    Raises:
+        ValueError: a run that has not flown one of the layouts (its name and the first missing seed).
+    """
+    column, flip = ("success", True) if outcome == "failure" else (outcome, False)
+    flown = {(row["agent"], int(row["seed"])): bool(row[column]) != flip for row in rows}
     outcomes = np.zeros((len(runs), len(layouts)))
     for i, run in enumerate(runs):
         for j, seed in enumerate(layouts):

@@ -33,11 +33,15 @@ from agents.evaluation.episode import EpisodeRecord
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
-# Columns added since identities, last in the record: a file written before one of them keeps its own columns
-# when episodes are appended (the new value is then unknown, None on reading), so resuming never re-flies.
-ADDED_FIELDS = ("mean_depth_outlier_share",)
-PREVIOUS_CSV_FIELDS = [name for name in CSV_FIELDS if name not in ADDED_FIELDS]
-_READABLE_HEADERS = [CSV_FIELDS, PREVIOUS_CSV_FIELDS, LEGACY_FIELDS]
+# Columns added since identities, last in the record, oldest first: a file written before one of them keeps its
+# own columns when episodes are appended (the newer values are then unknown, None on reading), so resuming never
+# re-flies. EARLIER_CSV_FIELDS[k] is the header of files from before ADDED_FIELDS[k].
+ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version")
+EARLIER_CSV_FIELDS = [
+    [name for name in CSV_FIELDS if name not in ADDED_FIELDS[since:]] for since in range(len(ADDED_FIELDS))
+]
+PREVIOUS_CSV_FIELDS = EARLIER_CSV_FIELDS[0]  # before the outlier share: the committed result CSVs
+_READABLE_HEADERS = [CSV_FIELDS, *reversed(EARLIER_CSV_FIELDS), LEGACY_FIELDS]
 
 # What a resumed run compares besides (agent, factor, level, seed). The record's code_version is left out on
 # purpose: it changes with every commit, and comparing it would fly every episode again after any change.
@@ -76,7 +80,8 @@ def append_record(path: Path, record: EpisodeRecord) -> bool:
         OSError: the disk is full or the file cannot be written; the message names it.
     """
     path = Path(path)
-    columns = PREVIOUS_CSV_FIELDS if _first_line(path) == csv_line(PREVIOUS_CSV_FIELDS) else CSV_FIELDS
+    first_line = _first_line(path)
+    columns = next((earlier for earlier in EARLIER_CSV_FIELDS if first_line == csv_line(earlier)), CSV_FIELDS)
     row = asdict(record)
     values = [str(row[name]) for name in columns if name != CHECKSUM_FIELD]
     identity = episode_identity(row)

@@ -74,7 +74,9 @@ def run_task(task: EpisodeTask) -> EpisodeRecord:
     torch.set_num_threads(1)
     env, agent = _env_and_agent(task)
     record = run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
-    return dataclasses.replace(record, **task.identity(), code_version=_code_version())
+    return dataclasses.replace(
+        record, **task.identity(), code_version=_code_version(), suite_version=task.suite_version
+    )
 
 
 def run_claimed_task(csv_path: Path, task: EpisodeTask) -> tuple[EpisodeTask, str, EpisodeRecord | None]:

@@ -90,7 +90,12 @@ def format_summary(table: list[Mapping[str, Any]], *, omit: Iterable[str] = ()) 
     )
     lines = [header, "|" + "---|" * (len(leading) + 5)]
     for r in table:
-        cells = {"agent": r["agent"], "factor": r["factor"], "level": f"{r['level']:g}", "episodes": r["episodes"]}
+        cells = {
+            "agent": r["agent"],
+            "factor": r["factor"],
+            "level": f"{r['level']:g}",
+            "episodes": r["episodes"],
+        }
         lines.append(
             "".join(f"| {cells[name]} " for name in leading)
             + f"| {r['failure_rate']:.2f} [{r['failure_ci_low']:.2f}, {r['failure_ci_high']:.2f}] | "

@@ -105,7 +105,9 @@ def external_env_settings(spec: str) -> dict[str, Any]:
     """
     declared = getattr(_resolve(spec), "env_settings", None) or {}
     if not isinstance(declared, Mapping) or not all(isinstance(key, str) for key in declared):
-        raise ValueError(f"agent {spec!r}: env_settings must map env setting names to values, got {declared!r}")
+        raise ValueError(
+            f"agent {spec!r}: env_settings must map env setting names to values, got {declared!r}"
+        )
     return dict(declared)  # a copy per call would not help: lru_cache hands out this one; callers copy
 
 
@@ -151,5 +153,8 @@ class ExternalAgent:
             ValueError: the agent read a key the env does not give.
         """
         return self.agent.predict(
-            KeyNamingObservation(observation), state=state, episode_start=episode_start, deterministic=deterministic
+            KeyNamingObservation(observation),
+            state=state,
+            episode_start=episode_start,
+            deterministic=deterministic,
         )

@@ -86,9 +86,13 @@ def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, A
         envs = SubprocVecEnv([IgnoringInterrupts(f) for f in factories], start_method="forkserver")
         try:
             # Two evaluation workers halve the time the training workers sit idle during an evaluation.
-            eval_env = SubprocVecEnv([IgnoringInterrupts(f) for f in eval_factories], start_method="forkserver")
+            eval_env = SubprocVecEnv(
+                [IgnoringInterrupts(f) for f in eval_factories], start_method="forkserver"
+            )
         except BaseException:
-            close_quietly(envs)  # its workers ignore stop signals: left open, they would keep the process alive
+            close_quietly(
+                envs
+            )  # its workers ignore stop signals: left open, they would keep the process alive
             raise
     else:
         envs, eval_env = DummyVecEnv(factories), DummyVecEnv(eval_factories)

@@ -210,7 +210,9 @@ def train(
         with suppress(Exception):  # the record says why, where the disk still takes it
             record.end(FAILED, model.num_timesteps, error=f"{type(error).__name__}: {error}")
         raise
-    print(f"saved {files.policy} after {model.num_timesteps} steps ({record.wall_minutes:.1f} min this session)")
+    print(
+        f"saved {files.policy} after {model.num_timesteps} steps ({record.wall_minutes:.1f} min this session)"
+    )
     if ship_to is not None:
         if status == INTERRUPTED:
             print(f"interrupted: not shipping; ship it later with --ship-only --config {config_path}")

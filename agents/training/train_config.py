@@ -17,6 +17,7 @@ def env_setting_field(setting: str, **kwargs: Any) -> Any:
     the rule the env owns for it, so no config writes that range again."""
     return checked_field(setting_check(setting), **kwargs)
 
+
 @dataclass
 class PPOParams:
     """stable-baselines3 PPO hyperparameters (see its docs); ``net_arch`` sizes both actor and critic."""

@@ -55,6 +55,7 @@ class PlaybackSettings:
     translation_drift: float = 0.0
     rotation_noise_deg: float = 0.0
     translation_noise_m: float = 0.0
+    imu_time_offset_ms: float = 0.0
     depth_noise: float = 0.0
     depth_outliers: float = 0.0
     depth_dropout: float = 0.0

@@ -4,6 +4,7 @@ at zero it draws nothing and returns its inputs unchanged."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor_errors import (
     add_motion_noise,
     corrupt_depths,
+    lagged_attitude,
     outlier_depth_range,
     scale_motion,
     walk_bias,
@@ -120,3 +122,44 @@ def test_outlier_range_comes_from_the_bin_edges() -> None:
     assert outlier_depth_range((0.2, 1.0, 4.0)) == (0.2, 4.0)
     with pytest.raises(ValueError, match=r"^outlier depths need 0 < low < high, got low=0.0, high=13.0$"):
         corrupt_depths(np.ones(3), 0.0, 0.1, 0.0, 0.0, 13.0, np.random.default_rng())
+
+
+def test_a_lagged_attitude_is_the_interpolation_back_toward_the_previous_frame() -> None:
+    previous = rotation_from_vector(np.array([0.0, 0.0, 0.1]))
+    current = rotation_from_vector(np.array([0.0, 0.0, 0.3]))
+    assert lagged_attitude(previous, current, 0.0) is current
+    np.testing.assert_allclose(lagged_attitude(previous, current, 1.0), previous, atol=1e-12)
+    np.testing.assert_allclose(lagged_attitude(previous, current, 5.0), previous, atol=1e-12)  # capped at a frame
+    halfway = vector_from_rotation(lagged_attitude(previous, current, 0.25))
+    np.testing.assert_allclose(halfway, [0.0, 0.0, 0.25], atol=1e-12)
+
+
+def _told_yaw_steps(offset_ms: float, yaw_per_frame: list[float]) -> list[float]:
+    """Yaw told per frame by the pipeline (10 Hz) for a camera turning by these angles (rad) about its y axis."""
+    from flownav_env.sensor import SensorPipeline
+    from flownav_env.settings import SensorSettings
+
+    sensor = SensorSettings(imu_time_offset_ms=offset_ms)
+    pipeline, rng = SensorPipeline(10.0), np.random.default_rng(0)
+    angle, position = 0.0, np.zeros(3)
+    pipeline.start((np.eye(3), position))
+    told = []
+    for step in yaw_per_frame:
+        angle += step
+        frame = pipeline.motion(sensor, rng, (rotation_from_vector(np.array([0.0, angle, 0.0])), position))
+        told.append(-vector_from_rotation(frame.told_motion[0])[1])
+    return told
+
+
+def test_a_clock_offset_leaves_a_steady_turn_and_turns_a_change_of_rate_into_an_error() -> None:
+    steps = [0.0, 0.0, 0.05, 0.05, 0.05, 0.0]  # start turning at frame 3, stop at frame 6
+    np.testing.assert_allclose(_told_yaw_steps(0.0, steps), steps, atol=1e-12)
+    told = _told_yaw_steps(20.0, steps)  # 20 ms at 10 Hz: a fifth of a frame late
+    np.testing.assert_allclose(told, [0.0, 0.0, 0.04, 0.05, 0.05, 0.01], atol=1e-12)
+
+
+def test_a_negative_clock_offset_is_refused_with_its_range() -> None:
+    from flownav_env.settings import SensorSettings
+
+    with pytest.raises(ValueError, match=re.escape("imu_time_offset_ms must be in [0.0, 100.0], got -5.0")):
+        SensorSettings(imu_time_offset_ms=-5.0)

@@ -247,7 +247,12 @@ def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
         )
 
     table = markdown_table(
-        ["resolution", "steps/s vs current default", "valid points vs current default", "meets both criteria"],
+        [
+            "resolution",
+            "steps/s vs current default",
+            "valid points vs current default",
+            "meets both criteria",
+        ],
         [
             [
                 row["config"],
@@ -312,7 +317,9 @@ def _ratio_target_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
         "ratio_high": f"{max(ratios):.2f}",
         "ratio_met": bool(max(ratios) <= TARGET_RATIO),
         "ratio_met_for_some": bool(min(ratios) <= TARGET_RATIO < max(ratios)),
-        "ratio_met_configs": ", ".join(row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO),
+        "ratio_met_configs": ", ".join(
+            row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO
+        ),
         "floor": f"{floor:.2f}",
         "floor_low": f"{default['ratio_floor_min']:.2f}",
         "floor_high": f"{default['ratio_floor_max']:.2f}",

@@ -12,6 +12,7 @@ from agents.evaluation.csv_file import LEGACY_FIELDS, sealed_line
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.records import (
     CSV_FIELDS,
+    EARLIER_CSV_FIELDS,
     PREVIOUS_CSV_FIELDS,
     append_record,
     drop_agents,
@@ -65,7 +66,7 @@ def test_rows_round_trip_with_their_identity_and_checksum(tmp_path: Path) -> Non
 def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     # Committed leaderboard, ablation and tuning CSVs predate mean_depth_outlier_share: resuming into them must
     # neither be refused nor fly their episodes again.
-    assert [*PREVIOUS_CSV_FIELDS[:-1], "mean_depth_outlier_share", "row_crc"] == CSV_FIELDS
+    assert [*PREVIOUS_CSV_FIELDS[:-1], "mean_depth_outlier_share", "suite_version", "row_crc"] == CSV_FIELDS
     append_record(tmp_path / "new.csv", replace(RECORD, mean_depth_outlier_share=0.25))
     assert read_records(tmp_path / "new.csv")[0]["mean_depth_outlier_share"] == 0.25
     old = tmp_path / "old.csv"
@@ -77,6 +78,22 @@ def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp
     rows = read_records(old)
     assert [r["seed"] for r in rows] == [1_000_000, 1_000_001]
     assert [r["mean_depth_outlier_share"] for r in rows] == [None, None]  # unknown in that format
+    assert [r["suite_version"] for r in rows] == [None, None]
+
+
+def test_a_file_from_before_the_suite_version_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
+    before_suite = EARLIER_CSV_FIELDS[1]
+    assert before_suite == [name for name in CSV_FIELDS if name != "suite_version"]
+    old = tmp_path / "old.csv"
+    values = [str(getattr(RECORD, name)) for name in before_suite[:-1]]
+    old.write_text(",".join(before_suite) + "\r\n" + sealed_line(values), newline="")
+    assert append_record(old, replace(RECORD, seed=1_000_001, suite_version="1"))
+    assert old.read_text().splitlines()[0] == ",".join(before_suite)
+    rows = read_records(old)
+    assert [r["seed"] for r in rows] == [1_000_000, 1_000_001]
+    assert [r["suite_version"] for r in rows] == [None, None]
+    append_record(tmp_path / "new.csv", replace(RECORD, suite_version="1"))
+    assert read_records(tmp_path / "new.csv")[0]["suite_version"] == "1"
     assert rows[1]["env_kwargs"] == RECORD.env_kwargs
 
 

@@ -100,3 +100,15 @@ def test_evaluate_scores_a_model_given_by_policy_and_algo(tmp_path: Path) -> Non
 def test_evaluate_refuses_an_incomplete_model_request(arguments: list[str], message: str, capsys) -> None:
     assert main(["evaluate", *arguments]) == 2
     assert re.search(message, capsys.readouterr().err)
+
+
+@pytest.mark.parametrize("algo", ["sac", "a2c"])
+def test_a_saved_model_is_scored_on_the_suite(algo: str, tmp_path: Path) -> None:
+    from agents.evaluation.suite_report import read_suite_csv
+
+    path = saved_model(algo, tmp_path)
+    out = tmp_path / "score"
+    argv = ["score", "--policy", str(path), "--algo", algo, "--tiers", "hard", "--layouts", "1", "--workers", "1"]
+    assert main([*argv, "--out", str(out)]) == 0
+    (row,) = read_suite_csv(out / "score.csv")
+    assert row["agent"] == sb3_model_name(algo, path) and row["tier"] == "hard" and row["episodes"] == 1

@@ -1,0 +1,67 @@
+"""``flownav score``: score any agent on the suite's frozen test layouts, one row per tier.
+
+The agent is a FlowNav agent name, one of your own (``my_pkg.my_module:make_agent`` or
+``path/to/file.py:make_agent``: a callable returning an object with stable-baselines3's ``predict``, or such an
+object), or a stable-baselines3 model (``--policy model.zip --algo sac``). Writes ``<out>/suite_episodes.csv``
+(resumable) and ``<out>/score.csv``; ``flownav leaderboard --include <out>/score.csv`` sets the rows beside the
+published table. In Python: ``agents.evaluation.suite.score``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from agents.cli.suite import add_tier_arguments
+
+HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
+    from agents.policies.sb3_models import SB3_ALGORITHMS
+
+    parser.add_argument(
+        "--agent",
+        help="a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent",
+    )
+    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
+    parser.add_argument(
+        "--algo", choices=SB3_ALGORITHMS, help="with --policy and no --agent: a stable-baselines3 model"
+    )
+    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
+    add_tier_arguments(parser)
+    parser.add_argument("--out", default="runs/score", help="output folder (default: %(default)s)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.suite import score
+    from agents.evaluation.suite_report import tier_tables
+    from agents.policies.sb3_models import sb3_model_name
+
+    agent, policy = args.agent, args.policy
+    if args.algo:
+        if agent or not policy:
+            raise ValueError(
+                "--algo goes with --policy model.zip and without --agent (the model is the agent)"
+            )
+        agent, policy = sb3_model_name(args.algo, policy), None
+    if not agent:
+        raise ValueError("give --agent (or --policy model.zip --algo ALGO)")
+    rows = score(
+        agent,
+        tiers=args.tiers,
+        layouts=args.layouts,
+        out=Path(args.out),
+        policy=policy,
+        trust_pickle=args.trust_pickle,
+        workers=args.workers,
+        backend=args.backend,
+        address=args.address,
+    )
+    print("\n".join(tier_tables(rows)))
+    print(
+        f"rows written to {Path(args.out) / 'score.csv'}; set them beside the published table with "
+        f"flownav leaderboard --include {Path(args.out) / 'score.csv'}"
+    )
+    return 0

@@ -1,0 +1,76 @@
+"""``flownav suite``: every agent on every tier's frozen test layouts, learned agents over all their shipped
+training seeds; writes the suite's leading table (see :mod:`agents.evaluation.suite`).
+
+Resumable: run the same command again after an interruption. Agents fly one after another in the order given,
+so a partial flight reports whole agents and lists what is left.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+from agents.common.locations import RESULTS_DIR
+
+HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
+
+
+def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options ``suite`` and ``score`` share: which tiers, how many layouts, where to fly."""
+    from agents.common.seeds import SUITE_LAYOUTS
+    from flownav_env.tiers import TIER_NAMES
+
+    parser.add_argument(
+        "--tiers",
+        default="all",
+        help=f"all, or comma-separated tiers of {', '.join(TIER_NAMES)} (default: all)",
+    )
+    parser.add_argument(
+        "--layouts",
+        type=int,
+        default=SUITE_LAYOUTS,
+        help="the first N frozen test layouts per run (default: all %(default)s; fewer is a stated prefix)",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
+    )
+    parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where episodes fly")
+    parser.add_argument("--address", help="Ray cluster address (with --backend ray; default: a local Ray)")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from agents.policies import AGENT_NAMES
+
+    parser.add_argument(
+        "--agents",
+        default=",".join(AGENT_NAMES),
+        help=f"comma-separated agents, flown in this order (default: all, {','.join(AGENT_NAMES)})",
+    )
+    add_tier_arguments(parser)
+    parser.add_argument(
+        "--out", default="runs/suite", help=f"output folder (default: %(default)s; {RESULTS_DIR} to publish)"
+    )
+    parser.add_argument(
+        "--report-only", action="store_true", help="fly nothing: report the episodes already in --out"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.evaluation.suite import run_suite
+
+    command = "flownav suite " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    lines = run_suite(
+        [name.strip() for name in args.agents.split(",") if name.strip()],
+        Path(args.out),
+        tiers=args.tiers,
+        layouts=args.layouts,
+        workers=args.workers,
+        backend=args.backend,
+        address=args.address,
+        report_only=args.report_only,
+        command=command.strip(),
+    )
+    print("\n".join(lines))
+    return 0

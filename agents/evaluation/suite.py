@@ -1,0 +1,303 @@
+"""The benchmark suite: any agent on every tier's frozen test layouts, one row per (agent, tier).
+
+The tiers are :mod:`flownav_env.tiers`' (frozen under ``SUITE_VERSION``), the layouts
+:func:`agents.common.seeds.suite_seeds` (a test sub-range nothing was chosen on). A learned agent named alone flies
+every shipped training seed on every layout, so its intervals span training runs and layouts, as the leaderboard's
+do; any other agent (reactive, ``module:callable``, ``file.py:callable``, an SB3 ``--policy --algo``) is one run.
+Episodes go to a resumable episodes CSV through the same runner as ``evaluate`` and ``sweep`` (local pool or Ray),
+each stamped with the suite version.
+
+``score`` is the one call that scores an agent: ``flownav score`` is its command line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common.locations import POLICIES_DIR
+from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of
+from agents.evaluation.over_seeds import episode_outcomes, runs_and_layouts_interval
+from agents.evaluation.records import read_records
+from agents.evaluation.runner import execute
+from agents.evaluation.statistics import wilson_interval
+from agents.policies import agent_env_kwargs, is_learned, policy_file, runs_to_fly, split_agent_name
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+
+EPISODES_CSV = "suite_episodes.csv"
+# Each outcome an episode has (failure: did not reach the goal) and the rate the table reports for it.
+OUTCOMES = ("failure", "collision", "out_of_bounds", "success")
+SUMMARY_COLUMNS = [
+    "suite_version",
+    "tier",
+    "env_id",
+    "agent",
+    "runs",
+    "layouts",
+    "episodes",
+    *(f"{outcome}_{part}" for outcome in OUTCOMES for part in ("rate", "low", "high")),
+    "interval_over",
+]
+
+
+def parse_tiers(text: str | Sequence[str]) -> list[str]:
+    """``"all"`` or comma-separated tier names (or a list of them) → the tier names, in suite order.
+
+    Raises:
+        ValueError: an unknown tier, or none.
+    """
+    names = [name.strip() for name in text.split(",")] if isinstance(text, str) else list(text)
+    names = [name for name in names if name]
+    if names == ["all"]:
+        return list(TIER_NAMES)
+    if not names:
+        raise ValueError(f"give at least one tier: all, or some of {', '.join(TIER_NAMES)}")
+    for name in names:
+        tier(name)
+    return [name for name in TIER_NAMES if name in names]
+
+
+def agent_runs(agent: str, policy: str | None = None) -> list[str]:
+    """The runs ``agent`` is in the suite: a learned agent named alone is every shipped training seed
+    (``ppo_flow@0`` ...); anything else is itself.
+
+    Raises:
+        ValueError: an unknown agent name.
+        FileNotFoundError: a learned agent with no policy shipped.
+    """
+    return runs_to_fly(agent, policy)[0]
+
+
+def _check_agent_fits_tier(name: str, policy: str | None, tier_name: str) -> None:
+    """An agent may ask for observation settings, never change what a tier fixes."""
+    fixed = tier(tier_name).settings
+    path = policy_file(name, policy, directory=POLICIES_DIR) if is_learned(name) else policy
+    wanted = agent_env_kwargs(name, path)
+    clashes = {key: value for key, value in wanted.items() if key in fixed and fixed[key] != value}
+    if clashes:
+        key, value = next(iter(clashes.items()))
+        raise ValueError(
+            f"agent {name} sets {key}={value!r}, but tier {tier_name} fixes {key}={fixed[key]!r}: a suite agent "
+            "may only ask for observation settings"
+        )
+
+
+def suite_tasks(
+    runs: Mapping[str, Sequence[str]],
+    tiers: Sequence[str],
+    layouts: int = SUITE_LAYOUTS,
+    *,
+    policies: Mapping[str, str | None] | None = None,
+    trust_pickle: bool = False,
+) -> list[EpisodeTask]:
+    """Every run of every agent on the first ``layouts`` frozen layouts of each tier, tier by tier and layout by
+    layout (an interrupted flight leaves every run with about the same layouts).
+
+    Args:
+        runs: agent → its run names (:func:`agent_runs`).
+        tiers: tier names.
+        layouts: how many of the frozen layouts (a prefix of them).
+        policies: agent → its policy file where it is not the shipped one.
+        trust_pickle: load policy zips without their config by unpickling them (the user's opt-in).
+
+    Raises:
+        ValueError: a bad tier or layout count, or an agent that sets a setting a tier fixes.
+    """
+    policies = policies or {}
+    seeds = suite_seeds(layouts)
+    tasks = []
+    for tier_name in tiers:
+        spec = tier(tier_name)
+        for agent, names in runs.items():
+            _check_agent_fits_tier(names[0], policies.get(agent), tier_name)
+        for seed in seeds:
+            for agent, names in runs.items():
+                for name in names:
+                    tasks.append(
+                        EpisodeTask(
+                            name,
+                            tier_name,
+                            0.0,
+                            seed,
+                            spec.env_id,
+                            tuple(sorted(spec.settings.items())),
+                            policies.get(agent),
+                            trust_pickle=trust_pickle,
+                            suite_version=SUITE_VERSION,
+                        )
+                    )
+    return tasks
+
+
+def summarise_suite(
+    rows: Iterable[Mapping[str, Any]],
+    runs: Mapping[str, Sequence[str]],
+    tiers: Sequence[str],
+    layouts: int = SUITE_LAYOUTS,
+) -> list[dict[str, Any]]:
+    """One row per (agent, tier) with :data:`SUMMARY_COLUMNS`: each outcome's rate, with a 95 % interval over
+    layouts (Wilson) for one run, or over runs × layouts (two-level bootstrap) for several training seeds.
+    Agents and tiers with episodes missing are left out (a partial flight reports what is whole).
+    """
+    rows = list(rows)
+    seeds = list(suite_seeds(layouts))
+    table = []
+    for tier_name in tiers:
+        tier_rows = [row for row in rows if row["factor"] == tier_name]
+        for agent, names in runs.items():
+            try:
+                outcomes = {name: episode_outcomes(tier_rows, names, seeds, name) for name in OUTCOMES}
+            except ValueError:
+                continue
+            row: dict[str, Any] = {
+                "suite_version": SUITE_VERSION,
+                "tier": tier_name,
+                "env_id": tier(tier_name).env_id,
+                "agent": agent,
+                "runs": len(names),
+                "layouts": len(seeds),
+                "episodes": len(names) * len(seeds),
+                "interval_over": "layouts (Wilson)" if len(names) == 1 else "runs × layouts (bootstrap)",
+            }
+            for name, matrix in outcomes.items():
+                if len(names) == 1:
+                    low, high = wilson_interval(int(matrix.sum()), matrix.size)
+                else:
+                    low, high = runs_and_layouts_interval(matrix)
+                row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
+            table.append({column: row[column] for column in SUMMARY_COLUMNS})
+    return table
+
+
+def score(
+    agent: str,
+    *,
+    tiers: str | Sequence[str] = "all",
+    layouts: int = SUITE_LAYOUTS,
+    out: str | Path = "runs/score",
+    policy: str | None = None,
+    trust_pickle: bool = False,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+) -> list[dict[str, Any]]:
+    """Fly ``agent`` on the suite and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
+
+    Episodes are appended to ``<out>/suite_episodes.csv`` (calling again resumes); the rows are written to
+    ``<out>/score.csv``, which ``flownav leaderboard --include`` sets beside the published table.
+
+    Args:
+        agent: a FlowNav agent name, ``my_pkg.my_module:make_agent``, ``path/to/file.py:make_agent``, or
+            ``<algo>:<model.zip>`` for a stable-baselines3 model.
+        tiers: ``"all"`` or tier names.
+        layouts: how many of the frozen layouts (the table's rows say how many).
+        out: output folder.
+        policy: a learned agent's policy file, if not the shipped one.
+        trust_pickle: allow unpickling a policy zip without its config (runs its code).
+        workers: local worker processes; backend: ``"local"`` or ``"ray"``; address: a Ray cluster's.
+
+    Raises:
+        ValueError: a bad agent, tier, layout count or folder; an agent that needs an observation key or
+            setting a tier does not give.
+    """
+    from agents.common.folders import check_writable_folder
+
+    tier_names = parse_tiers(tiers)
+    agent = resolve_agent(agent, trust_pickle=trust_pickle)
+    runs = {agent: agent_runs(agent, policy)}
+    tasks = suite_tasks(runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle)
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / EPISODES_CSV
+    execute(tasks, csv_path, backend=backend, workers=workers, address=address, description=f"score {agent}")
+    rows = rows_of(tasks, read_records(csv_path))
+    table = summarise_suite(rows, runs, tier_names, layouts)
+    write_summary_csv(out / "score.csv", table)
+    return table
+
+
+def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
+    """The name records keep for ``agent``: an outside agent's spec made absolute, after loading it once so
+    that a bad one fails before anything flies.
+
+    Raises:
+        ValueError: an unknown name, an import path that does not resolve, or a callable that returns
+            something without ``predict``.
+    """
+    from agents.policies import load_agent
+    from agents.policies.external import canonical_spec, is_external_name
+    from agents.policies.sb3_models import is_sb3_model_name
+
+    split_agent_name(agent)
+    if is_external_name(agent):
+        agent = agent if is_sb3_model_name(agent) else canonical_spec(agent)
+        load_agent(agent, trust_pickle=trust_pickle)
+    return agent
+
+
+def write_summary_csv(path: Path, table: Sequence[Mapping[str, Any]]) -> None:
+    """The suite's rows as CSV (:data:`SUMMARY_COLUMNS`, rates to 4 decimals), replaced atomically."""
+    import csv
+    import io
+
+    from agents.common.folders import write_text_atomically
+
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for row in table:
+        writer.writerow({k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()})
+    write_text_atomically(path, text.getvalue())
+
+
+def run_suite(
+    agents: Sequence[str],
+    out: str | Path,
+    *,
+    tiers: str | Sequence[str] = "all",
+    layouts: int = SUITE_LAYOUTS,
+    workers: int = 2,
+    backend: str = "local",
+    address: str | None = None,
+    report_only: bool = False,
+    command: str = "flownav suite",
+) -> list[str]:
+    """Fly (unless ``report_only``) every agent on the suite, agent by agent in the order given (an interrupted
+    flight leaves whole agents), and write ``suite_episodes.csv``, ``suite.csv``, ``suite.md`` and ``suite.png``
+    into ``out``; returns the report's lines.
+
+    Raises:
+        ValueError: a bad agent, tier, layout count, worker count or folder.
+    """
+    from agents.common.folders import check_writable_folder, write_text_atomically
+    from agents.evaluation.provenance import machine_summary
+    from agents.evaluation.suite_report import plot_suite, suite_report
+
+    tier_names = parse_tiers(tiers)
+    if workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    runs = {agent: agent_runs(resolve_agent(agent)) for agent in agents}
+    tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, tier_names, layouts)]
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / EPISODES_CSV
+    if not report_only:
+        execute(tasks, csv_path, backend=backend, workers=workers, address=address, description="suite")
+    rows = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+    table = summarise_suite(rows, runs, tier_names, layouts)
+    whole = {(row["agent"], row["tier"]) for row in table}
+    missing = [f"{agent} on {name}" for name in tier_names for agent in runs if (agent, name) not in whole]
+    write_summary_csv(out / "suite.csv", table)
+    if table:
+        plot_suite(table, out / "suite.png")
+    lines = suite_report(
+        table, command=command, layouts=suite_seeds(layouts), machine=machine_summary(), missing=missing
+    )
+    write_text_atomically(out / "suite.md", "\n".join(lines) + "\n")
+    return lines

@@ -1,0 +1,205 @@
+"""The suite's leading table as a report: ``suite.md``, ``suite.png``, and outside rows set beside it.
+
+Every sentence with a number is worded from the table here (the best agent per tier, whether a tier leaves
+room to improve), so the report cannot disagree with its CSV.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from agents.evaluation.suite import OUTCOMES, SUMMARY_COLUMNS
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+
+# A tier leaves room to improve when its best agent still fails at least this often.
+HEADROOM_FAILURE = 0.15
+
+
+def read_suite_csv(path: Path) -> list[dict[str, Any]]:
+    """Rows of a suite or score CSV (:data:`SUMMARY_COLUMNS`), typed.
+
+    Raises:
+        ValueError: not such a CSV, or rows of another suite version (their tiers are other tasks).
+        FileNotFoundError: no file at ``path``.
+    """
+    path = Path(path)
+    with path.open(newline="") as handle:
+        reader = csv.DictReader(handle)
+        missing = [name for name in SUMMARY_COLUMNS if name not in (reader.fieldnames or [])]
+        if missing:
+            raise ValueError(
+                f"{path} is not a suite CSV (flownav score writes one): it lacks the columns {', '.join(missing)}"
+            )
+        rows = list(reader)
+    for row in rows:
+        if row["suite_version"] != SUITE_VERSION:
+            raise ValueError(
+                f"{path} holds rows of suite version {row['suite_version']!r}, but this is suite version "
+                f"{SUITE_VERSION!r}: its tiers are other tasks; score the agent again with flownav score"
+            )
+        tier(row["tier"])
+    return [
+        {
+            name: (
+                float(value)
+                if name.endswith(("_rate", "_low", "_high"))
+                else int(value)
+                if name in ("runs", "layouts", "episodes")
+                else value
+            )
+            for name, value in row.items()
+            if name in SUMMARY_COLUMNS
+        }
+        for row in rows
+    ]
+
+
+def merge_rows(
+    published: Sequence[Mapping[str, Any]], included: Sequence[Mapping[str, Any]]
+) -> list[dict[str, Any]]:
+    """The published rows and the included ones (an included row replaces a published row of the same agent
+    and tier), tier by tier, best first."""
+    merged = {(row["tier"], row["agent"]): dict(row) for row in published}
+    for row in included:
+        merged[(row["tier"], row["agent"])] = {**row, "included": True}
+    order = {name: index for index, name in enumerate(TIER_NAMES)}
+    return sorted(merged.values(), key=lambda r: (order[r["tier"]], r["failure_rate"], r["agent"]))
+
+
+def _interval(row: Mapping[str, Any], outcome: str) -> str:
+    return f"{row[f'{outcome}_rate']:.2f} [{row[f'{outcome}_low']:.2f}, {row[f'{outcome}_high']:.2f}]"
+
+
+def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """A markdown table per tier, best agent first; an included row is marked."""
+    from agents.common.tables import markdown_table
+
+    lines: list[str] = []
+    for name in TIER_NAMES:
+        mine = sorted((r for r in rows if r["tier"] == name), key=lambda r: (r["failure_rate"], r["agent"]))
+        if not mine:
+            continue
+        spec = tier(name)
+        lines += [f"### `{name}` (`{spec.env_id}`)", "", spec.why + ".", ""]
+        table_rows = [
+            [
+                f"`{r['agent']}`" + (" (included)" if r.get("included") else ""),
+                r["runs"],
+                r["layouts"],
+                *(_interval(r, outcome) for outcome in OUTCOMES),
+            ]
+            for r in mine
+        ]
+        header = ["agent", "runs", "layouts", *(f"{o.replace('_', ' ')} [95 % CI]" for o in OUTCOMES)]
+        lines += [markdown_table(header, table_rows), ""]
+    return lines
+
+
+def headroom_lines(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Per tier: its best agent and whether it leaves room (fails ≥ :data:`HEADROOM_FAILURE`)."""
+    lines = []
+    for name in TIER_NAMES:
+        mine = [r for r in rows if r["tier"] == name]
+        if not mine:
+            continue
+        best = min(mine, key=lambda r: (r["failure_rate"], r["agent"]))
+        room = (
+            "room to improve"
+            if best["failure_rate"] >= HEADROOM_FAILURE
+            else f"less than {HEADROOM_FAILURE:.2f} left to improve on"
+        )
+        lines.append(
+            f"- `{name}`: best `{best['agent']}`, failure {_interval(best, 'failure')}, over {len(mine)} agents "
+            f"flown: {room}."
+        )
+    return lines
+
+
+def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
+    """Failure rate with its 95 % interval per agent, a panel per tier."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tiers = [name for name in TIER_NAMES if any(r["tier"] == name for r in rows)]
+    agents = sorted({r["agent"] for r in rows}, key=lambda a: a.lower())
+    figure, axes = plt.subplots(
+        1,
+        max(len(tiers), 1),
+        figsize=(3.2 * max(len(tiers), 1), 0.35 * len(agents) + 1.5),
+        sharey=True,
+        squeeze=False,
+    )
+    for axis, name in zip(axes[0], tiers, strict=False):
+        found = {r["agent"]: r for r in rows if r["tier"] == name}
+        for index, agent in enumerate(agents):
+            row = found.get(agent)
+            if row is None:
+                continue
+            rate = row["failure_rate"]
+            axis.errorbar(
+                rate,
+                index,
+                xerr=[[max(rate - row["failure_low"], 0.0)], [max(row["failure_high"] - rate, 0.0)]],
+                fmt="o",
+                color="tab:red" if row.get("included") else "tab:blue",
+                capsize=3,
+            )
+        axis.axvline(HEADROOM_FAILURE, color="grey", linestyle=":", linewidth=1)
+        axis.set_xlim(0, 1)
+        axis.set_title(name)
+        axis.set_xlabel("failure rate")
+    axes[0][0].set_yticks(range(len(agents)), [a if len(a) < 28 else a[:25] + "…" for a in agents])
+    figure.suptitle(
+        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE})"
+    )
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+def suite_report(
+    rows: Sequence[Mapping[str, Any]], *, command: str, layouts: range, machine: str, missing: Sequence[str]
+) -> list[str]:
+    """``suite.md``: what the suite is, the leading table per tier, each tier's headroom, what is unflown."""
+    from agents.common.tables import today
+
+    lines = [
+        f"# FlowNav suite v{SUITE_VERSION}: every agent on every tier's frozen test layouts",
+        "",
+        f"Generated {today()} by `{command}`. {machine}",
+        "",
+        f"Frozen test layouts {layouts.start:,}–{layouts.stop - 1:,} ({len(layouts)} per run; "
+        "`agents/common/seeds.py`, `SUITE_SEED_START`): no run of the project flew them before the tiers were "
+        "frozen, and nothing was chosen by looking at them. The tiers were calibrated on validation layouts "
+        "(`suite_calibration/calibration.md`) and are defined in `flownav_env/tiers.py`. A learned agent is every "
+        "shipped training seed on every layout: its rates are means over runs with a two-level bootstrap "
+        "interval (runs, then layouts); any other agent is one run with Wilson intervals over layouts. A "
+        "failure is any episode that does not reach the goal. Score your own agent with "
+        "`flownav score --agent file.py:make_agent` and set it beside these rows with "
+        "`flownav leaderboard --include runs/score/score.csv`.",
+        "",
+        "## Headroom",
+        "",
+        *headroom_lines(rows),
+        "",
+        "![failure rates per tier](suite.png)",
+        "",
+        "## The table",
+        "",
+        *tier_tables(rows),
+    ]
+    if missing:
+        lines += [
+            "## Not yet flown",
+            "",
+            "These (agent, tier) pairs have not flown every layout yet; the command above resumes them: "
+            + ", ".join(f"`{item}`" for item in missing)
+            + ".",
+            "",
+        ]
+    return lines

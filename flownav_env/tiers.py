@@ -1,0 +1,124 @@
+"""The benchmark suite's task tiers: a registered Gymnasium id each, frozen under :data:`SUITE_VERSION`.
+
+| tier | id | course | sensor |
+|---|---|---|---|
+| ``clean`` | ``FlowNav-v0`` | today's defaults: 1 m/s, 0.12 capsules/m² | perfect rotation and translation |
+| ``hard`` | ``FlowNavHard-v0`` | :data:`HARD_COURSE` | perfect |
+| ``noisy`` | ``FlowNavNoisy-v0`` | defaults | :func:`realistic_sensor`, from datasheets |
+| ``hard_noisy`` | ``FlowNavHardNoisy-v0`` | :data:`HARD_COURSE` | :func:`realistic_sensor` |
+
+How each number was chosen is in ``results/suite/calibration.md``: the hard course on validation layouts only
+(``flownav suite calibrate``), the sensor from the specifications cited below. A tier never changes after
+results are published under its version; any change is a new :data:`SUITE_VERSION` and new ids.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+# Bump with any change to a tier's settings (and the ids' -vN); every suite result row carries it.
+SUITE_VERSION = "1"
+
+# Sensor specifications of parts a small drone flies with (the numbers, not our choice):
+# Bosch Sensortec BMI088 datasheet (BST-BMI088-DS001), gyroscope output noise density: 0.014 °/s/√Hz.
+GYRO_NOISE_DENSITY_DEG_S_RTHZ = 0.014
+# InvenSense MPU-6000/MPU-6050 product specification (PS-MPU-6000A), gyroscope sensitivity scale factor
+# tolerance at 25 °C: ±3 %.
+GYRO_SCALE_TOLERANCE = 0.03
+# u-blox NEO-M8 data sheet (UBX-15031086), velocity accuracy: 0.05 m/s, a 50 % bound ("50 % @ 30 m/s"). For a
+# normal error per axis, half its draws lie within 0.6745 σ, so σ = 0.05 / 0.6745 = 0.074 m/s.
+VELOCITY_ACCURACY_M_S = 0.05
+MEDIAN_ABS_NORMAL = 0.6745
+# Camera and IMU clocks that are not hardware-synchronised differ by tens of milliseconds, which is why VIO
+# systems estimate the offset online (Li & Mourikis, "Online temporal calibration for camera-IMU systems",
+# IJRR 2014; Qin & Shen, "Online temporal calibration for monocular visual-inertial systems", IROS 2018).
+# The low end of that order, for a drone whose offset was never calibrated:
+CAMERA_IMU_OFFSET_MS = 20.0
+# Monocular visual-inertial odometry drifts by about 1 % of the distance flown on the EuRoC MAV sequences
+# (Delmerico & Scaramuzza, "A Benchmark Comparison of Monocular Visual-Inertial Odometry Algorithms for
+# Flying Robots", ICRA 2018): a scale error of the told translation.
+ODOMETRY_SCALE_ERROR = 0.01
+
+
+def realistic_sensor(frame_rate: float = 10.0) -> dict[str, float]:
+    """The error settings a drone with the parts above has, per camera frame at ``frame_rate`` (Hz).
+
+    - ``rotation_noise_deg``: the gyro's white rate noise integrated over one frame, N·√Δt;
+    - ``rotation_bias``: the gyro's scale-factor tolerance, at its worst sign-free value;
+    - ``translation_noise_m``: the velocity source's error over one frame, σ_v·Δt per axis;
+    - ``translation_bias``: odometry's scale drift as a share of the distance;
+    - ``imu_time_offset_ms``: an uncalibrated camera-IMU clock offset.
+
+    Each but the time offset reuses a setting the sweep already varies (``flownav_env.settings.SensorSettings``).
+    """
+    frame_time = 1.0 / frame_rate
+    return {
+        "rotation_noise_deg": round(GYRO_NOISE_DENSITY_DEG_S_RTHZ * math.sqrt(frame_time), 6),
+        "rotation_bias": GYRO_SCALE_TOLERANCE,
+        "translation_noise_m": round(VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL * frame_time, 6),
+        "translation_bias": ODOMETRY_SCALE_ERROR,
+        "imu_time_offset_ms": CAMERA_IMU_OFFSET_MS,
+    }
+
+
+# Chosen on validation layouts by `flownav suite calibrate` (results/suite/calibration.md): the candidate whose
+# best reactive agent fails closest to the middle of 0.20-0.50.
+HARD_COURSE: dict[str, float] = {"forward_speed": 2.0, "obstacle_density": 0.18}
+
+
+@dataclass(frozen=True)
+class Tier:
+    """One task of the suite: its registered id and the settings it fixes over the env's defaults."""
+
+    name: str
+    env_id: str
+    course: Mapping[str, Any] = field(default_factory=dict)
+    sensor: Mapping[str, Any] = field(default_factory=dict)
+    why: str = ""
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """Every setting the tier fixes (course, then sensor)."""
+        return {**self.course, **self.sensor}
+
+
+TIERS: dict[str, Tier] = {
+    tier.name: tier
+    for tier in (
+        Tier("clean", "FlowNav-v0", why="today's defaults, for continuity with the 300-layout history"),
+        Tier(
+            "hard",
+            "FlowNavHard-v0",
+            course=HARD_COURSE,
+            why="a faster flight through a denser field, where the best existing agent fails 0.20-0.50",
+        ),
+        Tier(
+            "noisy",
+            "FlowNavNoisy-v0",
+            sensor=realistic_sensor(),
+            why="the default course told rotation and translation with a real drone's sensor errors",
+        ),
+        Tier(
+            "hard_noisy",
+            "FlowNavHardNoisy-v0",
+            course=HARD_COURSE,
+            sensor=realistic_sensor(),
+            why="the hard course with the realistic sensor",
+        ),
+    )
+}
+TIER_NAMES = tuple(TIERS)
+
+
+def tier(name: str) -> Tier:
+    """The tier called ``name``.
+
+    Raises:
+        ValueError: not a tier; the message lists them.
+    """
+    if name not in TIERS:
+        raise ValueError(f"tier must be one of {', '.join(TIER_NAMES)}, got {name!r}")
+    return TIERS[name]

@@ -1,0 +1,246 @@
+"""Scoring any agent on the suite's frozen layouts: the tasks, the table, score.csv and leaderboard --include."""
+
+from __future__ import annotations
+
+import csv
+import re
+from pathlib import Path
+
+import pytest
+
+from agents.cli import main
+from agents.common.seeds import (
+    CONFIRMATION_SEED_START,
+    SUITE_LAYOUTS,
+    SUITE_SEED_START,
+    TEST_SEED_START,
+    TIER_CALIBRATION_SEED_START,
+    VALIDATION_SEED_START,
+    suite_seeds,
+)
+from agents.evaluation.records import read_records
+from agents.evaluation.suite import (
+    SUMMARY_COLUMNS,
+    parse_tiers,
+    score,
+    suite_tasks,
+    summarise_suite,
+)
+from agents.evaluation.suite_report import merge_rows, read_suite_csv
+from flownav_env.tiers import SUITE_VERSION, TIERS
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
+
+
+def test_the_frozen_layouts_are_test_seeds_apart_from_every_other_range() -> None:
+    assert VALIDATION_SEED_START <= CONFIRMATION_SEED_START < TIER_CALIBRATION_SEED_START < TEST_SEED_START
+    assert list(suite_seeds(3)) == [SUITE_SEED_START, SUITE_SEED_START + 1, SUITE_SEED_START + 2]
+    assert SUITE_SEED_START >= TEST_SEED_START + 1_000 * 300  # past every layout the earlier tables flew
+    for bad in (0, SUITE_LAYOUTS + 1, 2.5, True):
+        with pytest.raises(
+            ValueError, match=re.escape(f"suite layouts must be an integer in [1, {SUITE_LAYOUTS}], got")
+        ):
+            suite_seeds(bad)
+
+
+def test_tiers_parse_from_all_or_names_in_suite_order() -> None:
+    assert parse_tiers("all") == list(TIERS)
+    assert parse_tiers("noisy, hard") == ["hard", "noisy"]
+    with pytest.raises(ValueError, match="tier must be one of clean, hard, noisy, hard_noisy, got 'medium'"):
+        parse_tiers("hard,medium")
+    with pytest.raises(ValueError, match="give at least one tier"):
+        parse_tiers(" , ")
+
+
+def test_suite_tasks_carry_the_tier_settings_and_the_suite_version() -> None:
+    tasks = suite_tasks({"bee": ["bee"]}, ["hard_noisy"], layouts=2)
+    assert [t.seed for t in tasks] == [SUITE_SEED_START, SUITE_SEED_START + 1]
+    task = tasks[0]
+    assert task.factor == "hard_noisy" and task.env_id == "FlowNavHardNoisy-v0"
+    assert dict(task.env_kwargs) == TIERS["hard_noisy"].settings and task.suite_version == SUITE_VERSION
+
+
+def test_an_agent_that_changes_what_a_tier_fixes_is_refused(tmp_path: Path) -> None:
+    agent_file = tmp_path / "fast_agent.py"
+    agent_file.write_text(
+        "import numpy as np\n"
+        "class Fast:\n"
+        "    env_settings = {'forward_speed': 1.0}\n"
+        "    def predict(self, observation, state=None, episode_start=None, deterministic=True):\n"
+        "        return np.zeros(3, np.float32), state\n"
+        "def make():\n    return Fast()\n"
+    )
+    with pytest.raises(
+        ValueError, match=re.escape("sets forward_speed=1.0, but tier hard fixes forward_speed=2.0")
+    ):
+        score(f"{agent_file}:make", tiers="hard", layouts=1, out=tmp_path / "out")
+
+
+def _row(agent: str, tier: str, failure: float, version: str = SUITE_VERSION) -> dict:
+    row = {name: 0.0 for name in SUMMARY_COLUMNS}
+    row.update(suite_version=version, tier=tier, env_id=TIERS[tier].env_id, agent=agent, runs=1, layouts=30)
+    row.update(episodes=30, interval_over="layouts (Wilson)", failure_rate=failure, success_rate=1 - failure)
+    row.update(failure_low=max(failure - 0.1, 0.0), failure_high=min(failure + 0.1, 1.0))
+    return row
+
+
+def _write(path: Path, rows: list[dict]) -> Path:
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None:
+    seeds = list(suite_seeds(2))
+    rows = [
+        {
+            "agent": run,
+            "factor": "hard",
+            "seed": seed,
+            "success": run == "a@0" or seed == seeds[0],
+            "collision": False,
+            "out_of_bounds": not (run == "a@0" or seed == seeds[0]),
+        }
+        for run in ("a@0", "a@1")
+        for seed in seeds
+    ]
+    rows.append(
+        {
+            "agent": "b",
+            "factor": "hard",
+            "seed": seeds[0],
+            "success": True,
+            "collision": False,
+            "out_of_bounds": False,
+        }
+    )
+    table = summarise_suite(rows, {"a": ["a@0", "a@1"], "b": ["b"]}, ["hard"], layouts=2)
+    assert [row["agent"] for row in table] == ["a"]  # b has not flown layout 2
+    (row,) = table
+    assert row["runs"] == 2 and row["episodes"] == 4 and row["failure_rate"] == 0.25
+    assert row["out_of_bounds_rate"] == 0.25 and row["interval_over"] == "runs × layouts (bootstrap)"
+    assert row["failure_low"] <= 0.25 <= row["failure_high"]
+
+
+def test_the_example_agent_is_scored_end_to_end_and_included_beside_the_published_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "score"
+    code = main(
+        [
+            "score",
+            "--agent",
+            f"{EXAMPLE}:make_agent",
+            "--tiers",
+            "hard",
+            "--layouts",
+            "2",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    (row,) = read_suite_csv(out / "score.csv")
+    assert row["tier"] == "hard" and row["layouts"] == 2 and row["suite_version"] == SUITE_VERSION
+    episodes = read_records(out / "suite_episodes.csv")
+    assert len(episodes) == 2 and {e["suite_version"] for e in episodes} == {SUITE_VERSION}
+    assert row["failure_rate"] == sum(not e["success"] for e in episodes) / 2
+    # Again: resumes, flies nothing, same rows.
+    assert (
+        main(
+            [
+                "score",
+                "--agent",
+                f"{EXAMPLE}:make_agent",
+                "--tiers",
+                "hard",
+                "--layouts",
+                "2",
+                "--workers",
+                "1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    assert len(read_records(out / "suite_episodes.csv")) == 2
+    published = _write(tmp_path / "suite.csv", [_row("bee_ttc", "hard", 0.3), _row("bee", "clean", 0.1)])
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "leaderboard",
+                "--suite",
+                str(published),
+                "--include",
+                str(out / "score.csv"),
+                "--out",
+                str(tmp_path / "board"),
+            ]
+        )
+        == 0
+    )
+    text = (tmp_path / "board" / "suite_with_included.md").read_text()
+    assert "open_gap_agent.py:make_agent` (included)" in text and "`bee_ttc`" in text
+    assert (tmp_path / "board" / "suite_with_included.png").stat().st_size > 0
+
+
+def test_included_rows_of_another_suite_version_or_file_kind_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    published = _write(tmp_path / "suite.csv", [_row("bee_ttc", "hard", 0.3)])
+    other = _write(tmp_path / "old.csv", [_row("mine", "hard", 0.2, version="0")])
+    assert (
+        main(["leaderboard", "--suite", str(published), "--include", str(other), "--out", str(tmp_path)]) == 2
+    )
+    assert (
+        f"holds rows of suite version '0', but this is suite version '{SUITE_VERSION}'"
+        in capsys.readouterr().err
+    )
+    foreign = tmp_path / "foreign.csv"
+    foreign.write_text("agent,failure\nmine,0.2\n")
+    assert (
+        main(["leaderboard", "--suite", str(published), "--include", str(foreign), "--out", str(tmp_path)])
+        == 2
+    )
+    assert (
+        "is not a suite CSV (flownav score writes one): it lacks the columns suite_version"
+        in capsys.readouterr().err
+    )
+
+
+def test_an_included_row_replaces_the_published_row_of_its_agent_and_tier() -> None:
+    merged = merge_rows([_row("bee", "hard", 0.5), _row("bee_ttc", "hard", 0.3)], [_row("bee", "hard", 0.2)])
+    assert [(r["agent"], r["failure_rate"], r.get("included", False)) for r in merged] == [
+        ("bee", 0.2, True),
+        ("bee_ttc", 0.3, False),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["--agent", "no_such_package.module:make"],
+            "cannot import the agent module 'no_such_package.module'",
+        ),
+        (
+            ["--agent", "bee", "--tiers", "medium"],
+            "tier must be one of clean, hard, noisy, hard_noisy, got 'medium'",
+        ),
+        (["--agent", "bee", "--layouts", "0"], "suite layouts must be an integer in [1, 300], got 0"),
+        (["--algo", "sac"], "--algo goes with --policy model.zip and without --agent"),
+        ([], "give --agent (or --policy model.zip --algo ALGO)"),
+    ],
+)
+def test_bad_score_input_is_one_line(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["score", *argv, "--out", str(tmp_path)]) == 2
+    error = capsys.readouterr().err
+    assert message in error and error.count("\n") == 1

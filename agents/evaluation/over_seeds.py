@@ -167,13 +167,15 @@ def interval_estimates(
 def runs_and_layouts_interval(
     outcomes: np.ndarray, seed: int = 0, reps: int = BOOTSTRAP_REPS
 ) -> tuple[float, float]:
-    """95 % interval of the success rate over runs and layouts: a two-level bootstrap that resamples runs,
-    then layouts within each resampled run, so that it carries both the spread between training runs and
-    the layouts' sampling noise."""
+    """95 % interval of the success rate over runs and layouts: a two-level bootstrap that resamples runs, and
+    layouts once per replicate for all its runs (every run flew the same layouts, so a hard layout is hard for
+    all of them: resampling layouts per run would treat that shared difficulty as independent noise and make
+    the interval too narrow). It carries both the spread between training runs and the layouts' sampling
+    noise."""
     rng = np.random.default_rng(seed)
     runs, layouts = outcomes.shape
     chosen_runs = rng.integers(runs, size=(reps, runs, 1))
-    chosen_layouts = rng.integers(layouts, size=(reps, runs, layouts))
+    chosen_layouts = rng.integers(layouts, size=(reps, 1, layouts))
     rates = outcomes[chosen_runs, chosen_layouts].mean(axis=(1, 2))
     tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
     low, high = np.percentile(rates, [tail, 100.0 - tail])

@@ -191,3 +191,13 @@ def test_the_command_refuses_bad_input_before_flying(
     assert main(["leaderboard", "--out", str(tmp_path / "lb"), *extra]) == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "lb").exists()
+
+
+def test_layouts_are_resampled_once_for_all_the_runs_that_flew_them() -> None:
+    from agents.evaluation.statistics import wilson_interval
+
+    # Five runs that agree layout by layout know no more than one run does: a hard layout is hard for all.
+    shared = (np.random.default_rng(3).random(300) < 0.7).astype(float)
+    low, high = runs_and_layouts_interval(np.tile(shared, (5, 1)), reps=1000)
+    one_low, one_high = wilson_interval(int(shared.sum()), 300)
+    assert high - low > 0.8 * (one_high - one_low)

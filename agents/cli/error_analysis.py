@@ -22,6 +22,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the sweep's episodes CSV (default: the repository's results/sweep_episodes.csv)",
     )
     parser.add_argument(
+        "--baseline",
+        default=str(RESULTS_DIR / "leaderboard_episodes.csv"),
+        help="the clean table's episodes, the breaking points' reference (default: the repository's "
+        "results/leaderboard_episodes.csv; '' for the sweep's own clean cells)",
+    )
+    parser.add_argument(
         "--out",
         default=str(SCRATCH_DIR / "error_analysis"),
         help=f"output folder (default %(default)s; {RESULTS_DIR} to publish)",
@@ -39,6 +45,13 @@ def run(args: argparse.Namespace) -> int:
     rows = pool_every_seed(read_records(episodes))
     if not rows:
         raise ValueError(f"--episodes {episodes} holds no readable episode")
+    baseline = []
+    if args.baseline:
+        if not Path(args.baseline).is_file():
+            raise FileNotFoundError(
+                f"--baseline {args.baseline}: no such file (flownav leaderboard writes it)"
+            )
+        baseline = pool_every_seed(read_records(Path(args.baseline)))
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    print("\n".join(write_error_analysis(rows, Path(args.out), command.strip())))
+    print("\n".join(write_error_analysis(rows, Path(args.out), command.strip(), baseline)))
     return 0

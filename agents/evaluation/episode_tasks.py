@@ -24,6 +24,7 @@ from agents.evaluation.records import (
     read_episodes,
     row_identity,
 )
+from agents.evaluation.statistics import RUN_KEY
 from agents.policies import (
     agent_env_kwargs,
     agent_parameters,
@@ -208,7 +209,7 @@ def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set) -> 
 def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Rows with each learned agent's training seeds (``ppo_flow@3``) relabelled as the agent, so that a
     summary gives the agent one row over its seeds."""
-    return [{**row, "agent": split_agent_name(row["agent"])[0]} for row in rows]
+    return [{**row, "agent": split_agent_name(row["agent"])[0], RUN_KEY: row["agent"]} for row in rows]
 
 
 def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -20,10 +20,44 @@ def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[f
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
+RUN_KEY = "run"
+"""A pooled row's own run (``ppo_flow@3``) where its ``agent`` names the pooled agent (``ppo_flow@all``)."""
+BOOTSTRAP_REPS = 2000
+
+
+def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[float, float]:
+    """95 % interval of the failure rate of ``rows``: Wilson over episodes for one run; for rows pooled from
+    several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs, then each chosen
+    run's own episodes, so that it carries the spread between training runs as well as the layouts'."""
+    runs: dict[str, list[bool]] = {}
+    for row in rows:
+        runs.setdefault(str(row.get(RUN_KEY, "")), []).append(not bool(row["success"]))
+    failures = sum(sum(values) for values in runs.values())
+    n = sum(len(values) for values in runs.values())
+    if len(runs) < 2:
+        return wilson_interval(failures, n)
+    sizes = np.array([len(values) for values in runs.values()])
+    padded = np.zeros((len(runs), sizes.max()))
+    for index, values in enumerate(runs.values()):
+        padded[index, : len(values)] = values
+    rng = np.random.default_rng(seed)
+    chosen = rng.integers(len(runs), size=(BOOTSTRAP_REPS, len(runs)))
+    chosen_sizes = sizes[chosen]
+    picks = np.floor(rng.random((BOOTSTRAP_REPS, len(runs), sizes.max())) * chosen_sizes[..., None]).astype(
+        int
+    )
+    inside = np.arange(sizes.max()) < chosen_sizes[..., None]
+    drawn = padded[chosen[..., None], picks] * inside
+    rates = drawn.sum(axis=(1, 2)) / inside.sum(axis=(1, 2))
+    low, high = np.percentile(rates, [2.5, 97.5])
+    return float(low), float(high)
+
+
 def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
-    success rate with its interval, failure rate with its interval, episodes out of bounds, and medians of
-    progress and clearance.
+    success rate with its interval, failure rate with its interval (:func:`failure_interval`: over training
+    runs and layouts where the rows pool several runs), episodes out of bounds, and medians of progress and
+    clearance.
 
     A failure is every episode that did not reach the goal: a collision, leaving the course (out of bounds)
     or the time limit. Collisions alone can fall while failures rise (a drone that leaves the course sideways
@@ -39,8 +73,8 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
         successes = sum(bool(m["success"]) for m in members)
         out_of_bounds = sum(bool(m["out_of_bounds"]) for m in members)
         low, high = wilson_interval(collisions, n)
-        success_low, success_high = wilson_interval(successes, n)
-        failure_low, failure_high = wilson_interval(n - successes, n)
+        failure_low, failure_high = failure_interval(members)
+        success_low, success_high = 1.0 - failure_high, 1.0 - failure_low
         table.append(
             {
                 "agent": agent,

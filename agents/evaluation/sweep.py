@@ -27,7 +27,7 @@ from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import format_summary
+from agents.evaluation.statistics import RUN_KEY, format_summary
 from agents.evaluation.sweep_report import (
     comparison_markdown,
     plot_collision_vs_error,
@@ -136,7 +136,8 @@ def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, 
     relabelled = []
     for row in rows:
         base, seed = split_agent_name(row["agent"])
-        relabelled.append({**row, "agent": base + ALL_SEEDS} if seed is not None and base in pooled else row)
+        pooled_row = {**row, "agent": base + ALL_SEEDS, RUN_KEY: row["agent"]}
+        relabelled.append(pooled_row if seed is not None and base in pooled else row)
     return relabelled
 
 

@@ -2,14 +2,18 @@
 and one dose-response model per agent that pools every factor and level.
 
 - **Tolerance.** Per agent and factor, on each side of the factor's neutral level: the largest level whose
-  failure rate stays inside the clean cell's Wilson 95 % interval, and the first level at which the failure
-  rate reaches twice the clean one (none when twice the clean rate would exceed 1).
-- **Dose-response.** Episode failure against the measured depth quality of that episode (its median relative
-  depth error, its mean number of valid depths per frame and, where recorded, its mean share of depths off by
-  more than half), pooled over every factor and level, fitted as a
-  logistic regression (statsmodels). A second fit adds one indicator per factor: if the factors improve the fit
-  beyond depth quality (likelihood-ratio test), they act on failures through something else too, e.g. the
-  drone's motion or what the estimator cannot measure.
+  failure rate stays inside the clean interval, the first level at which the failure rate reaches twice the
+  clean one (none when twice the clean rate would exceed 1), and the first level whose interval lies wholly
+  above the clean one (it breaks). The clean rate is the 300-layout clean table's where the agent has one.
+  Intervals are over training runs and layouts for a learned agent pooled over its seeds, Wilson otherwise.
+- **Dose-response.** Episode failure against its cell's depth quality (:func:`cell_quality`: median relative
+  depth error, valid depths per frame and, where recorded, the share of depths off by more than half, measured
+  on the cell's full-course flights so that no episode's covariate depends on its own length), pooled over the
+  sensor factors' cells and the clean one, fitted as a logistic regression (statsmodels) with standard errors
+  clustered by layout. A second fit adds one indicator per sensor factor; a cluster-robust Wald test of those
+  indicators says whether the factors act on failures through more than the measured depth quality (e.g. the
+  drone's motion, or what the estimator cannot measure). Task factors (:data:`TASK_FACTORS`) change the task
+  itself and are left out of both. p-values are printed no smaller than :data:`P_VALUE_FLOOR`.
 
 Agents on oracle observations are left out of the dose-response: their observation is not the estimate.
 """
@@ -25,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.statistics import failure_interval
 from agents.policies.base import base_agent_name
 from flownav_env.settings import EnvSettings
 
@@ -41,6 +45,13 @@ NOT_TESTED = "not tested"
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
 # depths off by more than half, where the episodes recorded it (not in files from before it existed).
 DOSE_FEATURES = ("log_depth_error", "valid_points_per_100", "outlier_share")
+# Factors that change the task itself (how fast, how cluttered, how visible), not what the drone is told or
+# estimates: "they matter beyond depth quality" would be true of them by construction, so the dose-response
+# fits and their test use the sensor factors only.
+TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
+# A cell's quality is measured on its successful (full-course) episodes when it has at least this many.
+MIN_FULL_COURSE = 5
+P_VALUE_FLOOR = 1e-6
 
 
 def neutral_level(factor: str) -> float:
@@ -52,16 +63,28 @@ def neutral_level(factor: str) -> float:
 
 
 def _failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
+    """Failure rate, its 95 % interval (over training runs too where the rows pool several:
+    :func:`~agents.evaluation.statistics.failure_interval`) and the episodes."""
     n = len(rows)
     failures = sum(not bool(r["success"]) for r in rows)
-    low, high = wilson_interval(failures, n)
+    low, high = failure_interval(rows)
     return failures / n, low, high, n
 
 
-def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+BASELINE_SOURCE = "the 300-layout clean table"
+SWEEP_CLEAN_SOURCE = "the sweep's clean cell"
+
+
+def tolerance_table(
+    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
     inside the clean interval, the first level at which the failure rate doubles, the first level at which it
-    breaks (its Wilson interval lies wholly above the clean one), and the thesis's verdict.
+    breaks (its interval lies wholly above the clean one), and the thesis's verdict.
+
+    The clean rate is the agent's episodes in ``baseline`` (the leaderboard's clean layouts, pooled over
+    training seeds like ``rows``) where it has any, else the sweep's own clean cell: a breaking point measured
+    against a noisy 100-layout clean cell moves with that cell's luck.
 
     A level is tolerated while its failure rate stays at or below the clean interval's upper end (a level
     that fails less than clean is no harm); scanning outward from the neutral level, the tolerated level is
@@ -70,11 +93,17 @@ def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     cells: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
     for row in rows:
         cells.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
+    clean_rows: dict[str, tuple[list[Mapping[str, Any]], str]] = {}
+    for row in baseline:
+        if row["factor"] == "clean":
+            clean_rows.setdefault(row["agent"], ([], BASELINE_SOURCE))[0].append(row)
     table = []
     for agent in sorted({key[0] for key in cells}):
-        if (agent, "clean", 0.0) not in cells:
+        if agent not in clean_rows and (agent, "clean", 0.0) in cells:
+            clean_rows[agent] = (cells[(agent, "clean", 0.0)], SWEEP_CLEAN_SOURCE)
+        if agent not in clean_rows:
             continue
-        clean, clean_low, clean_high, _ = _failure(cells[(agent, "clean", 0.0)])
+        clean, clean_low, clean_high, clean_episodes = _failure(clean_rows[agent][0])
         factors = sorted({key[1] for key in cells if key[0] == agent and key[1] != "clean"})
         for factor in factors:
             neutral = neutral_level(factor)
@@ -107,6 +136,8 @@ def tolerance_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                         "clean_failure": clean,
                         "clean_low": clean_low,
                         "clean_high": clean_high,
+                        "clean_episodes": clean_episodes,
+                        "clean_source": clean_rows[agent][1],
                         "levels": [r[0] for r in rates],
                         "tolerated_level": tolerated,
                         "doubling_level": doubled,
@@ -180,38 +211,75 @@ def is_flow_agent(row: Mapping[str, Any]) -> bool:
     return "oracle" not in str(row["agent"])
 
 
-def dose_features(
-    rows: Sequence[Mapping[str, Any]],
-) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-    """Design matrix (episodes, features) of :data:`DOSE_FEATURES`, failures (episodes,), and the rows used:
-    episodes with a finite, positive median depth error. The outlier share is the third column only when every
-    one of those episodes recorded it (:func:`dose_feature_names`)."""
-    used = [
-        r
-        for r in rows
-        if math.isfinite(float(r["median_depth_error"])) and float(r["median_depth_error"]) > 0.0
-    ]
-    names = dose_feature_names(used)
-    features = np.array(
-        [
-            [math.log(float(r["median_depth_error"])), float(r["mean_points_valid"]) / 100.0]
-            + ([float(r["mean_depth_outlier_share"])] if len(names) == 3 else [])
-            for r in used
+def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], dict[str, Any]]:
+    """Each sensor cell's depth quality, measured on full-course flights: per (factor, level), the medians over
+    the flow agents' successful episodes of :data:`DOSE_FEATURES` (log median relative depth error, valid depths
+    per frame / 100, outlier share where every episode recorded it), or over all its episodes where fewer than
+    :data:`MIN_FULL_COURSE` succeeded (``full_course`` False).
+
+    An episode's own means depend on how long it flew, and a failed one is short: as a covariate of its own
+    failure that is circular. A cell's quality from flights that all covered the course is a property of the
+    sensor condition (the dose), the same for every episode flown in it. Task factors are left out
+    (:data:`TASK_FACTORS`).
+    """
+    cells: dict[tuple[str, float], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        error = float(row["median_depth_error"])
+        if (
+            row["factor"] in TASK_FACTORS
+            or not is_flow_agent(row)
+            or not (math.isfinite(error) and error > 0)
+        ):
+            continue
+        cells.setdefault((row["factor"], float(row["level"])), []).append(row)
+    every_outlier = all(
+        r.get("mean_depth_outlier_share") is not None and math.isfinite(float(r["mean_depth_outlier_share"]))
+        for members in cells.values()
+        for r in members
+    )
+    quality = {}
+    for key, members in cells.items():
+        full = [r for r in members if bool(r["success"])]
+        chosen = full if len(full) >= MIN_FULL_COURSE else members
+        values = [
+            float(np.median([math.log(float(r["median_depth_error"])) for r in chosen])),
+            float(np.median([float(r["mean_points_valid"]) for r in chosen])) / 100.0,
         ]
-    ).reshape(-1, len(names))
+        if every_outlier:
+            values.append(float(np.median([float(r["mean_depth_outlier_share"]) for r in chosen])))
+        quality[key] = {"values": values, "full_course": chosen is full, "episodes": len(chosen)}
+    return quality
+
+
+def dose_features(
+    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+    """Design matrix (episodes, features): each episode's cell quality (:func:`cell_quality`); failures
+    (episodes,); and the rows used: the episodes of cells with a quality."""
+    used = [r for r in rows if (r["factor"], float(r["level"])) in quality]
+    width = len(next(iter(quality.values()))["values"]) if quality else 2
+    features = np.array([quality[(r["factor"], float(r["level"]))]["values"] for r in used]).reshape(
+        -1, width
+    )
     failures = np.array([0.0 if bool(r["success"]) else 1.0 for r in used])
     return features, failures, used
 
 
-def dose_feature_names(rows: Sequence[Mapping[str, Any]]) -> tuple[str, ...]:
-    """The :data:`DOSE_FEATURES` these rows can fit: all three when every row has a finite outlier share."""
-    known = [r.get("mean_depth_outlier_share") for r in rows]
-    if known and all(v is not None and math.isfinite(float(v)) for v in known):
-        return DOSE_FEATURES
-    return DOSE_FEATURES[:2]
+def format_p(p: float) -> str:
+    """A p-value as the report prints it: two significant digits, and no smaller than :data:`P_VALUE_FLOOR`
+    (beyond it the model's own assumptions, not the data, set the number)."""
+    if not math.isfinite(p):
+        return "–"
+    return f"< {P_VALUE_FLOOR:g}" if p < P_VALUE_FLOOR else f"{p:.2g}"
 
 
-def _converged_logit(failures: np.ndarray, design: np.ndarray, terms: str, method: str = "newton") -> Any:
+def _converged_logit(
+    failures: np.ndarray,
+    design: np.ndarray,
+    terms: str,
+    method: str = "newton",
+    groups: np.ndarray | None = None,
+) -> Any:
     """A fitted statsmodels Logit, or ValueError where its estimate is not one: a fit that did not converge,
     whose Hessian cannot be inverted, or whose outcomes the terms separate (perfectly or nearly), where the
     coefficients run off to infinity and statsmodels only warns."""
@@ -224,7 +292,9 @@ def _converged_logit(failures: np.ndarray, design: np.ndarray, terms: str, metho
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = sm.Logit(failures, design).fit(disp=0, maxiter=200, method=method)
+        # Episodes on one layout share its difficulty: standard errors clustered by layout.
+        robust = {} if groups is None else {"cov_type": "cluster", "cov_kwds": {"groups": groups}}
+        model = sm.Logit(failures, design).fit(disp=0, maxiter=200, method=method, **robust)
     problems = sorted(
         {
             "overflow" if issubclass(w.category, RuntimeWarning) else w.category.__name__
@@ -241,13 +311,16 @@ def _converged_logit(failures: np.ndarray, design: np.ndarray, terms: str, metho
     return model
 
 
-def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-    """Logistic regression of failure on depth quality (one agent's episodes, every factor and level), and
-    the likelihood-ratio test of adding one indicator per factor.
+def fit_dose_response(
+    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+) -> dict[str, Any]:
+    """Logistic regression of failure on its cell's depth quality (one agent's episodes over the sensor
+    factors and the clean cell), with standard errors clustered by layout, and a cluster-robust Wald test of
+    adding one indicator per sensor factor.
 
     Returns:
-        ``{"episodes", "features", "params", "bse", "pvalues", "conf_int", "model", "lr_statistic", "lr_df",
-        "lr_pvalue"}``; the model is the fitted statsmodels result of depth quality alone.
+        ``{"episodes", "layouts", "features", "params", "bse", "pvalues", "conf_int", "model", "wald_statistic",
+        "wald_df", "wald_pvalue"}``; the model is the fitted statsmodels result of depth quality alone.
 
     Raises:
         ValueError: fewer than 20 usable episodes, failures that are all equal, or a feature without spread
@@ -255,46 +328,55 @@ def fit_dose_response(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     """
     import statsmodels.api as sm
 
-    features, failures, used = dose_features(rows)
+    features, failures, used = dose_features(rows, quality)
     if len(used) < 20 or failures.min() == failures.max():
         raise ValueError(
             f"a dose-response fit needs >= 20 episodes with a depth error and both outcomes, got {len(used)} "
             f"episodes with {int(failures.sum())} failures"
         )
-    feature_names = DOSE_FEATURES[: features.shape[1]]  # the columns dose_features chose
+    feature_names = DOSE_FEATURES[: features.shape[1]]
     flat = [name for name, column in zip(feature_names, features.T, strict=True) if np.ptp(column) == 0.0]
     if flat:
         raise ValueError(f"a dose-response fit needs spread in every feature; {', '.join(flat)} is constant")
+    layouts = np.array([int(r["seed"]) for r in used])
     design = sm.add_constant(features)
-    model = _converged_logit(failures, design, "depth quality")
+    model = _converged_logit(failures, design, "depth quality", groups=layouts)
     factors = sorted({r["factor"] for r in used} - {"clean"})
-    indicators = np.array([[1.0 if r["factor"] == f else 0.0 for f in factors] for r in used]).reshape(
-        len(used), -1
-    )
-    lr_statistic, lr_df, lr_pvalue = math.nan, 0, math.nan
+    wald_statistic, wald_df, wald_pvalue = math.nan, 0, math.nan
     if factors:
+        indicators = np.array([[1.0 if r["factor"] == f else 0.0 for f in factors] for r in used])
         full = _converged_logit(
-            failures, np.hstack([design, indicators]), "depth quality and the factors", method="bfgs"
+            failures, np.hstack([design, indicators]), "depth quality and the factors", "bfgs", layouts
         )
-        from scipy import stats
-
-        lr_statistic = max(0.0, 2.0 * (full.llf - model.llf))
-        lr_df = len(factors)
-        lr_pvalue = float(stats.chi2.sf(lr_statistic, lr_df))
+        wald_statistic, wald_df, wald_pvalue = _wald(full, design.shape[1], len(factors))
     names = ["const", *feature_names]
     interval = np.asarray(model.conf_int())
     return {
         "episodes": len(used),
+        "layouts": len(set(layouts.tolist())),
         "features": feature_names,
         "params": dict(zip(names, map(float, model.params), strict=True)),
         "bse": dict(zip(names, map(float, model.bse), strict=True)),
         "pvalues": dict(zip(names, map(float, model.pvalues), strict=True)),
         "conf_int": {name: (float(lo), float(hi)) for name, (lo, hi) in zip(names, interval, strict=True)},
         "model": model,
-        "lr_statistic": float(lr_statistic),
-        "lr_df": lr_df,
-        "lr_pvalue": lr_pvalue,
+        "wald_statistic": wald_statistic,
+        "wald_df": wald_df,
+        "wald_pvalue": wald_pvalue,
     }
+
+
+def _wald(model: Any, first: int, count: int) -> tuple[float, int, float]:
+    """Wald test that the ``count`` coefficients from index ``first`` are all zero, with the model's own
+    (cluster-robust) covariance; (statistic, degrees of freedom, p)."""
+    from scipy import stats
+
+    params = np.asarray(model.params)[first : first + count]
+    covariance = np.asarray(model.cov_params())[first : first + count, first : first + count]
+    inverse = np.linalg.pinv(covariance)
+    statistic = float(params @ inverse @ params)
+    df = int(np.linalg.matrix_rank(covariance))
+    return statistic, df, float(stats.chi2.sf(statistic, df))
 
 
 def dose_curve(

@@ -14,9 +14,14 @@ from agents.common.folders import check_writable_folder
 from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from agents.studies.error_analysis import (
+    MIN_FULL_COURSE,
+    P_VALUE_FLOOR,
+    TASK_FACTORS,
+    cell_quality,
     dose_curve,
     dose_features,
     fit_dose_response,
+    format_p,
     is_flow_agent,
     tolerance_table,
     turning_and_rotation_error,
@@ -73,9 +78,14 @@ def breaking_point_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
             return ""
         if row["breaking_level"] is None:
             return f"— ({row['worst_failure']:.2f} at {row['worst_level']:g})"
-        return f"**{row['breaking_level']:g}** ({row['breaking_failure']:.2f})"
+        delta = row["breaking_failure"] - row["clean_failure"]
+        return f"**{row['breaking_level']:g}** ({row['breaking_failure']:.2f}, {delta:+.2f})"
 
-    clean = {r["agent"]: f"{r['clean_failure']:.2f}" for r in table}
+    clean = {
+        r["agent"]: f"{r['clean_failure']:.2f} [{r['clean_low']:.2f}, {r['clean_high']:.2f}], "
+        f"{r['clean_episodes']} episodes" + (" (sweep)" if "sweep" in r["clean_source"] else "")
+        for r in table
+    }
     rows = [["clean failure", "", *(clean[agent] for agent in agents)]]
     rows += [
         [factor, side, *(cell(by_key.get((factor, side, agent))) for agent in agents)]
@@ -179,35 +189,65 @@ def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
                 [
                     agent,
                     fit["episodes"],
+                    fit["layouts"],
                     name,
                     f"{fit['params'][name]:+.3f}",
                     f"{fit['bse'][name]:.3f}",
                     f"[{low:+.3f}, {high:+.3f}]",
-                    f"{fit['pvalues'][name]:.2g}",
+                    format_p(fit["pvalues"][name]),
                 ]
             )
     tests = [
-        [agent, f"{fit['lr_statistic']:.1f}", fit["lr_df"], f"{fit['lr_pvalue']:.2g}"]
+        [agent, f"{fit['wald_statistic']:.1f}", fit["wald_df"], format_p(fit["wald_pvalue"])]
         for agent, fit in fits.items()
     ]
     return [
-        markdown_table(["agent", "episodes", "term", "coefficient", "SE", "95 % CI", "p"], rows),
+        markdown_table(
+            [
+                "agent",
+                "episodes",
+                "layouts (clusters)",
+                "term",
+                "coefficient",
+                "SE (by layout)",
+                "95 % CI",
+                "p",
+            ],
+            rows,
+        ),
         "",
-        "Do the factors act only through depth quality? Likelihood-ratio test of adding one indicator per "
-        "factor to the model above (a small p: the factors change failures beyond what the measured depth "
+        "Do the sensor factors act only through depth quality? Cluster-robust Wald test of adding one indicator "
+        "per sensor factor to the model above (a small p: they change failures beyond what the measured depth "
         "quality explains):",
         "",
-        markdown_table(["agent", "LR statistic", "df", "p"], tests),
+        markdown_table(["agent", "Wald statistic", "df", "p"], tests),
     ]
 
 
+def quality_lines(quality: Mapping[tuple[str, float], Mapping[str, Any]]) -> list[str]:
+    """How each cell's depth quality was measured: on how many full-course flights, or on all its episodes."""
+    short = sorted(f"`{f}={level:g}`" for (f, level), q in quality.items() if not q["full_course"])
+    lines = [
+        f"Each cell's depth quality comes from the flow agents' successful episodes in it ({len(quality) - len(short)} "
+        f"of {len(quality)} cells)"
+    ]
+    if short:
+        lines[0] += (
+            f"; where fewer than {MIN_FULL_COURSE} succeeded it comes from all its episodes, shorter on "
+            f"average: {', '.join(short)}"
+        )
+    return [lines[0] + "."]
+
+
 def plot_dose_response(
-    rows: Sequence[Mapping[str, Any]], fits: Mapping[str, Mapping[str, Any]], path: Path
+    rows: Sequence[Mapping[str, Any]],
+    fits: Mapping[str, Mapping[str, Any]],
+    quality: Mapping[tuple[str, float], Mapping[str, Any]],
+    path: Path,
 ) -> None:
-    """A panel per flow agent: observed failure rate in deciles of median depth error (dots); the fit's mean
-    predicted probability over the same deciles' episodes (squares: how well all its terms together follow
-    the dots); and the fitted probability against depth error alone, at the agent's median valid points per
-    frame (and outlier share), with its 95 % band."""
+    """A panel per flow agent: each sensor cell's observed failure rate against its depth error (dots; open
+    where the cell's quality came from all its episodes), and the fitted probability against depth error alone,
+    at the agent's median valid points per frame (and outlier share), with its 95 % band."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -223,25 +263,22 @@ def plot_dose_response(
     for axis in axes.flat[len(agents) :]:
         axis.set_visible(False)
     for axis, agent in zip(axes.flat, agents, strict=False):
-        features, failures, _ = dose_features([r for r in rows if r["agent"] == agent])
+        features, failures, used = dose_features([r for r in rows if r["agent"] == agent], quality)
+        cells: dict[tuple[str, float], list[float]] = {}
+        for row, failed in zip(used, failures, strict=True):
+            cells.setdefault((row["factor"], float(row["level"])), []).append(failed)
+        for key, outcomes in cells.items():
+            error = math.exp(quality[key]["values"][0])
+            full = quality[key]["full_course"]
+            axis.scatter(
+                error * 100,
+                np.mean(outcomes),
+                s=18,
+                zorder=3,
+                facecolors="black" if full else "none",
+                edgecolors="black",
+            )
         errors = np.exp(features[:, 0])
-        edges = np.unique(np.quantile(errors, np.linspace(0, 1, 11)))
-        which = np.clip(np.searchsorted(edges, errors, side="right") - 1, 0, len(edges) - 2)
-        bins = [b for b in range(len(edges) - 1) if (which == b).any()]
-        centres = np.array([np.median(errors[which == b]) for b in bins])
-        observed = [failures[which == b].mean() for b in bins]
-        fitted = fits[agent]["model"].predict(np.column_stack([np.ones(len(errors)), features]))
-        axis.scatter(centres * 100, observed, color="black", s=18, zorder=3, label="observed (deciles)")
-        axis.scatter(
-            centres * 100,
-            [fitted[which == b].mean() for b in bins],
-            marker="s",
-            facecolors="none",
-            edgecolors="tab:red",
-            s=24,
-            zorder=3,
-            label="fit, mean over the decile",
-        )
         grid = np.geomspace(errors.min(), errors.max(), 80)
         outliers = float(np.median(features[:, 2])) if features.shape[1] > 2 else 0.0
         predicted, low, high = dose_curve(fits[agent], grid, float(np.median(features[:, 1]) * 100), outliers)
@@ -251,7 +288,7 @@ def plot_dose_response(
         axis.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
         axis.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         axis.set_ylim(0, 1)
-        axis.set_xlabel("episode's median relative depth error (%)")
+        axis.set_xlabel("cell's median relative depth error (%)")
         axis.set_title(f"{agent} ({fits[agent]['episodes']} episodes)", fontsize=10)
         axis.grid(alpha=0.3)
     for row in axes:
@@ -262,20 +299,24 @@ def plot_dose_response(
     plt.close(figure)
 
 
-def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: str) -> list[str]:
-    """Write ``error_analysis.md`` and ``dose_response.png`` into ``out``; returns the report's lines."""
+def write_error_analysis(
+    rows: Sequence[Mapping[str, Any]], out: Path, command: str, baseline: Sequence[Mapping[str, Any]] = ()
+) -> list[str]:
+    """Write ``error_analysis.md`` and ``dose_response.png`` into ``out``; returns the report's lines.
+    ``baseline``: the clean table's episodes, the breaking points' reference where an agent has them."""
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     flow_agents = sorted({r["agent"] for r in rows if is_flow_agent(r)})
+    quality = cell_quality(rows)
     fits: dict[str, Mapping[str, Any]] = {}
     skipped = []
     for agent in flow_agents:
         try:
-            fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent])
+            fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent], quality)
         except ValueError as reason:
             skipped.append(f"- `{agent}`: no fit ({reason}).")
-    table = tolerance_table(rows)
+    table = tolerance_table(rows, baseline)
     lines = [
         "# How estimation errors cause failures",
         "",
@@ -283,9 +324,12 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         "",
         "## Where each factor breaks each agent",
         "",
-        "The first level, scanning outward from the neutral one, whose failure rate's Wilson 95 % interval lies "
-        "wholly above the clean cell's, with its failure rate; '—' where no level flown does, with the worst "
-        "failure rate and its level.",
+        "The first level, scanning outward from the neutral one, whose failure rate's 95 % interval lies "
+        "wholly above the clean one, with its failure rate and the difference from clean; '—' where no level "
+        "flown does, with the worst failure rate and its level. Clean is the agent's 300-layout clean table "
+        "(`leaderboard_episodes.csv`, pooled over training seeds), or the sweep's 100-layout clean cell where "
+        "it has none ('sweep'). Intervals: over training runs and layouts for a learned agent (a two-level "
+        "bootstrap), Wilson over layouts for a reactive one.",
         "",
         *breaking_point_lines(table),
         "",
@@ -302,15 +346,21 @@ def write_error_analysis(rows: Sequence[Mapping[str, Any]], out: Path, command: 
         *turning_lines(turning_and_rotation_error(rows)),
         "## Dose-response: failure against measured depth quality",
         "",
-        "Logistic regression per flow agent, pooled over every factor and level: "
+        "Logistic regression per flow agent over the sensor factors' cells and the clean one: "
         "logit P(failure) = b0 + b1 · ln(median relative depth error) + b2 · (valid depths per frame / 100) "
-        "+ b3 · (share of depths off by more than half), the last term where the episodes recorded it "
-        "(`outlier_share`, the mean over the episode's frames). "
-        "Episodes without a measured depth error are left out; oracle agents too (they do not see the estimate).",
+        "+ b3 · (share of depths off by more than half), the last term where the episodes recorded it. The "
+        "covariates are the episode's cell's, measured on full-course flights, because an episode's own means "
+        "depend on its length and a failed episode is short. Standard errors are clustered by layout: the "
+        f"episodes of one layout share its difficulty. p-values below {P_VALUE_FLOOR:g} print as "
+        f"'< {P_VALUE_FLOOR:g}'. Task factors ({', '.join(f'`{f}`' for f in TASK_FACTORS)}) change the task "
+        "itself, so they are left out: that they matter beyond depth quality is true by construction. Oracle "
+        "agents are left out too (they do not see the estimate).",
+        "",
+        *quality_lines(quality),
         "",
     ]
     if fits:
-        plot_dose_response(rows, fits, out / "dose_response.png")
+        plot_dose_response(rows, fits, quality, out / "dose_response.png")
         lines += [*regression_lines(fits), "", "![dose-response](dose_response.png)"]
     lines += skipped
     (out / "error_analysis.md").write_text("\n".join(lines) + "\n")

@@ -12,7 +12,9 @@ import pytest
 
 from agents.cli import main
 from agents.studies.error_analysis import (
+    cell_quality,
     fit_dose_response,
+    format_p,
     is_flow_agent,
     neutral_level,
     tolerance_table,
@@ -93,80 +95,131 @@ def test_oracle_and_blind_agents_are_left_out_of_the_dose_response() -> None:
     assert not is_flow_agent(_cell("straight", "clean", 0.0, 1, n=1)[0])
 
 
-def test_the_dose_response_recovers_a_known_logistic_law() -> None:
-    rng = np.random.default_rng(1)
+def _law_cells(law, rng: np.random.Generator, layouts: int = 150, outliers: bool = False) -> list[dict]:
+    """Episodes of sensor cells (three factors × six levels, and clean) whose depth quality is set per cell and
+    whose failures follow ``law(error, points, outlier_share)``; every cell flies the same layouts."""
     rows = []
-    for i in range(3000):
+    cells = [("clean", 0.0)] + [
+        (f, float(k)) for f in ("depth_noise", "rotation_error", "translation_error") for k in range(1, 7)
+    ]
+    for factor, level in cells:
         error = float(np.exp(rng.uniform(np.log(0.02), np.log(0.5))))
-        probability = 1.0 / (1.0 + math.exp(-(2.0 + 1.5 * math.log(error))))
-        rows.append(
-            {
+        points = float(rng.uniform(50, 200))
+        share = float(rng.uniform(0.0, 0.6))
+        probability = law(error, points, share)
+        for seed in range(layouts):
+            row = {
                 "agent": "bee",
-                "factor": ("clean", "depth_noise", "rotation_error")[i % 3],
-                "level": 0.0,
-                "success": rng.random() >= probability,
+                "factor": factor,
+                "level": level,
+                "seed": 1_000_000 + seed,
+                "success": bool(rng.random() >= probability),
                 "median_depth_error": error,
-                "mean_points_valid": float(rng.uniform(50, 200)),
+                "mean_points_valid": points,
             }
-        )
-    fit = fit_dose_response(rows)
-    assert fit["episodes"] == 3000
+            if outliers:
+                row["mean_depth_outlier_share"] = share
+            rows.append(row)
+    return rows
+
+
+def test_the_dose_response_recovers_a_known_logistic_law() -> None:
+    def law(error: float, points: float, share: float) -> float:
+        return 1.0 / (1.0 + math.exp(-(2.0 + 1.5 * math.log(error))))
+
+    rows = _law_cells(law, np.random.default_rng(1))
+    fit = fit_dose_response(rows, cell_quality(rows))
+    assert fit["episodes"] == 19 * 150 and fit["layouts"] == 150
     low, high = fit["conf_int"]["log_depth_error"]
     assert low < 1.5 < high
     low, high = fit["conf_int"]["valid_points_per_100"]
     assert low < 0.0 < high  # points do not matter in this law
-    assert fit["lr_df"] == 2 and fit["lr_pvalue"] > 0.001  # the factors act only through the error
+    assert fit["wald_df"] == 3 and fit["wald_pvalue"] > 0.001  # the factors act only through the error
+
+
+def test_a_cells_quality_comes_from_its_full_course_flights() -> None:
+    rows = _cell("bee", "depth_noise", 0.4, 50, n=100, error=0.04)
+    for row in rows[:50]:  # the failed ones flew short and saw worse depths
+        row["median_depth_error"] = 0.4
+    quality = cell_quality(rows)[("depth_noise", 0.4)]
+    assert quality["full_course"] and quality["episodes"] == 50
+    assert quality["values"][0] == pytest.approx(math.log(0.04))
+    few = _cell("bee", "depth_noise", 0.8, 97, n=100, error=0.3)  # 3 successes: too few
+    assert not cell_quality(few)[("depth_noise", 0.8)]["full_course"]
+    assert cell_quality(_cell("bee", "forward_speed", 2.0, 50)) == {}  # a task factor has no dose
+
+
+def test_p_values_are_floored() -> None:
+    assert format_p(3e-12) == "< 1e-06" and format_p(0.0123) == "0.012" and format_p(float("nan")) == "–"
 
 
 def test_the_outlier_share_joins_the_fit_where_every_episode_recorded_it() -> None:
-    rng = np.random.default_rng(2)
-    rows = []
-    for i in range(3000):
-        outliers = float(rng.uniform(0.0, 0.6))
-        probability = 1.0 / (1.0 + math.exp(-(-3.0 + 8.0 * outliers)))
-        rows.append(
-            {
-                "agent": "bee",
-                "factor": ("clean", "depth_outliers")[i % 2],
-                "level": 0.0,
-                "success": rng.random() >= probability,
-                "median_depth_error": float(rng.uniform(0.02, 0.1)),
-                "mean_points_valid": float(rng.uniform(50, 200)),
-                "mean_depth_outlier_share": outliers,
-            }
-        )
-    fit = fit_dose_response(rows)
+    def law(error: float, points: float, share: float) -> float:
+        return 1.0 / (1.0 + math.exp(-(-3.0 + 8.0 * share)))
+
+    rows = _law_cells(law, np.random.default_rng(2), outliers=True)
+    fit = fit_dose_response(rows, cell_quality(rows))
     assert fit["features"] == ("log_depth_error", "valid_points_per_100", "outlier_share")
     low, high = fit["conf_int"]["outlier_share"]
     assert low < 8.0 < high
-    assert abs(fit["params"]["log_depth_error"]) < 0.5  # the median error does not matter in this law
     # One episode from a file written before the outlier share existed: the fit falls back to two features.
     rows[0]["mean_depth_outlier_share"] = None
-    assert fit_dose_response(rows)["features"] == ("log_depth_error", "valid_points_per_100")
+    assert fit_dose_response(rows, cell_quality(rows))["features"] == (
+        "log_depth_error",
+        "valid_points_per_100",
+    )
 
 
 def test_a_fit_needs_both_outcomes_and_spread() -> None:
+    rows = _cell("bee", "clean", 0.0, 0)
     with pytest.raises(
         ValueError, match="needs >= 20 episodes with a depth error and both outcomes, got 100"
     ):
-        fit_dose_response(_cell("bee", "clean", 0.0, 0))
+        fit_dose_response(rows, cell_quality(rows))
+    rows = _cell("bee", "clean", 0.0, 50)
     with pytest.raises(
         ValueError, match="needs spread in every feature; log_depth_error, valid_points_per_100"
     ):
-        fit_dose_response(_cell("bee", "clean", 0.0, 50))
+        fit_dose_response(rows, cell_quality(rows))
+
+
+def test_breaking_points_are_measured_against_the_baseline_clean_table() -> None:
+    rows = _sweep()
+    baseline = _cell("bee", "clean", 0.0, 30, n=300)  # 0.10 on 300 layouts, against the sweep's 0.20
+    table = {(r["factor"], r["side"]): r for r in tolerance_table(rows, baseline)}
+    row = table[("rotation_error", "above")]
+    assert row["clean_failure"] == pytest.approx(0.10) and row["clean_episodes"] == 300
+    assert row["clean_source"] == "the 300-layout clean table"
+    assert row["breaking_level"] == 0.05  # 0.22 is above the baseline's interval, not the sweep cell's
+    assert {(r["factor"], r["side"]): r for r in tolerance_table(rows)}[("rotation_error", "above")][
+        "breaking_level"
+    ] == 0.5
+    assert tolerance_table(rows)[0]["clean_source"] == "the sweep's clean cell"
+
+
+def test_a_learned_agents_interval_spans_its_training_runs() -> None:
+    from agents.evaluation.statistics import failure_interval
+
+    agree = [{"run": f"a@{k}", "success": i >= 5} for k in range(5) for i in range(20)]
+    differ = [{"run": f"a@{k}", "success": i >= (0, 0, 5, 10, 10)[k]} for k in range(5) for i in range(20)]
+    low, high = failure_interval(agree)
+    spread_low, spread_high = failure_interval(differ)
+    assert sum(not r["success"] for r in differ) == sum(not r["success"] for r in agree)  # both 0.25
+    assert spread_high - spread_low > high - low
 
 
 def test_the_report_and_figure_are_written(tmp_path: Path) -> None:
     rows = _sweep()
     rng = np.random.default_rng(1)
     for row in rows:
-        row["median_depth_error"] = float(rng.uniform(0.02, 0.3)) if not row["success"] else 0.03
+        cell_error = 0.03 + (0.2 * row["level"] if row["factor"] == "rotation_error" else 0.0)
+        row["median_depth_error"] = cell_error * float(rng.uniform(0.9, 1.1))
         row["mean_points_valid"] = float(rng.uniform(50, 200))
     lines = write_error_analysis(rows, tmp_path, "flownav error-analysis --episodes x.csv")
     text = (tmp_path / "error_analysis.md").read_text()
     assert text == "\n".join(lines) + "\n"
     assert "| bee | rotation_error | above | 0.20 [0.13, 0.29] |" in text
-    assert "| rotation_error | above | **0.5** (0.45) |" in text
+    assert "| rotation_error | above | **0.5** (0.45, +0.25) |" in text
     assert "| forward_speed | below | — (0.18 at 0.25) |" in text
     assert "log_depth_error" in text and (tmp_path / "dose_response.png").stat().st_size > 10_000
     assert "| outlier_share |" not in text  # these rows never recorded it
@@ -210,10 +263,16 @@ def _write_sweep_episodes(path: Path, separated: bool) -> None:
     from agents.evaluation.records import append_record
 
     rng = np.random.default_rng(0)
-    for i in range(60):
-        for factor, level in (("clean", 0.0), ("rotation_error", 0.5)):
-            error = float(rng.uniform(0.02, 0.4))
-            failed = error > 0.2 if separated else bool(rng.random() < 2.0 * error)
+    for factor, level in (
+        ("clean", 0.0),
+        ("rotation_error", 0.1),
+        ("rotation_error", 0.3),
+        ("rotation_error", 0.5),
+        ("rotation_error", 1.0),
+    ):
+        cell_error = 0.02 + 0.3 * level
+        for i in range(60):
+            failed = level >= 0.5 if separated else bool(rng.random() < 0.1 + 0.6 * level)
             append_record(
                 path,
                 EpisodeRecord(
@@ -231,7 +290,7 @@ def _write_sweep_episodes(path: Path, separated: bool) -> None:
                     min_clearance_m=0.5,
                     path_length_m=20.4,
                     mean_points_valid=float(rng.uniform(50, 200)),
-                    median_depth_error=error,
+                    median_depth_error=cell_error * float(rng.uniform(0.9, 1.1)),
                     episode_return=1.0,
                     env_kwargs=json.dumps({"obs_source": "flow"}),
                     mean_depth_outlier_share=float(rng.uniform(0.0, 0.2)),
@@ -245,7 +304,7 @@ def test_the_command_pools_a_learned_agents_training_seeds(tmp_path: Path) -> No
     assert main(["error-analysis", "--episodes", str(episodes), "--out", str(tmp_path)]) == 0
     text = (tmp_path / "error_analysis.md").read_text()
     assert "| ppo_flow@all | rotation_error | above |" in text and "ppo_flow@0" not in text
-    assert "| ppo_flow@all | 120 | const |" in text  # one fit over all three seeds' episodes
+    assert "| ppo_flow@all | 300 | 60 | const |" in text  # one fit over all three seeds' episodes
 
 
 def test_a_fit_that_separates_the_outcomes_is_refused_not_reported(tmp_path: Path) -> None:
@@ -254,7 +313,7 @@ def test_a_fit_that_separates_the_outcomes_is_refused_not_reported(tmp_path: Pat
     assert main(["error-analysis", "--episodes", str(episodes), "--out", str(tmp_path)]) == 0
     text = (tmp_path / "error_analysis.md").read_text()
     assert "- `ppo_flow@all`: no fit (the logistic fit on depth quality has no reliable estimate" in text
-    assert "perfectly separated" in text and "| ppo_flow@all | 120 | const |" not in text
+    assert "perfectly separated" in text and "| ppo_flow@all | 300 | 60 | const |" not in text
 
 
 def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:

@@ -1,0 +1,43 @@
+"""``flownav confirm``: issue 16's pick against its first stage and ``ppo_flow`` on fresh validation layouts,
+every training seed on every layout, clean and under issue 16's conditions (see
+:mod:`agents.studies.confirmation`). Resumable: run it again after an interruption."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+HELP = "confirm issue 16's pick on fresh validation layouts, paired by layout -> confirmation.md"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from agents.studies.confirmation import CONFIRMATION_LAYOUTS
+
+    parser.add_argument(
+        "--layouts",
+        type=int,
+        default=CONFIRMATION_LAYOUTS,
+        help="fresh validation layouts (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
+    )
+    parser.add_argument("--out", default="runs/confirmation", help="output folder (default: %(default)s)")
+    parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
+
+
+def run(args: argparse.Namespace) -> int:
+    from agents.common.folders import write_text_atomically
+    from agents.common.locations import RESULTS_DIR
+    from agents.studies.confirmation import report_lines, run_confirmation, search_record
+
+    command = "flownav confirm " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    result = run_confirmation(
+        Path(args.out), layouts=args.layouts, workers=args.workers, report_only=args.report_only
+    )
+    lines = report_lines(result, search_record(RESULTS_DIR / "ablation"), command.strip())
+    write_text_atomically(Path(args.out) / "confirmation.md", "\n".join(lines) + "\n")
+    print("\n".join(lines))
+    return 0

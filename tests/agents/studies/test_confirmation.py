@@ -1,0 +1,75 @@
+"""Confirming a pick on fresh layouts: the paired comparison, the search record and the report's wording."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents.common.locations import RESULTS_DIR
+from agents.studies.confirmation import (
+    PICK,
+    confirmation_tasks,
+    paired_difference,
+    report_lines,
+    search_record,
+)
+
+
+def test_pairing_by_layout_narrows_a_difference_the_layouts_share() -> None:
+    rng = np.random.default_rng(0)
+    hard = rng.random(200) < 0.3  # layouts both agents fail on
+    first = np.tile(hard, (5, 1)).astype(float)
+    second = first.copy()
+    second[:, :10] = 1.0  # the second fails ten more layouts
+    value, low, high = paired_difference(first, second)
+    assert value == pytest.approx(-(10 - hard[:10].sum()) / 200)
+    assert low <= value <= high < 0 and high - low < 0.06
+
+
+def test_tasks_fly_every_run_on_every_layout_under_every_condition(tmp_path) -> None:
+    tasks = confirmation_tasks(
+        {"ppo_flow@0": tmp_path / "a.zip", "ppo_flow@1": tmp_path / "b.zip"}, layouts=2
+    )
+    assert len(tasks) == 3 * 2 * 2
+    assert {(t.factor, t.level) for t in tasks} == {
+        ("clean", 0.0),
+        ("obstacle_density", 0.18),
+        ("forward_speed", 1.5),
+    }
+    assert min(t.seed for t in tasks) == 910_000
+
+
+def test_the_search_record_reads_the_committed_ablation() -> None:
+    record = search_record(RESULTS_DIR / "ablation")
+    assert PICK in record["configs"] and len(record["layouts"]) >= 50
+    assert all(900_000 <= seed < 910_000 for seed in record["layouts"])
+
+
+def test_the_report_words_each_comparison_from_its_interval() -> None:
+    result = {
+        "layouts": 200,
+        "rates": [{"condition": "clean", "agent": PICK, "runs": 5, "failure": 0.04}],
+        "differences": [
+            {"condition": "clean", "other": "ppo_flow", "difference": -0.05, "low": -0.08, "high": -0.02},
+            {
+                "condition": "density 0.18",
+                "other": "ppo_flow_course_approach",
+                "difference": -0.02,
+                "low": -0.06,
+                "high": 0.03,
+            },
+        ],
+        "rises": [
+            {"condition": "density 0.18", "agent": PICK, "rise": 0.04, "low": 0.01, "high": 0.08},
+            {"condition": "speed 1.5 m/s", "agent": PICK, "rise": 0.06, "low": 0.01, "high": 0.12},
+            {"condition": "speed 1.5 m/s", "agent": "ppo_flow", "rise": 0.3, "low": 0.2, "high": 0.4},
+        ],
+    }
+    text = "\n".join(
+        report_lines(result, {"configs": ["a", "b"], "layouts": [900_000, 900_049]}, "flownav confirm")
+    )
+    assert "| fails less |" in text and "| no difference shown |" in text
+    assert "met, interval included" in text and "met by point estimate only" in text and "| not met |" in text
+    assert "flew 2 PPO configurations" in text
+    empty = {"layouts": 200, "rates": [], "differences": [], "rises": []}
+    assert "Not flown yet" in "\n".join(report_lines(empty, {"configs": [], "layouts": []}, "x"))

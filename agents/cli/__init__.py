@@ -26,11 +26,13 @@ COMMANDS = {
     "calibrate-tiers": "agents.cli.calibrate_tiers",
     "suite": "agents.cli.suite",
     "score": "agents.cli.score",
+    "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",
     "ablation": "agents.cli.ablation",
     "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",
+    "reports": "agents.cli.reports",
 }
 
 

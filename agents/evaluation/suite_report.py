@@ -174,8 +174,9 @@ def suite_report(
         f"Generated {today()} by `{command}`. {machine}",
         "",
         f"Frozen test layouts {layouts.start:,}–{layouts.stop - 1:,} ({len(layouts)} per run; "
-        "`agents/common/seeds.py`, `SUITE_SEED_START`): no run of the project flew them before the tiers were "
-        "frozen, and nothing was chosen by looking at them. The tiers were calibrated on validation layouts "
+        "`agents/common/seeds.py`, `SUITE_SEED_START`): before the suite was flown nothing flew them but checks "
+        "that the scoring commands work (on the first three at most, into scratch folders, discarded), and "
+        "nothing was chosen by looking at them. The tiers were calibrated on validation layouts "
         "(`suite_calibration/calibration.md`) and are defined in `flownav_env/tiers.py`. A learned agent is every "
         "shipped training seed on every layout: its rates are means over runs with a two-level bootstrap "
         "interval (runs, then layouts); any other agent is one run with Wilson intervals over layouts. A "

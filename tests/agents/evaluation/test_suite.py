@@ -244,3 +244,28 @@ def test_bad_score_input_is_one_line(
     assert main(["score", *argv, "--out", str(tmp_path)]) == 2
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
+
+
+def test_an_agent_without_predict_or_missing_a_key_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    agent_file = tmp_path / "agents.py"
+    agent_file.write_text(
+        "import numpy as np\n"
+        "class ReadsApproach:\n"
+        "    def predict(self, observation, state=None, episode_start=None, deterministic=True):\n"
+        "        return np.clip(observation['approach'][:3], -1, 1), state\n"
+        "class NoPredict:\n    pass\n"
+        "def reads_approach():\n    return ReadsApproach()\n"
+        "def no_predict():\n    return NoPredict()\n"
+    )
+    common = ["--tiers", "hard", "--layouts", "1", "--workers", "1", "--out", str(tmp_path / "out")]
+    assert main(["score", "--agent", f"{agent_file}:no_predict", *common]) == 2
+    error = capsys.readouterr().err
+    assert "gave a NoPredict, which has no predict(observation, state, episode_start, deterministic)" in error
+    assert main(["score", "--agent", f"{agent_file}:reads_approach", *common]) == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error == (
+        "flownav score: error: the agent reads observation key 'approach', which this env does not give: declare "
+        "env_settings = {'observe_approach': True} on the agent (or make the env with observe_approach=True)"
+    )

@@ -222,7 +222,7 @@ def report_lines(
         "",
         "A learned agent is every training seed shipped in `results/policies/<agent>/seed_<k>.zip`, each flying "
         "every layout; its rates are means over runs, with a 95 % interval from a two-level bootstrap (runs, "
-        "then layouts within each run). A reactive agent is deterministic: one run, Wilson interval over "
+        "and layouts once for all runs, since every run flew the same layouts). A reactive agent is deterministic: one run, Wilson interval over "
         "layouts. A failure is any episode that does not reach the goal (collision, out of bounds, time limit). "
         f"IQM: interquartile mean of the failure rate over runs × blocks of {block} layouts, with "
         "rliable's stratified-bootstrap interval over runs.",

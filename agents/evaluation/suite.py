@@ -25,23 +25,11 @@ from agents.evaluation.over_seeds import episode_outcomes, runs_and_layouts_inte
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite, suite_report
 from agents.policies import agent_env_kwargs, is_learned, policy_file, runs_to_fly, split_agent_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
 
 EPISODES_CSV = "suite_episodes.csv"
-# Each outcome an episode has (failure: did not reach the goal) and the rate the table reports for it.
-OUTCOMES = ("failure", "collision", "out_of_bounds", "success")
-SUMMARY_COLUMNS = [
-    "suite_version",
-    "tier",
-    "env_id",
-    "agent",
-    "runs",
-    "layouts",
-    "episodes",
-    *(f"{outcome}_{part}" for outcome in OUTCOMES for part in ("rate", "low", "high")),
-    "interval_over",
-]
 
 
 def parse_tiers(text: str | Sequence[str]) -> list[str]:
@@ -276,7 +264,6 @@ def run_suite(
     """
     from agents.common.folders import check_writable_folder, write_text_atomically
     from agents.evaluation.provenance import machine_summary
-    from agents.evaluation.suite_report import plot_suite, suite_report
 
     tier_names = parse_tiers(tiers)
     if workers < 1:

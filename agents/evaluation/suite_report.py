@@ -11,8 +11,22 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from agents.evaluation.suite import OUTCOMES, SUMMARY_COLUMNS
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+
+# Each outcome an episode has (failure: did not reach the goal) and the rate the table reports for it.
+OUTCOMES = ("failure", "collision", "out_of_bounds", "success")
+# One row per (agent, tier): the suite's CSV and flownav score's.
+SUMMARY_COLUMNS = [
+    "suite_version",
+    "tier",
+    "env_id",
+    "agent",
+    "runs",
+    "layouts",
+    "episodes",
+    *(f"{outcome}_{part}" for outcome in OUTCOMES for part in ("rate", "low", "high")),
+    "interval_over",
+]
 
 # A tier leaves room to improve when its best agent still fails at least this often.
 HEADROOM_FAILURE = 0.15

@@ -228,7 +228,7 @@ def _report(
         f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
         f"{ABLATION_SEED_START + episodes - 1:,} ({condition}), never a test layout; seeds asked: "
         f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
-        "two-level bootstrap (runs, then layouts within each run); a reactive reference row's is Wilson's over its "
+        "two-level bootstrap (runs, and layouts once for all runs, since they flew the same layouts); a reactive reference row's is Wilson's over its "
         "layouts.",
         "",
         markdown_table(

@@ -22,6 +22,7 @@ from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import AGENT_NAMES, runs_to_fly
 from agents.policies.base import base_agent_name
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
@@ -262,7 +263,13 @@ def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
             f"### `{name}` (`{spec.env_id}`): {spec.why}",
             "",
             f"Settings: {settings}. Best agent: `{found['best']['agent']}`, failing {_rate(found['best'])}; "
-            f"{apart} of {pairs} agent pairs have 95 % intervals apart.",
+            f"{apart} of {pairs} agent pairs have 95 % intervals apart. "
+            + (
+                f"It leaves room to improve (the best agent fails at least {HEADROOM_FAILURE:.2f})."
+                if found["best"]["failure_rate"] >= HEADROOM_FAILURE
+                else f"**Its best agent fails less than {HEADROOM_FAILURE:.2f}**: on these layouts the tier leaves "
+                "less headroom than the suite asks of a tier; its sensor is not tuned to reach it (section 2)."
+            ),
             "",
             markdown_table(
                 ["agent", "episodes", "failure [95 % CI]"],

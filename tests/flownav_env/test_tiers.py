@@ -14,11 +14,11 @@ from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
     CAMERA_IMU_OFFSET_MS,
     GYRO_NOISE_DENSITY_DEG_S_RTHZ,
-    VELOCITY_ACCURACY_M_S,
     HARD_COURSE,
     SUITE_VERSION,
     TIER_NAMES,
     TIERS,
+    VELOCITY_ACCURACY_M_S,
     realistic_sensor,
     tier,
 )

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import difflib
-import glob
 import os
 import shutil
 import tempfile
@@ -112,13 +111,14 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
 
 
 def _error_analysis(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/error_analysis.py, which has no function of its own to call.
+    # The same calls as agents/cli/error_analysis.py with its default --baseline (the leaderboard's episodes).
     from agents.evaluation.records import read_records
     from agents.evaluation.sweep import pool_every_seed
     from agents.studies.error_analysis_report import write_error_analysis
 
     rows = pool_every_seed(read_records(RESULTS_DIR / "sweep_episodes.csv"))
-    write_error_analysis(rows, folder, report.command)
+    baseline = pool_every_seed(read_records(RESULTS_DIR / "leaderboard_episodes.csv"))
+    write_error_analysis(rows, folder, report.command, baseline)
 
 
 def _ablation(
@@ -199,7 +199,7 @@ def _not_regenerated(reason: str, *paths: str) -> tuple[Report, ...]:
 
 
 _PROSE = "hand-written prose"
-_MEASURED = "a measurement of this machine's speed: regenerating it means measuring again (flownav bench)"
+_MEASURED = "a measurement, not a summary of committed episodes: regenerating it means measuring again (flownav bench)"
 _STALE = "stale, kept for comparison as the code of its time wrote it (results/README.md)"
 
 REPORTS: tuple[Report, ...] = (
@@ -221,7 +221,7 @@ REPORTS: tuple[Report, ...] = (
         "error_analysis.md",
         name="error-analysis",
         command="flownav error-analysis --episodes results/sweep_episodes.csv --out results",
-        inputs=("sweep_episodes.csv",),
+        inputs=("sweep_episodes.csv", "leaderboard_episodes.csv"),
         write=_error_analysis,
         staged=False,
     ),
@@ -305,17 +305,19 @@ def select_reports(names: Sequence[str] | None = None) -> list[Report]:
     return [report for report in REPORTS if report.regenerated and report.name in wanted]
 
 
-def missing_inputs(report: Report) -> list[str]:
-    """The input patterns of ``report`` that match no file under ``results/``."""
-    return [pattern for pattern in report.inputs if not glob.glob(str(RESULTS_DIR / pattern))]
+def missing_inputs(report: Report) -> str:
+    """Why ``report`` cannot be regenerated here: the inputs that match no file under ``results/``, as
+    "no results/x.csv (its data is not committed)"; empty when every input is there."""
+    missing = [f"results/{pattern}" for pattern in report.inputs if not any(RESULTS_DIR.glob(pattern))]
+    return f"no {', '.join(missing)} (its data is not committed)" if missing else ""
 
 
 def _stage_inputs(report: Report, out: Path) -> None:
     """Copy ``report``'s committed inputs to the same places under ``out`` (nothing when ``out`` is
     ``results/``). Copies, not links: a writer that appended to a linked CSV would change the committed one."""
     for pattern in report.inputs:
-        for source in sorted(glob.glob(str(RESULTS_DIR / pattern))):
-            target = out / Path(source).relative_to(RESULTS_DIR)
+        for source in sorted(RESULTS_DIR.glob(pattern)):
+            target = out / source.relative_to(RESULTS_DIR)
             if target.exists() and target.samefile(source):
                 continue
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -336,8 +338,7 @@ def regenerate(out: Path, names: Sequence[str] | None = None) -> list[Outcome]:
     for report in reports:
         missing = missing_inputs(report)
         if missing:
-            absent = ", ".join(f"results/{pattern}" for pattern in missing)
-            outcomes.append(Outcome(report, None, skipped=f"no {absent} (its data is not committed)"))
+            outcomes.append(Outcome(report, None, skipped=missing))
             continue
         folder = out / Path(report.path).parent
         if report.staged:
@@ -372,7 +373,7 @@ def differences(report: Report, written: Path) -> str:
         difflib.unified_diff(
             before.splitlines(keepends=True),
             after.splitlines(keepends=True),
-            f"results/{report.path} (committed)",
+            f"results/{report.path} ({'committed' if committed.is_file() else 'not committed'})",
             f"{report.path} (regenerated)",
         )
     )
@@ -386,7 +387,7 @@ def listing() -> list[str]:
     for report in REPORTS:
         if report.regenerated:
             missing = missing_inputs(report)
-            note = f" [skipped: no results/{', results/'.join(missing)}]" if missing else ""
+            note = f" [skipped: {missing}]" if missing else ""
             lines.append(f"{report.path:<{width}}  regenerated as {report.name}: {report.command}{note}")
         else:
             lines.append(f"{report.path:<{width}}  not regenerated: {report.reason}")

@@ -156,6 +156,16 @@ def _calibration(report: Report, folder: Path) -> None:
     write_text_atomically(folder / "calibration.md", "\n".join(report_lines(result, report.command)) + "\n")
 
 
+def _confirmation(report: Report, folder: Path) -> None:
+    # The same calls as agents/cli/confirm.py: the fresh flights staged in the folder, the search's from results/.
+    from agents.common.folders import write_text_atomically
+    from agents.studies.confirmation import report_lines, run_confirmation, search_record
+
+    result = run_confirmation(folder, report_only=True)
+    lines = report_lines(result, search_record(RESULTS_DIR / "ablation"), report.command)
+    write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
+
+
 def _suite(report: Report, folder: Path) -> None:
     from agents.evaluation.suite import run_suite
     from agents.policies import AGENT_NAMES
@@ -234,6 +244,16 @@ REPORTS: tuple[Report, ...] = (
         command="flownav calibrate-tiers --out results/suite_calibration --report-only",
         inputs=("suite_calibration/calibration_episodes.csv", "suite_calibration/sensor_pilot_episodes.csv"),
         write=_calibration,
+    ),
+    Report(
+        "confirmation/confirmation.md",
+        name="confirm",
+        command="flownav confirm --out results/confirmation --report-only",
+        # Not flown on fresh layouts yet: once results/confirmation/<agent>.csv exist, add
+        # "confirmation/*.csv" here and stage it (staged=True), so the regenerated report reads them.
+        inputs=("ablation/*/*/seed_*.csv",),
+        write=_confirmation,
+        staged=False,
     ),
     Report(
         "suite.md",

@@ -32,13 +32,12 @@ from agents.evaluation.over_seeds import (
     interval_estimates,
     probability_of_improvement,
     run_rates,
-    runs_and_layouts_interval,
     success_outcomes,
 )
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.policies import (
     LEARNED_AGENTS,
     REACTIVE_AGENTS,

@@ -25,17 +25,48 @@ RUN_KEY = "run"
 BOOTSTRAP_REPS = 2000
 
 
+CONFIDENCE = 0.95
+
+
+def runs_and_layouts_interval(
+    outcomes: np.ndarray, seed: int = 0, reps: int = BOOTSTRAP_REPS
+) -> tuple[float, float]:
+    """95 % interval of the success rate over runs and layouts: a two-level bootstrap that resamples runs, and
+    layouts once per replicate for all its runs (every run flew the same layouts, so a hard layout is hard for
+    all of them: resampling layouts per run would treat that shared difficulty as independent noise and make
+    the interval too narrow). It carries both the spread between training runs and the layouts' sampling
+    noise."""
+    rng = np.random.default_rng(seed)
+    runs, layouts = outcomes.shape
+    chosen_runs = rng.integers(runs, size=(reps, runs, 1))
+    chosen_layouts = rng.integers(layouts, size=(reps, 1, layouts))
+    rates = outcomes[chosen_runs, chosen_layouts].mean(axis=(1, 2))
+    tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
+    low, high = np.percentile(rates, [tail, 100.0 - tail])
+    return float(low), float(high)
+
+
 def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[float, float]:
     """95 % interval of the failure rate of ``rows``: Wilson over episodes for one run; for rows pooled from
-    several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs, then each chosen
-    run's own episodes, so that it carries the spread between training runs as well as the layouts'."""
+    several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs and their
+    episodes, so that it carries the spread between training runs as well as the layouts'. Where every run flew
+    the same layouts (a leaderboard), layouts are resampled once for all runs (:func:`runs_and_layouts_interval`,
+    the same interval as the leaderboard's); where each flew its own (a sweep cell), each chosen run's own."""
     runs: dict[str, list[bool]] = {}
+    layouts: dict[str, list[int]] = {}
     for row in rows:
         runs.setdefault(str(row.get(RUN_KEY, "")), []).append(not bool(row["success"]))
+        layouts.setdefault(str(row.get(RUN_KEY, "")), []).append(int(row.get("seed", -1)))
     failures = sum(sum(values) for values in runs.values())
     n = sum(len(values) for values in runs.values())
     if len(runs) < 2:
         return wilson_interval(failures, n)
+    order = {name: np.argsort(seeds, kind="stable") for name, seeds in layouts.items()}
+    shared = [sorted(seeds) for seeds in layouts.values()]
+    if all(seeds == shared[0] for seeds in shared) and len(set(shared[0])) == len(shared[0]):
+        successes = np.array([1.0 - np.asarray(runs[name], float)[order[name]] for name in runs])
+        low, high = runs_and_layouts_interval(successes, seed=seed)
+        return 1.0 - high, 1.0 - low
     sizes = np.array([len(values) for values in runs.values()])
     padded = np.zeros((len(runs), sizes.max()))
     for index, values in enumerate(runs.values()):

@@ -21,10 +21,10 @@ import numpy as np
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
-from agents.evaluation.over_seeds import episode_outcomes, runs_and_layouts_interval
+from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite, suite_report
 from agents.policies import agent_env_kwargs, is_learned, policy_file, runs_to_fly, split_agent_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier

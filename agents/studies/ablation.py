@@ -30,10 +30,9 @@ from agents.evaluation.episode_tasks import (
     rows_of,
     set_aside_stale_episodes,
 )
-from agents.evaluation.over_seeds import runs_and_layouts_interval
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles

@@ -166,6 +166,38 @@ def _confirmation(report: Report, folder: Path) -> None:
     write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
 
 
+def _benchmark(report: Report, folder: Path) -> None:
+    from agents.studies.benchmark_report import write_benchmark
+
+    write_benchmark(folder, folder, report.command)
+
+
+def _thesis_block(report: Report, folder: Path) -> None:
+    # Only the closed-loop paragraph between its markers is written from data; flownav replicate owns the rest.
+    from agents.studies.benchmark_report import write_thesis_closed_loop
+
+    root = folder
+    for _ in Path(report.path).parent.parts:  # the folder with the layout of results/ that holds the data
+        root = root.parent
+    write_thesis_closed_loop(root, root / report.path)
+
+
+# What benchmark.md and the thesis's closed-loop paragraph are written from (agents/studies/benchmark_data.py).
+BENCHMARK_INPUTS = (
+    "leaderboard_episodes.csv",
+    "training_seeds.csv",
+    "sweep_episodes.csv",
+    "diagnostics/reactive_oracle_episodes.csv",
+    "thesis/three_capsule.json",
+    "ablation/*/seed_*.csv",
+    "ablation/*/*/seed_*.csv",
+    "ablation/reference/*.csv",
+    "ablation/*/reference/*.csv",
+    "policies/*/seed_*.json",
+    "policies/*/seed_*.yaml",
+)
+
+
 def _suite(report: Report, folder: Path) -> None:
     from agents.evaluation.suite import run_suite
     from agents.policies import AGENT_NAMES
@@ -246,6 +278,27 @@ REPORTS: tuple[Report, ...] = (
         write=_calibration,
     ),
     Report(
+        "benchmark.md",
+        name="benchmark",
+        command="flownav reports --out results --only benchmark",
+        inputs=BENCHMARK_INPUTS,
+        write=_benchmark,
+    ),
+    Report(
+        "thesis/DISCUSSION.md",
+        name="thesis-discussion",
+        command="flownav reports --out results --only thesis-discussion",
+        inputs=(*BENCHMARK_INPUTS, "thesis/DISCUSSION.md"),
+        write=_thesis_block,
+    ),
+    Report(
+        "thesis/README.md",
+        name="thesis-readme",
+        command="flownav reports --out results --only thesis-readme",
+        inputs=(*BENCHMARK_INPUTS, "thesis/README.md"),
+        write=_thesis_block,
+    ),
+    Report(
         "confirmation/confirmation.md",
         name="confirm",
         command="flownav confirm --out results/confirmation --report-only",
@@ -265,7 +318,6 @@ REPORTS: tuple[Report, ...] = (
     *_not_regenerated(
         _PROSE,
         "README.md",
-        "benchmark.md",
         "flow_gap.md",
         "diagnostics/README.md",
         "renderer_check/README.md",
@@ -273,7 +325,6 @@ REPORTS: tuple[Report, ...] = (
         "sweep_thesis_range/README.md",
         "throughput/README.md",
         "unfinished/README.md",
-        "thesis/DISCUSSION.md",
     ),
     *_not_regenerated(
         _MEASURED,
@@ -290,10 +341,6 @@ REPORTS: tuple[Report, ...] = (
         "sweep_thesis_range/benchmark.md",
         "renderer_check/sweep.md",
         "bee_tuning/ranking.md",
-    ),
-    *_not_regenerated(
-        "flownav replicate rewrites it only after running the thesis experiments again (no report-only path)",
-        "thesis/README.md",
     ),
     *_not_regenerated(
         "flownav tune has no report-only path: running it again resumes the study, which may fly episodes",

@@ -20,9 +20,9 @@ from agents.evaluation.over_seeds import (
     interval_estimates,
     probability_of_improvement,
     run_rates,
-    runs_and_layouts_interval,
     success_outcomes,
 )
+from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import (
     REACTIVE_AGENTS,
     is_learned,

@@ -1,0 +1,169 @@
+"""The values of the two generated blocks in hand-written files: the README's results (its table and the
+comparisons its bullets make) and the thesis discussion's closed-loop paragraph."""
+
+from __future__ import annotations
+
+from agents.common.tables import markdown_table
+from agents.policies.base import REACTIVE_AGENTS
+from agents.studies.benchmark_claims import WINNER, interval, intervals_relation, rate
+from agents.studies.benchmark_data import BenchmarkData
+from agents.studies.benchmark_findings import FLOW
+from agents.studies.benchmark_sweep import sweep_table
+from agents.studies.benchmark_values import (
+    DESCRIPTIONS,
+    ISSUE_MAX_LOSS,
+    Values,
+    best_agents,
+    robustness,
+)
+
+_NUMBER_WORDS = (
+    "no",
+    "one",
+    "two",
+    "three",
+    "four",
+    "five",
+    "six",
+    "seven",
+    "eight",
+    "nine",
+    "ten",
+    "eleven",
+)
+
+
+def _span(data: BenchmarkData, agent: str) -> tuple[float, float]:
+    row = data.row(agent)
+    return row["failure_low"], row["failure_high"]
+
+
+def _readme_table(data: BenchmarkData) -> str:
+    best_reactive, best_learned = best_agents(data)
+    bold = {best_reactive["agent"], best_learned["agent"]}
+    rows = []
+    for r in data.leaderboard:
+        label = f"{DESCRIPTIONS.get(r['agent'], r['agent'])} (`{r['agent']}`)"
+        failure = interval(r["failure_rate"], r["failure_low"], r["failure_high"])
+        if r["agent"] in bold:
+            label, failure = f"**{label}**", f"**{failure}**"
+        runs = "–" if r["agent"] in REACTIVE_AGENTS else str(r["runs"])
+        rates = (rate(r[key]) for key in ("collision_rate", "out_of_bounds_rate", "success_rate"))
+        rows.append([label, runs, failure, *rates])
+    header = [
+        "agent",
+        "training runs",
+        "failure rate [95 % CI]",
+        "collision",
+        "out of bounds",
+        "success rate",
+    ]
+    return markdown_table(header, rows)
+
+
+def _beat_sentence(data: BenchmarkData) -> str:
+    """Whether both PPO agents reliably beat the plain bee and vfh (every interval above 0.5)."""
+    pairs = [(x, y) for y in ("bee", "vfh") for x in ("ppo_flow", "ppo_oracle")]
+    gains = {pair: data.gain(*pair) for pair in pairs}
+    if all(g["low"] > 0.5 for g in gains.values()):
+        p = [f"{gains[pair]['probability']:.2f}" for pair in pairs]
+        return (
+            f"Both PPO agents reliably beat the plain `bee` (P = {p[0]} and {p[1]}) and `vfh` (P = {p[2]} and "
+            f"{p[3]}), each interval clear above 0.5."
+        )
+    return " ".join(
+        f"P(`{x}` > `{y}`) = {interval(g['probability'], g['low'], g['high'])}."
+        for (x, y), g in gains.items()
+    )
+
+
+def readme_values(data: BenchmarkData) -> Values:
+    """The README's own values: its table and the comparisons its bullets make."""
+    best_reactive, best_learned = best_agents(data)
+    relations = {
+        a: intervals_relation(_span(data, "ppo_flow"), _span(data, a)) for a in ("bee_robust", "bee_ttc")
+    }
+    if len(set(relations.values())) == 1:
+        flow_vs_rules = f"{next(iter(relations.values()))} from both"
+    else:
+        flow_vs_rules = "; ".join(f"{relation} with `{a}`" for a, relation in relations.items())
+    test_ok = {a: max(losses) <= ISSUE_MAX_LOSS for a, losses in robustness(data).items()}
+    clean, density, speed = (data.validation[c] for c in ("clean", "density", "speed"))
+    validation_ok = {
+        name: max(density[name].rate, speed[name].rate) - clean[name].rate <= ISSUE_MAX_LOSS
+        for name in set(clean) & set(density) & set(speed) & set(test_ok)
+    }
+    bias = data.tolerance_row(WINNER, "rotation_bias", "above")
+    level = bias["breaking_level"] if bias and bias["breaking_level"] is not None else max(bias["levels"])
+    rb = {
+        a: " / ".join(rate(data.cell(a, "rotation_bias", sign * level).rate) for sign in (1, -1))
+        for a in ("ppo_flow", WINNER)
+    }
+    robust, flow = data.row("ppo_robust"), data.row("ppo_flow")
+    oracle = data.oracle_reactive
+    return {
+        "readme_table": _readme_table(data),
+        "reactive_leads": best_reactive["failure_rate"] < best_learned["failure_rate"],
+        "learned_close": intervals_relation(
+            _span(data, best_learned["agent"]), _span(data, best_reactive["agent"])
+        )
+        == "intervals overlapping",
+        **{
+            f"r_{a}": rate(data.row(a)["failure_rate"])
+            for a in ("bee_robust", "bee_ttc", "ppo_flow", "ppo_oracle", "ppo_robust")
+        },
+        "flow_vs_rules": flow_vs_rules,
+        "oracle_ttc": interval(oracle["bee_ttc"].rate, oracle["bee_ttc"].low, oracle["bee_ttc"].high),
+        "oracle_robust": interval(
+            oracle["bee_robust"].rate, oracle["bee_robust"].low, oracle["bee_robust"].high
+        ),
+        "ppo_beat_sentence": _beat_sentence(data),
+        "validation_agrees": all(validation_ok[a] == test_ok[a] for a in validation_ok),
+        "rb_pct": f"{100 * level:.0f}",
+        "rb_winner": rb[WINNER],
+        "rb_flow": rb["ppo_flow"],
+        "robust_costs": robust["failure_low"] > flow["failure_high"],
+        "robust_vs_flow": intervals_relation(_span(data, "ppo_robust"), _span(data, "ppo_flow")),
+        "robust_oob": rate(robust["out_of_bounds_rate"]),
+    }
+
+
+def _broke(
+    data: BenchmarkData, agent: str, factor: str, side: str = "above", signed: bool = False
+) -> tuple[str, ...]:
+    """Where ``factor`` first breaks ``agent`` on ``side`` (a percentage), its clean failure and its failure
+    there."""
+    row = data.tolerance_row(agent, factor, side)
+    if row is None:
+        return "not flown", "–", "–"
+    if row["breaking_level"] is None:
+        return "no level flown", rate(row["clean_failure"]), "–"
+    level = f"{100 * row['breaking_level']:{'+' if signed else ''}.0f} %"
+    return level, rate(row["clean_failure"]), rate(row["breaking_failure"])
+
+
+def thesis_values(data: BenchmarkData) -> Values:
+    """The thesis discussion's closed-loop values: the relative rotation error's and the rotation bias's
+    breaking points, beside the clean rates."""
+    first = min(
+        (
+            r["breaking_level"]
+            for r in sweep_table(data)
+            if r["factor"] == "rotation_error" and r["breaking_level"] is not None
+        ),
+        default=None,
+    )
+    flow, ttc = _broke(data, FLOW, "rotation_error"), _broke(data, "bee_ttc", "rotation_error")
+    bias = [_broke(data, FLOW, "rotation_bias", side, signed=True) for side in ("above", "below")]
+    agents = len({key[0] for key in data.cells})
+    return {
+        "sweep_agent_words": _NUMBER_WORDS[agents] if agents < len(_NUMBER_WORDS) else str(agents),
+        "rotation_first_break": "no level flown" if first is None else f"{100 * first:.0f}",
+        "flow_rotation_pct": flow[0],
+        "flow_clean": flow[1],
+        "flow_rotation_rate": flow[2],
+        "ttc_rotation_pct": ttc[0],
+        "ttc_clean": ttc[1],
+        "ttc_rotation_rate": ttc[2],
+        "flow_bias_break": " and ".join(f"{level} ({failure})" for level, _, failure in bias),
+    }

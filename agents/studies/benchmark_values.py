@@ -1,0 +1,357 @@
+"""The values of the benchmark's clean-course sections: the leading table, what the reactive rules leave to
+learning, issue 16's levers on validation layouts and its targets on test layouts, and the set-up. Each figure
+is computed from :class:`~agents.studies.benchmark_data.BenchmarkData`; each verdict is a ``bool`` that picks a
+wording in the template, or a phrase built by :mod:`agents.studies.benchmark_claims`."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import Any
+
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.common.tables import markdown_table
+from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
+from agents.studies.benchmark_claims import (
+    WINNER,
+    delta,
+    display_name,
+    every_or_all_but,
+    half_side,
+    interval,
+    intervals_relation,
+    join_words,
+    rate,
+)
+from agents.studies.benchmark_data import BenchmarkData, Rate, commit_of
+from agents.studies.error_analysis import is_flow_agent
+from flownav_env.settings import EnvSettings
+
+# Issue 16's targets: the best flow-only agent fails at most this much on clean test layouts and no worse than
+# this multiple of the oracle's rate, stays within this much of its clean rate at the speed and density below,
+# and trains in at most this many minutes per seed.
+ISSUE_MAX_FAILURE = 0.12
+ISSUE_ORACLE_FACTOR = 2.0
+ISSUE_MAX_LOSS = 0.10
+ISSUE_SPEED = 1.5
+ISSUE_DENSITY = 0.18
+ISSUE_MINUTES = 60.0
+
+# What each agent is, for the tables.
+DESCRIPTIONS = {
+    "straight": "no avoidance",
+    "bee": "bee-style centring",
+    "bee_robust": "centring on robust sector statistics",
+    "bee_ttc": "`bee_robust` on the rate of approach",
+    "vfh": "vector field histogram",
+    "ppo_flow": "PPO on flow depths",
+    "ppo_robust": "PPO on flow, sensor errors in training",
+    "ppo_oracle": "PPO on true depths, same points",
+    WINNER: "PPO on flow and the rate of approach, over speeds and densities; issue 16's winner",
+}
+VSEP = "–"
+
+
+Values = dict[str, str | bool]
+
+
+def count(value: float) -> str:
+    """A count with thousands separators: ``43,400``."""
+    return f"{value:,.0f}"
+
+
+def span(values: Sequence[float], digits: int = 0) -> str:
+    """``36–59``: the smallest and largest value, or one where they print alike."""
+    low, high = f"{min(values):,.{digits}f}", f"{max(values):,.{digits}f}"
+    return low if low == high else f"{low}{VSEP}{high}"
+
+
+def seed_list(seeds: Sequence[int]) -> str:
+    """``0-4`` for consecutive seeds, else ``0,2,3``."""
+    ordered = sorted(seeds)
+    if ordered == list(range(ordered[0], ordered[-1] + 1)) and len(ordered) > 1:
+        return f"{ordered[0]}-{ordered[-1]}"
+    return ",".join(map(str, ordered))
+
+
+def learning_rate(value: float) -> str:
+    """``1e-4``."""
+    mantissa, exponent = f"{value:.0e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def _row_interval(row: dict[str, Any]) -> tuple[float, float]:
+    return row["failure_low"], row["failure_high"]
+
+
+def _fail(row: dict[str, Any]) -> str:
+    return interval(row["failure_rate"], row["failure_low"], row["failure_high"])
+
+
+def best_agents(data: BenchmarkData) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The reactive agent (straight aside) and the learned flow agent with the lowest clean failure rate."""
+    reactive = [r for r in data.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
+    learned = [r for r in data.leaderboard if r["agent"] in LEARNED_AGENTS and is_flow_agent(r)]
+    return min(reactive, key=lambda r: r["failure_rate"]), min(learned, key=lambda r: r["failure_rate"])
+
+
+def leaderboard_values(data: BenchmarkData) -> Values:
+    """The leading table, its provenance, the training seeds' spread and the probabilities of improvement."""
+    best_reactive, best_learned = best_agents(data)
+    bold = {best_reactive["agent"], best_learned["agent"]}
+    rows = []
+    for r in data.leaderboard:
+        name, failure = f"`{r['agent']}`", _fail(r)
+        if r["agent"] in bold:
+            name, failure = f"**{name}**", f"**{failure}**"
+        iqm = (
+            "–" if r["runs"] == 1 else interval(r["iqm_failure"], r["iqm_failure_low"], r["iqm_failure_high"])
+        )
+        rows.append(
+            [
+                f"{name} ({DESCRIPTIONS.get(r['agent'], r['agent'])})",
+                r["runs"],
+                failure,
+                interval(r["success_rate"], r["success_low"], r["success_high"]),
+                rate(r["collision_rate"]),
+                rate(r["out_of_bounds_rate"]),
+                iqm,
+            ]
+        )
+    header = ["agent", "runs", "failure rate [95 % CI]", "success rate [95 % CI]", "collision"]
+    header += ["out of bounds", "IQM failure [95 % CI]"]
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for agent, versions in data.code_versions.items():
+        groups.setdefault(tuple(commit_of(v) for v in versions), []).append(f"`{agent}`")
+    code = "; ".join(
+        f"{join_words(list(commits))} ({join_words(agents)})" for commits, agents in groups.items()
+    )
+    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
+    reactive = [
+        r["agent"] for r in data.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"
+    ]
+    improvement = [
+        [
+            f"`{x}`",
+            *(interval(*(data.gain(x, y)[k] for k in ("probability", "low", "high"))) for y in reactive),
+        ]
+        for x in learned
+    ]
+    complete = all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard)
+    return {
+        "leaderboard_episodes": count(data.leaderboard_episodes),
+        "leaderboard_layouts": f"{data.layouts[0]:,}{VSEP}{data.layouts[-1]:,}",
+        "leaderboard_complete": complete,
+        "leaderboard_code": code,
+        "layouts_per_run": str(len(data.layouts)),
+        "leaderboard_table": markdown_table(header, rows),
+        "block": str(data.block),
+        "seed_ranges": _seed_ranges(data),
+        "improvement_table": markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], improvement),
+    }
+
+
+def _seed_ranges(data: BenchmarkData) -> str:
+    """Each learned agent's failure rates over its seeds, with its worst seed and that seed's out-of-bounds
+    share."""
+    parts = []
+    for agent in (r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS):
+        seeds = [r for r in data.seed_rows if r["agent"] == agent]
+        worst = max(seeds, key=lambda r: r["failure_rate"])
+        parts.append(
+            f"`{agent}` {span([r['failure_rate'] for r in seeds], 2)} (worst: seed {worst['train_seed']}, "
+            f"{rate(worst['failure_rate'])}, of it {rate(worst['out_of_bounds_rate'])} out of bounds)"
+        )
+    return "; ".join(parts)
+
+
+def reactive_gap_values(data: BenchmarkData) -> Values:
+    """What the strongest reactive rule leaves to learning on clean test layouts."""
+    best_reactive, best_learned = best_agents(data)
+    ttc, flow, oracle, winner = (data.row(a) for a in ("bee_ttc", "ppo_flow", "ppo_oracle", WINNER))
+    best_gain = data.gain(best_learned["agent"], best_reactive["agent"])
+    flow_gain, winner_gain = data.gain("ppo_flow", "bee_ttc"), data.gain(WINNER, "bee_ttc")
+
+    def worse_apart(row: dict[str, Any]) -> bool:
+        return row["failure_low"] > ttc["failure_high"]
+
+    closing = (flow["failure_rate"] - winner["failure_rate"]) / (flow["failure_rate"] - ttc["failure_rate"])
+    return {
+        "learned_beats_reactive": best_gain["low"] > 0.5,
+        "best_learned": f"`{best_learned['agent']}`",
+        "best_reactive": f"`{best_reactive['agent']}`",
+        "fail_bee_ttc": _fail(ttc),
+        "fail_bee_robust": _fail(data.row("bee_robust")),
+        "fail_ppo_flow": _fail(flow),
+        "runs_ppo_flow": str(flow["runs"]),
+        "ppo_flow_vs_ttc": intervals_relation(_row_interval(flow), _row_interval(ttc)),
+        "p_flow_ttc": interval(flow_gain["probability"], flow_gain["low"], flow_gain["high"]),
+        "p_flow_ttc_side": half_side(flow_gain["low"], flow_gain["high"]),
+        "fail_ppo_oracle": _fail(oracle),
+        "oracle_vs_ttc": intervals_relation(_row_interval(oracle), _row_interval(ttc)),
+        "ppo_short_both": worse_apart(flow) and worse_apart(oracle),
+        "fail_winner": _fail(winner),
+        "winner_vs_ttc": intervals_relation(_row_interval(winner), _row_interval(ttc)),
+        "winner_closes": f"closing {100 * closing:.0f} %",
+        "winner_beats_ttc": winner_gain["low"] > 0.5,
+        "p_winner_ttc": interval(winner_gain["probability"], winner_gain["low"], winner_gain["high"]),
+        "p_winner_ttc_side": half_side(winner_gain["low"], winner_gain["high"]),
+    }
+
+
+def _within(clean: Rate, *conditions: Rate) -> bool:
+    return all(c.rate - clean.rate <= ISSUE_MAX_LOSS for c in conditions)
+
+
+def validation_values(data: BenchmarkData) -> Values:
+    """Issue 16's levers and the reactive references on validation layouts: clean, at density 0.18 and at
+    1.5 m/s, each with its difference from clean."""
+    clean, density, speed = (data.validation[c] for c in ("clean", "density", "speed"))
+    names = [name for name in clean if name in density and name in speed]
+    names = [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
+    rows, within = [], []
+    for name in names:
+        ok = _within(clean[name], density[name], speed[name])
+        within += [name] if ok else []
+        label = f"`{name}` (reactive)" if name in REACTIVE_AGENTS else f"`{name}`"
+        rows.append(
+            [
+                label,
+                "–" if name in REACTIVE_AGENTS else str(clean[name].runs),
+                interval(clean[name].rate, clean[name].low, clean[name].high),
+                *(
+                    f"{interval(c.rate, c.low, c.high)} ({delta(c.rate - clean[name].rate)})"
+                    for c in (density[name], speed[name])
+                ),
+                "yes" if ok else "no",
+            ]
+        )
+    header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {ISSUE_DENSITY:g} (Δ)"]
+    header += [f"{ISSUE_SPEED:g} m/s (Δ)", f"within +{ISSUE_MAX_LOSS:.2f} at both"]
+    per_run = {c: {r.episodes // r.runs for r in data.validation[c].values()} for c in data.validation}
+    stage1, stage2 = data.training[WINNER].init_config or {}, data.training[WINNER].config
+    return {
+        "validation_table": markdown_table(header, rows),
+        "validation_within": join_words([f"`{n}`" for n in within]) or "none",
+        "validation_clean_layouts": "/".join(map(str, sorted(per_run["clean"]))),
+        "validation_condition_layouts": "/".join(map(str, sorted(per_run["density"] | per_run["speed"]))),
+        "stage2_steps": count(stage2["total_timesteps"]),
+        "stage2_lr": learning_rate(stage2["ppo"]["learning_rate"]),
+        "stage1_lr": learning_rate(stage1.get("ppo", {}).get("learning_rate", float("nan"))),
+        "issue_limit": f"{ISSUE_MAX_LOSS:.2f}",
+        "issue_density": f"{ISSUE_DENSITY:g}",
+        "issue_speed": f"{ISSUE_SPEED:g}",
+    }
+
+
+def robustness(data: BenchmarkData) -> dict[str, tuple[float, float]]:
+    """Per sweep agent (base name): its failure at issue 16's speed and density on the sweep's test cells, less
+    its clean failure on the leading table's layouts."""
+    found = {}
+    for row in data.leaderboard:
+        agent = row["agent"]
+        try:
+            cells = [
+                data.cell(agent, f, x)
+                for f, x in (("forward_speed", ISSUE_SPEED), ("obstacle_density", ISSUE_DENSITY))
+            ]
+        except KeyError:
+            continue
+        found[agent] = (cells[0].rate - row["failure_rate"], cells[1].rate - row["failure_rate"])
+    return found
+
+
+def issue16_values(data: BenchmarkData) -> Values:
+    """Issue 16's targets on test layouts: the flow–truth gap, who meets the first target, who stays within the
+    robustness limit, and the winner's training time."""
+    flow, oracle, winner = data.row("ppo_flow"), data.row("ppo_oracle"), data.row(WINNER)
+    limit = min(ISSUE_MAX_FAILURE, ISSUE_ORACLE_FACTOR * oracle["failure_rate"])
+    flow_agents = [
+        r
+        for r in data.leaderboard
+        if is_flow_agent(r) and r["agent"] != "straight" and r["agent"] != "ppo_oracle"
+    ]
+    first = [r for r in flow_agents if r["failure_rate"] <= limit]
+    losses = robustness(data)
+    robust = [a for a, (s, d) in losses.items() if s <= ISSUE_MAX_LOSS and d <= ISSUE_MAX_LOSS]
+    minutes = data.training[WINNER].minutes
+    in_time = max(minutes) <= ISSUE_MINUTES
+    overlapping = intervals_relation(_row_interval(flow), _row_interval(oracle)) == "intervals overlapping"
+    return {
+        "flow_vs_oracle": intervals_relation(_row_interval(flow), _row_interval(oracle)),
+        "flow_costs_nothing": overlapping,
+        "issue_max_failure": f"{ISSUE_MAX_FAILURE:.2f}",
+        "issue_oracle_factor": f"{ISSUE_ORACLE_FACTOR:g}",
+        "oracle_rate": rate(oracle["failure_rate"]),
+        "first_target_met": join_words(
+            [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first]
+        )
+        or "no agent",
+        "robustness_lines": "; ".join(
+            f"{display_name(a)} {delta(s)} and {delta(d)}" for a, (s, d) in losses.items()
+        ),
+        "robust_agents": every_or_all_but(
+            [display_name(a) for a in losses], [display_name(a) for a in robust], "agent"
+        ),
+        "winner_minutes": span(minutes),
+        "winner_cores": "/".join(map(str, data.training[WINNER].cores)),
+        "winner_in_time": in_time,
+        "issue_minutes": f"{ISSUE_MINUTES:.0f}",
+        "issue_met": winner in first and WINNER in robust and in_time,
+        "winner_vs_oracle": intervals_relation(_row_interval(winner), _row_interval(oracle)),
+    }
+
+
+def _randomized(config: dict[str, Any]) -> str:
+    units = {
+        "forward_speed": ("speeds", " m/s"),
+        "obstacle_density": ("densities", ""),
+        "brightness": ("brightness", ""),
+    }
+    parts = []
+    for key, (low, high) in (config.get("randomize") or {}).items():
+        noun, unit = units.get(key, (key, ""))
+        parts.append(f"{noun} {low:g}{VSEP}{high:g}{unit}")
+    return join_words(parts)
+
+
+def setup_values(data: BenchmarkData) -> Values:
+    """The task's and training's settings, read from the env's defaults, the seed ranges and the shipped
+    policies' configs and records."""
+    defaults = {f.name: f.default for f in dataclasses.fields(EnvSettings)}
+    rows, columns = defaults["histogram_sectors"]
+    ppo = data.training["ppo_flow"].config
+    learned = [a for a in data.training if a != WINNER]
+    stage1 = data.training[WINNER].init_config or {}
+    train_lines = []
+    for agent in learned:
+        seeds = seed_list([int(r["train_seed"]) for r in data.seed_rows if r["agent"] == agent])
+        train_lines += [
+            f"flownav train --config configs/{agent}.yaml --seeds {seeds} --parallel 2 --ship",
+            f"flownav select --config configs/{agent}.yaml --seeds {seeds} --ship",
+        ]
+    winner_seeds = [int(r["train_seed"]) for r in data.seed_rows if r["agent"] == WINNER]
+    return {
+        "capsule_height": f"{defaults['obstacle_height']:g}",
+        "capsule_radius": f"{defaults['obstacle_radius']:g}",
+        "density": f"{defaults['obstacle_density']:g}",
+        "field_length": f"{defaults['field_length']:g}",
+        "default_speed": f"{defaults['forward_speed']:g}",
+        "metres_per_frame": f"{defaults['forward_speed'] / defaults['frame_rate']:g}",
+        "frame_rate": f"{defaults['frame_rate']:g}",
+        "camera": f"{defaults['camera_width']}×{defaults['camera_height']}",
+        "fov": f"{defaults['camera_fov_deg']:g}",
+        "histogram": f"{rows} × {columns}-sector × {len(defaults['depth_bin_edges']) - 1}-bin",
+        "validation_start": count(VALIDATION_SEED_START),
+        "test_start": count(TEST_SEED_START),
+        "ablation_start": count(ABLATION_SEED_START),
+        "net_arch": " × ".join(map(str, ppo["ppo"]["net_arch"])),
+        "ppo_steps": count(ppo["total_timesteps"]),
+        "ppo_minutes": span([m for a in learned for m in data.training[a].minutes]),
+        "ppo_cores": "/".join(map(str, sorted({c for a in learned for c in data.training[a].cores}))),
+        "stage1_steps": count(stage1.get("total_timesteps", 0)),
+        "stage1_randomize": _randomized(stage1),
+        "stage2_randomize": _randomized(data.training[WINNER].config),
+        "train_commands": "\n".join(train_lines),
+        "winner_seeds": seed_list(winner_seeds),
+    }

@@ -143,26 +143,23 @@ def write_readme_results(results_dir: Path, readme: Path) -> str:
         FileNotFoundError: a missing input or README.
         ValueError: the README's markers missing or repeated.
     """
-    readme = Path(readme)
-    if not readme.is_file():
-        raise FileNotFoundError(f"README not found: {readme}")
-    text = readme.read_text()
-    block = _render(README_TEMPLATE, report_values(load_benchmark_data(Path(results_dir))))
-    new = replace_block(text, README_MARKERS, block, str(readme))
-    if new != text:
-        readme.write_text(new)
-    return new
+    return _rewrite_block(results_dir, Path(readme), README_TEMPLATE, README_MARKERS)
 
 
 def write_thesis_closed_loop(results_dir: Path, text_file: Path) -> str:
     """Like :func:`write_readme_results` for the thesis discussion's closed-loop paragraph (between
     :data:`THESIS_MARKERS`), in ``results/thesis/DISCUSSION.md`` or the ``README.md`` built from it."""
-    text_file = Path(text_file)
+    return _rewrite_block(results_dir, Path(text_file), THESIS_TEMPLATE, THESIS_MARKERS)
+
+
+def _rewrite_block(results_dir: Path, text_file: Path, template: Path, markers: tuple[str, str]) -> str:
+    """``text_file`` with the block between ``markers`` rendered from ``template`` and the data; written back
+    only where it changed."""
     if not text_file.is_file():
         raise FileNotFoundError(f"file not found: {text_file}")
     text = text_file.read_text()
-    block = _render(THESIS_TEMPLATE, report_values(load_benchmark_data(Path(results_dir))))
-    new = replace_block(text, THESIS_MARKERS, block, str(text_file))
+    block = _render(template, report_values(load_benchmark_data(Path(results_dir))))
+    new = replace_block(text, markers, block, str(text_file))
     if new != text:
         text_file.write_text(new)
     return new

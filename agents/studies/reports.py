@@ -284,19 +284,15 @@ REPORTS: tuple[Report, ...] = (
         inputs=BENCHMARK_INPUTS,
         write=_benchmark,
     ),
-    Report(
-        "thesis/DISCUSSION.md",
-        name="thesis-discussion",
-        command="flownav reports --out results --only thesis-discussion",
-        inputs=(*BENCHMARK_INPUTS, "thesis/DISCUSSION.md"),
-        write=_thesis_block,
-    ),
-    Report(
-        "thesis/README.md",
-        name="thesis-readme",
-        command="flownav reports --out results --only thesis-readme",
-        inputs=(*BENCHMARK_INPUTS, "thesis/README.md"),
-        write=_thesis_block,
+    *(
+        Report(
+            f"thesis/{file}",
+            name=name,
+            command=f"flownav reports --out results --only {name}",
+            inputs=(*BENCHMARK_INPUTS, f"thesis/{file}"),
+            write=_thesis_block,
+        )
+        for file, name in (("DISCUSSION.md", "thesis-discussion"), ("README.md", "thesis-readme"))
     ),
     Report(
         "confirmation/confirmation.md",

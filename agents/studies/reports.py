@@ -3,7 +3,7 @@ data without flying anything (``flownav reports``).
 
 A report's numbers should be what the current code makes of the committed episodes: when a statistic changes
 (a bootstrap interval, a table's layout), a report written before the change silently disagrees with the code
-that claims to produce it. :data:`REPORTS` lists every ``results/**/*.md``: each machine-written report with a
+that claims to produce it. :data:`~agents.studies.report_registry.REPORTS` lists every ``results/**/*.md``: each machine-written report with a
 report-only path names its inputs and the writer call that rebuilds it, in-process; every other one (prose,
 measurements of a machine's speed, stale archives) says in one line why it is not regenerated.
 :func:`regenerate` writes the reports into any folder with the layout of ``results/``, and :func:`differences`
@@ -13,19 +13,20 @@ was written (:func:`comparable_text`).
 
 from __future__ import annotations
 
-import contextlib
 import difflib
-import os
 import shutil
-import tempfile
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
-from typing import Any
 
-from agents.common.locations import REPO_ROOT, RESULTS_DIR
+from agents.common.locations import RESULTS_DIR
+from agents.studies.report_registry import (  # noqa: F401  (the registry, re-exported)
+    ABLATION_REFERENCE,
+    ABLATION_SEEDS,
+    REPORTS,
+    Report,
+)
 
 # Lines of a report's preamble that record how it was made, not what it says: every writer but the sweep's puts
 # the date, command, commit and machine on one "Generated ..." line; the sweep's header
@@ -42,35 +43,6 @@ CONTENT_STARTS = ("## ", "```", "|")
 
 
 @dataclass(frozen=True)
-class Report:
-    """One Markdown file of ``results/``.
-
-    Attributes:
-        path: the report, relative to ``results/`` (``ablation/speed_1.5/ablation.md``).
-        name: what ``flownav reports --only`` calls it; empty for a report that is not regenerated.
-        command: the stand-alone command that rebuilds it from the committed data (what the report names).
-        inputs: glob patterns, relative to ``results/``, of the committed data it is built from; each must
-            match a file, or the report is skipped.
-        write: rebuilds the report (and its figures and tables) into the folder given, reading ``inputs``
-            there when ``staged``; None: not regenerated, ``reason`` says why.
-        staged: the writer reads its inputs from its own output folder, so they are copied there first.
-        reason: one line, why a report is not regenerated.
-    """
-
-    path: str
-    name: str = ""
-    command: str = ""
-    inputs: tuple[str, ...] = ()
-    write: Callable[[Report, Path], None] | None = None
-    staged: bool = True
-    reason: str = ""
-
-    @property
-    def regenerated(self) -> bool:
-        return self.write is not None
-
-
-@dataclass(frozen=True)
 class Outcome:
     """What :func:`regenerate` did with one report: where it wrote it (None: skipped, ``skipped`` says why)
     and how long the writer took."""
@@ -79,272 +51,6 @@ class Outcome:
     written: Path | None
     seconds: float = 0.0
     skipped: str = ""
-
-
-@contextlib.contextmanager
-def _repository_as_cwd() -> Iterator[None]:
-    """Run a writer from the repository root, then return: the sweep's report prints its config path as given
-    (``configs/sweep.yaml``) and reads the config through it, so the text is the same wherever this runs."""
-    before = Path.cwd()
-    os.chdir(REPO_ROOT)
-    try:
-        yield
-    finally:
-        os.chdir(before)
-
-
-def _leaderboard(report: Report, folder: Path) -> None:
-    from agents.evaluation.leaderboard import run_leaderboard
-    from agents.policies import AGENT_NAMES
-
-    run_leaderboard(AGENT_NAMES, folder, report_only=True, command=report.command)
-
-
-def _sweep(report: Report, folder: Path, *, config: str) -> None:
-    from agents.evaluation.sweep import run_sweep
-
-    # `flownav sweep` leaves --report-only out of the command it prints; the report's "Rebuilt with" line says it.
-    with _repository_as_cwd():
-        run_sweep(
-            Path(config), folder, report_only=True, command=report.command.replace(" --report-only", "")
-        )
-
-
-def _error_analysis(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/error_analysis.py with its default --baseline (the leaderboard's episodes).
-    from agents.evaluation.records import read_records
-    from agents.evaluation.sweep import pool_every_seed
-    from agents.studies.error_analysis_report import write_error_analysis
-
-    rows = pool_every_seed(read_records(RESULTS_DIR / "sweep_episodes.csv"))
-    baseline = pool_every_seed(read_records(RESULTS_DIR / "leaderboard_episodes.csv"))
-    write_error_analysis(rows, folder, report.command, baseline)
-
-
-def _ablation(
-    report: Report,
-    folder: Path,
-    *,
-    configs: Sequence[str],
-    episodes: int,
-    env: Mapping[str, Any],
-) -> None:
-    from agents.studies.ablation import compare_configs
-
-    # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
-    # checkout, so the report does not depend on what this machine trained.
-    with tempfile.TemporaryDirectory(prefix="flownav-no-runs-") as no_runs:
-        compare_configs(
-            [REPO_ROOT / config for config in configs],
-            ABLATION_SEEDS,
-            folder,
-            runs_dir=Path(no_runs),
-            episodes=episodes,
-            report_only=True,
-            command=report.command,
-            reference_agents=ABLATION_REFERENCE,
-            env=env,
-        )
-
-
-def _calibration(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/calibrate_tiers.py, which writes calibration.md itself.
-    from agents.common.folders import write_text_atomically
-    from agents.studies.tier_calibration import report_lines, run_calibration
-
-    result = run_calibration(folder, report_only=True)
-    write_text_atomically(folder / "calibration.md", "\n".join(report_lines(result, report.command)) + "\n")
-
-
-def _confirmation(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/confirm.py: the fresh flights staged in the folder, the search's from results/.
-    from agents.common.folders import write_text_atomically
-    from agents.studies.confirmation import report_lines, run_confirmation, search_record
-
-    result = run_confirmation(folder, report_only=True)
-    lines = report_lines(result, search_record(RESULTS_DIR / "ablation"), report.command)
-    write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
-
-
-def _benchmark(report: Report, folder: Path) -> None:
-    from agents.studies.benchmark_report import write_benchmark
-
-    write_benchmark(folder, folder, report.command)
-
-
-def _thesis_block(report: Report, folder: Path) -> None:
-    # Only the closed-loop paragraph between its markers is written from data; flownav replicate owns the rest.
-    from agents.studies.benchmark_report import write_thesis_closed_loop
-
-    root = folder
-    for _ in Path(report.path).parent.parts:  # the folder with the layout of results/ that holds the data
-        root = root.parent
-    write_thesis_closed_loop(root, root / report.path)
-
-
-# What benchmark.md and the thesis's closed-loop paragraph are written from (agents/studies/benchmark_data.py).
-BENCHMARK_INPUTS = (
-    "leaderboard_episodes.csv",
-    "training_seeds.csv",
-    "sweep_episodes.csv",
-    "diagnostics/reactive_oracle_episodes.csv",
-    "thesis/three_capsule.json",
-    "ablation/*/seed_*.csv",
-    "ablation/*/*/seed_*.csv",
-    "ablation/reference/*.csv",
-    "ablation/*/reference/*.csv",
-    "policies/*/seed_*.json",
-    "policies/*/seed_*.yaml",
-)
-
-
-def _suite(report: Report, folder: Path) -> None:
-    from agents.evaluation.suite import run_suite
-    from agents.policies import AGENT_NAMES
-
-    run_suite(AGENT_NAMES, folder, report_only=True, command=report.command)
-
-
-ABLATION_SEEDS = range(5)
-ABLATION_REFERENCE = ("bee_robust", "bee_ttc")
-_LEVERS = tuple(
-    f"configs/experiments/ppo_flow_{lever}.yaml"
-    for lever in (
-        "course",
-        "nearness",
-        "course_approach",
-        "course_approach_stack4",
-        "course_approach_curriculum",
-        "course_approach_smooth",
-        "course_approach_curriculum_slow",
-    )
-)
-_CLEAN_ABLATION = ("configs/ppo_flow.yaml", "configs/ppo_oracle.yaml", "configs/ppo_robust.yaml", *_LEVERS)
-_CONDITION_ABLATION = ("configs/ppo_flow.yaml", *_LEVERS)
-
-
-def _ablation_report(folder: str, configs: Sequence[str], episodes: int, env: Mapping[str, Any]) -> Report:
-    """An ``ablation.md``, its command written from the same settings the writer is called with."""
-    options = f" --episodes {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
-    return Report(
-        f"{folder}/ablation.md",
-        name=folder.replace("/", "-").replace("_", "-"),
-        command=f"flownav ablation --configs {' '.join(configs)} --seeds 0-4 "
-        f"--reference {','.join(ABLATION_REFERENCE)}{options} --out results/{folder} --report-only",
-        inputs=(f"{folder}/*/seed_*.csv", f"{folder}/reference/*.csv"),
-        write=partial(_ablation, configs=configs, episodes=episodes, env=env),
-    )
-
-
-def _not_regenerated(reason: str, *paths: str) -> tuple[Report, ...]:
-    return tuple(Report(path, reason=reason) for path in paths)
-
-
-_PROSE = "hand-written prose"
-_MEASURED = "a measurement, not a summary of committed episodes: regenerating it means measuring again (flownav bench)"
-_STALE = "stale, kept for comparison as the code of its time wrote it (results/README.md)"
-
-REPORTS: tuple[Report, ...] = (
-    Report(
-        "leaderboard.md",
-        name="leaderboard",
-        command="flownav leaderboard --out results --report-only",
-        inputs=("leaderboard_episodes.csv",),
-        write=_leaderboard,
-    ),
-    Report(
-        "sweep.md",
-        name="sweep",
-        command="flownav sweep --config configs/sweep.yaml --out results --report-only",
-        inputs=("sweep_episodes.csv",),
-        write=partial(_sweep, config="configs/sweep.yaml"),
-    ),
-    Report(
-        "error_analysis.md",
-        name="error-analysis",
-        command="flownav error-analysis --episodes results/sweep_episodes.csv --out results",
-        inputs=("sweep_episodes.csv", "leaderboard_episodes.csv"),
-        write=_error_analysis,
-        staged=False,
-    ),
-    _ablation_report("ablation", _CLEAN_ABLATION, 100, {}),
-    _ablation_report("ablation/density_0.18", _CONDITION_ABLATION, 50, {"obstacle_density": 0.18}),
-    _ablation_report("ablation/speed_1.5", _CONDITION_ABLATION, 50, {"forward_speed": 1.5}),
-    Report(
-        "suite_calibration/calibration.md",
-        name="calibrate-tiers",
-        command="flownav calibrate-tiers --out results/suite_calibration --report-only",
-        inputs=("suite_calibration/calibration_episodes.csv", "suite_calibration/sensor_pilot_episodes.csv"),
-        write=_calibration,
-    ),
-    Report(
-        "benchmark.md",
-        name="benchmark",
-        command="flownav reports --out results --only benchmark",
-        inputs=BENCHMARK_INPUTS,
-        write=_benchmark,
-    ),
-    *(
-        Report(
-            f"thesis/{file}",
-            name=name,
-            command=f"flownav reports --out results --only {name}",
-            inputs=(*BENCHMARK_INPUTS, f"thesis/{file}"),
-            write=_thesis_block,
-        )
-        for file, name in (("DISCUSSION.md", "thesis-discussion"), ("README.md", "thesis-readme"))
-    ),
-    Report(
-        "confirmation/confirmation.md",
-        name="confirm",
-        command="flownav confirm --out results/confirmation --report-only",
-        # Not flown on fresh layouts yet: once results/confirmation/<agent>.csv exist, add
-        # "confirmation/*.csv" here and stage it (staged=True), so the regenerated report reads them.
-        inputs=("ablation/*/*/seed_*.csv",),
-        write=_confirmation,
-        staged=False,
-    ),
-    Report(
-        "suite.md",
-        name="suite",
-        command="flownav suite --out results --report-only",
-        inputs=("suite_episodes.csv",),
-        write=_suite,
-    ),
-    *_not_regenerated(
-        _PROSE,
-        "README.md",
-        "flow_gap.md",
-        "diagnostics/README.md",
-        "renderer_check/README.md",
-        "sweep_fast20/README.md",
-        "sweep_thesis_range/README.md",
-        "throughput/README.md",
-        "unfinished/README.md",
-    ),
-    *_not_regenerated(
-        _MEASURED,
-        "estimator_performance.md",
-        "env_performance.md",
-        "training_performance.md",
-        "depth_yield.md",
-        "renderer_check/env_performance.md",
-    ),
-    *_not_regenerated(
-        _STALE,
-        "sweep_fast20/sweep.md",
-        "sweep_thesis_range/sweep.md",
-        "sweep_thesis_range/benchmark.md",
-        "renderer_check/sweep.md",
-        "bee_tuning/ranking.md",
-    ),
-    *_not_regenerated(
-        "flownav tune has no report-only path: running it again resumes the study, which may fly episodes",
-        "tuning/bee/tuning.md",
-        "tuning/bee_robust/tuning.md",
-        "tuning/vfh/tuning.md",
-    ),
-)
 
 
 def report_names() -> list[str]:

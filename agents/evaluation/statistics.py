@@ -49,7 +49,8 @@ def runs_and_layouts_interval(
 def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[float, float]:
     """95 % interval of the failure rate of ``rows``: Wilson over episodes for one run; for rows pooled from
     several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs and their
-    episodes, so that it carries the spread between training runs as well as the layouts'. Where every run flew
+    episodes, so that it carries the spread between training runs as well as the layouts' (where each run flew
+    its own layouts, never narrower than Wilson's over the pooled episodes). Where every run flew
     the same layouts (a leaderboard), layouts are resampled once for all runs (:func:`runs_and_layouts_interval`,
     the same interval as the leaderboard's); where each flew its own (a sweep cell), each chosen run's own."""
     runs: dict[str, list[bool]] = {}
@@ -81,7 +82,10 @@ def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[
     drawn = padded[chosen[..., None], picks] * inside
     rates = drawn.sum(axis=(1, 2)) / inside.sum(axis=(1, 2))
     low, high = np.percentile(rates, [2.5, 97.5])
-    return float(low), float(high)
+    # With few episodes per run the percentile bootstrap is too narrow (all successes give [0, 0]): it is
+    # never allowed to claim more than the episodes' own binomial noise, Wilson's interval, allows.
+    wilson_low, wilson_high = wilson_interval(failures, n)
+    return float(min(low, wilson_low)), float(max(high, wilson_high))
 
 
 def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:

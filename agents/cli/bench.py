@@ -31,7 +31,7 @@ if __doc__:  # None under python -OO
 
 HELP = (
     "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution) and "
-    "`bench train` (training steps/s per n_envs)"
+    "`bench train` (training steps/s per n_envs), `bench recipe` (minutes per training seed of whole recipes)"
 )
 
 
@@ -109,6 +109,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     _add_output_options(train)
 
+    recipe = targets.add_parser(
+        "recipe", help="minutes per training seed of whole recipes (all their stages), side by side"
+    )
+    recipe.add_argument(
+        "--recipe",
+        action="append",
+        required=True,
+        metavar="[NAME=]STAGE.yaml[,STAGE.yaml...]",
+        help="a recipe: its stage configs in training order; give two or more, the first is the reference",
+    )
+    recipe.add_argument("--rollouts", type=int, default=2, help="timed PPO rollouts per stage (default 2)")
+    recipe.add_argument("--repeats", type=int, default=3, help="alternated blocks per recipe (default 3)")
+    recipe.add_argument(
+        "--ablation-dir",
+        type=Path,
+        default=Path("results") / "ablation",
+        help="flownav ablation's --out, for each recipe's validation quality (default results/ablation)",
+    )
+    _add_output_options(recipe)
+
     depth_yield = targets.add_parser(
         "yield",
         help="valid depths per frame and their accuracy per estimator setting, in-scene (and ICL-NUIM)",
@@ -168,6 +188,19 @@ def run(args: argparse.Namespace) -> int:
             args.steps,
             args.sequence,
             args.out,
+            progress=not args.no_progress,
+        )
+    elif args.target == "recipe":
+        from agents.policies.teachers import make_teacher
+        from agents.studies.perf.recipe_speed_report import run_recipe_benchmark
+
+        paths = run_recipe_benchmark(
+            args.recipe,
+            args.rollouts,
+            args.repeats,
+            args.out,
+            make_teacher=make_teacher,
+            ablation_dir=args.ablation_dir,
             progress=not args.no_progress,
         )
     elif args.target == "train":

@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=1,
         help="with --seeds and the local backend: train this many seeds at a time, each in one process that "
         "steps its own envs (same rollouts; on a small machine more steps per second than one at a time: "
-        "results/training_performance.md measures how many more). Default 1",
+        "results/training_throughput.md measures how many more). Default 1",
     )
     parser.add_argument(
         "--park",
@@ -118,6 +118,10 @@ def run(args: argparse.Namespace) -> int:
     override(config, "total_timesteps", args.total_timesteps, "--total-timesteps")
     override(config, "max_minutes", args.max_minutes, "--max-minutes")
     check_env_kwargs(config.env, str(config_path))
+    if config.imitation.teacher:
+        from agents.policies.teachers import check_teacher
+
+        check_teacher(config.imitation.teacher, config.env, str(config_path))
     if args.seeds is None and (args.backend != "local" or args.address is not None or args.parallel != 1):
         raise ValueError("--backend, --address and --parallel apply to --seeds runs only")
     _check_output_folders(args, config.name)
@@ -132,9 +136,19 @@ def run(args: argparse.Namespace) -> int:
         runs_dir=Path(args.runs_dir),
         ship_to=Path(args.ship_to) if args.ship else None,
         command=command,
+        make_teacher=_teacher_maker(config),
     )
     _raise_if_interrupted(files, command if args.resume else f"{command} --resume")
     return 0
+
+
+def _teacher_maker(config):
+    """What builds the config's teacher (the rules live above the training layer), or None without one."""
+    if not config.imitation.teacher:
+        return None
+    from agents.policies.teachers import make_teacher
+
+    return make_teacher
 
 
 def command_line(args: argparse.Namespace) -> str:
@@ -209,6 +223,7 @@ def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
         ship_to=Path(args.ship_to) if args.ship else None,
         parked_dir=Path(args.parked_dir),
         command=command_line(args),
+        make_teacher=_teacher_maker(config),
     )
     if args.park:
         park_seeds(jobs)

@@ -180,8 +180,8 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
                 tried.append(config.name)
     differences = []
     for condition, folder in SEARCH_FOLDERS.items():
-        pick = _seed_matrix(Path(ablation_dir) / folder / PICK)
-        first_stage = _seed_matrix(Path(ablation_dir) / folder / COMPARED[0])
+        pick = seed_failure_matrix(Path(ablation_dir) / folder / PICK)
+        first_stage = seed_failure_matrix(Path(ablation_dir) / folder / COMPARED[0])
         if pick is None or first_stage is None or pick.shape[1] != first_stage.shape[1]:
             continue
         value, low, high = paired_difference(pick, first_stage)
@@ -191,7 +191,7 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
     return {"configs": tried, "layouts": sorted(layouts), "differences": differences}
 
 
-def _seed_matrix(folder: Path) -> np.ndarray | None:
+def seed_failure_matrix(folder: Path) -> np.ndarray | None:
     """Failures (seeds, layouts) of one config's ``seed_<k>.csv`` files, layouts in seed order; None when a
     seed has not flown the same layouts as the others."""
     matrices = []

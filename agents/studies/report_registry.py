@@ -292,6 +292,7 @@ REPORTS: tuple[Report, ...] = (
         "estimator_performance.md",
         "env_performance.md",
         "training_performance.md",
+        "training_throughput.md",
         "depth_yield.md",
         "renderer_check/env_performance.md",
     ),

@@ -75,7 +75,7 @@ def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, A
     ``EVAL_WORKERS`` evaluation envs; with one env, both run in this process (one evaluation env).
     ``in_process=True`` steps the same envs, with the same seeds, in this process (``DummyVecEnv``): for
     several training seeds side by side, one process per core, where a lock-stepped worker per env loses a
-    third of the cores to waiting (``results/training_performance.md``). Both give the same rollouts.
+    third of the cores to waiting (``results/training_throughput.md``). Both give the same rollouts.
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 

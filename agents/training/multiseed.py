@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import queue
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -69,6 +69,8 @@ class SeedJob:
     ship_to: Path | None
     parked_dir: Path | None = None
     command: str | None = None  # the command line that trains the seeds, for the record
+    # Builds the agent a config's ``imitation.teacher`` names; a module-level function, so a job pickles.
+    make_teacher: Callable[[str], Any] | None = None
 
     @property
     def files(self) -> RunFiles:
@@ -91,6 +93,7 @@ def seed_jobs(
     ship_to: Path | None,
     parked_dir: Path | None = None,
     command: str | None = None,
+    make_teacher: Callable[[str], Any] | None = None,
 ) -> list[SeedJob]:
     """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds; seeds parked
     in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty;
@@ -98,7 +101,13 @@ def seed_jobs(
     seed_ship_to = Path(ship_to) / config.name if ship_to is not None else None
     return [
         SeedJob(
-            replace(config, seed=seed), Path(config_path), Path(runs_dir), seed_ship_to, parked_dir, command
+            replace(config, seed=seed),
+            Path(config_path),
+            Path(runs_dir),
+            seed_ship_to,
+            parked_dir,
+            command,
+            make_teacher,
         )
         for seed in seeds
     ]
@@ -150,6 +159,7 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
         in_process_envs=side_by_side,
         progress_bar=not side_by_side,
         command=job.command,
+        make_teacher=job.make_teacher,
     )
     steps = interrupted_at(job.files)
     if steps is not None:

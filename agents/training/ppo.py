@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 from typing import Any
@@ -151,6 +152,7 @@ def train(
     in_process_envs: bool = False,
     progress_bar: bool = True,
     command: str | None = None,
+    make_teacher: Callable[[str], Any] | None = None,
 ) -> Path:
     """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
     training seeds); returns the run's policy path.
@@ -159,6 +161,9 @@ def train(
     :func:`agents.training.envs.build_envs`), for seeds trained side by side; ``progress_bar=False`` prints a
     line every ``checkpoint_every`` steps instead, where several runs share one terminal. ``command`` is the
     command line recorded for the session (default: ``flownav train --config <config_path>``).
+    ``make_teacher`` builds the agent a config's ``imitation.teacher`` names (``agents.policies.make_agent``;
+    the rules live above this layer); a fresh run with a teacher imitates it before PPO
+    (:mod:`agents.training.imitation`).
 
     Ships the run to ``ship_to`` when given and the session was not interrupted (an interrupted run is
     shipped deliberately later, with :func:`agents.training.shipping.ship_run`); whether it was, the record
@@ -193,6 +198,9 @@ def train(
             init=init_summary(config),
         )
         callbacks = _callbacks(config, eval_env, files, resume_step, record, progress_bar)
+        record.restart_clock()  # the session's minutes count from here: the teacher start and learning
+        if resume_step is None and config.imitation.teacher:
+            _teacher_start(model, envs, config, record, make_teacher)
         status = _learn(model, config, files, record, callbacks, resume_step, progress_bar)
     finally:
         close_quietly(envs)
@@ -219,6 +227,33 @@ def train(
         else:
             ship_run(files, ship_to)
     return files.policy
+
+
+def _teacher_start(
+    model: Any,
+    envs: Any,
+    config: TrainConfig,
+    record: SessionRecord,
+    make_teacher: Callable[[str], Any] | None,
+) -> None:
+    """DAgger against the config's teacher on the training envs, before PPO; its summary goes into the
+    session's record (env steps, minutes, losses per round).
+
+    Raises:
+        ValueError: no ``make_teacher`` was given to build the teacher the config names.
+    """
+    from agents.training.imitation import imitate
+
+    if make_teacher is None:
+        raise ValueError(
+            f"config {config.name!r} names the teacher {config.imitation.teacher!r}, but no make_teacher was "
+            "given to build it (flownav train passes agents.policies.make_agent)"
+        )
+    summary = imitate(
+        model, envs, make_teacher(config.imitation.teacher), config.imitation, config.ppo.gamma, config.seed
+    )
+    record.session["imitation"] = summary
+    record.write()
 
 
 def _callbacks(
@@ -283,7 +318,6 @@ def _learn(
     note = rollout_note(config, model.num_timesteps)
     if note is not None:
         print(note)
-    record.restart_clock()
     try:
         with stop_signals_interrupt():
             model.learn(

@@ -40,6 +40,20 @@ class PPOParams:
 
 
 @dataclass
+class ImitationParams:
+    """A teacher start before PPO (:mod:`agents.training.imitation`): DAgger rounds against a teacher agent;
+    an empty ``teacher`` skips it."""
+
+    teacher: str = ""  # an agent name (``bee_ttc``); its observation keys must be in the config's ``env``
+    rounds: int = field_range(1, 100, default=3)
+    steps_per_round: int = field_range(1, 1_000_000, default=8192)  # per env
+    epochs: int = field_range(1, 1000, default=10)
+    batch_size: int = field_range(8, 100_000, default=256)
+    learning_rate: float = field_range(1e-6, 1.0, default=1e-3)
+    value_weight: float = field_range(0.0, 100.0, default=0.5)
+
+
+@dataclass
 class Randomization:
     """Per-episode uniform ranges [low, high] of the sensor and course variables; empty = fixed."""
 
@@ -88,6 +102,7 @@ class TrainConfig:
     # for this run's seed (``results/policies/ppo_flow/seed_{seed}.zip``); empty = random initial weights.
     # Only the policy's weights carry over: the optimiser, step count and evaluations start afresh.
     init_from: str = ""
+    imitation: ImitationParams = field(default_factory=ImitationParams)
     ppo: PPOParams = field(default_factory=PPOParams)
 
     def validate(self) -> None:
@@ -98,6 +113,13 @@ class TrainConfig:
                 raise ValueError(
                     f"key 'init_from' may hold only the placeholder {{seed}}, got {self.init_from!r} ({error})"
                 ) from error
+        if self.imitation.teacher and (
+            self.init_from or self.frame_stack > 1 or self.ppo.lstm_hidden_size > 0
+        ):
+            raise ValueError(
+                f"key 'imitation.teacher' ({self.imitation.teacher!r}) starts a feed-forward policy from scratch: "
+                "it takes no 'init_from', 'frame_stack' above 1 or 'ppo.lstm_hidden_size' above 0"
+            )
         if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
             raise ValueError(
                 f"keys 'frame_stack' ({self.frame_stack}) and 'ppo.lstm_hidden_size' ({self.ppo.lstm_hidden_size}) "

@@ -149,7 +149,7 @@ def run_training_benchmark(
     side_by_side: int = 0,
 ) -> list[Path]:
     """Measure every ``n_envs`` (and, with ``side_by_side`` >= 2, that many runs of the config's own
-    ``n_envs`` at once) ``repeats`` times, alternating, and write ``training_performance.md`` and ``.csv`` to
+    ``n_envs`` at once) ``repeats`` times, alternating, and write ``training_throughput.md`` and ``.csv`` to
     ``out_dir``; returns their paths.
 
     Raises:
@@ -177,7 +177,7 @@ def run_training_benchmark(
         runs[(n_envs, count)].append(measured)
     rows = [_summary(config, n, count, measured) for (n, count), measured in runs.items()]
     out_dir.mkdir(parents=True, exist_ok=True)
-    csv_path, md_path = out_dir / "training_performance.csv", out_dir / "training_performance.md"
+    csv_path, md_path = out_dir / "training_throughput.csv", out_dir / "training_throughput.md"
     write_csv(csv_path, rows)
     command = (
         f"flownav bench train --config {config_path} --n-envs {','.join(map(str, n_envs_options))} "

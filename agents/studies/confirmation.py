@@ -165,6 +165,8 @@ def run_confirmation(
 
 # Where issue 16's ablation kept each condition's runs, under results/ablation/.
 SEARCH_FOLDERS = {"clean": ".", "density 0.18": "density_0.18", "speed 1.5 m/s": "speed_1.5"}
+# Configs flown under the same conditions after issue 16's search ended, so not part of it: issue 31's recipe.
+FLOWN_AFTER_THE_SEARCH = ("ppo_flow_teacher",)
 
 
 def search_record(ablation_dir: Path) -> dict[str, Any]:
@@ -173,7 +175,8 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
     (:func:`paired_difference`), per condition."""
     tried, layouts = [], set()
     for condition in sorted(Path(ablation_dir).glob("*_*/")):
-        for config in sorted(p for p in condition.iterdir() if p.is_dir() and p.name != "reference"):
+        configs = (p for p in condition.iterdir() if p.is_dir() and p.name != "reference")
+        for config in sorted(p for p in configs if p.name not in FLOWN_AFTER_THE_SEARCH):
             for csv_path in config.glob("seed_*.csv"):
                 layouts.update(int(row["seed"]) for row in read_records(csv_path))
             if config.name not in tried:

@@ -182,6 +182,7 @@ _LEVERS = tuple(
         "course_approach_curriculum",
         "course_approach_smooth",
         "course_approach_curriculum_slow",
+        "teacher",  # issue 31's recipe: a teacher start (results/training_performance.md)
     )
 )
 _CLEAN_ABLATION = ("configs/ppo_flow.yaml", "configs/ppo_oracle.yaml", "configs/ppo_robust.yaml", *_LEVERS)

@@ -29,6 +29,8 @@ from agents.training.train_config import TrainConfig
 
 # The validation quality a recipe must reach (issue 31): the issue-16 winner's bar.
 CLEAN_FAILURE_BAR = 0.05
+# Issue 31's goal: a recipe in at most a third of the reference's minutes per seed.
+TARGET_TIME_RATIO = 1 / 3
 # flownav ablation's folders per condition, under its --out (results/ablation).
 CONDITIONS = {"clean": "", "density 0.18": "density_0.18", "1.5 m/s": "speed_1.5"}
 KINDS = ("startup", "ppo", "evaluation", "teacher")
@@ -257,6 +259,10 @@ def _report(rows: list[dict[str, Any]], command: str, elapsed: float, repeats: i
         "as the issue-16 winner was picked. Recorded minutes are the seeds' own training records (with the "
         "earlier stage's): trained on whatever machine and load they met, so context, not the comparison.",
         "",
+        "## Target",
+        "",
+        *_target_lines(rows),
+        "",
         "## Seeds per hour",
         "",
         f"Here ({cores} cores, one seed's envs on all of them): "
@@ -268,6 +274,31 @@ def _report(rows: list[dict[str, Any]], command: str, elapsed: float, repeats: i
         "",
     ]
     return "\n".join(lines)
+
+
+def _target_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """Issue 31's target, worded from the data: a recipe at ≤ 1/3 of the reference's minutes per seed that
+    meets the reference's validation bar."""
+    reference = rows[0]
+    lines = []
+    for row in rows[1:]:
+        fast = row["ratio_to_reference"] <= TARGET_TIME_RATIO
+        judged = {True: "meets", False: "misses", "": "has not been flown against"}[row["meets_quality"]]
+        met = fast and row["meets_quality"] is True
+        lines.append(
+            f"- `{row['recipe']}`: {row['ratio_to_reference']:.2f}× the minutes per seed of `{reference['recipe']}` "
+            f"(target ≤ {TARGET_TIME_RATIO:.2f}×), and it {judged} the validation bar → **{'met' if met else 'missed'}**."
+        )
+    teachers = [row["recipe"] for row in rows if row["teacher_env_steps"]]
+    if teachers:
+        lines += [
+            "",
+            "A teacher start counts only its own work per seed: the teacher rule's gains were tuned once for the "
+            "benchmark (`flownav tune`, `results/tuning/`), not per seed, and the student starts from what that "
+            "rule does, so it needs a rule worth imitating on the task; its PPO stage is what may carry it past "
+            "the rule. Recipes with a teacher here: " + ", ".join(f"`{name}`" for name in teachers) + ".",
+        ]
+    return lines
 
 
 def _rate(value: Any) -> str:

@@ -11,7 +11,7 @@ from helpers import SMALL, tiny_train_config
 from agents.common.yaml_config import load_config
 from agents.policies.teachers import make_teacher
 from agents.studies.perf.recipe_speed import block_ratios, stage_minutes, stage_work
-from agents.studies.perf.recipe_speed_report import parse_recipe, run_recipe_benchmark
+from agents.studies.perf.recipe_speed_report import _target_lines, parse_recipe, run_recipe_benchmark
 from agents.training.train_config import TrainConfig
 
 EXPERIMENTS = Path(__file__).resolve().parents[4] / "configs" / "experiments"
@@ -76,7 +76,9 @@ def test_two_tiny_recipes_are_timed_side_by_side_into_the_report(tmp_path: Path)
 
 
 def test_a_recipe_without_a_config_is_refused() -> None:
-    with pytest.raises(ValueError, match=r"--recipe must be \[name=\]stage.yaml\[,stage.yaml...\], got 'fast='"):
+    with pytest.raises(
+        ValueError, match=r"--recipe must be \[name=\]stage.yaml\[,stage.yaml...\], got 'fast='"
+    ):
         parse_recipe("fast=")
 
 
@@ -84,3 +86,23 @@ def test_one_recipe_alone_is_refused(tmp_path: Path) -> None:
     _, old = tiny_train_config(tmp_path, total=64, name="tiny_old")
     with pytest.raises(ValueError, match=r"give at least two recipes to compare, got 1"):
         run_recipe_benchmark([str(old)], 1, 1, tmp_path / "out", progress=False)
+
+
+@pytest.mark.parametrize(
+    ("ratio", "meets", "verdict"),
+    [
+        (0.30, True, "**met**"),
+        (0.40, True, "**missed**"),
+        (0.30, False, "**missed**"),
+        (0.30, "", "**missed**"),
+    ],
+)
+def test_the_target_needs_both_a_third_of_the_time_and_the_quality(ratio, meets, verdict) -> None:
+    rows = [
+        {"recipe": "old", "ratio_to_reference": 1.0, "meets_quality": True, "teacher_env_steps": 0},
+        {"recipe": "new", "ratio_to_reference": ratio, "meets_quality": meets, "teacher_env_steps": 10},
+    ]
+    lines = _target_lines(rows)
+    assert lines[0].startswith(f"- `new`: {ratio:.2f}× the minutes per seed of `old` (target ≤ 0.33×)")
+    assert lines[0].endswith(f"→ {verdict}.")
+    assert "Recipes with a teacher here: `new`." in lines[-1]

@@ -249,9 +249,21 @@ def _teacher_start(
             f"config {config.name!r} names the teacher {config.imitation.teacher!r}, but no make_teacher was "
             "given to build it (flownav train passes agents.policies.make_agent)"
         )
-    summary = imitate(
-        model, envs, make_teacher(config.imitation.teacher), config.imitation, config.ppo.gamma, config.seed
-    )
+    try:
+        with stop_signals_interrupt():
+            summary = imitate(
+                model,
+                envs,
+                make_teacher(config.imitation.teacher),
+                config.imitation,
+                config.ppo.gamma,
+                config.seed,
+            )
+    except KeyboardInterrupt:
+        # Nothing of a teacher start is checkpointed (it is minutes): resuming starts the run afresh.
+        print("interrupted during the teacher start: the same command starts the run again")
+        record.end(INTERRUPTED, 0)
+        raise
     record.session["imitation"] = summary
     record.write()
 

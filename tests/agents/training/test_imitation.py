@@ -16,6 +16,7 @@ from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import discounted_returns, fit, fly
 from agents.training.outputs import RunFiles
 from agents.training.ppo import new_model, train
+from agents.training.run_record import interrupted_at
 from agents.training.train_config import ImitationParams
 
 TEACHER_ENV = {"observe_unresolved": True}
@@ -119,3 +120,37 @@ def _small_env() -> dict:
 def _action_error(model, flights) -> float:
     actions = model.predict(flights.observations, deterministic=True)[0]
     return float(np.mean((actions - flights.teacher_actions) ** 2))
+
+
+class _StoppedTeacher:
+    """bee_ttc until its ``calls``-th action, when Ctrl-C lands."""
+
+    def __init__(self, calls: int) -> None:
+        self.teacher, self.left = make_teacher("bee_ttc"), calls
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        self.left -= 1
+        if self.left == 0:
+            raise KeyboardInterrupt
+        return self.teacher.predict(observation, state, episode_start, deterministic)
+
+
+def test_an_interrupted_teacher_start_is_recorded_and_the_same_command_starts_afresh(tmp_path: Path) -> None:
+    imitation = {"teacher": "bee_ttc", "rounds": 2, "steps_per_round": 8, "epochs": 1}
+    config, config_path = tiny_train_config(
+        tmp_path, total=64, env={**_small_env(), **TEACHER_ENV}, imitation=imitation
+    )
+    arguments = {
+        "config_path": config_path,
+        "resume": True,
+        "runs_dir": tmp_path / "runs",
+        "progress_bar": False,
+    }
+    with pytest.raises(KeyboardInterrupt):
+        train(config, make_teacher=lambda name: _StoppedTeacher(5), **arguments)
+    files = RunFiles.of(tmp_path / "runs", config.name)
+    assert interrupted_at(files) == 0
+    train(config, make_teacher=make_teacher, **arguments)
+    record = json.loads(files.record.read_text())
+    assert [s["status"] for s in record["sessions"]] == ["interrupted", "finished"]
+    assert record["sessions"][-1]["imitation"]["env_steps"] == 16 and record["total_timesteps"] >= 64

@@ -264,11 +264,10 @@ REPORTS: tuple[Report, ...] = (
         "confirmation/confirmation.md",
         name="confirm",
         command="flownav confirm --out results/confirmation --report-only",
-        # Not flown on fresh layouts yet: once results/confirmation/<agent>.csv exist, add
-        # "confirmation/*.csv" here and stage it (staged=True), so the regenerated report reads them.
-        inputs=("ablation/*/*/seed_*.csv",),
+        # The fresh flights are staged into the folder the report is written to; the search's are read
+        # from results/ablation/ where they lie.
+        inputs=("confirmation/*.csv", "ablation/*/*/seed_*.csv"),
         write=_confirmation,
-        staged=False,
     ),
     Report(
         "suite.md",

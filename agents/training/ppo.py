@@ -161,7 +161,7 @@ def train(
     :func:`agents.training.envs.build_envs`), for seeds trained side by side; ``progress_bar=False`` prints a
     line every ``checkpoint_every`` steps instead, where several runs share one terminal. ``command`` is the
     command line recorded for the session (default: ``flownav train --config <config_path>``).
-    ``make_teacher`` builds the agent a config's ``imitation.teacher`` names (``agents.policies.make_agent``;
+    ``make_teacher`` builds the agent a config's ``imitation.teacher`` names (``agents.policies.teachers.make_teacher``;
     the rules live above this layer); a fresh run with a teacher imitates it before PPO
     (:mod:`agents.training.imitation`).
 
@@ -247,7 +247,7 @@ def _teacher_start(
     if make_teacher is None:
         raise ValueError(
             f"config {config.name!r} names the teacher {config.imitation.teacher!r}, but no make_teacher was "
-            "given to build it (flownav train passes agents.policies.make_agent)"
+            "given to build it (flownav train passes agents.policies.teachers.make_teacher)"
         )
     try:
         with stop_signals_interrupt():

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import queue
 import re
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -157,7 +158,9 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
         ship_to=job.ship_to,
         files=job.files,
         in_process_envs=side_by_side,
-        progress_bar=not side_by_side,
+        # A live bar's refresh thread only suits a terminal; in a log (CI, nohup) it printed noise, and a
+        # SIGTERM caught it mid-refresh ("deque mutated during iteration") and left the run hanging.
+        progress_bar=not side_by_side and sys.stdout.isatty(),
         command=job.command,
         make_teacher=job.make_teacher,
     )

@@ -7,8 +7,13 @@ import pytest
 
 from agents.common.locations import RESULTS_DIR
 from agents.studies.confirmation import (
+    COMPARED,
     PICK,
+    TRUE_DEPTH_RECIPE,
     confirmation_tasks,
+    failure_interval_over_runs_and_layouts,
+    flow_costs,
+    flown_agents,
     paired_difference,
     report_lines,
     search_record,
@@ -48,7 +53,9 @@ def test_the_search_record_reads_the_committed_ablation() -> None:
 def test_the_report_words_each_comparison_from_its_interval() -> None:
     result = {
         "layouts": 200,
-        "rates": [{"condition": "clean", "agent": PICK, "runs": 5, "failure": 0.04}],
+        "rates": [
+            {"condition": "clean", "agent": PICK, "runs": 5, "failure": 0.04, "low": 0.02, "high": 0.07}
+        ],
         "differences": [
             {"condition": "clean", "other": "ppo_flow", "difference": -0.05, "low": -0.08, "high": -0.02},
             {
@@ -71,5 +78,36 @@ def test_the_report_words_each_comparison_from_its_interval() -> None:
     assert "| fails less |" in text and "| no difference shown |" in text
     assert "met, interval included" in text and "met by point estimate only" in text and "| not met |" in text
     assert "flew 2 PPO configurations" in text
+    assert "0.040 [0.020, 0.070]" in text
+    assert f"`{TRUE_DEPTH_RECIPE}`, has no shipped training seeds yet" in text
     empty = {"layouts": 200, "rates": [], "differences": [], "rises": []}
     assert "Not flown yet" in "\n".join(report_lines(empty, {"configs": [], "layouts": []}, "x"))
+
+
+def test_the_true_depth_recipe_flies_once_it_has_shipped_seeds(tmp_path) -> None:
+    assert flown_agents(tmp_path) == (PICK, *COMPARED)
+    (tmp_path / TRUE_DEPTH_RECIPE).mkdir()
+    (tmp_path / TRUE_DEPTH_RECIPE / "seed_0.zip").write_bytes(b"")
+    assert flown_agents(tmp_path) == (PICK, *COMPARED, TRUE_DEPTH_RECIPE)
+
+
+def test_flow_costs_are_the_pick_against_its_true_depth_recipe() -> None:
+    against_truth = {
+        "condition": "clean",
+        "other": TRUE_DEPTH_RECIPE,
+        "difference": 0.02,
+        "low": -0.01,
+        "high": 0.05,
+    }
+    result = {
+        "differences": [{"condition": "clean", "other": "ppo_flow", "difference": -0.05}, against_truth]
+    }
+    assert flow_costs(result) == [against_truth]
+
+
+def test_a_failure_interval_resamples_runs_and_layouts() -> None:
+    rng = np.random.default_rng(1)
+    matrix = (rng.random((5, 200)) < 0.1).astype(float)
+    low, high = failure_interval_over_runs_and_layouts(matrix)
+    assert low < matrix.mean() < high and high - low < 0.1
+    assert failure_interval_over_runs_and_layouts(np.zeros((3, 50))) == (0.0, 0.0)

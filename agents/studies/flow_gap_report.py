@@ -1,0 +1,278 @@
+"""``flow_gap.md``: what optical flow costs a learned policy, written from the committed data alone.
+
+The thesis's question for a learned policy is the gap between the same recipe trained on the estimator's depths
+and on the true depths at the same tracked points. Two recipes answer it: the plain one (``ppo_flow`` against
+``ppo_oracle``) and issue 16's pick against its recipe on true depths (:data:`TRUE_DEPTH_RECIPE`). Each gap is
+paired by layout: every training seed of both agents flew the same layouts, the interval resamples training seeds
+(each agent's apart) and layouts (once for both). The sources are the confirmation flights on fresh validation
+layouts (``results/confirmation/``), the suite's frozen test layouts (``results/suite_episodes.csv``) and, for
+the plain recipe, the leading clean table. The prose is ``templates/flow_gap.md``; nothing is flown.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common.folders import check_writable_folder, write_text_atomically
+from agents.common.locations import POLICIES_DIR
+from agents.common.seeds import suite_seeds
+from agents.common.tables import markdown_table, today
+from agents.common.templates import render_template
+from agents.evaluation.over_seeds import episode_outcomes
+from agents.evaluation.records import read_records
+from agents.evaluation.suite import EPISODES_CSV
+from agents.policies import shipped_seed_runs
+from agents.studies.benchmark_claims import display_name, interval, intervals_relation, join_words
+from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
+from agents.studies.benchmark_report import TEMPLATES, template_fields
+from agents.studies.benchmark_values import (
+    Values,
+    issue16_values,
+    leaderboard_values,
+    reactive_gap_values,
+    validation_values,
+)
+from agents.studies.confirmation import (
+    COMPARED,
+    CONFIRMATION_LAYOUTS,
+    FLOWN_AFTER_THE_SEARCH,
+    PICK,
+    TRUE_DEPTH_RECIPE,
+    failure_interval_over_runs_and_layouts,
+    flow_costs,
+    paired_difference,
+    run_confirmation,
+    search_record,
+)
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
+
+FLOW_GAP_TEMPLATE = TEMPLATES / "flow_gap.md"
+# The plain recipe: PPO on the estimator's depths and on the true depths, all else the same.
+PLAIN_FLOW, PLAIN_TRUTH = "ppo_flow", "ppo_oracle"
+# How many training seeds a recipe's gap is measured over (issue 33).
+SEEDS_WANTED = 5
+TRUE_DEPTH_STAGES = (
+    "configs/experiments/ppo_flow_course_approach_oracle.yaml",
+    "configs/experiments/ppo_flow_course_approach_curriculum_slow_oracle.yaml",
+)
+
+
+def gap_reading(low: float, high: float) -> str:
+    """How flow minus truth reads: flow fails more, less, or no difference is shown."""
+    if low > 0:
+        return "flow fails more"
+    return "flow fails less" if high < 0 else "no difference shown"
+
+
+def gap_row(label: str, flow: np.ndarray, truth: np.ndarray) -> list[str]:
+    """A table row: each agent's failure with its interval, flow minus truth paired by layout, its reading."""
+    difference, low, high = paired_difference(flow, truth)
+    return [
+        label,
+        interval(flow.mean(), *failure_interval_over_runs_and_layouts(flow)),
+        interval(truth.mean(), *failure_interval_over_runs_and_layouts(truth)),
+        f"{difference:+.3f} [{low:+.3f}, {high:+.3f}]",
+        gap_reading(low, high),
+    ]
+
+
+def gap_table(flow: str, truth: str, rows: Sequence[list[str]], where: str) -> str:
+    header = [where, f"`{flow}` (flow)", f"`{truth}` (true depths)", "flow − truth [95 % CI]", "reading"]
+    return markdown_table(header, rows)
+
+
+def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, np.ndarray]:
+    """tier → failures (runs, layouts) of ``agent``'s shipped seeds on the suite's frozen layouts, for the
+    tiers every run has flown whole."""
+    path = results / EPISODES_CSV
+    runs = shipped_seed_runs(agent, policies_dir)
+    if not path.is_file() or not runs:
+        return {}
+    rows = [row for row in read_records(path) if row["agent"] in runs]
+    layouts = list(suite_seeds())
+    found = {}
+    for tier_name in TIER_NAMES:
+        try:
+            found[tier_name] = episode_outcomes(
+                [row for row in rows if row["factor"] == tier_name], runs, layouts, "failure"
+            )
+        except ValueError:
+            continue
+    return found
+
+
+def _suite_gap(results: Path, flow: str, truth: str, policies_dir: Path) -> tuple[bool, str]:
+    flow_tiers, truth_tiers = (suite_matrices(results, a, policies_dir) for a in (flow, truth))
+    rows = [
+        gap_row(t, flow_tiers[t], truth_tiers[t]) for t in TIER_NAMES if t in flow_tiers and t in truth_tiers
+    ]
+    return bool(rows), gap_table(flow, truth, rows, "tier") if rows else ""
+
+
+def confirmation_gap(result: Mapping[str, Any], results: Path, policies_dir: Path) -> tuple[bool, str, str]:
+    """The pick against its true-depth recipe on the confirmation layouts: whether flown, the table, and one
+    sentence per condition worded from the intervals."""
+    from agents.studies.confirmation import outcome_matrices
+
+    costs = flow_costs(result)
+    if not costs:
+        return False, "", ""
+    matrices = outcome_matrices(
+        results / "confirmation", (PICK, TRUE_DEPTH_RECIPE), result["layouts"], policies_dir
+    )
+    rows = [
+        gap_row(condition, found[PICK], found[TRUE_DEPTH_RECIPE])
+        for condition, found in matrices.items()
+        if PICK in found and TRUE_DEPTH_RECIPE in found
+    ]
+    sentence = "; ".join(
+        f"{d['condition']}: {d['difference']:+.3f}, {gap_reading(d['low'], d['high'])}" for d in costs
+    )
+    return True, gap_table(PICK, TRUE_DEPTH_RECIPE, rows, "condition"), sentence
+
+
+def _seed_status(policies_dir: Path) -> str:
+    stages = [Path(config).stem for config in TRUE_DEPTH_STAGES]
+    return join_words(
+        [f"`{stage}` {len(shipped_seed_runs(stage, policies_dir))} of {SEEDS_WANTED}" for stage in stages]
+    )
+
+
+def selection_values(result: Mapping[str, Any], search: Mapping[str, Any]) -> Values:
+    """The search as it happened and what the fresh layouts say about the pick, worded from the numbers."""
+    rises = [r for r in result["rises"] if r["agent"] == PICK]
+    limit = 0.10
+    met = [r["condition"] for r in rises if r["high"] <= limit]
+    point_only = [r["condition"] for r in rises if r["rise"] <= limit < r["high"]]
+    missed = [r["condition"] for r in rises if r["rise"] > limit]
+
+    def readings(other: str) -> str:
+        found = [d for d in result["differences"] if d["other"] == other]
+        return "; ".join(
+            f"{d['condition']} {d['difference']:+.3f} [{d['low']:+.3f}, {d['high']:+.3f}]" for d in found
+        )
+
+    def verdict(other: str) -> str:
+        found = [d for d in result["differences"] if d["other"] == other]
+        if found and all(d["high"] < 0 for d in found):
+            return "fails less under every condition"
+        if found and all(d["low"] <= 0 <= d["high"] for d in found):
+            return "shows no difference under any condition"
+        return "differs under some conditions only"
+
+    parts = [
+        f"{how} at {join_words(conditions)}"
+        for how, conditions in (
+            ("with its whole interval", met),
+            ("by point estimate only", point_only),
+        )
+        if conditions
+    ]
+    standing = f"stays within +{limit:.2f} of its clean rate {'; '.join(parts)}" if parts else ""
+    if missed:
+        standing += ("; it " if standing else "") + f"misses that limit at {join_words(missed)}"
+    layouts = search["layouts"]
+    return {
+        "search_count": str(len(search["configs"])),
+        "search_layouts": f"{len(layouts)} ({layouts[0]:,}–{layouts[-1]:,})" if layouts else "0",
+        "confirmation_layouts": str(result["layouts"]),
+        "confirmation_flown": bool(rises),
+        "pick_standing": standing,
+        "first_stage": COMPARED[0],
+        "first_stage_verdict": verdict(COMPARED[0]),
+        "second_stage_shown": any(d["high"] < 0 for d in result["differences"] if d["other"] == COMPARED[0]),
+        "after_the_search": join_words([f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH]),
+        "first_stage_readings": readings(COMPARED[0]),
+        "plain_verdict": verdict(COMPARED[1]),
+        "plain_readings": readings(COMPARED[1]),
+    }
+
+
+def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Values:
+    flow, truth = data.row(PLAIN_FLOW), data.row(PLAIN_TRUTH)
+    clean = data.validation["clean"]
+    suite_flown, suite_table = _suite_gap(results, PLAIN_FLOW, PLAIN_TRUTH, policies_dir)
+    bounds = [(r["failure_low"], r["failure_high"]) for r in (flow, truth)]
+    return {
+        "ppo_steps": f"{data.training[PLAIN_FLOW].config['total_timesteps']:,}",
+        "plain_test_flow": interval(flow["failure_rate"], *bounds[0]),
+        "plain_test_truth": interval(truth["failure_rate"], *bounds[1]),
+        "plain_test_relation": intervals_relation(*bounds),
+        "plain_test_runs": f"{flow['runs']} and {truth['runs']}",
+        "plain_validation_flow": interval(
+            clean[PLAIN_FLOW].rate, clean[PLAIN_FLOW].low, clean[PLAIN_FLOW].high
+        ),
+        "plain_validation_truth": interval(
+            clean[PLAIN_TRUTH].rate, clean[PLAIN_TRUTH].low, clean[PLAIN_TRUTH].high
+        ),
+        "plain_validation_layouts": str(clean[PLAIN_FLOW].episodes // clean[PLAIN_FLOW].runs),
+        "plain_suite_flown": suite_flown,
+        "plain_suite_table": suite_table,
+    }
+
+
+def flow_gap_values(results_dir: Path, policies_dir: Path = POLICIES_DIR) -> Values:
+    """Every value of the flow-gap template, from the committed data under ``results_dir``."""
+    results = Path(results_dir)
+    data = load_benchmark_data(results)
+    result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
+    confirmation_flown, confirmation_table, confirmation_sentence = confirmation_gap(
+        result, results, policies_dir
+    )
+    suite_flown, suite_table = _suite_gap(results, PICK, TRUE_DEPTH_RECIPE, policies_dir)
+    values: Values = {
+        **leaderboard_values(data),
+        **reactive_gap_values(data),
+        **validation_values(data),
+        **issue16_values(data),
+        **_plain_values(data, results, policies_dir),
+        **selection_values(result, search_record(results / "ablation")),
+        "pick": PICK,
+        "pick_name": display_name(PICK),
+        "truth_recipe": TRUE_DEPTH_RECIPE,
+        "truth_seed_status": _seed_status(policies_dir),
+        "truth_train_commands": "\n".join(
+            f"flownav train --config {config} --seeds 0-{SEEDS_WANTED - 1} --parallel 2 --ship"
+            for config in TRUE_DEPTH_STAGES
+        ),
+        "truth_confirmation_flown": confirmation_flown,
+        "truth_confirmation_table": confirmation_table,
+        "truth_confirmation_sentence": confirmation_sentence,
+        "truth_suite_flown": suite_flown,
+        "truth_suite_table": suite_table,
+        "suite_version": SUITE_VERSION,
+        "confirmation_layouts_wanted": str(CONFIRMATION_LAYOUTS),
+    }
+    return values
+
+
+def write_flow_gap(
+    results_dir: Path, out: Path, command: str, policies_dir: Path = POLICIES_DIR
+) -> list[str]:
+    """Write ``out/flow_gap.md`` from the committed data under ``results_dir``.
+
+    Args:
+        results_dir: a folder with the layout of ``results/`` (episodes, ablations, confirmation flights).
+        out: the output folder (created); nothing else is written.
+        command: the command line the report names on its "Generated" line.
+        policies_dir: where the shipped training seeds are (the runs the flights are matched against).
+
+    Returns:
+        The report's lines.
+
+    Raises:
+        FileNotFoundError: a missing input, named in one line.
+        ValueError: an unwritable ``out``, or data the report cannot be worded from.
+    """
+    values = {**flow_gap_values(results_dir, policies_dir), "generated": today(), "command": command}
+    fields = template_fields(FLOW_GAP_TEMPLATE)
+    text = render_template(FLOW_GAP_TEMPLATE, {key: value for key, value in values.items() if key in fields})
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomically(out / "flow_gap.md", text)
+    return text.splitlines()

@@ -1,0 +1,126 @@
+"""What flow costs a learned policy: the paired gap, its wording, and the flights it is read from."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
+from agents.evaluation.csv_file import LEGACY_FIELDS
+from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
+from agents.studies.flow_gap_report import (
+    confirmation_gap,
+    gap_reading,
+    gap_row,
+    selection_values,
+    suite_matrices,
+)
+
+
+def _write_episodes(path: Path, episodes: list[tuple[str, str, float, int, bool]]) -> None:
+    """An episodes CSV in the format from before identities, so its rows match any task's settings."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a", newline="") as handle:
+        writer = csv.writer(handle)
+        if path.stat().st_size == 0:
+            writer.writerow(LEGACY_FIELDS)
+        for agent, factor, level, seed, failed in episodes:
+            writer.writerow(
+                [agent, factor, level, seed, failed, not failed, False, False, 20.0, 20.0, 200, 0.5, 20.4, 100.0,
+                 0.05, 1.0]
+            )  # fmt: skip
+
+
+def _ship(policies: Path, agent: str, seeds: int) -> None:
+    (policies / agent).mkdir(parents=True, exist_ok=True)
+    for seed in range(seeds):
+        (policies / agent / f"seed_{seed}.zip").write_bytes(agent.encode() + bytes([seed]))
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "reading"),
+    [
+        (0.01, 0.05, "flow fails more"),
+        (-0.05, -0.01, "flow fails less"),
+        (-0.02, 0.03, "no difference shown"),
+    ],
+)
+def test_a_gap_is_read_from_where_its_interval_lies(low: float, high: float, reading: str) -> None:
+    assert gap_reading(low, high) == reading
+
+
+def test_a_gap_row_pairs_the_layouts_both_recipes_flew() -> None:
+    rng = np.random.default_rng(0)
+    truth = (rng.random((5, 200)) < 0.05).astype(float)
+    flow = truth.copy()
+    flow[:, :30] = 1.0  # flow fails thirty more layouts with every seed
+    label, flow_cell, truth_cell, difference, reading = gap_row("clean", flow, truth)
+    assert label == "clean"
+    expected = flow.mean() - truth.mean()
+    assert difference.startswith(f"{expected:+.3f} [") and reading == "flow fails more"
+    assert flow_cell.startswith(f"{flow.mean():.2f} [") and truth_cell.startswith(f"{truth.mean():.2f} [")
+
+
+def test_suite_matrices_keep_only_tiers_every_seed_flew_whole(tmp_path: Path) -> None:
+    policies = tmp_path / "policies"
+    _ship(policies, "ppo_flow", 2)
+    layouts = list(suite_seeds())
+    episodes = [(f"ppo_flow@{k}", "clean", 0.0, seed, seed % 10 == 0) for seed in layouts for k in range(2)]
+    episodes += [(f"ppo_flow@{k}", "hard", 0.0, seed, True) for seed in layouts[:-1] for k in range(2)]
+    episodes += [("bee", "noisy", 0.0, seed, False) for seed in layouts]
+    _write_episodes(tmp_path / "suite_episodes.csv", episodes)
+    found = suite_matrices(tmp_path, "ppo_flow", policies)
+    assert list(found) == ["clean"]
+    assert found["clean"].shape == (2, len(layouts)) and found["clean"].mean() == pytest.approx(0.1)
+    assert suite_matrices(tmp_path, "ppo_oracle", policies) == {}
+
+
+def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path) -> None:
+    policies, flights = tmp_path / "policies", tmp_path / "confirmation"
+    for agent in (PICK, *COMPARED, TRUE_DEPTH_RECIPE):
+        _ship(policies, agent, 2)
+    layouts = range(CONFIRMATION_SEED_START, CONFIRMATION_SEED_START + 40)
+    conditions = (("clean", 0.0), ("obstacle_density", 0.18), ("forward_speed", 1.5))
+    for agent, every in ((PICK, 4), (COMPARED[0], 5), (COMPARED[1], 6), (TRUE_DEPTH_RECIPE, 1_000)):
+        episodes = [
+            (f"ppo_flow@{k}", factor, level, seed, seed % every == 0)
+            for factor, level in conditions
+            for seed in layouts
+            for k in range(2)
+        ]
+        _write_episodes(flights / f"{agent}.csv", episodes)
+    result = run_confirmation(flights, layouts=40, report_only=True, policies_dir=policies)
+    flown, table, sentence = confirmation_gap(result, tmp_path, policies)
+    assert flown and table.count("flow fails more") == 3
+    assert sentence.startswith("clean: +0.2") and "density 0.18" in sentence and "speed 1.5 m/s" in sentence
+
+    (flights / f"{TRUE_DEPTH_RECIPE}.csv").unlink()
+    result = run_confirmation(flights, layouts=40, report_only=True, policies_dir=policies)
+    assert confirmation_gap(result, tmp_path, policies) == (False, "", "")
+
+
+def test_the_selection_is_worded_from_the_confirmation() -> None:
+    result = {
+        "layouts": 200,
+        "differences": [
+            {"condition": "clean", "other": COMPARED[0], "difference": -0.01, "low": -0.04, "high": 0.02},
+            {"condition": "clean", "other": COMPARED[1], "difference": -0.06, "low": -0.09, "high": -0.02},
+        ],
+        "rises": [
+            {"condition": "density 0.18", "agent": PICK, "rise": 0.07, "low": 0.02, "high": 0.11},
+            {"condition": "speed 1.5 m/s", "agent": PICK, "rise": 0.12, "low": 0.05, "high": 0.2},
+            {"condition": "speed 1.5 m/s", "agent": "ppo_flow", "rise": 0.01, "low": -0.02, "high": 0.04},
+        ],
+    }
+    values = selection_values(result, {"configs": ["a", "b", "c"], "layouts": [900_000, 900_049]})
+    assert values["pick_standing"] == (
+        "stays within +0.10 of its clean rate by point estimate only at density 0.18; it misses that limit at "
+        "speed 1.5 m/s"
+    )
+    assert values["first_stage_verdict"] == "shows no difference under any condition"
+    assert values["second_stage_shown"] is False
+    assert values["plain_verdict"] == "fails less under every condition"
+    assert values["search_count"] == "3" and values["search_layouts"] == "2 (900,000–900,049)"

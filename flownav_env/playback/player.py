@@ -20,23 +20,19 @@ DISTANCE_PER_FRAME = Range(0.0, 10.0, low_open=True, unit="m")
 
 
 @dataclass(frozen=True)
-class PlaybackSettings:
-    """The test variables of one playback (thesis §5.2, Appendices C–H).
+class PlaybackSettings(SensorSettings):
+    """The test variables of one playback (thesis §5.2, Appendices C–H): the env's sensor settings, declared once
+    in :class:`~flownav_env.settings.SensorSettings` with their ranges and meanings, plus what only playback has.
+
+    The sensor settings act as in the env, with two differences: ``attitude_jitter_deg`` is real (the camera
+    turns) and known (the estimator is told the true motion), and the told motion's drift steps every
+    1/``frame_rate`` of the played path. ``depth_noise``, ``depth_outliers`` and ``depth_dropout`` are refused
+    unless 0: playback runs no estimator (its callers do), so it has no depths to corrupt; apply
+    :func:`flownav_env.sensor_errors.corrupt_depths` to the estimates, or fly the env.
 
     Attributes:
-        brightness: Scene light level, 1 = daylight (range: the env's ``brightness`` setting).
         distance_per_frame: Resample the path to this many metres per frame (:data:`DISTANCE_PER_FRAME`), or
             None to play the recorded frames as they are.
-        attitude_jitter_deg: Camera attitude disturbance per frame, uniform ± this per axis, degrees. The
-            disturbance is real (the camera turns) and known (the estimator is told the true motion).
-        rotation_error: Relative error of each rotation component told to the estimator.
-        translation_error: Relative error of each translation component told to the estimator.
-        rotation_bias, translation_bias, rotation_drift, translation_drift, rotation_noise_deg,
-            translation_noise_m: The told motion's bias, its drift (stepping every 1/``frame_rate`` of the
-            played path) and its noise floor, as the env's settings of the same names define them.
-        depth_noise, depth_outliers, depth_dropout: Refused unless 0: playback runs no estimator (its
-            callers do), so it has no depths to corrupt; apply :func:`flownav_env.sensor_errors.corrupt_depths`
-            to the estimates, or fly the env.
         max_frames: Most frames to play (from the start), an integer >= 2, or None for all.
         seed: Seed of the jitter and motion errors; the same seed gives the same playback.
 
@@ -44,21 +40,7 @@ class PlaybackSettings:
         ValueError: A value is outside its range; the message names it, the value and the range.
     """
 
-    brightness: float = 1.0
     distance_per_frame: float | None = None
-    attitude_jitter_deg: float = 0.0
-    rotation_error: float = 0.0
-    translation_error: float = 0.0
-    rotation_bias: float = 0.0
-    translation_bias: float = 0.0
-    rotation_drift: float = 0.0
-    translation_drift: float = 0.0
-    rotation_noise_deg: float = 0.0
-    translation_noise_m: float = 0.0
-    imu_time_offset_ms: float = 0.0
-    depth_noise: float = 0.0
-    depth_outliers: float = 0.0
-    depth_dropout: float = 0.0
     max_frames: int | None = None
     seed: int = 0
 

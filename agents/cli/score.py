@@ -4,7 +4,8 @@ The agent is a FlowNav agent name, one of your own (``my_pkg.my_module:make_agen
 ``path/to/file.py:make_agent``: a callable returning an object with stable-baselines3's ``predict``, or such an
 object), or a stable-baselines3 model (``--policy model.zip --algo sac``). Writes ``<out>/suite_episodes.csv``
 (resumable) and ``<out>/score.csv``; ``flownav leaderboard --include <out>/score.csv`` sets the rows beside the
-published table. In Python: ``agents.evaluation.suite.score``.
+published table. In Python: ``agents.evaluation.suite.score``. ``--robustness`` adds the agent's failure-versus-
+error curves on the sweep's sensor factors (``agents.studies.robustness.robustness``).
 """
 
 from __future__ import annotations
@@ -32,6 +33,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
     add_tier_arguments(parser)
     parser.add_argument("--out", default="runs/score", help="output folder (default: %(default)s)")
+    parser.add_argument(
+        "--robustness",
+        action="store_true",
+        help="also fly the agent's failure-versus-error curve for each sensor factor of configs/sweep.yaml, on "
+        "the sweep's layouts: robustness.csv, robustness_summary.csv (each curve's area and breaking level), "
+        "robustness.png",
+    )
+    parser.add_argument(
+        "--factors", help="with --robustness: comma-separated sensor factors (default: all of the sweep's)"
+    )
+    parser.add_argument(
+        "--robustness-layouts",
+        type=int,
+        help="with --robustness: the first N of the sweep's layouts per cell (default: the sweep's count)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,6 +64,12 @@ def run(args: argparse.Namespace) -> int:
         agent, policy = sb3_model_name(args.algo, policy), None
     if not agent:
         raise ValueError("give --agent (or --policy model.zip --algo ALGO)")
+    if not args.robustness and (args.factors or args.robustness_layouts is not None):
+        raise ValueError("--factors and --robustness-layouts go with --robustness")
+    if args.robustness:
+        from agents.studies.robustness import robustness_cells
+
+        robustness_cells(args.factors, args.robustness_layouts)  # bad options fail before anything flies
     rows = score(
         agent,
         tiers=args.tiers,
@@ -64,4 +86,24 @@ def run(args: argparse.Namespace) -> int:
         f"rows written to {Path(args.out) / 'score.csv'}; set them beside the published table with "
         f"flownav leaderboard --include {Path(args.out) / 'score.csv'}"
     )
+    if args.robustness:
+        from agents.evaluation.suite import resolve_agent
+        from agents.studies.robustness import robustness, summary_lines
+
+        summary = robustness(
+            resolve_agent(agent, trust_pickle=args.trust_pickle),
+            Path(args.out),
+            factors=args.factors,
+            layouts=args.robustness_layouts,
+            policy=policy,
+            trust_pickle=args.trust_pickle,
+            workers=args.workers,
+            backend=args.backend,
+            address=args.address,
+        )
+        print("\n".join(summary_lines(summary)))
+        print(
+            f"robustness curves written to {Path(args.out) / 'robustness.csv'} and robustness.png; the published "
+            "agents' are in results/sweep.md"
+        )
     return 0

@@ -215,6 +215,101 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Val
     }
 
 
+Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
+
+
+def _cell(matrix: np.ndarray | None) -> Cell | None:
+    if matrix is None:
+        return None
+    return (float(matrix.mean()), *failure_interval_over_runs_and_layouts(matrix))
+
+
+def gap_bars(
+    data: BenchmarkData, result: Mapping[str, Any], results: Path, policies_dir: Path
+) -> dict[str, list[tuple[str, Cell | None, Cell | None]]]:
+    """What the figure shows, per recipe: (where, flow's failure, truth's failure), None where not flown."""
+    flow, truth = data.row(PLAIN_FLOW), data.row(PLAIN_TRUTH)
+    clean = data.validation["clean"]
+    plain: list[tuple[str, Cell | None, Cell | None]] = [
+        (
+            "test, clean",
+            (flow["failure_rate"], flow["failure_low"], flow["failure_high"]),
+            (truth["failure_rate"], truth["failure_low"], truth["failure_high"]),
+        ),
+        (
+            "validation, clean",
+            (clean[PLAIN_FLOW].rate, clean[PLAIN_FLOW].low, clean[PLAIN_FLOW].high),
+            (clean[PLAIN_TRUTH].rate, clean[PLAIN_TRUTH].low, clean[PLAIN_TRUTH].high),
+        ),
+    ]
+    rates = {(r["condition"], r["agent"]): (r["failure"], r["low"], r["high"]) for r in result["rates"]}
+    pick = [
+        (
+            f"fresh validation, {condition}",
+            rates.get((condition, PICK)),
+            rates.get((condition, TRUE_DEPTH_RECIPE)),
+        )
+        for condition in dict.fromkeys(r["condition"] for r in result["rates"])
+    ]
+    for bars, (flow_agent, truth_agent) in (
+        (plain, (PLAIN_FLOW, PLAIN_TRUTH)),
+        (pick, (PICK, TRUE_DEPTH_RECIPE)),
+    ):
+        flow_tiers, truth_tiers = (
+            suite_matrices(results, a, policies_dir) for a in (flow_agent, truth_agent)
+        )
+        bars += [
+            (f"suite, {t}", _cell(flow_tiers.get(t)), _cell(truth_tiers.get(t)))
+            for t in TIER_NAMES
+            if t in flow_tiers or t in truth_tiers
+        ]
+    return {f"`{PLAIN_FLOW}` / `{PLAIN_TRUTH}`": plain, f"the pick / {TRUE_DEPTH_RECIPE}": pick}
+
+
+def plot_gap(panels: Mapping[str, Sequence[tuple[str, Cell | None, Cell | None]]], path: Path) -> None:
+    """A panel per recipe: flow's and truth's failure side by side where each was flown, 95 % intervals."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    widths = [max(1, len(bars)) for bars in panels.values()]
+    fig, axes = plt.subplots(
+        1,
+        len(panels),
+        figsize=(1.0 + 0.9 * sum(widths), 4.0),
+        gridspec_kw={"width_ratios": widths},
+        squeeze=False,
+    )
+    for ax, (title, bars) in zip(axes[0], panels.items(), strict=True):
+        for offset, (index, colour, name) in (
+            (-0.2, (1, "tab:blue", "flow")),
+            (0.2, (2, "tab:orange", "true depths")),
+        ):
+            xs, ys, errors = [], [], [[], []]
+            for x, bar in enumerate(bars):
+                cell = bar[index]
+                if cell is not None:
+                    xs.append(x + offset)
+                    ys.append(cell[0])
+                    errors[0].append(cell[0] - cell[1])
+                    errors[1].append(cell[2] - cell[0])
+            ax.bar(xs, ys, width=0.4, yerr=errors, capsize=3, color=colour, alpha=0.8, label=name)
+        ax.set_xticks(range(len(bars)), [bar[0] for bar in bars], rotation=35, ha="right", fontsize=8)
+        ax.set_ylim(0, 1)
+        ax.set_title(title.replace("`", ""), fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        if not any(bar[2] for bar in bars):
+            ax.text(
+                0.5, 0.9, "true-depth recipe not trained yet", transform=ax.transAxes, ha="center", fontsize=8
+            )
+    axes[0][0].set_ylabel("failure rate (95 % CI)")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def flow_gap_values(results_dir: Path, policies_dir: Path = POLICIES_DIR) -> Values:
     """Every value of the flow-gap template, from the committed data under ``results_dir``."""
     results = Path(results_dir)
@@ -253,7 +348,7 @@ def flow_gap_values(results_dir: Path, policies_dir: Path = POLICIES_DIR) -> Val
 def write_flow_gap(
     results_dir: Path, out: Path, command: str, policies_dir: Path = POLICIES_DIR
 ) -> list[str]:
-    """Write ``out/flow_gap.md`` from the committed data under ``results_dir``.
+    """Write ``out/flow_gap.md`` and its figure ``flow_gap.png`` from the committed data under ``results_dir``.
 
     Args:
         results_dir: a folder with the layout of ``results/`` (episodes, ablations, confirmation flights).
@@ -269,10 +364,14 @@ def write_flow_gap(
         ValueError: an unwritable ``out``, or data the report cannot be worded from.
     """
     values = {**flow_gap_values(results_dir, policies_dir), "generated": today(), "command": command}
+    results = Path(results_dir)
+    result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
+    panels = gap_bars(load_benchmark_data(results), result, results, policies_dir)
     fields = template_fields(FLOW_GAP_TEMPLATE)
     text = render_template(FLOW_GAP_TEMPLATE, {key: value for key, value in values.items() if key in fields})
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
+    plot_gap(panels, out / "flow_gap.png")
     write_text_atomically(out / "flow_gap.md", text)
     return text.splitlines()

@@ -124,3 +124,14 @@ def test_the_selection_is_worded_from_the_confirmation() -> None:
     assert values["second_stage_shown"] is False
     assert values["plain_verdict"] == "fails less under every condition"
     assert values["search_count"] == "3" and values["search_layouts"] == "2 (900,000–900,049)"
+
+
+def test_the_figure_draws_each_recipe_where_it_flew(tmp_path: Path) -> None:
+    from agents.studies.flow_gap_report import plot_gap
+
+    panels = {
+        "plain": [("test, clean", (0.08, 0.06, 0.12), (0.10, 0.05, 0.15))],
+        "pick": [("clean", (0.03, 0.02, 0.05), None), ("hard", (0.4, 0.3, 0.5), None)],
+    }
+    plot_gap(panels, tmp_path / "flow_gap.png")
+    assert (tmp_path / "flow_gap.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

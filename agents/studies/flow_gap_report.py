@@ -197,8 +197,11 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Val
     clean = data.validation["clean"]
     suite_flown, suite_table = _suite_gap(results, PLAIN_FLOW, PLAIN_TRUTH, policies_dir)
     bounds = [(r["failure_low"], r["failure_high"]) for r in (flow, truth)]
+    flow_steps, truth_steps = (data.training[a].config["total_timesteps"] for a in (PLAIN_FLOW, PLAIN_TRUTH))
     return {
-        "ppo_steps": f"{data.training[PLAIN_FLOW].config['total_timesteps']:,}",
+        "ppo_steps": f"{flow_steps:,}",
+        "oracle_steps": f"{truth_steps:,}",
+        "plain_same_budget": flow_steps == truth_steps,
         "plain_test_flow": interval(flow["failure_rate"], *bounds[0]),
         "plain_test_truth": interval(truth["failure_rate"], *bounds[1]),
         "plain_test_relation": intervals_relation(*bounds),

@@ -128,13 +128,28 @@ class ResumableEvalCallback(EvalCallback):
             self.evaluations_length = [list(map(int, n)) for n in lengths[keep]]
         if not self.files.best_model.is_file():
             return
+        if self.files.best_info.is_file() and self._best_mean_return() is None:
+            aside = self.files.best_info.with_name(f"{self.files.best_info.stem}.unreadable.json")
+            with naming_file(aside):
+                os.replace(self.files.best_info, aside)
+            print(f"warning: {self.files.best_info} unreadable; kept as {aside.name}, the best model's return "
+                  "is taken from the evaluations")  # fmt: skip
         if not self.files.best_info.is_file() and earlier:
             # A run from before best_model.json: its best model's return is in the earlier evaluations.
             steps = read_saved_model(self.files.best_model).num_timesteps
             mean = earlier.get(steps, max(earlier.values()))
             write_text_atomically(self.files.best_info, json.dumps({"mean_return": mean, "timesteps": steps}))
-        if self.files.best_info.is_file():
-            self.best_mean_reward = float(json.loads(self.files.best_info.read_text())["mean_return"])
+        best = self._best_mean_return() if self.files.best_info.is_file() else None
+        if best is not None:
+            self.best_mean_reward = best
+
+    def _best_mean_return(self) -> float | None:
+        """The best model's mean return from ``best_model.json``; None when the file is damaged."""
+        try:
+            value = float(json.loads(self.files.best_info.read_text())["mean_return"])
+        except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+            return None
+        return value if np.isfinite(value) else None
 
     def _earlier_evaluations(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The earlier sessions' evaluations; None when there are none, or when they are unreadable: the file

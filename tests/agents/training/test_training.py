@@ -135,6 +135,41 @@ def test_resumed_evaluation_drops_lost_steps_and_knows_an_older_runs_best(
     }
 
 
+@pytest.mark.parametrize(
+    "damaged",
+    [
+        b"",
+        b"{",
+        b"[]",
+        b'{"timesteps": 64}',
+        b'{"mean_return": "high"}',
+        b'{"mean_return": NaN}',
+        b"\xff\xfe",
+    ],
+)
+def test_a_damaged_best_model_record_is_moved_aside_and_rebuilt_from_the_evaluations(
+    resumed_run: ResumedRun, tmp_path: Path, capsys, damaged: bytes
+) -> None:
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    shutil.copytree(resumed_run.files.run_dir, tmp_path / "tiny_ppo")
+    files = RunFiles.of(tmp_path, "tiny_ppo")
+    files.best_info.write_bytes(damaged)
+    with np.load(files.evaluations) as evaluations:
+        means = evaluations["results"].mean(axis=1)
+    capsys.readouterr()
+    eval_env = DummyVecEnv([lambda: gym.make("CartPole-v1")])
+    callback = callbacks.ResumableEvalCallback(eval_env, files, resume_step=128, n_eval_episodes=1)
+    eval_env.close()
+    assert callback.best_mean_reward == pytest.approx(means[int(np.argmax(means))])
+    assert capsys.readouterr().out.splitlines()[-1] == (
+        f"warning: {files.best_info} unreadable; kept as best_model.unreadable.json, the best model's return is "
+        "taken from the evaluations"
+    )
+    assert (files.best_info.parent / "best_model.unreadable.json").read_bytes() == damaged
+    assert json.loads(files.best_info.read_text())["mean_return"] == pytest.approx(callback.best_mean_reward)
+
+
 def test_a_fresh_run_refuses_a_folder_holding_an_earlier_run(resumed_run: ResumedRun) -> None:
     config, _ = tiny_train_config(resumed_run.config_path.parent, total=128)
     with pytest.raises(ValueError, match=r"tiny_ppo already holds a run .*continue it with --resume"):

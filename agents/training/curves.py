@@ -16,6 +16,21 @@ def run_label(evaluations: Path) -> str:
     return stem.removesuffix("_evaluations") if stem != "evaluations" else evaluations.parent.name
 
 
+def load_curve(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The steps and per-episode returns of an ``evaluations.npz``.
+
+    Raises:
+        ValueError: the file is damaged or not an evaluations file; one line naming it and what is wrong.
+    """
+    from agents.training.callbacks import read_evaluations
+
+    try:
+        steps, returns, _ = read_evaluations(path)
+    except ValueError as problem:
+        raise ValueError(f"evaluations file {path} is unreadable: {problem}") from None
+    return steps, returns
+
+
 def plot_learning_curves(
     curves: Mapping[str, Path], output: Path, title: str = "held-out evaluation"
 ) -> None:
@@ -28,8 +43,7 @@ def plot_learning_curves(
 
     fig, ax = plt.subplots(figsize=(6.5, 3.6))
     for label, path in curves.items():
-        data = np.load(path)
-        steps, returns = data["timesteps"], data["results"]
+        steps, returns = load_curve(path)
         line = ax.plot(steps, returns.mean(axis=1), marker="o", markersize=3, label=label)[0]
         if len(curves) == 1:
             ax.fill_between(
@@ -68,8 +82,8 @@ def plot_grouped_learning_curves(
     for axis, (group, curves) in zip(axes.flat, groups.items(), strict=False):
         means = []
         for path in curves.values():
-            data = np.load(path)
-            steps, returns = data["timesteps"], data["results"].mean(axis=1)
+            steps, returns = load_curve(path)
+            returns = returns.mean(axis=1)
             axis.plot(steps, returns, color="tab:blue", alpha=0.35, linewidth=1)
             means.append((steps, returns))
         reached = min(len(steps) for steps, _ in means)

@@ -60,6 +60,7 @@ def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path
             tmp_path / f"{name}_evaluations.npz",
             timesteps=np.array([100, 200, 300]),
             results=scale * np.arange(6.0).reshape(3, 2),
+            ep_lengths=np.full((3, 2), 200),
         )
     out = tmp_path / "curves.png"
     files = [str(tmp_path / "ppo_a_evaluations.npz"), str(tmp_path / "ppo_b_evaluations.npz")]
@@ -68,6 +69,11 @@ def test_curves_command_plots_every_run_and_rejects_missing_files(tmp_path: Path
     assert run_label(Path("runs/ppo_x/evaluations.npz")) == "ppo_x"
     assert main(["curves", str(tmp_path / "none.npz"), "--out", str(out)]) == 2
     assert "evaluations file not found" in capsys.readouterr().err
+    damaged = tmp_path / "ppo_c_evaluations.npz"
+    damaged.write_bytes((tmp_path / "ppo_a_evaluations.npz").read_bytes()[:100])
+    assert main(["curves", files[0], str(damaged), "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert f"evaluations file {damaged} is unreadable: " in error and error.count("\n") == 1
 
 
 def test_grouped_curves_draw_a_panel_per_config_even_when_a_seed_stopped_evaluating_earlier(
@@ -78,7 +84,8 @@ def test_grouped_curves_draw_a_panel_per_config_even_when_a_seed_stopped_evaluat
     def evaluations(name: str, evaluations_done: int) -> Path:
         path = tmp_path / f"{name}.npz"
         steps = np.arange(1, evaluations_done + 1) * 100
-        np.savez(path, timesteps=steps, results=np.outer(steps, [1.0, 2.0]) / 100)
+        lengths = np.full((len(steps), 2), 200)
+        np.savez(path, timesteps=steps, results=np.outer(steps, [1.0, 2.0]) / 100, ep_lengths=lengths)
         return path
 
     groups = {
@@ -151,8 +158,14 @@ def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypa
     monkeypatch.setattr(runner, "execute", made_up)
     assert main(["demo", "--episodes", "5"]) == 0
     out = capsys.readouterr().out
-    assert "Only 5 episodes per agent: a quick look, not a ranking (the widest 95 % interval below spans 0.43)" in out
-    assert f"every agent on 300 test layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'}" in out
+    assert (
+        "Only 5 episodes per agent: a quick look, not a ranking (the widest 95 % interval below spans 0.43)"
+        in out
+    )
+    assert (
+        f"every agent on 300 test layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'}"
+        in out
+    )
     table = [line for line in out.splitlines() if line.startswith("|")]
     assert table[0].startswith("| agent | episodes | failure rate [95 % CI] |")  # no constant factor, level
     assert any(line.startswith("| ppo_flow | 5 | 0.00 [0.00, 0.43] |") for line in table)  # seeds pooled

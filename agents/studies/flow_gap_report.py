@@ -334,8 +334,9 @@ def flow_gap_values(results_dir: Path, policies_dir: Path = POLICIES_DIR) -> Val
         "truth_recipe": TRUE_DEPTH_RECIPE,
         "truth_seed_status": _seed_status(policies_dir),
         "truth_train_commands": "\n".join(
-            f"flownav train --config {config} --seeds 0-{SEEDS_WANTED - 1} --parallel 2 --ship"
+            f"flownav {step} --config {config} --seeds 0-{SEEDS_WANTED - 1}{options} --ship"
             for config in TRUE_DEPTH_STAGES
+            for step, options in (("train", " --parallel 2"), ("select", ""))
         ),
         "truth_confirmation_flown": confirmation_flown,
         "truth_confirmation_table": confirmation_table,

@@ -131,11 +131,11 @@ def test_a_bad_only_name_is_one_line_naming_it_and_the_allowed_names(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     allowed = ", ".join(report_names())
-    message = f"--only: no regenerated report is called 'flow-gap' (one of: {allowed})"
+    message = f"--only: no regenerated report is called 'lab-notes' (one of: {allowed})"
     with pytest.raises(ValueError) as error:
-        select_reports(["leaderboard", "flow-gap"])
+        select_reports(["leaderboard", "lab-notes"])
     assert type(error.value) is ValueError and str(error.value) == message
-    assert main(["reports", "--only", "leaderboard,flow-gap"]) == 2
+    assert main(["reports", "--only", "leaderboard,lab-notes"]) == 2
     assert capsys.readouterr().err == f"flownav reports: error: {message}\n"
 
 

@@ -70,17 +70,15 @@ def run(args: argparse.Namespace) -> int:
         from agents.studies.robustness import robustness_cells
 
         robustness_cells(args.factors, args.robustness_layouts)  # bad options fail before anything flies
-    rows = score(
-        agent,
-        tiers=args.tiers,
-        layouts=args.layouts,
-        out=Path(args.out),
-        policy=policy,
-        trust_pickle=args.trust_pickle,
-        workers=args.workers,
-        backend=args.backend,
-        address=args.address,
-    )
+    # What both flights share: the agent's policy file and where the episodes fly.
+    common = {
+        "policy": policy,
+        "trust_pickle": args.trust_pickle,
+        "workers": args.workers,
+        "backend": args.backend,
+        "address": args.address,
+    }
+    rows = score(agent, tiers=args.tiers, layouts=args.layouts, out=Path(args.out), **common)
     print("\n".join(tier_tables(rows)))
     print(
         f"rows written to {Path(args.out) / 'score.csv'}; set them beside the published table with "
@@ -95,11 +93,7 @@ def run(args: argparse.Namespace) -> int:
             Path(args.out),
             factors=args.factors,
             layouts=args.robustness_layouts,
-            policy=policy,
-            trust_pickle=args.trust_pickle,
-            workers=args.workers,
-            backend=args.backend,
-            address=args.address,
+            **common,
         )
         print("\n".join(summary_lines(summary)))
         print(

@@ -313,11 +313,15 @@ def plot_gap(panels: Mapping[str, Sequence[tuple[str, Cell | None, Cell | None]]
     plt.close(fig)
 
 
-def flow_gap_values(results_dir: Path, policies_dir: Path = POLICIES_DIR) -> Values:
-    """Every value of the flow-gap template, from the committed data under ``results_dir``."""
+def flow_gap_values(
+    results_dir: Path, policies_dir: Path = POLICIES_DIR, result: Mapping[str, Any] | None = None
+) -> Values:
+    """Every value of the flow-gap template, from the committed data under ``results_dir``; ``result``: the
+    confirmation's comparison (:func:`run_confirmation`) when the caller has it already."""
     results = Path(results_dir)
     data = load_benchmark_data(results)
-    result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
+    if result is None:
+        result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     confirmation_flown, confirmation_table, confirmation_sentence = confirmation_gap(
         result, results, policies_dir
     )
@@ -367,9 +371,9 @@ def write_flow_gap(
         FileNotFoundError: a missing input, named in one line.
         ValueError: an unwritable ``out``, or data the report cannot be worded from.
     """
-    values = {**flow_gap_values(results_dir, policies_dir), "generated": today(), "command": command}
     results = Path(results_dir)
     result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
+    values = {**flow_gap_values(results, policies_dir, result), "generated": today(), "command": command}
     panels = gap_bars(load_benchmark_data(results), result, results, policies_dir)
     fields = template_fields(FLOW_GAP_TEMPLATE)
     text = render_template(FLOW_GAP_TEMPLATE, {key: value for key, value in values.items() if key in fields})

@@ -23,7 +23,7 @@ from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
 from agents.evaluation.suite_report import HEADROOM_FAILURE
-from agents.policies import AGENT_NAMES, runs_to_fly
+from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
 
@@ -36,7 +36,18 @@ CANDIDATE_COURSES = tuple(
 # agents trail them everywhere there, results/sweep.md); every agent flies stage 2.
 COURSE_AGENTS = ("bee_robust", "bee_ttc", "ppo_flow_course_approach_curriculum_slow")
 STAGES = ("course", "tiers")
-TIER_AGENTS = tuple(name for name in AGENT_NAMES if name != "straight")
+# The agents the tiers were calibrated with when suite version 1 was frozen; an agent added later (issue 33's
+# true-depth recipe) is scored on the frozen tiers by `flownav suite`, not flown into the calibration.
+TIER_AGENTS = (
+    "bee",
+    "bee_robust",
+    "bee_ttc",
+    "vfh",
+    "ppo_flow",
+    "ppo_robust",
+    "ppo_oracle",
+    "ppo_flow_course_approach_curriculum_slow",
+)
 CALIBRATION_LAYOUTS = 100
 # The clean tier is today's defaults, flown on validation layouts many times already (results/ablation/).
 CALIBRATED_TIERS = tuple(name for name in TIER_NAMES if name != "clean")

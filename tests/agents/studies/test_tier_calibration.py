@@ -1,0 +1,27 @@
+"""The tiers' calibration (agents/studies/tier_calibration.py) against its committed episodes."""
+
+from __future__ import annotations
+
+from agents.common.locations import RESULTS_DIR
+from agents.evaluation.records import read_records
+from agents.policies import AGENT_NAMES
+from agents.policies.base import base_agent_name
+from agents.studies.tier_calibration import COURSE_AGENTS, EPISODES_CSV, TIER_AGENTS, course_label
+
+CALIBRATION = RESULTS_DIR / "suite_calibration" / EPISODES_CSV
+
+
+def test_the_calibration_agents_are_those_that_flew_the_frozen_calibration() -> None:
+    rows = read_records(CALIBRATION)
+    tier_flyers = {base_agent_name(r["agent"]) for r in rows if r["factor"].startswith("tier:")}
+    course_flyers = {base_agent_name(r["agent"]) for r in rows if not r["factor"].startswith("tier:")}
+    assert tier_flyers == set(TIER_AGENTS)
+    assert course_flyers == set(COURSE_AGENTS)
+    # An agent added after suite version 1 was frozen is scored by `flownav suite`, never flown into it.
+    assert set(TIER_AGENTS) <= set(AGENT_NAMES) and "straight" not in TIER_AGENTS
+
+
+def test_a_course_label_names_its_settings_in_a_fixed_order() -> None:
+    assert course_label({"obstacle_density": 0.18, "forward_speed": 2.0}) == (
+        "forward_speed=2.0,obstacle_density=0.18"
+    )

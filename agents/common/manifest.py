@@ -7,8 +7,11 @@ dropped in (``sha256sum -c MANIFEST.sha256`` checks the folder by hand).
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 MANIFEST_NAME = "MANIFEST.sha256"
@@ -51,13 +54,28 @@ def write_manifest(manifest: Path, entries: dict[str, str]) -> None:
     os.replace(temporary, manifest)
 
 
+@contextmanager
+def manifest_lock(manifest: Path) -> Iterator[None]:
+    """Holds an exclusive ``flock`` on the folder of ``manifest`` for the block, so that two processes shipping
+    seeds into one folder at once each add their entry instead of one overwriting the other's. The folder
+    itself is locked, so no lock file is left among the shipped ones."""
+    descriptor = os.open(manifest.parent, os.O_RDONLY)
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(descriptor)  # closing the descriptor releases its lock
+
+
 def record_in_manifest(directory: Path, file_names: list[str]) -> Path:
-    """Add or update ``file_names`` (files in ``directory``) in its manifest; returns the manifest's path."""
+    """Add or update ``file_names`` (files in ``directory``) in its manifest, read and rewritten under
+    :func:`manifest_lock`; returns the manifest's path."""
     manifest = Path(directory) / MANIFEST_NAME
-    entries = read_manifest(manifest)
-    for name in file_names:
-        entries[name] = file_sha256(Path(directory) / name)
-    write_manifest(manifest, entries)
+    with manifest_lock(manifest):
+        entries = read_manifest(manifest)
+        for name in file_names:
+            entries[name] = file_sha256(Path(directory) / name)
+        write_manifest(manifest, entries)
     return manifest
 
 

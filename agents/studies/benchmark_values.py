@@ -48,6 +48,7 @@ DESCRIPTIONS = {
     "ppo_robust": "PPO on flow, sensor errors in training",
     "ppo_oracle": "PPO on true depths, same points",
     WINNER: "PPO on flow and the rate of approach, over speeds and densities; issue 16's winner",
+    f"{WINNER}_oracle": "the winner's recipe on true depths, same points",
 }
 VSEP = "–"
 

@@ -48,6 +48,7 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
+from agents.studies.flow_gap_figure import Cell, plot_gap
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 FLOW_GAP_TEMPLATE = TEMPLATES / "flow_gap.md"
@@ -103,6 +104,26 @@ def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR)
         except ValueError:
             continue
     return found
+
+
+def leaderboard_matrix(
+    data: BenchmarkData, results: Path, agent: str, policies_dir: Path
+) -> np.ndarray | None:
+    """Failures (runs, layouts) of ``agent``'s shipped seeds on the leading clean table's test layouts, or None
+    where it is not in that table (not flown yet)."""
+    runs = shipped_seed_runs(agent, policies_dir)
+    if not runs or not any(r["agent"] == agent for r in data.leaderboard):
+        return None
+    rows = [row for row in read_records(results / "leaderboard_episodes.csv") if row["agent"] in runs]
+    return episode_outcomes(rows, runs, data.layouts, "failure")
+
+
+def _test_gap(data: BenchmarkData, results: Path, policies_dir: Path) -> tuple[bool, str]:
+    """The pick against its recipe on true depths on the leading clean table's test layouts, paired by layout."""
+    flow, truth = (leaderboard_matrix(data, results, a, policies_dir) for a in (PICK, TRUE_DEPTH_RECIPE))
+    if flow is None or truth is None:
+        return False, ""
+    return True, gap_table(PICK, TRUE_DEPTH_RECIPE, [gap_row("clean", flow, truth)], "test layouts")
 
 
 def _suite_gap(results: Path, flow: str, truth: str, policies_dir: Path) -> tuple[bool, str]:
@@ -218,9 +239,6 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Val
     }
 
 
-Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
-
-
 def _cell(matrix: np.ndarray | None) -> Cell | None:
     if matrix is None:
         return None
@@ -269,50 +287,6 @@ def gap_bars(
     return {f"`{PLAIN_FLOW}` / `{PLAIN_TRUTH}`": plain, f"the pick / {TRUE_DEPTH_RECIPE}": pick}
 
 
-def plot_gap(panels: Mapping[str, Sequence[tuple[str, Cell | None, Cell | None]]], path: Path) -> None:
-    """A panel per recipe: flow's and truth's failure side by side where each was flown, 95 % intervals."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    widths = [max(1, len(bars)) for bars in panels.values()]
-    fig, axes = plt.subplots(
-        1,
-        len(panels),
-        figsize=(1.0 + 0.9 * sum(widths), 4.0),
-        gridspec_kw={"width_ratios": widths},
-        squeeze=False,
-    )
-    for ax, (title, bars) in zip(axes[0], panels.items(), strict=True):
-        for offset, (index, colour, name) in (
-            (-0.2, (1, "tab:blue", "flow")),
-            (0.2, (2, "tab:orange", "true depths")),
-        ):
-            xs, ys, errors = [], [], [[], []]
-            for x, bar in enumerate(bars):
-                cell = bar[index]
-                if cell is not None:
-                    xs.append(x + offset)
-                    ys.append(cell[0])
-                    errors[0].append(cell[0] - cell[1])
-                    errors[1].append(cell[2] - cell[0])
-            ax.bar(xs, ys, width=0.4, yerr=errors, capsize=3, color=colour, alpha=0.8, label=name)
-        ax.set_xticks(range(len(bars)), [bar[0] for bar in bars], rotation=35, ha="right", fontsize=8)
-        ax.set_ylim(0, 1)
-        ax.set_title(title.replace("`", ""), fontsize=9)
-        ax.grid(alpha=0.3, axis="y")
-        if not any(bar[2] for bar in bars):
-            ax.text(
-                0.5, 0.9, "true-depth recipe not trained yet", transform=ax.transAxes, ha="center", fontsize=8
-            )
-    axes[0][0].set_ylabel("failure rate (95 % CI)")
-    axes[0][0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
 def flow_gap_values(
     results_dir: Path, policies_dir: Path = POLICIES_DIR, result: Mapping[str, Any] | None = None
 ) -> Values:
@@ -326,6 +300,7 @@ def flow_gap_values(
         result, results, policies_dir
     )
     suite_flown, suite_table = _suite_gap(results, PICK, TRUE_DEPTH_RECIPE, policies_dir)
+    test_flown, test_table = _test_gap(data, results, policies_dir)
     values: Values = {
         **leaderboard_values(data),
         **reactive_gap_values(data),
@@ -345,6 +320,8 @@ def flow_gap_values(
         "truth_confirmation_flown": confirmation_flown,
         "truth_confirmation_table": confirmation_table,
         "truth_confirmation_sentence": confirmation_sentence,
+        "truth_test_flown": test_flown,
+        "truth_test_table": test_table,
         "truth_suite_flown": suite_flown,
         "truth_suite_table": suite_table,
         "suite_version": SUITE_VERSION,

@@ -15,6 +15,7 @@ from agents.studies.flow_gap_report import (
     confirmation_gap,
     gap_reading,
     gap_row,
+    leaderboard_matrix,
     selection_values,
     suite_matrices,
 )
@@ -78,6 +79,22 @@ def test_suite_matrices_keep_only_tiers_every_seed_flew_whole(tmp_path: Path) ->
     assert suite_matrices(tmp_path, "ppo_oracle", policies) == {}
 
 
+def test_the_clean_test_gap_reads_the_leading_tables_episodes_of_each_shipped_seed(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    policies = tmp_path / "policies"
+    _ship(policies, PICK, 2)
+    layouts = list(range(1_000_000, 1_000_020))
+    episodes = [(f"{PICK}@{k}", "clean", 0.0, seed, seed % 4 == 0) for seed in layouts for k in range(2)]
+    _write_episodes(tmp_path / "leaderboard_episodes.csv", episodes)
+    data = SimpleNamespace(leaderboard=[{"agent": PICK}], layouts=layouts)
+    found = leaderboard_matrix(data, tmp_path, PICK, policies)
+    assert found is not None and found.shape == (2, 20) and found.mean() == pytest.approx(0.25)
+    # not in the table yet, or no seeds shipped: nothing to pair
+    assert leaderboard_matrix(data, tmp_path, TRUE_DEPTH_RECIPE, policies) is None
+    assert leaderboard_matrix(SimpleNamespace(leaderboard=[], layouts=layouts), tmp_path, PICK, policies) is None
+
+
 def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path) -> None:
     policies, flights = tmp_path / "policies", tmp_path / "confirmation"
     for agent in (PICK, *COMPARED, TRUE_DEPTH_RECIPE):
@@ -127,7 +144,7 @@ def test_the_selection_is_worded_from_the_confirmation() -> None:
 
 
 def test_the_figure_draws_each_recipe_where_it_flew(tmp_path: Path) -> None:
-    from agents.studies.flow_gap_report import plot_gap
+    from agents.studies.flow_gap_figure import plot_gap
 
     panels = {
         "plain": [("test, clean", (0.08, 0.06, 0.12), (0.10, 0.05, 0.15))],

@@ -16,6 +16,8 @@ from agents.policies.base import base_agent_name
 
 # Issue 16's winner, chosen on validation layouts (results/flow_gap.md): the reports call it "the winner".
 WINNER = "ppo_flow_course_approach_curriculum_slow"
+# The winner's recipe, both stages and the same budget, on the true depths at the same tracked points (issue 33).
+WINNER_ON_TRUE_DEPTHS = f"{WINNER}_oracle"
 
 
 def display_name(agent: str) -> str:

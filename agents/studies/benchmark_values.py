@@ -14,6 +14,7 @@ from agents.common.tables import markdown_table
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_claims import (
     WINNER,
+    WINNER_ON_TRUE_DEPTHS,
     delta,
     display_name,
     every_or_all_but,
@@ -48,7 +49,7 @@ DESCRIPTIONS = {
     "ppo_robust": "PPO on flow, sensor errors in training",
     "ppo_oracle": "PPO on true depths, same points",
     WINNER: "PPO on flow and the rate of approach, over speeds and densities; issue 16's winner",
-    f"{WINNER}_oracle": "the winner's recipe on true depths, same points",
+    WINNER_ON_TRUE_DEPTHS: "the winner's recipe on true depths, same points",
 }
 VSEP = "–"
 
@@ -177,7 +178,13 @@ def reactive_gap_values(data: BenchmarkData) -> Values:
         return row["failure_low"] > ttc["failure_high"]
 
     closing = (flow["failure_rate"] - winner["failure_rate"]) / (flow["failure_rate"] - ttc["failure_rate"])
+    # The winner's recipe on true depths (issue 33) once it is in the leading table.
+    truth = next((r for r in data.leaderboard if r["agent"] == WINNER_ON_TRUE_DEPTHS), None)
     return {
+        "truth_recipe": WINNER_ON_TRUE_DEPTHS,
+        "truth_recipe_flown": truth is not None,
+        "fail_truth_recipe": _fail(truth) if truth else "",
+        "winner_vs_truth_recipe": intervals_relation(_row_interval(winner), _row_interval(truth)) if truth else "",
         "learned_beats_reactive": best_gain["low"] > 0.5,
         "best_learned": f"`{best_learned['agent']}`",
         "best_reactive": f"`{best_reactive['agent']}`",

@@ -23,13 +23,14 @@ from agents.evaluation.over_seeds import success_outcomes
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.policies import seeded_agent_name, trained_seeds
+from agents.studies.benchmark_claims import WINNER, WINNER_ON_TRUE_DEPTHS
 
-PICK = "ppo_flow_course_approach_curriculum_slow"
+PICK = WINNER
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.
 COMPARED = ("ppo_flow_course_approach", "ppo_flow")
 # The pick's recipe, both stages and the same budget, trained on the true depths at the same tracked points
 # (issue 33): the pick minus it is what optical flow costs this learned policy. Flown once its seeds are shipped.
-TRUE_DEPTH_RECIPE = f"{PICK}_oracle"
+TRUE_DEPTH_RECIPE = WINNER_ON_TRUE_DEPTHS
 CONDITIONS: dict[str, dict[str, float]] = {
     "clean": {},
     "density 0.18": {"obstacle_density": 0.18},

@@ -144,3 +144,21 @@ def test_generated_blocks_are_committed_idempotent_and_local(tmp_path: Path, sou
     assert first == committed and copy.read_text() == committed
     assert writer(RESULTS_DIR, copy) == first
     assert _outside(first, markers) == _outside(stale, markers)
+
+
+@pytest.mark.slow
+def test_the_winners_true_depth_recipe_is_worded_once_it_is_in_the_leading_table() -> None:
+    import dataclasses
+
+    from agents.studies.benchmark_claims import WINNER, WINNER_ON_TRUE_DEPTHS
+    from agents.studies.benchmark_data import load_benchmark_data
+    from agents.studies.benchmark_values import reactive_gap_values
+
+    data = load_benchmark_data(RESULTS_DIR)
+    others = [r for r in data.leaderboard if r["agent"] != WINNER_ON_TRUE_DEPTHS]
+    assert reactive_gap_values(dataclasses.replace(data, leaderboard=others))["truth_recipe_flown"] is False
+    # a row failing like the winner reads as overlapping it
+    twin = {**data.row(WINNER), "agent": WINNER_ON_TRUE_DEPTHS}
+    values = reactive_gap_values(dataclasses.replace(data, leaderboard=[*others, twin]))
+    assert values["truth_recipe_flown"] is True and values["fail_truth_recipe"] == values["fail_winner"]
+    assert values["winner_vs_truth_recipe"] == "intervals overlapping"

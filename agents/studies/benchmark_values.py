@@ -180,11 +180,12 @@ def reactive_gap_values(data: BenchmarkData) -> Values:
     closing = (flow["failure_rate"] - winner["failure_rate"]) / (flow["failure_rate"] - ttc["failure_rate"])
     # The winner's recipe on true depths (issue 33) once it is in the leading table.
     truth = next((r for r in data.leaderboard if r["agent"] == WINNER_ON_TRUE_DEPTHS), None)
+    truth_relation = intervals_relation(_row_interval(winner), _row_interval(truth)) if truth else ""
     return {
         "truth_recipe": WINNER_ON_TRUE_DEPTHS,
         "truth_recipe_flown": truth is not None,
         "fail_truth_recipe": _fail(truth) if truth else "",
-        "winner_vs_truth_recipe": intervals_relation(_row_interval(winner), _row_interval(truth)) if truth else "",
+        "winner_vs_truth_recipe": truth_relation,
         "learned_beats_reactive": best_gain["low"] > 0.5,
         "best_learned": f"`{best_learned['agent']}`",
         "best_reactive": f"`{best_reactive['agent']}`",

@@ -9,7 +9,15 @@ import numpy as np
 REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
 # ppo_flow_course_approach_curriculum_slow: issue 16's winner, trained from configs/experiments/ (its name lists
 # its levers: course distribution, approach input, a gentler second curriculum stage; results/flow_gap.md).
-LEARNED_AGENTS = ("ppo_flow", "ppo_robust", "ppo_oracle", "ppo_flow_course_approach_curriculum_slow")
+# ppo_flow_course_approach_curriculum_slow_oracle: the same recipe told the true depths at the same tracked points,
+# the yardstick of what flow costs it (issue 33), as ppo_oracle is ppo_flow's.
+LEARNED_AGENTS = (
+    "ppo_flow",
+    "ppo_robust",
+    "ppo_oracle",
+    "ppo_flow_course_approach_curriculum_slow",
+    "ppo_flow_course_approach_curriculum_slow_oracle",
+)
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
 # results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.

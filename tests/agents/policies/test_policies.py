@@ -131,6 +131,10 @@ def test_every_learned_agent_ships_verified_training_seeds_that_fly_with_their_o
     # issue 16's winner reads the approach input it was trained on; its seeds act on a real env.
     winner = "ppo_flow_course_approach_curriculum_slow"
     assert agent_env_kwargs(f"{winner}@4")["observe_approach"] is True
+    # its recipe on true depths reads the same inputs, the true depth at the same tracked points in place of flow's
+    truth = agent_env_kwargs(f"{winner}_oracle@4")
+    assert truth["observe_approach"] is True and truth["obs_source"] == "oracle"
+    assert agent_env_kwargs(f"{winner}@4").get("obs_source", "flow") == "flow"
     env = gym.make("FlowNav-v0", **agent_env_kwargs(f"{winner}@0"), **SMALL)
     observation, _ = env.reset(seed=TEST_SEED_START)
     env.close()

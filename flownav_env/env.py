@@ -95,9 +95,13 @@ class FlowNavEnv(gym.Env):
     ## Episode End
     ### Termination
     1. Collision: any contact of the drone with an obstacle or the ground (``info["collision"]``).
-    2. Goal: the drone crosses the goal line at the far end of the course (``info["success"]``).
-    3. Out of bounds: more than ``lateral_bound`` metres sideways of the course axis or above
+    2. Out of bounds: more than ``lateral_bound`` metres sideways of the course axis or above
        ``max_height`` (``info["out_of_bounds"]``), so that flying around or over the field is no solution.
+    3. Goal: the drone crosses the goal line at the far end of the course, in bounds (``info["success"]``).
+
+    The three are exclusive, in this order (``flownav_env.task.episode_outcome``): a step that collides out of
+    bounds is a collision, one that reaches the goal line out of bounds is out of bounds. After termination,
+    ``step`` raises until ``reset``.
     ### Truncation
     The time limit: ``max_episode_steps`` given at registration (400 steps for ``FlowNav-v0``, 40 s).
 
@@ -119,6 +123,8 @@ class FlowNavEnv(gym.Env):
     ## Version History
     * v0: initial version (FAST threshold 10 since the benchmark's second sweep; 20 before). Since 2026-11-23 the
       camera's near plane is at 5 cm (it was 1.22 m, and nearer capsules rendered hollow): results differ.
+      Since 2026-12-04 the outcomes are exclusive (an episode reaching the goal line out of bounds was counted
+      a success too; trajectories are unchanged) and ``step`` after termination raises.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES), "render_fps": 10}
@@ -158,6 +164,8 @@ class FlowNavEnv(gym.Env):
         self.action_space = action_space()
         self._frame: np.ndarray | None = None
         self._depth_points: DepthPoints | None = None
+        # Set by reset, cleared by a terminating step: a step after the end would count the end twice.
+        self._episode_running = False
 
     @property
     def depth_bin_edges(self) -> np.ndarray:  # as a float64 array (m)
@@ -195,10 +203,11 @@ class FlowNavEnv(gym.Env):
         self.estimator.reset()
         points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
         observation = self.task.observe(physics, settings, points, np.zeros(0))
+        self._episode_running = True
         return observation, self.task.start_info() | estimator_info(points, np.zeros(0))
 
     def step(self, action):
-        self._require_open("step")
+        self._require_episode()
         action = checked_action(action)
         settings, rng, physics, task = self.settings, self.np_random, self.physics, self.task
         x_before = physics.position()[0]
@@ -217,6 +226,7 @@ class FlowNavEnv(gym.Env):
         observation = task.observe(physics, settings, points, true_depth)
         outcome = task.outcome(physics, settings, x_before, collision)
         terms = task.reward(settings, outcome, action)
+        self._episode_running = not outcome.terminated
         info = {
             **outcome.info(),
             "true_rotation": motion.true_motion[0],
@@ -251,6 +261,14 @@ class FlowNavEnv(gym.Env):
         if self._view is not None:
             self._view.close()
             self._view = None
+
+    def _require_episode(self) -> None:
+        self._require_open("step")
+        if not self._episode_running:
+            raise RuntimeError(
+                "step() called with no episode running: the last one terminated (or none was started); "
+                "call reset() first"
+            )
 
     def _require_open(self, method: str) -> None:
         # A closed env would quietly make a new GL context; a closed env is a bug in the caller.

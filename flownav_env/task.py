@@ -27,6 +27,20 @@ from flownav_env.quadrotor import velocity_command
 from flownav_env.scene import LAYOUT_FUNCTIONS, material_names
 from flownav_env.settings import EnvSettings
 
+# How an episode can end, exactly one each: an episode that ends on none of the first three ran out of time.
+EPISODE_OUTCOMES = ("success", "collision", "out_of_bounds", "timeout")
+
+
+def episode_outcome(collision: bool, out_of_bounds: bool, success: bool) -> str:
+    """The one :data:`EPISODE_OUTCOMES` entry of an episode whose last step had these flags, which may hold
+    together: a collision outranks the rest (the drone touched something, wherever it was), then leaving the
+    bounds (reaching the goal line out of bounds is out of bounds), then the goal; none of them is a timeout."""
+    if collision:
+        return "collision"
+    if out_of_bounds:
+        return "out_of_bounds"
+    return "success" if success else "timeout"
+
 
 @dataclass(frozen=True)
 class StepOutcome:
@@ -34,8 +48,9 @@ class StepOutcome:
 
     Attributes:
         collision: The drone touched an obstacle or the ground.
-        success: It crossed the goal line without a collision.
-        out_of_bounds: It is more than ``lateral_bound`` sideways of the course axis or above ``max_height``.
+        success: It crossed the goal line, in bounds, without a collision.
+        out_of_bounds: It is more than ``lateral_bound`` sideways of the course axis or above ``max_height``,
+            without a collision. At most one of the three holds (:func:`episode_outcome`).
         position: Its world position, m.
         progress_m: Metres gained toward the goal line this step.
         clearance: Distance from its centre to the nearest capsule surface, m (inf without capsules).
@@ -168,8 +183,9 @@ class FlowNavTask:
         position = physics.position()
         clearance = physics.obstacle_clearance()
         self.min_clearance = min(self.min_clearance, clearance)
-        success = bool(position[0] >= self.goal_x and not collision)
-        out_of_bounds = bool(abs(position[1]) > settings.lateral_bound or position[2] > settings.max_height)
+        outside = bool(abs(position[1]) > settings.lateral_bound or position[2] > settings.max_height)
+        ended = episode_outcome(collision, outside, bool(position[0] >= self.goal_x))
+        success, out_of_bounds = ended == "success", ended == "out_of_bounds"
         progress = float(position[0] - x_before)
         return StepOutcome(
             collision, success, out_of_bounds, position, progress, clearance, self.min_clearance

@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
+
+from flownav_env.settings import EnvSettings
 
 # Bump with any change to a tier's settings (and the ids' -vN); every suite result row carries it.
 SUITE_VERSION = "1"
@@ -122,3 +124,88 @@ def tier(name: str) -> Tier:
     if name not in TIERS:
         raise ValueError(f"tier must be one of {', '.join(TIER_NAMES)}, got {name!r}")
     return TIERS[name]
+
+
+# The only settings an agent may choose on a tier: each adds an observation key (or shapes one, for
+# ``near_smoothing``), so it changes what the agent is shown, never the course it flies or the sensor's errors.
+AGENT_OBSERVATION_SETTINGS = (
+    "observe_unresolved",
+    "observe_counts",
+    "observe_nearness",
+    "observe_approach",
+    "near_smoothing",
+)
+# Setting values that show an agent what no tier's sensor gives: asked for only by an agent declared privileged.
+PRIVILEGED_SETTING_VALUES: dict[str, tuple[Any, ...]] = {"obs_source": ("oracle", "oracle_valid")}
+
+
+def tier_value(tier_name: str, setting: str) -> Any:
+    """The value ``tier_name`` flies ``setting`` with: the tier's own, else the env's default (a tier fixes
+    every setting an agent may not choose).
+
+    Raises:
+        ValueError: an unknown tier or setting.
+    """
+    spec = tier(tier_name)
+    defaults = {item.name: item.default for item in fields(EnvSettings)}
+    if setting not in defaults:
+        raise ValueError(f"{setting!r} is not a FlowNav env setting")
+    return spec.settings.get(setting, defaults[setting])
+
+
+def privileged_requests(wanted: Mapping[str, Any]) -> dict[str, Any]:
+    """The entries of ``wanted`` (env settings an agent asks for) that would show it privileged data."""
+    return {
+        key: value
+        for key, value in wanted.items()
+        if key in PRIVILEGED_SETTING_VALUES and value in PRIVILEGED_SETTING_VALUES[key]
+    }
+
+
+def check_agent_settings(
+    agent: str, wanted: Mapping[str, Any], tier_name: str, *, privileged: bool = False
+) -> None:
+    """Refuse an agent that asks ``tier_name`` for anything but observation keys, so every agent on a tier flies
+    the same task. Asking for a setting's tier value is no change and passes; privileged data (true depths)
+    passes only for an agent declared ``privileged``.
+
+    Raises:
+        ValueError: one line naming the agent, the setting, the value asked for and the tier's value.
+    """
+    for key, value in wanted.items():
+        if key in AGENT_OBSERVATION_SETTINGS:
+            continue
+        fixed = tier_value(tier_name, key)
+        if key in privileged_requests({key: value}):
+            if privileged:
+                continue
+            raise ValueError(
+                f"agent {agent} asks for {key}={value!r}, privileged data the tier {tier_name} sensor does not "
+                "give; only an agent declared privileged (privileged = True) may, and it is listed as a "
+                "reference, never ranked"
+            )
+        if value != fixed:
+            raise ValueError(
+                f"agent {agent} asks for {key}={value!r}, but tier {tier_name} fixes {key}={fixed!r}: an agent "
+                f"may choose only {', '.join(AGENT_OBSERVATION_SETTINGS)}"
+            )
+
+
+def check_flown_settings(
+    agent: str, flown: Mapping[str, Any], tier_name: str, *, privileged: bool = False
+) -> None:
+    """Refuse episodes of ``agent`` recorded on ``tier_name`` with settings ``flown`` (the env kwargs its
+    episode records hold) that are not the tier's task: a tier setting missing or changed, or anything else
+    that :func:`check_agent_settings` refuses.
+
+    Raises:
+        ValueError: one line naming the agent, the tier and the first setting that differs.
+    """
+    for key, value in tier(tier_name).settings.items():
+        if key not in flown or flown[key] != value:
+            raise ValueError(
+                f"agent {agent} was flown on tier {tier_name} with {key}={flown.get(key, 'the default')!r}, but "
+                f"the tier fixes {key}={value!r}: these are not the tier's episodes"
+            )
+    others = {key: value for key, value in flown.items() if key not in tier(tier_name).settings}
+    check_agent_settings(agent, others, tier_name, privileged=privileged)

@@ -23,6 +23,7 @@ import numpy as np
 
 from agents.evaluation.statistics import BOOTSTRAP_REPS, CONFIDENCE
 from agents.policies import split_agent_name
+from flownav_env.task import EPISODE_OUTCOMES, episode_outcome
 
 LAYOUT_BLOCK = 30
 # rliable's probability of improvement runs a Mann-Whitney test per block in every replicate: fewer of them.
@@ -102,13 +103,19 @@ def episode_outcomes(
     rows: Iterable[Mapping[str, Any]], runs: Sequence[str], layouts: Sequence[int], outcome: str
 ) -> np.ndarray:
     """Whether each run's episode on each layout had ``outcome`` (1) or not (0): (runs, layouts). ``outcome``
-    is a record's boolean column (``success``, ``collision``, ``out_of_bounds``) or ``failure`` (not success).
+    is one of :data:`~flownav_env.task.EPISODE_OUTCOMES` (exclusive, by the env's rule) or ``failure`` (not
+    success).
 
     Raises:
-        ValueError: a run that has not flown one of the layouts (its name and the first missing seed).
+        ValueError: an unknown outcome, or a run that has not flown one of the layouts (its name and the first
+            missing seed).
     """
-    column, flip = ("success", True) if outcome == "failure" else (outcome, False)
-    flown = {(row["agent"], int(row["seed"])): bool(row[column]) != flip for row in rows}
+    if outcome not in (*EPISODE_OUTCOMES, "failure"):
+        raise ValueError(f"outcome must be one of {', '.join(EPISODE_OUTCOMES)}, failure; got {outcome!r}")
+    flown = {}
+    for row in rows:
+        ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
+        flown[(row["agent"], int(row["seed"]))] = (ended != "success") if outcome == "failure" else ended == outcome
     outcomes = np.zeros((len(runs), len(layouts)))
     for i, run in enumerate(runs):
         for j, seed in enumerate(layouts):

@@ -30,6 +30,7 @@ from agents.evaluation.csv_file import (
     sealed_line,
 )
 from agents.evaluation.episode import EpisodeRecord
+from flownav_env.task import episode_outcome
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
@@ -182,6 +183,18 @@ def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
             if not text and name in _REQUIRED_TEXT:
                 return None
             row[name] = text
+    return exclusive_outcome(row)
+
+
+def exclusive_outcome(row: dict[str, Any]) -> dict[str, Any]:
+    """``row`` with its ``collision``, ``out_of_bounds`` and ``success`` made exclusive by the env's rule
+    (:func:`flownav_env.task.episode_outcome`): episodes recorded before the rule (a goal reached out of bounds,
+    a collision out of bounds) count once, as the env now ends them. Their flights are unchanged: the flags
+    are those of the same last step."""
+    ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
+    row.update(
+        collision=ended == "collision", out_of_bounds=ended == "out_of_bounds", success=ended == "success"
+    )
     return row
 
 

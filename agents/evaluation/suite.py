@@ -26,8 +26,15 @@ from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite, suite_report
-from agents.policies import agent_env_kwargs, is_learned, policy_file, runs_to_fly, split_agent_name
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+from agents.policies import (
+    agent_env_kwargs,
+    is_learned,
+    is_privileged,
+    policy_file,
+    runs_to_fly,
+    split_agent_name,
+)
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
 EPISODES_CSV = "suite_episodes.csv"
 
@@ -61,17 +68,10 @@ def agent_runs(agent: str, policy: str | None = None) -> list[str]:
 
 
 def _check_agent_fits_tier(name: str, policy: str | None, tier_name: str) -> None:
-    """An agent may ask for observation settings, never change what a tier fixes."""
-    fixed = tier(tier_name).settings
+    """An agent may choose observation keys, never change the task a tier fixes; privileged data only when it
+    is declared privileged (:func:`flownav_env.tiers.check_agent_settings`)."""
     path = policy_file(name, policy, directory=POLICIES_DIR) if is_learned(name) else policy
-    wanted = agent_env_kwargs(name, path)
-    clashes = {key: value for key, value in wanted.items() if key in fixed and fixed[key] != value}
-    if clashes:
-        key, value = next(iter(clashes.items()))
-        raise ValueError(
-            f"agent {name} sets {key}={value!r}, but tier {tier_name} fixes {key}={fixed[key]!r}: a suite agent "
-            "may only ask for observation settings"
-        )
+    check_agent_settings(name, agent_env_kwargs(name, path), tier_name, privileged=is_privileged(name))
 
 
 def suite_tasks(
@@ -150,6 +150,8 @@ def summarise_suite(
                 "layouts": len(seeds),
                 "episodes": len(names) * len(seeds),
                 "interval_over": "layouts (Wilson)" if len(names) == 1 else "runs × layouts (bootstrap)",
+                "env_kwargs": _flown_settings(tier_rows, names),
+                "privileged": is_privileged(agent),
             }
             for name, matrix in outcomes.items():
                 if len(names) == 1:
@@ -159,6 +161,19 @@ def summarise_suite(
                 row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
             table.append({column: row[column] for column in SUMMARY_COLUMNS})
     return table
+
+
+def _flown_settings(rows: Sequence[Mapping[str, Any]], runs: Sequence[str]) -> str:
+    """The env kwargs (JSON) the episodes of ``runs`` were flown with: one set, as every run of an agent on a
+    tier flies the same task.
+
+    Raises:
+        ValueError: the runs' episodes were flown with different settings.
+    """
+    flown = {row["env_kwargs"] or "{}" for row in rows if row["agent"] in runs}
+    if len(flown) != 1:
+        raise ValueError(f"runs {', '.join(runs)} were flown with {len(flown)} different settings: {sorted(flown)}")
+    return flown.pop()
 
 
 def score(

@@ -7,14 +7,16 @@ room to improve), so the report cannot disagree with its CSV.
 from __future__ import annotations
 
 import csv
+import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
 
-# Each outcome an episode has (failure: did not reach the goal) and the rate the table reports for it.
-OUTCOMES = ("failure", "collision", "out_of_bounds", "success")
+# The rates the table reports: failure (did not reach the goal), then the exclusive ways an episode ends
+# (flownav_env.task.EPISODE_OUTCOMES), whose rates sum to 1.
+OUTCOMES = ("failure", "collision", "out_of_bounds", "timeout", "success")
 # One row per (agent, tier): the suite's CSV and flownav score's.
 SUMMARY_COLUMNS = [
     "suite_version",
@@ -26,6 +28,10 @@ SUMMARY_COLUMNS = [
     "episodes",
     *(f"{outcome}_{part}" for outcome in OUTCOMES for part in ("rate", "low", "high")),
     "interval_over",
+    # What the agent was flown with (its episodes' env kwargs, as JSON), so that a row set beside the
+    # published table can be checked against its tier; and whether the agent is privileged (a reference).
+    "env_kwargs",
+    "privileged",
 ]
 
 # A tier leaves room to improve when its best agent still fails at least this often.
@@ -55,6 +61,7 @@ def read_suite_csv(path: Path) -> list[dict[str, Any]]:
                 f"{SUITE_VERSION!r}: its tiers are other tasks; score the agent again with flownav score"
             )
         tier(row["tier"])
+        check_row_task(row, path)
     return [
         {
             name: (
@@ -62,6 +69,8 @@ def read_suite_csv(path: Path) -> list[dict[str, Any]]:
                 if name.endswith(("_rate", "_low", "_high"))
                 else int(value)
                 if name in ("runs", "layouts", "episodes")
+                else value == "True"
+                if name == "privileged"
                 else value
             )
             for name, value in row.items()
@@ -69,6 +78,24 @@ def read_suite_csv(path: Path) -> list[dict[str, Any]]:
         }
         for row in rows
     ]
+
+
+def check_row_task(row: Mapping[str, Any], path: Path) -> None:
+    """Refuse a row whose episodes were not flown on its tier's task (:func:`flownav_env.tiers.
+    check_flown_settings`): a changed course or sensor, or privileged data for an agent not declared privileged.
+
+    Raises:
+        ValueError: one line naming ``path``, the agent, the tier and the setting.
+    """
+    try:
+        flown = json.loads(row["env_kwargs"] or "{}")
+        if not isinstance(flown, dict):
+            raise ValueError(f"env_kwargs is not a JSON object: {row['env_kwargs']!r}")
+        check_flown_settings(
+            row["agent"], flown, row["tier"], privileged=str(row["privileged"]) in ("True", "true")
+        )
+    except (ValueError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path}: {error}") from None
 
 
 def merge_rows(

@@ -6,7 +6,13 @@ object itself. An agent that needs env settings beyond the defaults (an optional
 against the env's settings. Its observation comes as a mapping that answers a key the env does not give with
 one line naming the key and the setting that gives it, instead of a ``KeyError`` from inside ``predict``.
 Episode records identify the agent by its name and the hash of the file that defines it, so a resumed run
-never counts episodes of an edited agent as the new one's.
+never counts episodes of an edited agent as the new one's; tables show it by a short display name
+(:func:`display_name`).
+
+Whatever goes wrong inside the user's code (a file that does not import, a factory or ``predict`` that raises, a
+``predict`` that does not return ``(action, state)``) becomes a ValueError of one line naming the agent and where
+in its file it failed, so that the command line prints that line rather than a traceback from FlowNav's insides
+(and, from a process pool, one per worker).
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ import hashlib
 import importlib
 import importlib.util
 import sys
+import traceback
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -26,6 +33,10 @@ from agents.policies.base import Agent
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 
 SPEC_HELP = "module.path:callable or path/to/file.py:callable"
+# What an agent's predict is called with and gives back, as SB3's; `flownav describe` prints it.
+PREDICT_SIGNATURE = (
+    "predict(observation, state=None, episode_start=None, deterministic=True) -> (action, state)"
+)
 
 
 def is_external_name(name: str) -> bool:
@@ -57,14 +68,33 @@ def _module(target: str) -> Any:
             raise ValueError(f"agent file {target} is not a Python module (an external agent is {SPEC_HELP})")
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module  # so pickling its classes (process pools) finds them
-        spec.loader.exec_module(module)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as error:
+            del sys.modules[name]
+            raise ValueError(f"agent file {target} does not import: {describe_error(error, path)}") from None
         return module
     try:
         return importlib.import_module(target)
-    except ImportError as error:
+    except Exception as error:
         raise ValueError(
-            f"cannot import the agent module {target!r} ({error}); an external agent is {SPEC_HELP}"
+            f"cannot import the agent module {target!r} ({describe_error(error)}); an external agent is {SPEC_HELP}"
         ) from None
+
+
+def describe_error(error: BaseException, source: Path | str | None = None) -> str:
+    """``error`` in one line: its type, its message and where it was raised, in ``source`` where the traceback
+    passes through that file (the user's code, not the library it called), else at its innermost frame."""
+    message = " ".join(str(error).split())
+    if isinstance(error, SyntaxError):
+        message = " ".join(str(error.msg).split())
+        return f"SyntaxError: {message} (at {error.filename}:{error.lineno})"
+    frames = traceback.extract_tb(error.__traceback__)
+    if source is not None:
+        wanted = str(Path(source).resolve())
+        frames = [frame for frame in frames if str(Path(frame.filename).resolve()) == wanted] or frames
+    where = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+    return f"{type(error).__name__}{': ' + message if message else ''}{where}"
 
 
 def load_external_agent(spec: str) -> Agent:
@@ -87,7 +117,13 @@ def _resolve(spec: str) -> Any:
         raise ValueError(f"agent {spec!r}: {target} has no {attribute!r}")
     made = getattr(module, attribute)
     if isinstance(made, type) or (callable(made) and not hasattr(made, "predict")):
-        made = made()  # a factory or a class; an object with predict is the agent itself
+        try:
+            made = made()  # a factory or a class; an object with predict is the agent itself
+        except Exception as error:
+            source = getattr(module, "__file__", None)
+            raise ValueError(
+                f"agent {spec!r}: calling {attribute} raised {describe_error(error, source)}"
+            ) from None
     if not callable(getattr(made, "predict", None)):
         raise ValueError(
             f"agent {spec!r} gave a {type(made).__name__}, which has no predict(observation, state, "
@@ -111,12 +147,46 @@ def external_env_settings(spec: str) -> dict[str, Any]:
     return dict(declared)  # a copy per call would not help: lru_cache hands out this one; callers copy
 
 
+@functools.lru_cache(maxsize=32)
+def external_privileged(spec: str) -> bool:
+    """Whether the agent ``spec`` declares itself privileged (``privileged = True``): it may ask for data the
+    tier's sensor does not give, and is then a reference, never ranked.
+
+    Raises:
+        ValueError: ``privileged`` is set to something other than True or False.
+    """
+    declared = getattr(_resolve(spec), "privileged", False)
+    if not isinstance(declared, bool):
+        raise ValueError(f"agent {spec!r}: privileged must be True or False, got {declared!r}")
+    return declared
+
+
+def display_name(agent: str) -> str:
+    """The short name tables, CSVs and figures show for ``agent``: a file's agent by the file's stem and its
+    callable (``/home/me/my_agent.py:make_agent`` -> ``my_agent:make_agent``), an SB3 model by its algorithm and
+    the zip's stem (``sac:/home/me/model.zip`` -> ``sac:model``); a FlowNav agent or a module path is itself.
+    Episode records keep the full spec."""
+    from agents.policies.sb3_models import is_sb3_model_name
+
+    if is_sb3_model_name(agent):
+        algo, _, path = str(agent).partition(":")
+        return f"{algo}:{Path(path).stem}"
+    if not is_external_name(agent):
+        return str(agent)
+    target, _, attribute = str(agent).rpartition(":")
+    return f"{Path(target).stem}:{attribute}" if _is_file_target(target) else str(agent)
+
+
 def external_parameters(spec: str) -> dict[str, Any]:
     """What identifies the agent ``spec`` in episode records: the hash of the file that defines it."""
     target = str(spec).rpartition(":")[0]
     source = getattr(_module(target), "__file__", None)
     digest = hashlib.sha256(Path(source).read_bytes()).hexdigest() if source else ""
     return {"source_sha256": digest}
+
+
+class MissingObservationKey(ValueError):
+    """The agent read an observation key the env does not give (see :class:`KeyNamingObservation`)."""
 
 
 class KeyNamingObservation(dict):
@@ -130,7 +200,9 @@ class KeyNamingObservation(dict):
             if setting
             else f" (it gives {', '.join(sorted(self))})"
         )
-        raise ValueError(f"the agent reads observation key {key!r}, which this env does not give{remedy}")
+        raise MissingObservationKey(
+            f"the agent reads observation key {key!r}, which this env does not give{remedy}"
+        )
 
 
 class ExternalAgent:
@@ -150,11 +222,33 @@ class ExternalAgent:
         """The outside agent's ``predict`` on the checked observation.
 
         Raises:
-            ValueError: the agent read a key the env does not give.
+            ValueError: the agent read a key the env does not give, its ``predict`` raised (one line naming the
+                agent and where in its code), or it returned something other than ``(action, state)``.
         """
-        return self.agent.predict(
-            KeyNamingObservation(observation),
-            state=state,
-            episode_start=episode_start,
-            deterministic=deterministic,
-        )
+        try:
+            result = self.agent.predict(
+                KeyNamingObservation(observation),
+                state=state,
+                episode_start=episode_start,
+                deterministic=deterministic,
+            )
+        except MissingObservationKey:
+            raise
+        except Exception as error:
+            source = getattr(sys.modules.get(type(self.agent).__module__), "__file__", None)
+            raise ValueError(f"agent {self.spec!r}: predict raised {describe_error(error, source)}") from None
+        if not isinstance(result, (tuple, list)) or len(result) != 2:
+            raise ValueError(
+                f"agent {self.spec!r}: predict must return (action, state), as stable-baselines3's does, got "
+                f"{_shape_of(result)}; an agent without memory returns (action, None)"
+            )
+        return result[0], result[1]
+
+
+def _shape_of(value: Any) -> str:
+    """What ``value`` is, for a message: ``an ndarray of shape (3,)``, ``a tuple of 3``, ``a float``."""
+    if isinstance(value, np.ndarray):
+        return f"an ndarray of shape {value.shape}"
+    if isinstance(value, (tuple, list)):
+        return f"a {type(value).__name__} of {len(value)}"
+    return f"a {type(value).__name__}"

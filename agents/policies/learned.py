@@ -13,10 +13,17 @@ from typing import Any
 
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
-from agents.policies.base import Agent, is_learned, seeded_agent_name, split_agent_name
+from agents.policies.base import (
+    PRIVILEGED_AGENTS,
+    Agent,
+    is_learned,
+    seeded_agent_name,
+    split_agent_name,
+)
 from agents.policies.external import (
     external_env_settings,
     external_parameters,
+    external_privileged,
     is_external_name,
     load_external_agent,
 )
@@ -138,6 +145,17 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     if not config_path.is_file():
         return {}
     return dict(load_config(config_path, TrainConfig).env)
+
+
+def is_privileged(name: str) -> bool:
+    """Whether the agent ``name`` is declared privileged (it may read what a tier's sensor does not give, and is
+    a reference, never ranked): a shipped agent of :data:`~agents.policies.base.PRIVILEGED_AGENTS`, or an outside
+    agent with ``privileged = True``. Reactive rules and stable-baselines3 model files never are."""
+    if is_sb3_model_name(name):
+        return False
+    if is_external_name(name):
+        return external_privileged(name)
+    return split_agent_name(name)[0] in PRIVILEGED_AGENTS
 
 
 def load_agent(

@@ -269,3 +269,12 @@ def test_a_full_disk_is_one_error_naming_the_file_and_keeps_the_rows(tmp_path: P
     assert result.returncode == 3, result.stderr
     assert "cannot add an episode: File too large" in result.stdout and str(path) in result.stdout
     assert read_records(path)[0]["seed"] == RECORD.seed  # what was written stays readable
+
+
+def test_episodes_recorded_before_the_exclusive_rule_are_read_with_one_outcome(tmp_path: Path) -> None:
+    from agents.evaluation.records import exclusive_outcome
+
+    goal_out_of_bounds = exclusive_outcome({"collision": False, "out_of_bounds": True, "success": True})
+    assert (goal_out_of_bounds["success"], goal_out_of_bounds["out_of_bounds"]) == (False, True)
+    crash_out_of_bounds = exclusive_outcome({"collision": True, "out_of_bounds": True, "success": False})
+    assert (crash_out_of_bounds["collision"], crash_out_of_bounds["out_of_bounds"]) == (True, False)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import re
 from pathlib import Path
 
@@ -71,7 +72,7 @@ def test_an_agent_that_changes_what_a_tier_fixes_is_refused(tmp_path: Path) -> N
         "def make():\n    return Fast()\n"
     )
     with pytest.raises(
-        ValueError, match=re.escape("sets forward_speed=1.0, but tier hard fixes forward_speed=2.0")
+        ValueError, match=re.escape("asks for forward_speed=1.0, but tier hard fixes forward_speed=2.0")
     ):
         score(f"{agent_file}:make", tiers="hard", layouts=1, out=tmp_path / "out")
 
@@ -81,6 +82,7 @@ def _row(agent: str, tier: str, failure: float, version: str = SUITE_VERSION) ->
     row.update(suite_version=version, tier=tier, env_id=TIERS[tier].env_id, agent=agent, runs=1, layouts=30)
     row.update(episodes=30, interval_over="layouts (Wilson)", failure_rate=failure, success_rate=1 - failure)
     row.update(failure_low=max(failure - 0.1, 0.0), failure_high=min(failure + 0.1, 1.0))
+    row.update(env_kwargs=json.dumps(TIERS[tier].settings), privileged=False)
     return row
 
 
@@ -117,29 +119,34 @@ def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None
             "agent": run,
             "factor": "hard",
             "seed": seed,
-            "success": run == "a@0" or seed == seeds[0],
+            "success": run == "ppo_flow@0" or seed == seeds[0],
             "collision": False,
-            "out_of_bounds": not (run == "a@0" or seed == seeds[0]),
+            "out_of_bounds": not (run == "ppo_flow@0" or seed == seeds[0]),
+            "env_kwargs": '{"forward_speed":2.0,"obstacle_density":0.18}',
         }
-        for run in ("a@0", "a@1")
+        for run in ("ppo_flow@0", "ppo_flow@1")
         for seed in seeds
     ]
     rows.append(
         {
-            "agent": "b",
+            "agent": "bee",
             "factor": "hard",
             "seed": seeds[0],
             "success": True,
             "collision": False,
             "out_of_bounds": False,
+            "env_kwargs": '{"forward_speed":2.0,"obstacle_density":0.18}',
         }
     )
-    table = summarise_suite(rows, {"a": ["a@0", "a@1"], "b": ["b"]}, ["hard"], layouts=2)
-    assert [row["agent"] for row in table] == ["a"]  # b has not flown layout 2
+    table = summarise_suite(rows, {"ppo_flow": ["ppo_flow@0", "ppo_flow@1"], "bee": ["bee"]}, ["hard"], layouts=2)
+    assert [row["agent"] for row in table] == ["ppo_flow"]  # bee has not flown layout 2
     (row,) = table
     assert row["runs"] == 2 and row["episodes"] == 4 and row["failure_rate"] == 0.25
     assert row["out_of_bounds_rate"] == 0.25 and row["interval_over"] == "runs × layouts (bootstrap)"
     assert row["failure_low"] <= 0.25 <= row["failure_high"]
+    assert row["privileged"] is False and row["env_kwargs"] == '{"forward_speed":2.0,"obstacle_density":0.18}'
+    assert row["timeout_rate"] == 0.0
+    assert sum(row[f"{outcome}_rate"] for outcome in ("success", "collision", "out_of_bounds", "timeout")) == 1
 
 
 def test_the_example_agent_is_scored_end_to_end_and_included_beside_the_published_rows(
@@ -287,3 +294,56 @@ def test_an_agent_without_predict_or_missing_a_key_is_one_line(
         "flownav score: error: the agent reads observation key 'approach', which this env does not give: declare "
         "env_settings = {'observe_approach': True} on the agent (or make the env with observe_approach=True)"
     )
+
+
+def _agent_file(path: Path, settings: dict, privileged: bool = False) -> Path:
+    path.write_text(
+        "import numpy as np\n"
+        "class Straight:\n"
+        f"    env_settings = {settings!r}\n"
+        f"    privileged = {privileged!r}\n"
+        "    def predict(self, observation, state=None, episode_start=None, deterministic=True):\n"
+        "        return np.array([1.0, 0.0, 0.0], np.float32), state\n"
+        "def make():\n    return Straight()\n"
+    )
+    return path
+
+
+@pytest.mark.parametrize("tier_name", ["clean", "noisy"])
+def test_an_agent_cannot_empty_the_field_on_a_tier_that_names_no_course(tier_name: str, tmp_path: Path) -> None:
+    agent = _agent_file(tmp_path / "empty_field.py", {"obstacle_density": 0.0})
+    with pytest.raises(
+        ValueError, match=re.escape(f"asks for obstacle_density=0.0, but tier {tier_name} fixes obstacle_density=0.12")
+    ):
+        score(f"{agent}:make", tiers=tier_name, layouts=1, out=tmp_path / "out")
+    assert not (tmp_path / "out" / "suite_episodes.csv").exists()  # refused before anything flew
+
+
+def test_true_depths_need_a_declared_privileged_agent_whose_rows_say_so(tmp_path: Path) -> None:
+    undeclared = _agent_file(tmp_path / "peeks.py", {"obs_source": "oracle"})
+    with pytest.raises(ValueError, match=re.escape("asks for obs_source='oracle', privileged data")):
+        score(f"{undeclared}:make", tiers="clean", layouts=1, out=tmp_path / "undeclared")
+    declared = _agent_file(tmp_path / "reference.py", {"obs_source": "oracle"}, privileged=True)
+    (row,) = score(f"{declared}:make", tiers="clean", layouts=1, out=tmp_path / "declared")
+    assert row["privileged"] is True and json.loads(row["env_kwargs"]) == {"obs_source": "oracle"}
+    (again,) = read_suite_csv(tmp_path / "declared" / "score.csv")
+    assert again["privileged"] is True
+
+
+def test_included_rows_flown_with_other_settings_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    published = _write(tmp_path / "suite.csv", [_row("bee_ttc", "hard", 0.3)])
+    changed = _row("mine", "hard", 0.0)
+    changed["env_kwargs"] = json.dumps({**TIERS["hard"].settings, "obstacle_density": 0.0})
+    peeking = _row("peek", "noisy", 0.0)
+    peeking["env_kwargs"] = json.dumps({**TIERS["noisy"].settings, "obs_source": "oracle"})
+    for name, row, message in [
+        ("changed.csv", changed, "agent mine was flown on tier hard with obstacle_density=0.0"),
+        ("peeking.csv", peeking, "agent peek asks for obs_source='oracle', privileged data"),
+    ]:
+        included = _write(tmp_path / name, [row])
+        argv = ["leaderboard", "--suite", str(published), "--include", str(included), "--out", str(tmp_path)]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert f"{included}: {message}" in err and len(err.strip().splitlines()) == 1

@@ -1,0 +1,109 @@
+"""``suite.md``: the suite's leading table, per tier, with its ranking decided by paired tests
+(:mod:`agents.evaluation.paired`): values computed here, worded by ``templates/suite.md.j2``.
+
+Privileged agents are listed apart as references; learned agents with fewer training seeds than
+:data:`~agents.evaluation.paired.MIN_RANKED_SEEDS` are provisional. Neither is ranked, named best, or decides a
+tier's headroom.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from agents.common.jinja_reports import render
+from agents.evaluation.over_seeds import episode_outcomes
+from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, rank_tier
+from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
+from agents.policies import is_learned
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+
+
+def tier_failures(
+    rows: Sequence[Mapping[str, Any]], runs: Mapping[str, Sequence[str]], tier_name: str, layouts: Sequence[int]
+) -> dict[str, np.ndarray]:
+    """Each agent's failures on ``tier_name`` as a (runs, layouts) matrix, for the agents that flew every
+    layout with every run."""
+    mine = [row for row in rows if row["factor"] == tier_name]
+    failures = {}
+    for agent, names in runs.items():
+        try:
+            failures[agent] = episode_outcomes(mine, names, layouts, "failure")
+        except ValueError:
+            continue  # not flown in full: the report lists it as not yet flown
+    return failures
+
+
+def rank_suite(
+    table: Sequence[Mapping[str, Any]], failures: Mapping[str, Mapping[str, np.ndarray]]
+) -> dict[str, TierRanking]:
+    """Each tier's :class:`~agents.evaluation.paired.TierRanking` of the agents in its rows."""
+    rankings = {}
+    for name, matrices in failures.items():
+        privileged = [row["agent"] for row in table if row["tier"] == name and row["privileged"]]
+        learned = [agent for agent in matrices if is_learned(agent)]
+        if matrices:
+            rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned)
+    return rankings
+
+
+def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking) -> dict[str, Any]:
+    by_agent = {row["agent"]: dict(row) for row in rows}
+    compared = {c.agent: c for c in ranking.comparisons}
+    ranked = []
+    for agent in [ranking.best, *sorted(compared, key=lambda a: (by_agent[a]["failure_rate"], a))]:
+        entry = by_agent[agent] | {"in_top": agent in ranking.top_group, "comparison": compared.get(agent)}
+        ranked.append(entry)
+    apart = [by_agent[agent] | {"why": why} for agent, why in ranking.left_out.items()]
+    best = by_agent[ranking.best]
+    return {
+        "ranked": ranked,
+        "provisional": sorted((r for r in apart if not r["privileged"]), key=lambda r: r["failure_rate"]),
+        "references": sorted((r for r in apart if r["privileged"]), key=lambda r: r["failure_rate"]),
+        "best": best,
+        "top_group": list(ranking.top_group),
+        "room": best["failure_rate"] >= HEADROOM_FAILURE,
+    }
+
+
+def suite_values(
+    table: Sequence[Mapping[str, Any]],
+    rankings: Mapping[str, TierRanking],
+    *,
+    command: str,
+    layouts: range,
+    machine: str,
+    missing: Sequence[str],
+    generated: str,
+) -> dict[str, Any]:
+    """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
+    reference rows, its best agent, top group and headroom."""
+    tiers = []
+    for name in TIER_NAMES:
+        if name not in rankings:
+            continue
+        spec = tier(name)
+        rows = [row for row in table if row["tier"] == name]
+        tiers.append({"name": name, "env_id": spec.env_id, "why": spec.why, **_tier_values(rows, rankings[name])})
+    return {
+        "suite_version": SUITE_VERSION,
+        "generated": generated,
+        "command": command,
+        "machine": machine,
+        "first_layout": layouts.start,
+        "last_layout": layouts.stop - 1,
+        "layouts": len(layouts),
+        "tiers": tiers,
+        "outcomes": [outcome for outcome in OUTCOMES if outcome != "failure"],
+        "headroom_failure": HEADROOM_FAILURE,
+        "min_seeds": MIN_RANKED_SEEDS,
+        "significance": SIGNIFICANCE,
+        "missing": list(missing),
+    }
+
+
+def suite_page(values: Mapping[str, Any]) -> str:
+    """``suite.md``'s text from :func:`suite_values`."""
+    return render("agents.evaluation", "suite.md.j2", values)

@@ -1,0 +1,90 @@
+"""Paired comparisons: the bootstrap pairs layouts and resamples runs, Holm corrects, the top group holds what
+no corrected test separates from the best, and privileged or provisional agents are never ranked."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from agents.evaluation.paired import (
+    MIN_RANKED_SEEDS,
+    compare,
+    holm,
+    paired_bootstrap,
+    probability_of_improvement,
+    rank_tier,
+    refuse_privileged,
+    seed_interval,
+)
+
+
+def _failures(rate: float, runs: int = 1, layouts: int = 300, seed: int = 0) -> np.ndarray:
+    return (np.random.default_rng(seed).random((runs, layouts)) < rate).astype(float)
+
+
+def test_pairing_by_layout_narrows_the_interval_of_agents_that_fail_on_the_same_layouts() -> None:
+    hard_layouts = _failures(0.3, seed=1)
+    one_more = hard_layouts.copy()
+    one_more[0, np.flatnonzero(hard_layouts[0] == 0)[:15]] = 1.0  # fails where the other does, and 15 more
+    draws = paired_bootstrap(one_more, hard_layouts, seed=0)
+    assert np.all(draws >= 0.0)  # paired, the difference never changes sign
+    comparison = compare("worse", one_more, "better", hard_layouts)
+    assert comparison.difference == pytest.approx(15 / 300) and comparison.low > 0.0
+    assert comparison.p_value < 0.01 and comparison.probability_of_improvement < 0.5
+
+
+def test_identical_agents_are_not_separated() -> None:
+    same = _failures(0.2)
+    comparison = compare("a", same, "b", same)
+    assert comparison.difference == 0.0 and comparison.p_value == 1.0
+    assert comparison.probability_of_improvement == 0.5
+
+
+def test_spread_between_training_runs_widens_the_paired_interval() -> None:
+    reference = _failures(0.2, seed=3)
+    steady = np.vstack([_failures(0.2, seed=10 + k) for k in range(10)])
+    spread = np.vstack([_failures(rate, seed=10 + k) for k, rate in enumerate(np.linspace(0.0, 0.4, 10))])
+    narrow, wide = compare("s", steady, "r", reference), compare("w", spread, "r", reference)
+    assert (wide.high - wide.low) > (narrow.high - narrow.low)
+
+
+def test_holm_multiplies_the_smallest_by_the_family_size_and_keeps_the_order() -> None:
+    assert holm([0.01, 0.04, 0.03]) == pytest.approx([0.03, 0.06, 0.06])
+    assert holm([0.5]) == [0.5]
+
+
+def test_a_learned_agents_interval_is_never_narrower_than_the_t_interval_over_its_seeds() -> None:
+    runs = np.vstack([_failures(rate, seed=k) for k, rate in enumerate([0.04, 0.08, 0.08, 0.38, 0.64])])
+    low, high = seed_interval(runs)
+    means = runs.mean(axis=1)
+    assert low < means.mean() < high and high - low > 0.5  # the spread of five seeds, not of 1,500 episodes
+    assert seed_interval(runs[:1]) == (means[0], means[0])
+
+
+def test_the_top_group_holds_what_no_corrected_test_separates_and_leaves_out_references() -> None:
+    failures = {
+        "best": _failures(0.10, seed=1),
+        "close": _failures(0.11, seed=2),
+        "far": _failures(0.60, seed=3),
+        "oracle": _failures(0.0, runs=5, seed=4),
+        "learned": _failures(0.0, runs=MIN_RANKED_SEEDS - 1, seed=5),
+    }
+    ranking = rank_tier(failures, privileged=["oracle"], learned=["oracle", "learned"])
+    assert ranking.best == "best" and ranking.top_group == ("best", "close")
+    assert ranking.left_out == {"oracle": "privileged: a reference", "learned": f"provisional ({MIN_RANKED_SEEDS - 1} seeds)"}
+    assert {c.agent for c in ranking.comparisons} == {"close", "far"}
+    far = next(c for c in ranking.comparisons if c.agent == "far")
+    assert far.separated and far.p_holm >= far.p_value
+
+
+def test_bad_input_is_one_line() -> None:
+    with pytest.raises(ValueError, match=re.escape("paired agents must share their layouts: 300 against 200")):
+        paired_bootstrap(_failures(0.1), _failures(0.1, layouts=200))
+    with pytest.raises(ValueError, match=re.escape("agent must be a (runs, layouts) matrix with at least 2 layouts")):
+        probability_of_improvement(np.zeros(3), np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="no agent to rank: every agent is privileged or provisional"):
+        rank_tier({"oracle": _failures(0.0)}, privileged=["oracle"])
+    with pytest.raises(ValueError, match=r"agent ppo_oracle is privileged .* cannot be ranked"):
+        refuse_privileged(["bee", "ppo_oracle"], privileged=["ppo_oracle"])

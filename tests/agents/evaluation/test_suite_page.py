@@ -1,0 +1,65 @@
+"""suite.md's values and every branch of its template: ranked, provisional and reference rows, top groups,
+headroom and what is not yet flown."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from agents.common.seeds import suite_seeds
+from agents.evaluation.paired import MIN_RANKED_SEEDS
+from agents.evaluation.suite_page import rank_suite, suite_page, suite_values
+from agents.evaluation.suite_report import SUMMARY_COLUMNS
+from flownav_env.tiers import TIERS
+
+
+def _row(agent: str, tier: str, matrix: np.ndarray, privileged: bool = False) -> dict:
+    row = {name: 0.0 for name in SUMMARY_COLUMNS}
+    rate = float(matrix.mean())
+    row.update(tier=tier, agent=agent, runs=matrix.shape[0], layouts=matrix.shape[1], privileged=privileged)
+    row.update(failure_rate=rate, success_rate=1 - rate, collision_rate=rate, env_kwargs=json.dumps({}))
+    return row
+
+
+def _values(missing: list[str]) -> dict:
+    rng = np.random.default_rng(0)
+    matrices = {
+        "bee_ttc": (rng.random((1, 60)) < 0.3).astype(float),
+        "straight": np.ones((1, 60)),
+        "ppo_flow": (rng.random((MIN_RANKED_SEEDS - 5, 60)) < 0.1).astype(float),
+        "ppo_oracle": np.zeros((5, 60)),
+    }
+    table = [_row(agent, "hard", m, privileged=agent == "ppo_oracle") for agent, m in matrices.items()]
+    rankings = rank_suite(table, {"hard": matrices})
+    return suite_values(
+        table,
+        rankings,
+        command="flownav suite --report-only",
+        layouts=suite_seeds(60),
+        machine="a test machine",
+        missing=missing,
+        generated="today",
+    )
+
+
+def test_references_and_provisional_agents_are_listed_apart_and_never_best() -> None:
+    values = _values([])
+    (hard,) = values["tiers"]
+    assert hard["best"]["agent"] == "bee_ttc" and hard["top_group"] == ["bee_ttc"]
+    assert [row["agent"] for row in hard["ranked"]] == ["bee_ttc", "straight"]
+    assert [row["agent"] for row in hard["provisional"]] == ["ppo_flow"]
+    assert [row["agent"] for row in hard["references"]] == ["ppo_oracle"]
+    assert hard["room"] is True and hard["env_id"] == TIERS["hard"].env_id
+
+
+def test_the_page_renders_every_branch() -> None:
+    with_missing = suite_page(_values(["bee on noisy"]))
+    for section in ("## Top groups", "Provisional, not ranked", "References, privileged", "## Not yet flown"):
+        assert section in with_missing
+    assert "`bee on noisy`" in with_missing and "top group `bee_ttc`" in with_missing
+    assert "## Not yet flown" not in suite_page(_values([]))
+    table_lines = [line for line in with_missing.splitlines() if line.startswith("|")]
+    header = table_lines[0]
+    rule = table_lines[1]
+    assert header.count("|") == rule.count("|")  # every column has its rule

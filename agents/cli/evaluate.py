@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from agents.common.folders import check_writable_folder
     from agents.evaluation.csv_file import check_is_file_target
     from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
-    from agents.evaluation.records import read_episodes, start_new_file
+    from agents.evaluation.records import OVERWRITE_HINT, read_episodes, start_new_file
     from agents.evaluation.runner import execute
     from agents.evaluation.statistics import format_summary, summarise
     from agents.policies import load_agent, runs_to_fly, split_agent_name
@@ -121,7 +121,9 @@ def run(args: argparse.Namespace) -> int:
         if moved is not None:
             print(f"--overwrite: moved {out} to {moved}")
     # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are) with exit 130.
-    flown = execute(tasks, out, workers=args.workers, description=f"evaluate {args.agent}")
+    flown = execute(
+        tasks, out, workers=args.workers, description=f"evaluate {args.agent}", remedy=OVERWRITE_HINT
+    )
     episodes = read_episodes(out)
     rows = rows_of(tasks, episodes.rows)
     if len(runs) > 1:  # one row for the agent, its seeds pooled as the leaderboard's headline pools them

@@ -120,6 +120,20 @@ def claim_episode(csv_path: Path, identity: tuple) -> str:
     return MINE
 
 
+def release_claim(csv_path: Path, identity: tuple) -> None:
+    """Give up this process's claim on the episode ``identity`` without writing it (its flight failed), so
+    another run flies it at once rather than after :data:`CLAIM_EXPIRY_S`: a claim dated 0 never counts."""
+    csv_path = Path(csv_path)
+    with locked(csv_path):
+        descriptor = os.open(claims_path(csv_path), os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
+        try:
+            os.write(
+                descriptor, f"{socket.gethostname()} {os.getpid()} 0 {identity_digest(identity)}\n".encode()
+            )
+        finally:
+            os.close(descriptor)
+
+
 def release_claims(csv_path: Path) -> None:
     """Remove the claims file of ``csv_path`` once no live process claims anything in it (the end of a run);
     while another run still flies, its claims stay."""

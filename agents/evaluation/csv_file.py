@@ -246,6 +246,13 @@ def move_aside(path: Path) -> Path | None:
     check_is_file_target(path)
     if not path.exists():
         return None
+    backup = _link_backup(path)
+    os.unlink(path)
+    return backup
+
+
+def _link_backup(path: Path) -> Path:
+    """A second name for the file at ``path``, ``<name>.bak-<UTC time>`` (never over an existing file)."""
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
     for attempt in range(1000):
         backup = path.with_name(f"{path.name}.bak-{stamp}" + (f"-{attempt}" if attempt else ""))
@@ -253,6 +260,53 @@ def move_aside(path: Path) -> Path | None:
             os.link(path, backup)  # fails if the name is taken: nothing is overwritten
         except FileExistsError:
             continue
-        os.unlink(path)
         return backup
     raise ValueError(f"cannot move {path} aside: too many backups named {path.name}.bak-{stamp}*")
+
+
+@dataclass(frozen=True)
+class HeaderRepair:
+    """A CSV whose header was damaged, rewritten: its checksummed rows (``kept``) under a correct header, the
+    lines that failed (``dropped``) left out, the damaged file kept as ``backup``."""
+
+    backup: Path
+    kept: int
+    dropped: int
+
+
+def repair_header(path: Path, expected_headers: list[list[str]]) -> HeaderRepair | None:
+    """Give the CSV at ``path`` a correct header when its own is damaged (a flipped bit) but its rows still
+    pass their checksums under one of ``expected_headers``: those rows go to a new file at ``path``, byte for
+    byte, and the damaged file is kept as ``<name>.bak-<time>``. Held under the file's lock, and the new file
+    replaces the old atomically, so no concurrent append is lost.
+
+    Returns:
+        What was done; None when the header is intact, the file is missing or empty, or no row checks
+        under any checksummed header (then it is another kind of file, which reading refuses).
+    """
+    check_is_file_target(path)
+    if not path.is_file():
+        return None
+    with locked(path) as handle:
+        handle.seek(0)
+        lines = [line.rstrip(b"\r") for line in handle.read().split(b"\n")]
+        lines = [line for line in lines if line]
+        if not lines or csv_header(lines[0]) in expected_headers:
+            return None
+        best: list[str] = []
+        kept: list[bytes] = []
+        for header in expected_headers:
+            if header[-1] != CHECKSUM_FIELD:
+                continue
+            rows = [line for line in lines if parse_row(line, header) is not None]
+            if len(rows) > len(kept):
+                best, kept = header, rows
+        if not kept:
+            return None
+        temporary = path.with_name(path.name + ".tmp")
+        temporary.write_bytes(b"".join(line + LINE_END.encode() for line in [csv_line(best).encode(), *kept]))
+        backup = _link_backup(path)
+        os.replace(temporary, path)
+    # The first line was the damaged header unless it was itself a row (a file whose header is gone).
+    header_lines = 0 if parse_row(lines[0], best) is not None else 1
+    return HeaderRepair(backup, len(kept), len(lines) - header_lines - len(kept))

@@ -17,12 +17,13 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.manifest import file_sha256
 from agents.evaluation.csv_file import move_aside
 from agents.evaluation.records import (
+    FRESH_FILE_HINT,
     IDENTITY_FIELDS,
-    OVERWRITE_HINT,
     episode_key,
     predates_identities,
     read_episodes,
     row_identity,
+    suite_version_of,
 )
 from agents.evaluation.statistics import RUN_KEY
 from agents.policies import (
@@ -84,6 +85,8 @@ class EpisodeTask:
     trust_pickle: bool = False
     # The suite version its record carries (flownav_env.tiers.SUITE_VERSION) when it is an episode of the suite.
     suite_version: str = ""
+    # The most an outside agent's predict may take per call (0: no limit); how it flies, not which episode.
+    step_timeout_s: float = 0.0
 
     def policy_path(self) -> Path | None:
         """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
@@ -122,35 +125,72 @@ def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:
     return result
 
 
-def pending_tasks(tasks: list[EpisodeTask], csv_path: Path) -> list[EpisodeTask]:
-    """The tasks whose episode is not in the CSV yet (what a resumed run still has to fly).
+@dataclass
+class ResumePlan:
+    """What a CSV holds of a run's tasks: those still to fly (``todo``), how many are there already
+    (``done``), how many of its lines were damaged (``damaged``: torn or failing their checksum, so their
+    episodes count as not flown), and the rows of these episodes flown under another suite version
+    (``other_versions``: version → rows; left out, never counted as current)."""
+
+    todo: list[EpisodeTask]
+    done: int = 0
+    damaged: int = 0
+    other_versions: dict[str, int] = field(default_factory=dict)
+
+
+def resume_plan(tasks: list[EpisodeTask], csv_path: Path, remedy: str = FRESH_FILE_HINT) -> ResumePlan:
+    """Which of ``tasks`` the CSV at ``csv_path`` already holds, and what it holds that does not count.
+
+    Args:
+        remedy: what the command offers when the CSV cannot be resumed (:data:`FRESH_FILE_HINT`, or
+            :data:`~agents.evaluation.records.OVERWRITE_HINT` where it has ``--overwrite``).
 
     Raises:
         ValueError: the CSV predates episode identities, or holds an episode of one of the tasks flown with
-            other settings (resuming would mix the two), or two tasks share a key but not their settings.
+            other settings under the same suite version (resuming would mix the two), or two tasks share a
+            key but not their settings.
     """
     csv_path = Path(csv_path)
     episodes = read_episodes(csv_path)
     if episodes.legacy:
-        raise ValueError(predates_identities(csv_path))
+        raise ValueError(predates_identities(csv_path, remedy))
     identities = _identities(tasks)
     wanted: dict[tuple, tuple[str, ...]] = {}
+    versions: dict[tuple, str] = {}
     for task, identity in zip(tasks, identities, strict=True):
         key = episode_key(vars(task))
         if wanted.setdefault(key, identity) != identity:
             raise ValueError(f"two tasks are episode {_describe(key)} but with different settings")
+        versions[key] = task.suite_version
+    plan = ResumePlan([], damaged=episodes.skipped)
     flown: dict[tuple, set[tuple[str, ...] | None]] = {}
     for row in episodes.rows:
-        flown.setdefault(episode_key(row), set()).add(row_identity(row))
-    todo = []
+        key = episode_key(row)
+        if key in versions and suite_version_of(row) != versions[key]:
+            version = suite_version_of(row) or "none"
+            plan.other_versions[version] = plan.other_versions.get(version, 0) + 1
+            continue
+        flown.setdefault(key, set()).add(row_identity(row))
     for task, identity in zip(tasks, identities, strict=True):
         found = flown.get(episode_key(vars(task)), set())
         if identity in found:
+            plan.done += 1
             continue
         if found:
-            raise ValueError(_conflict(csv_path, episode_key(vars(task)), identity, found))
-        todo.append(task)
-    return todo
+            raise ValueError(_conflict(csv_path, episode_key(vars(task)), identity, found, remedy))
+        plan.todo.append(task)
+    return plan
+
+
+def pending_tasks(
+    tasks: list[EpisodeTask], csv_path: Path, remedy: str = FRESH_FILE_HINT
+) -> list[EpisodeTask]:
+    """The tasks whose episode is not in the CSV yet (what a resumed run still has to fly).
+
+    Raises:
+        ValueError: as :func:`resume_plan`.
+    """
+    return resume_plan(tasks, csv_path, remedy).todo
 
 
 def set_aside_stale_episodes(tasks: list[EpisodeTask], csv_path: Path, why: str) -> Path | None:
@@ -187,23 +227,38 @@ def _describe(key: tuple[str, str, float, int]) -> str:
     return f"({agent}, {factor}, level {level:g}, seed {seed})"
 
 
-def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set) -> str:
+def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set, remedy: str) -> str:
     there = next(iter(found))
-    differences = ", ".join(
-        f"{name} {old!r} there, {new!r} now"
+    changed = [
+        (name, old, new)
         for name, old, new in zip(IDENTITY_FIELDS, there or (None,) * len(identity), identity, strict=True)
         if old != new
+    ]
+    differences = ", ".join(f"{name} {old!r} there, {new!r} now" for name, old, new in changed)
+    cause = next(
+        (_edited_file(name, old, new) for name, old, new in changed if _edited_file(name, old, new)), ""
     )
-    retrained = "policy_sha256" in differences
     return (
-        f"{path} already holds episode {_describe(key)} flown with other settings ({differences}); "
-        f"resuming would mix them. To fly these settings, {OVERWRITE_HINT}"
-        + (
-            f"; after retraining, flownav sweep --refly {key[0]} flies just that agent again"
-            if retrained
-            else ""
-        )
+        f"{path} already holds episode {_describe(key)} flown with other settings ({cause}{differences}); "
+        f"resuming would mix them. To fly these settings, {remedy}"
     )
+
+
+def _edited_file(name: str, old: str | None, new: str) -> str:
+    """The plain cause when an identity field differs because a file changed: an outside agent's source
+    (its ``source_sha256`` in ``agent_params``) or a learned agent's policy; else ""."""
+    if name == "policy_sha256":
+        return "the policy file changed since these episodes were flown: "
+    if name != "agent_params" or old is None:
+        return ""
+    try:
+        before, after = json.loads(old), json.loads(new)
+    except json.JSONDecodeError:
+        return ""
+    if isinstance(before, dict) and isinstance(after, dict) and "source_sha256" in before:
+        if before.get("source_sha256") != after.get("source_sha256"):
+            return "your agent's file changed since these episodes were flown: "
+    return ""
 
 
 def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -213,13 +268,17 @@ def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any
 
 
 def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows that are episodes of ``tasks``: same (agent, factor, level, seed) and the same identity, or
-    an unknown one (a CSV from before identities), so a report never mixes in episodes of other settings."""
+    """The rows that are episodes of ``tasks``: same (agent, factor, level, seed), suite version and identity,
+    or an unknown identity (a CSV from before identities), so a report never mixes in episodes of other
+    settings or another suite version."""
     wanted = {
         episode_key(vars(task)): identity for task, identity in zip(tasks, _identities(tasks), strict=True)
     }
+    versions = {episode_key(vars(task)): task.suite_version for task in tasks}
     return [
         row
         for row in rows
-        if episode_key(row) in wanted and row_identity(row) in (None, wanted[episode_key(row)])
+        if episode_key(row) in wanted
+        and row_identity(row) in (None, wanted[episode_key(row)])
+        and suite_version_of(row) == versions[episode_key(row)]
     ]

@@ -26,6 +26,7 @@ from agents.evaluation.csv_file import (
     move_aside,
     parse_row,
     read_csv_content,
+    repair_header,
     rewrite_locked,
     sealed_line,
 )
@@ -51,10 +52,13 @@ IDENTITY_FIELDS = ("env_id", "env_kwargs", "agent_params", "policy_sha256")
 _FIELD_TYPES = {f.name: f.type for f in fields(EpisodeRecord)}
 _REQUIRED_TEXT = ("agent", "factor")
 
+# How to get past episodes that cannot be resumed, for commands with --out and --overwrite. FRESH_FILE_HINT,
+# the default, names no option, so no message suggests one that its command lacks.
 OVERWRITE_HINT = (
     "write to another file (--out), or start a new one with --overwrite "
     "(the old file is moved to <name>.bak-<time>, nothing is deleted)"
 )
+FRESH_FILE_HINT = "rename the file (nothing is lost) or write to another output folder, and run again"
 
 
 @dataclass
@@ -111,12 +115,13 @@ def _header_problem(path: Path) -> str:
     return "its header is not this version's"
 
 
-def predates_identities(path: Path) -> str:
-    """Why nothing can be resumed in or appended to a pre-identity CSV, and what to do instead."""
+def predates_identities(path: Path, remedy: str = FRESH_FILE_HINT) -> str:
+    """Why nothing can be resumed in or appended to a pre-identity CSV, and what to do instead (``remedy``:
+    what the command at hand offers, :data:`OVERWRITE_HINT` where it has ``--overwrite``)."""
     return (
         f"{path} predates episode identities (no env_id, env_kwargs, agent_params or policy_sha256 "
         "columns), so its episodes cannot be matched to these settings; reports can still be built from it "
-        f"(flownav sweep --report-only). To fly episodes, {OVERWRITE_HINT}"
+        f"(flownav sweep --report-only). To fly episodes, {remedy}"
     )
 
 
@@ -146,6 +151,20 @@ def read_episodes(path: Path) -> EpisodesCsv:
             "written twice, as runs writing one file at once could); each episode counts once"
         )
     return episodes
+
+
+def repair_episodes_header(path: Path) -> str | None:
+    """Give an episodes CSV whose header is damaged but whose rows pass their checksums a correct header
+    (:func:`~agents.evaluation.csv_file.repair_header`), so its episodes are not stranded; returns the one line
+    that says what was done, or None when there was nothing to repair."""
+    path = Path(path)
+    repair = repair_header(path, _READABLE_HEADERS)
+    if repair is None:
+        return None
+    return (
+        f"{path} had a damaged header: its {repair.kept} checksummed rows now sit under a correct header in a "
+        f"new {path.name} ({repair.dropped} damaged rows left out); the damaged file is kept as {repair.backup}"
+    )
 
 
 _SAID: set[str] = set()
@@ -209,10 +228,17 @@ def episode_key(row: Mapping[str, Any]) -> tuple[str, str, float, int]:
     return (row["agent"], row["factor"], float(row["level"]), int(row["seed"]))
 
 
+def suite_version_of(row: Mapping[str, Any]) -> str:
+    """The suite version a row, record or task was flown under; "" outside the suite, or in files from before
+    the column (their episodes are not the suite's)."""
+    return str(row.get("suite_version") or "")
+
+
 def episode_identity(row: Mapping[str, Any]) -> tuple:
-    """Everything that makes a row the episode it is: its :func:`episode_key` and :func:`row_identity`.
-    Works on typed rows, on a line's text values and on a record's fields alike."""
-    return (*episode_key(row), row_identity(row))
+    """Everything that makes a row the episode it is: its :func:`episode_key`, :func:`row_identity` and
+    suite version (an episode of another suite version is another episode). Works on typed rows, on a
+    line's text values and on a record's fields alike."""
+    return (*episode_key(row), row_identity(row), suite_version_of(row))
 
 
 @dataclass

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import signal
 import time
 from collections.abc import Iterator
@@ -19,11 +20,20 @@ from typing import Any
 
 from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
-from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claims
+from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
-from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, pending_tasks
-from agents.evaluation.records import append_record, episode_identity, read_episodes
+from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, resume_plan
+from agents.evaluation.progress import EpisodeProgress, holdings_line
+from agents.evaluation.records import (
+    FRESH_FILE_HINT,
+    append_record,
+    episode_identity,
+    read_episodes,
+    repair_episodes_header,
+)
+from agents.evaluation.step_limit import STEP_TIMEOUT_OPTION, TimeLimitedAgent, timeout_message
 from agents.policies import load_agent
+from agents.policies.external import is_external_name
 from flownav_env.limits import episode_step_limit
 
 # How often a run that is done checks whether another run has written the episodes it claimed.
@@ -68,22 +78,44 @@ def _code_version() -> str:
 
 def run_task(task: EpisodeTask) -> EpisodeRecord:
     """Fly the task's episode (in whatever process this runs); the record carries the task's identity and
-    the code version of the process that flew it."""
+    the code version of the process that flew it.
+
+    Raises:
+        PredictTimeout: an outside agent's ``predict`` ran past the task's ``step_timeout_s``.
+    """
     import torch
 
     torch.set_num_threads(1)
     env, agent = _env_and_agent(task)
+    if task.step_timeout_s > 0 and is_external_name(task.agent):
+        limit = task.step_timeout_s
+        agent = TimeLimitedAgent(agent, limit, timeout_message(task.agent, _episode_name(task), limit))
     record = run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
     return dataclasses.replace(
         record, **task.identity(), code_version=_code_version(), suite_version=task.suite_version
     )
 
 
+def _episode_name(task: EpisodeTask) -> str:
+    """The episode in words: a suite's tier and layout, or another run's factor, level and seed."""
+    if task.suite_version:
+        return f"the episode on tier {task.factor}, layout seed {task.seed}"
+    return f"the episode ({task.factor}, level {task.level:g}, seed {task.seed})"
+
+
 def run_claimed_task(csv_path: Path, task: EpisodeTask) -> tuple[EpisodeTask, str, EpisodeRecord | None]:
     """Fly the task if this process gets its claim on ``csv_path`` (:func:`claim_episode`); returns the task,
-    what the claim found, and the record (None when the episode was left to the CSV or another run)."""
-    found = claim_episode(csv_path, episode_identity({**vars(task), **task.identity()}))
-    return task, found, run_task(task) if found == MINE else None
+    what the claim found, and the record (None when the episode was left to the CSV or another run). A flight
+    that fails gives its claim up, so another run need not wait for it to expire."""
+    identity = episode_identity({**vars(task), **task.identity()})
+    found = claim_episode(csv_path, identity)
+    if found != MINE:
+        return task, found, None
+    try:
+        return task, found, run_task(task)
+    except BaseException:
+        release_claim(csv_path, identity)
+        raise
 
 
 class EpisodesInterrupted(KeyboardInterrupt):
@@ -100,8 +132,14 @@ def execute(
     workers: int = 1,
     address: str | None = None,
     description: str = "episodes",
+    remedy: str = FRESH_FILE_HINT,
+    step_timeout_s: float = 0.0,
+    by_factor: bool = False,
 ) -> int:
     """Fly every task not yet in ``csv_path``, appending each record as its episode ends.
+
+    Before flying, a damaged header is repaired (its checksummed rows kept), and damaged rows and rows of
+    another suite version are counted in a line each: their episodes are flown again.
 
     Args:
         tasks: the episodes to fly.
@@ -110,27 +148,41 @@ def execute(
         workers: local worker processes.
         address: Ray cluster address (``ray.init(address=...)``); None starts a local Ray instance.
         description: progress-bar label.
+        remedy: what the command offers when the CSV cannot be resumed (see :func:`resume_plan`).
+        step_timeout_s: the most an outside agent's ``predict`` may take per call; 0 for no limit.
+        by_factor: say first what the CSV holds of each factor (a suite's tiers), and give each its bar.
 
     Returns:
         The number of episodes flown and added in this call (not those another run flew meanwhile).
 
     Raises:
-        ValueError: a bad backend or worker count, or a CSV that cannot be resumed (see :func:`pending_tasks`).
+        ValueError: a bad backend, worker count or step timeout, or a CSV that cannot be resumed (see
+            :func:`resume_plan`).
+        PredictTimeout: an outside agent's ``predict`` ran past ``step_timeout_s``; the run stops, its claims
+            are given up and that episode is not recorded.
         EpisodesInterrupted: Ctrl-C or SIGTERM (a scheduler, ``kill``, the end of a session); the workers are
             stopped, the episodes flown so far are kept, and the message says how many are in the CSV and how
             to resume.
     """
-    from tqdm import tqdm
-
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if not (math.isfinite(step_timeout_s) and step_timeout_s >= 0):
+        raise ValueError(
+            f"{STEP_TIMEOUT_OPTION} must be a number of seconds >= 0 (0 = no limit), got {step_timeout_s!r}"
+        )
     csv_path = Path(csv_path)
-    todo = pending_tasks(tasks, csv_path)
+    if (repaired := repair_episodes_header(csv_path)) is not None:
+        print(repaired)
+    plan = resume_plan(tasks, csv_path, remedy)
+    _say_what_does_not_count(csv_path, plan.damaged, plan.other_versions)
+    todo = [dataclasses.replace(task, step_timeout_s=step_timeout_s) for task in plan.todo]
+    if by_factor:
+        print(holdings_line(csv_path, tasks, todo))
     if not todo:
         return 0
-    progress = tqdm(total=len(todo), desc=description, unit="episode")
+    progress = EpisodeProgress(todo, description, by_factor=by_factor)
     results = _results(todo, csv_path, backend, workers, address)
     flown = 0
     try:
@@ -143,7 +195,7 @@ def execute(
                     elsewhere.append(task)
                     continue
                 flown += record is not None and append_record(csv_path, record)
-                progress.update()
+                progress.update(record.factor if record is not None else task.factor if task else None)
             flown += _await_other_runs(elsewhere, csv_path, progress)
     except KeyboardInterrupt:
         results.close()  # stops the pool or Ray before the message, whichever line Ctrl-C hit
@@ -165,7 +217,24 @@ def execute(
     return flown
 
 
-def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: Any) -> int:
+def _say_what_does_not_count(csv_path: Path, damaged: int, other_versions: dict[str, int]) -> None:
+    """A line for the damaged rows of ``csv_path`` and one for its rows of another suite version: both are
+    left out, and any of this run's episodes among them is flown again."""
+    if damaged:
+        print(
+            f"{damaged} damaged rows in {csv_path} (torn, or failing their checksum) are left out; "
+            "their episodes will be flown again"
+        )
+    from flownav_env.tiers import SUITE_VERSION
+
+    for version, count in other_versions.items():
+        print(
+            f"{count} rows in {csv_path} were flown under suite version {version!r}, not the current "
+            f"{SUITE_VERSION!r}: they are left out and their episodes flown again"
+        )
+
+
+def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: EpisodeProgress) -> int:
     """Wait until the episodes another run claimed are in the CSV, so this run's report counts them too;
     fly here any whose claimant stopped without writing it. Returns the number flown here."""
     flown = 0
@@ -177,7 +246,7 @@ def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: Any) -
                 waiting.append(task)
                 continue
             flown += record is not None and append_record(csv_path, record)
-            progress.update()
+            progress.update(task.factor)
         if waiting:
             progress.set_postfix_str(f"waiting for {len(waiting)} episodes another run is flying")
             time.sleep(AWAIT_POLL_S)

@@ -25,7 +25,13 @@ from agents.common.locations import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
 from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
-from agents.evaluation.records import drop_agents, read_episodes, read_records, start_new_file
+from agents.evaluation.records import (
+    OVERWRITE_HINT,
+    drop_agents,
+    read_episodes,
+    read_records,
+    start_new_file,
+)
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import RUN_KEY, format_summary
 from agents.evaluation.sweep_report import (
@@ -45,6 +51,8 @@ from flownav_env.settings_check import check_env_kwargs, check_setting
 
 # ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
 ALL_SEEDS = "@all"
+# What the sweep offers when its CSV cannot be resumed: its own --overwrite, or --refly for a retrained agent.
+SWEEP_REMEDY = f"{OVERWRITE_HINT}; after retraining an agent, --refly AGENT flies just its episodes again"
 SWEEP_FACTORS = (
     "rotation_error",
     "translation_error",
@@ -261,7 +269,7 @@ def run_sweep(
         runs = [run for agent in refly for run in seed_rotation(config, agent)]
         # Refuse before deleting anything what the run itself would refuse (a CSV from before identities,
         # other agents' episodes of other settings), so --refly never deletes episodes and then stops.
-        pending_tasks([t for t in tasks if t.agent not in runs], episodes_csv)
+        pending_tasks([t for t in tasks if t.agent not in runs], episodes_csv, SWEEP_REMEDY)
         print(f"--refly: deleted {drop_agents(episodes_csv, runs)} episodes of {', '.join(refly)}")
     flown = 0
     if not report_only:
@@ -272,6 +280,7 @@ def run_sweep(
             workers=config.workers,
             address=address,
             description="sweep",
+            remedy=SWEEP_REMEDY,
         )
     episodes = read_episodes(episodes_csv)
     rows = pool_seeds(rows_of(tasks, episodes.rows), agents)

@@ -134,7 +134,7 @@ def test_legacy_rows_are_checked_by_type_and_have_unknown_identity(tmp_path: Pat
 def test_appending_to_a_legacy_csv_is_refused_with_the_way_out(tmp_path: Path) -> None:
     path = tmp_path / "old.csv"
     write_legacy(path, LEGACY_ROW)
-    with pytest.raises(ValueError, match=r"old.csv predates episode identities .*--overwrite"):
+    with pytest.raises(ValueError, match=r"old.csv predates episode identities .*rename the file"):
         append_record(path, RECORD)
 
 

@@ -17,7 +17,7 @@ from agents.evaluation import runner
 from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks
-from agents.evaluation.records import append_record, read_episodes, read_records
+from agents.evaluation.records import OVERWRITE_HINT, append_record, read_episodes, read_records
 from agents.evaluation.runner import EpisodesInterrupted, execute
 from flownav_env.limits import episode_step_limit
 
@@ -67,7 +67,7 @@ def test_resume_refuses_a_csv_of_the_same_episodes_flown_with_other_settings(
         assert pending_tasks([changed], path) == [changed]
         return
     with pytest.raises(ValueError) as error:
-        pending_tasks([changed], path)
+        pending_tasks([changed], path, OVERWRITE_HINT)
     message = str(error.value)
     assert message.startswith(
         f"{path} already holds episode (straight, clean, level 0, seed {TEST_SEED_START})"
@@ -101,7 +101,9 @@ def test_bee_gains_and_policy_content_are_part_of_an_episode(tmp_path: Path) -> 
     append_record(path, fake_record(learned))
     assert pending_tasks([learned], path) == []
     policy.write_bytes(b"retrained")
-    with pytest.raises(ValueError, match=r"policy_sha256 .*flownav sweep --refly ppo_flow"):
+    with pytest.raises(
+        ValueError, match=r"the policy file changed since these episodes were flown: policy_sha256"
+    ):
         pending_tasks([learned], path)
 
 
@@ -113,7 +115,7 @@ def test_resuming_into_a_csv_from_before_identities_is_refused_but_it_still_read
     )
     assert len(read_records(path)) == 1
     with pytest.raises(
-        ValueError, match=r"old.csv predates episode identities .* --report-only.*--overwrite"
+        ValueError, match=r"old.csv predates episode identities .* --report-only.*rename the file"
     ):
         execute([TASK], path)
 

@@ -3,12 +3,15 @@
 A command that trains or evaluates for an hour should not find out at its first save that its output folder is
 read-only or its disk full: :func:`check_writable_folder` tries a write up front. Errors from writes deep inside
 other libraries (a full disk, a file-size limit) often carry no file name; :func:`naming_file` gives them one,
-so the command can report them in one line.
+so the command can report them in one line. Files that readers may meet half-written are written through
+:func:`replacing_atomically`, the one atomic writer.
 """
 
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
@@ -76,20 +79,65 @@ def naming_file(path: Path | str) -> Iterator[None]:
         raise named from None
 
 
+def _file_mode() -> int:
+    """The mode a newly created file gets under this process's umask (``mkstemp`` would give 0600)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+NEW_FILE_MODE = _file_mode()
+
+
+@contextmanager
+def replacing_atomically(path: Path | str) -> Iterator[Path]:
+    """Yield a new temporary file beside ``path`` for the block to write; when the block ends, the file is
+    flushed to disk and renamed to ``path``. Readers see the old file or the whole new one, never a part.
+
+    The temporary's name is unique (``.<stem>.<random><suffix>``, the suffix kept for writers that go by it:
+    ``np.savez``, ``model.save``, ``savefig``), so processes writing the same ``path`` at once never write into
+    or rename each other's file: the last rename wins, whole.
+
+    Raises:
+        OSError: the block or the rename failed; it names ``path``, and the temporary file is removed.
+    """
+    path = Path(path)
+    with naming_file(path):
+        descriptor, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+        temporary = Path(name)
+        try:
+            os.fchmod(descriptor, NEW_FILE_MODE)
+            os.close(descriptor)
+            descriptor = -1
+            yield temporary
+            # Renamed before its data reach the disk, a crash could leave an empty file under the old name.
+            with temporary.open("rb") as written:
+                os.fsync(written.fileno())
+            os.replace(temporary, path)
+        except BaseException:
+            with suppress(OSError):  # a failed cleanup must not hide why the write failed
+                if descriptor >= 0:
+                    os.close(descriptor)
+                temporary.unlink(missing_ok=True)
+            raise
+
+
 def write_text_atomically(path: Path | str, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename: readers see the old file or the whole
-    new one, never a part.
+    """Write ``text`` to ``path`` through :func:`replacing_atomically`.
 
     Raises:
         OSError: the write failed; it names ``path``, and the temporary file is removed.
     """
-    path = Path(path)
-    temporary = path.with_name(f".{path.name}.tmp")
-    with naming_file(path):
-        try:
-            temporary.write_text(text)
-            os.replace(temporary, path)
-        except BaseException:
-            with suppress(OSError):  # a failed cleanup must not hide why the write failed
-                temporary.unlink(missing_ok=True)
-            raise
+    with replacing_atomically(path) as temporary:
+        temporary.write_text(text)
+
+
+def copy_atomically(source: Path | str, path: Path | str) -> None:
+    """Copy the file ``source`` to ``path`` through :func:`replacing_atomically`.
+
+    Raises:
+        OSError: the copy failed; it names ``path`` (or ``source``, when that cannot be read), and the
+            temporary file is removed.
+    """
+    with replacing_atomically(path) as temporary:
+        shutil.copyfile(source, temporary)

@@ -9,17 +9,15 @@ are never unpickled, since unpickling runs whatever code the file names.
 
 from __future__ import annotations
 
-import contextlib
 import io
 import json
-import os
 import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agents.common.folders import naming_file
+from agents.common.folders import naming_file, replacing_atomically
 
 CHECKPOINT_NAME = re.compile(r"_(\d+)_steps$")
 REQUIRED_ENTRIES = ("data", "policy.pth")
@@ -86,24 +84,18 @@ def read_saved_model(path: Path) -> SavedModel:
 
 
 def save_atomically(model: Any, path: Path) -> Path:
-    """``model.save(path)`` through a temporary ``<stem>.tmp.zip`` and a rename, so an interrupted save never
-    leaves a truncated ``path``; returns ``path``.
+    """``model.save(path)`` through :func:`agents.common.folders.replacing_atomically`, so an interrupted save
+    never leaves a truncated ``path``; returns ``path``.
 
     Raises:
         OSError: the save failed (full disk, file-size limit, read-only folder); it names ``path``, and the
             partial temporary file is removed.
     """
     path = Path(path)
-    temporary = path.with_name(f"{path.stem}.tmp.zip")
     with naming_file(path):
         path.parent.mkdir(parents=True, exist_ok=True)
-        try:
-            model.save(temporary)
-            os.replace(temporary, path)
-        except BaseException:
-            with contextlib.suppress(OSError):  # a failed cleanup must not hide why the save failed
-                temporary.unlink(missing_ok=True)
-            raise
+    with replacing_atomically(path) as temporary:
+        model.save(temporary)
     return path
 
 

@@ -12,9 +12,10 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
+from stable_baselines3.common.evaluation import evaluate_policy
 
-from agents.common.folders import naming_file, write_text_atomically
-from agents.common.saved_models import read_saved_model, save_atomically
+from agents.common.folders import copy_atomically, naming_file, replacing_atomically, write_text_atomically
+from agents.common.saved_models import checkpoint_steps, read_saved_model, save_atomically
 from agents.training.outputs import RunFiles
 
 
@@ -35,19 +36,57 @@ class AtomicCheckpointCallback(CheckpointCallback):
         return True
 
 
-class SaveBestModel(BaseCallback):
-    """Run by the evaluation on a new best: saves the model atomically with its mean return and step count
-    beside it, so a resumed run knows the best to beat and the record can name it."""
+def write_best_info(files: RunFiles, mean_return: float, timesteps: int) -> None:
+    """Write the best model's mean return and step count to ``best_model.json``, atomically."""
+    write_text_atomically(
+        files.best_info, json.dumps({"mean_return": mean_return, "timesteps": int(timesteps)})
+    )
 
-    def __init__(self, files: RunFiles) -> None:
-        super().__init__()
-        self.files = files
 
-    def _on_step(self) -> bool:
-        save_atomically(self.model, self.files.best_model)
-        info = {"mean_return": float(self.parent.best_mean_reward), "timesteps": int(self.num_timesteps)}
-        write_text_atomically(self.files.best_info, json.dumps(info))
-        return True
+def checkpoint_at(folder: Path, steps: int) -> Path | None:
+    """The checkpoint of step ``steps`` in ``folder`` (``<name>_<steps>_steps.zip``), None when there is none."""
+    return next((path for path in folder.glob("*_steps.zip") if checkpoint_steps(path) == steps), None)
+
+
+def restore_best(
+    files: RunFiles, kept: dict[int, float], saved: tuple[int, float | None] | None
+) -> float | None:
+    """Make the run's best model and ``best_model.json`` agree with the evaluations ``kept`` (step → mean
+    return); returns the best mean return, None when there is none to beat.
+
+    The best evaluation is the first of the highest mean (an evaluation replaces the best model only when
+    strictly better). ``saved`` is the step count and mean return (None: unknown) of the best model on disk:
+    it stays when at least as good, since it may come from an evaluation dropped at the resume; otherwise the
+    best evaluation's checkpoint takes its place, as when its own save failed after it was recorded.
+    """
+    top = min(kept, key=lambda step: (-kept[step], step)) if kept else None
+    steps, mean = saved if saved is not None else (None, None)
+    if mean is None and steps in kept:
+        mean = kept[steps]
+    better = top is not None and (mean is None or (kept[top], -top) > (mean, -(steps or 0)))
+    if better and top != steps:
+        checkpoint = checkpoint_at(files.checkpoints, top)
+        if checkpoint is None:
+            print(f"warning: the best evaluation, {kept[top]:.2f} at {top} steps, has no checkpoint left to be "
+                  "the best model; keeping the best model saved")  # fmt: skip
+        else:
+            files.best_model.parent.mkdir(parents=True, exist_ok=True)
+            copy_atomically(checkpoint, files.best_model)
+            steps, mean = top, kept[top]
+            print(f"the best evaluation, {mean:.2f} at {steps} steps, had no best model saved: taken from "
+                  f"{checkpoint}")  # fmt: skip
+    if steps is None or mean is None:
+        return None
+    write_best_info(files, mean, steps)
+    return mean
+
+
+def write_evaluations(
+    path: Path, timesteps: list[int], results: list[list[float]], lengths: list[list[int]]
+) -> None:
+    """Write the evaluation history in SB3's ``evaluations.npz`` layout, atomically."""
+    with replacing_atomically(path) as temporary:
+        np.savez(temporary, timesteps=timesteps, results=results, ep_lengths=lengths)
 
 
 def _evaluations_problem(timesteps: np.ndarray, results: np.ndarray, lengths: np.ndarray) -> str | None:
@@ -83,29 +122,39 @@ def read_evaluations(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 class ResumableEvalCallback(EvalCallback):
-    """SB3's EvalCallback over all sessions of a run.
+    """SB3's EvalCallback over all sessions of a run, such that a failed or interrupted write loses no
+    evaluation and changes no choice of the best model.
 
-    A fresh EvalCallback overwrites ``evaluations.npz`` with the new session's evaluations and starts its best
-    at −inf, so a resumed run forgot earlier evaluations and replaced a better best model with its first one.
-    Resumed from step ``resume_step``, this one first loads the earlier evaluations up to that step (later
-    ones belong to training that was lost with the unsaved steps, and are dropped) and starts from the best
-    mean return recorded so far; ``best_model.zip`` is only replaced by a better model. ``evaluations.npz`` is
-    written under a temporary name and renamed.
+    An evaluation is due at every multiple of ``eval_freq`` × the envs' count of the run's steps (not of the
+    session's, so a session resumed from any step keeps the run's schedule), on the same layouts each time
+    (the eval env is seeded with ``eval_seed`` before each), so an evaluation depends only on the model. Each
+    is added to ``evaluations.npz`` before anything else is written; only then is a new best saved as
+    ``best/best_model.zip`` with its mean return and steps in ``best_model.json``.
+
+    Resumed from step ``resume_step``, it loads the earlier evaluations up to that step (later ones belong to
+    training that was lost with the unsaved steps, and are dropped) and makes the best model agree with them:
+    the best evaluation's model is taken from its checkpoint where a failed save left an older best model, or
+    none. At the start of learning it redoes the evaluation due at the resumed step when the history lacks it
+    (a run stopped by a failed write of that evaluation): the resumed model is that step's checkpoint.
 
     Raises:
         ValueError: the earlier evaluations used another number of episodes (they could not share one array).
     """
 
-    def __init__(self, eval_env: Any, files: RunFiles, resume_step: int | None, **kwargs: Any) -> None:
-        super().__init__(
-            eval_env,
-            callback_on_new_best=SaveBestModel(files),
-            log_path=str(files.run_dir),
-            best_model_save_path=None,
-            **kwargs,
-        )
+    def __init__(
+        self,
+        eval_env: Any,
+        files: RunFiles,
+        resume_step: int | None,
+        eval_seed: int | None = None,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(eval_env, log_path=None, best_model_save_path=None, **kwargs)
         self.files = files
-        self.log_path = str(files.run_dir / "evaluations.tmp")  # np.savez adds ".npz"; renamed after each
+        self.eval_seed = eval_seed
+        self.resume_step = resume_step
+        self.step_interval = 0  # steps between evaluations, known once the training envs are
+        self.next_due = 0
         if resume_step is not None:
             self._restore(resume_step)
 
@@ -126,30 +175,44 @@ class ResumableEvalCallback(EvalCallback):
             self.evaluations_timesteps = [int(t) for t in timesteps[keep]]
             self.evaluations_results = [list(map(float, r)) for r in results[keep]]
             self.evaluations_length = [list(map(int, n)) for n in lengths[keep]]
+        kept = {t: earlier[t] for t in self.evaluations_timesteps}
+        best = restore_best(self.files, kept, self._saved_best(earlier))
+        if best is not None:
+            self.best_mean_reward = best
+
+    def _saved_best(self, earlier: dict[int, float]) -> tuple[int, float | None] | None:
+        """The step count of ``best_model.zip`` and its mean return (from ``best_model.json`` when that
+        describes this model, else from the evaluations, else None); None when there is no readable best
+        model. An unreadable ``best_model.json`` is moved aside with a warning."""
         if not self.files.best_model.is_file():
-            return
-        if self.files.best_info.is_file() and self._best_mean_return() is None:
+            return None
+        try:
+            steps = read_saved_model(self.files.best_model).num_timesteps
+        except ValueError as problem:
+            print(f"warning: the best model is unreadable and will be replaced: {problem}")
+            return None
+        info = self._best_info()
+        if self.files.best_info.is_file() and info is None:
             aside = self.files.best_info.with_name(f"{self.files.best_info.stem}.unreadable.json")
             with naming_file(aside):
                 os.replace(self.files.best_info, aside)
             print(f"warning: {self.files.best_info} unreadable; kept as {aside.name}, the best model's return "
                   "is taken from the evaluations")  # fmt: skip
-        if not self.files.best_info.is_file() and earlier:
-            # A run from before best_model.json: its best model's return is in the earlier evaluations.
-            steps = read_saved_model(self.files.best_model).num_timesteps
-            mean = earlier.get(steps, max(earlier.values()))
-            write_text_atomically(self.files.best_info, json.dumps({"mean_return": mean, "timesteps": steps}))
-        best = self._best_mean_return() if self.files.best_info.is_file() else None
-        if best is not None:
-            self.best_mean_reward = best
+        if info is not None and int(info.get("timesteps", steps)) == steps:
+            return steps, float(info["mean_return"])
+        return steps, earlier.get(steps)
 
-    def _best_mean_return(self) -> float | None:
-        """The best model's mean return from ``best_model.json``; None when the file is damaged."""
+    def _best_info(self) -> dict[str, Any] | None:
+        """``best_model.json``; None when there is none or it is damaged (no finite mean return)."""
+        if not self.files.best_info.is_file():
+            return None
         try:
-            value = float(json.loads(self.files.best_info.read_text())["mean_return"])
+            info = json.loads(self.files.best_info.read_text())
+            value = float(info["mean_return"])
+            int(info.get("timesteps", 0))
         except (ValueError, KeyError, TypeError, UnicodeDecodeError):
             return None
-        return value if np.isfinite(value) else None
+        return info if np.isfinite(value) else None
 
     def _earlier_evaluations(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The earlier sessions' evaluations; None when there are none, or when they are unreadable: the file
@@ -167,13 +230,56 @@ class ResumableEvalCallback(EvalCallback):
                   "starting a new history")  # fmt: skip
             return None
 
+    def _on_training_start(self) -> None:
+        self.step_interval = max(1, self.eval_freq) * self.training_env.num_envs
+        step = self.num_timesteps
+        missing = step not in self.evaluations_timesteps
+        if self.resume_step is not None and step > 0 and step % self.step_interval == 0 and missing:
+            print(f"redoing the evaluation at the resumed step {step}, missing from {self.files.evaluations}")
+            self._evaluate()
+        self.next_due = (step // self.step_interval + 1) * self.step_interval
+
     def _on_step(self) -> bool:
-        evaluations_before = len(self.evaluations_timesteps)
-        continue_training = super()._on_step()
-        if len(self.evaluations_timesteps) > evaluations_before:
-            with naming_file(self.files.evaluations):
-                os.replace(f"{self.log_path}.npz", self.files.evaluations)
-        return continue_training
+        if self.eval_freq > 0 and self.num_timesteps >= self.next_due:
+            self.next_due = (self.num_timesteps // self.step_interval + 1) * self.step_interval
+            self._evaluate()
+        return True
+
+    def _evaluate(self) -> None:
+        """Evaluate the model, write the history, then the best model when it is a new best.
+
+        Raises:
+            OSError: a write failed; it names the file, and the files written before it stay whole.
+        """
+        if self.eval_seed is not None:
+            self.eval_env.seed(self.eval_seed)
+        returns, lengths = evaluate_policy(
+            self.model,
+            self.eval_env,
+            n_eval_episodes=self.n_eval_episodes,
+            deterministic=self.deterministic,
+            return_episode_rewards=True,
+            warn=self.warn,
+        )
+        self.evaluations_timesteps.append(int(self.num_timesteps))
+        self.evaluations_results.append([float(r) for r in returns])
+        self.evaluations_length.append([int(n) for n in lengths])
+        write_evaluations(
+            self.files.evaluations,
+            self.evaluations_timesteps,
+            self.evaluations_results,
+            self.evaluations_length,
+        )
+        mean = float(np.mean(returns))
+        self.last_mean_reward = mean
+        self.logger.record("eval/mean_reward", mean)
+        self.logger.record("eval/mean_ep_length", float(np.mean(lengths)))
+        self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
+        self.logger.dump(self.num_timesteps)
+        if mean > self.best_mean_reward:
+            save_atomically(self.model, self.files.best_model)
+            write_best_info(self.files, mean, self.num_timesteps)
+            self.best_mean_reward = mean
 
 
 class WallClockBudget(BaseCallback):

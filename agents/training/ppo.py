@@ -14,17 +14,21 @@ Everything goes to ``runs/<name>/`` (see :class:`agents.training.outputs.RunFile
 from __future__ import annotations
 
 import json
-import os
-import shutil
 from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
-from agents.common.folders import check_writable_folder, named_os_error, naming_file
+from agents.common.folders import (
+    check_writable_folder,
+    copy_atomically,
+    named_os_error,
+    replacing_atomically,
+)
 from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import available_cores, code_version, cpu_model
 from agents.common.saved_models import latest_checkpoint, load_policy_weights, save_atomically
+from agents.common.seeds import checkpoint_selection_seed
 from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
@@ -38,10 +42,8 @@ from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
     """The run's learning curve: mean held-out return (and its min–max band) against steps."""
-    temporary = output.with_name(f"{output.stem}.tmp.png")
-    with naming_file(output):
+    with replacing_atomically(output) as temporary:
         plot_learning_curves({"mean return (held-out seeds)": evaluations}, temporary, title)
-        os.replace(temporary, output)
 
 
 def select_policy(model: Any, files: RunFiles) -> str:
@@ -54,10 +56,7 @@ def select_policy(model: Any, files: RunFiles) -> str:
     """
     if files.best_model.is_file() and files.best_info.is_file():
         best = json.loads(files.best_info.read_text())
-        temporary = files.policy.with_name(f"{files.policy.stem}.tmp.zip")
-        with naming_file(files.policy):
-            shutil.copyfile(files.best_model, temporary)
-            os.replace(temporary, files.policy)
+        copy_atomically(files.best_model, files.policy)
         return f"best held-out eval: mean return {best['mean_return']:.2f} at {best['timesteps']} steps"
     save_atomically(model, files.policy)
     return f"last: {model.num_timesteps} steps"
@@ -209,8 +208,7 @@ def train(
     try:
         selected = select_policy(model, files)
         if Path(config_path).resolve() != files.config.resolve():
-            with naming_file(files.config):
-                shutil.copyfile(config_path, files.config)
+            copy_atomically(config_path, files.config)
         if files.evaluations.exists():
             plot_learning_curve(files.evaluations, files.curve, config.name)
         record.end(status, model.num_timesteps, selected=selected)
@@ -299,6 +297,7 @@ def _callbacks(
             eval_env,
             files,
             resume_step,
+            eval_seed=checkpoint_selection_seed(config.seed),
             n_eval_episodes=config.eval_episodes,
             eval_freq=max(1, config.eval_every // per_env),
             deterministic=True,
@@ -345,11 +344,12 @@ def _learn(
         _save_checkpoint(model, config, files)
         return INTERRUPTED
     except BaseException as error:
-        # Keep what can still be kept; a second failure (the same full disk) must not hide the first.
-        with suppress(Exception):
-            _save_checkpoint(model, config, files)
+        # Keep what can still be kept; a second failure (the same full disk) must not hide the first. The
+        # record goes first: it is the smallest write, and a checkpoint's failed save may leave no room for it.
         with suppress(Exception):
             record.end(FAILED, model.num_timesteps, error=f"{type(error).__name__}: {error}")
+        with suppress(Exception):
+            _save_checkpoint(model, config, files)
         if isinstance(error, OSError) and not isinstance(error, ConnectionError):
             raise named_os_error(error, files.run_dir) from None
         raise

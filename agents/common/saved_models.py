@@ -4,7 +4,8 @@ checkpoint that reads.
 A ``kill -9`` or a full disk during ``model.save`` leaves a truncated zip; written under a temporary name and
 renamed, a file is either the old one or the complete new one. Reading uses only ``zipfile``, ``json`` and
 ``torch.load(weights_only=True)``: the ``data`` entry's pickled objects (spaces, schedules, the policy class)
-are never unpickled, since unpickling runs whatever code the file names.
+are never unpickled, since unpickling runs whatever code the file names (:func:`load_unpickled` does, for a
+file the user trusts).
 """
 
 from __future__ import annotations
@@ -54,6 +55,14 @@ def read_saved_model(path: Path) -> SavedModel:
     try:
         with zipfile.ZipFile(path) as archive:
             names = archive.namelist()
+            # SB3 stores its entries uncompressed, and policy.pth is itself a zip: in a file cut short, zipfile
+            # finds that inner zip's directory, whose entries start past byte 0, and lists torch's entries.
+            start = min((entry.header_offset for entry in archive.infolist()), default=0)
+            if start > 0:
+                raise ValueError(
+                    f"{path} is cut short: not a readable zip file (its own directory is missing; what reads is "
+                    f"a zip stored inside it from byte {start})"
+                )
             missing = [entry for entry in REQUIRED_ENTRIES if entry not in names]
             if missing:
                 raise ValueError(
@@ -81,6 +90,29 @@ def read_saved_model(path: Path) -> SavedModel:
     if not isinstance(state, dict):
         raise ValueError(f"{path}: its policy.pth holds a {type(state).__name__}, not a parameter dict")
     return SavedModel(path, data, state)
+
+
+def describe_error(error: BaseException) -> str:
+    """``error`` as one line, ``TypeError: what it said``, whatever newlines its message holds."""
+    text = " ".join(str(error).split())
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
+def load_unpickled(algorithm_class: Any, path: Path, label: str) -> Any:
+    """``algorithm_class.load(path)`` on the CPU: SB3's own load, which unpickles the zip and so runs any code
+    it names; only for a file the user said they trust (``--trust-pickle``).
+
+    Raises:
+        ValueError: the load raised anything (a broken file, or a payload that fails inside SB3); one line
+            naming the file and the ``label`` (``PPO``, ``sac``) it was loaded as.
+    """
+    try:
+        return algorithm_class.load(path, device="cpu")
+    except Exception as error:  # SB3 and whatever the file names raise any type; all mean "not loadable"
+        raise ValueError(
+            f"{path} could not be loaded as a {label} model (unpickled, as --trust-pickle asked): "
+            f"{describe_error(error)}"
+        ) from error
 
 
 def save_atomically(model: Any, path: Path) -> Path:

@@ -16,7 +16,7 @@ import warnings
 from pathlib import Path
 
 from agents.common.manifest import manifest_problem
-from agents.common.saved_models import SavedModel, read_saved_model
+from agents.common.saved_models import SavedModel, load_unpickled, read_saved_model
 from agents.common.yaml_config import ConfigError, load_config
 from agents.policies.base import Agent
 from agents.policies.observation_keys import CheckedPolicy, ObservationKeyCheck
@@ -136,11 +136,6 @@ def load_policy_file(path: Path, *, trust_pickle: bool = False) -> Agent:
 def _load_pickled(path: Path) -> Agent:
     from stable_baselines3 import PPO
 
-    try:
-        model = PPO.load(path, device="cpu")
-    except Exception as error:  # SB3 raises assertion, key and value errors for files it cannot use
-        raise ValueError(
-            f"{path} could not be loaded as a PPO model: {type(error).__name__}: {error}"
-        ) from error
+    model = load_unpickled(PPO, path, "PPO")
     keys = getattr(model.observation_space, "spaces", {})
     return CheckedPolicy(model, ObservationKeyCheck(keys, path, None))

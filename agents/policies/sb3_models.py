@@ -4,24 +4,25 @@
 rebuilt from the algorithm's ``MultiInputPolicy`` (``MultiInputLstmPolicy`` for RecurrentPPO), its saved
 ``policy_kwargs`` (kept as plain JSON in the zip) and the spaces of a FlowNav env that gives every observation
 key its parameters read; only the parameters are loaded (``torch.load(weights_only=True)``). A model whose
-``policy_kwargs`` were pickled (a custom activation or extractor class) can only be read by unpickling it,
-which runs code: that takes ``trust_pickle``.
+``policy_kwargs`` were pickled is read only when the pickle names nothing but torch's activations and
+optimisers and SB3's extractors and calls nothing (:mod:`agents.policies.policy_kwargs_pickle`); any other
+can only be read by unpickling it, which runs code: that takes ``trust_pickle``. ``--algo`` must be the
+algorithm the zip records (:func:`recorded_algorithm`).
 """
 
 from __future__ import annotations
 
-import base64
 import functools
 import hashlib
-import io
-import pickle
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agents.common.saved_models import SavedModel, read_saved_model
+from agents.common.saved_models import SavedModel, load_unpickled, read_saved_model
 from agents.policies.base import Agent
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS, CheckedPolicy, ObservationKeyCheck
+from agents.policies.policy_kwargs_pickle import RefusedPickle, read_policy_kwargs_pickle
 
 SB3_ALGORITHMS = ("ppo", "sac", "a2c", "td3", "recurrent_ppo")
 
@@ -46,6 +47,11 @@ def algorithm(name: str) -> Any:
 def sb3_model_name(algo: str, path: str | Path) -> str:
     """The agent name of the model ``path`` of algorithm ``algo``: ``sac:/abs/path/model.zip``."""
     algorithm(algo)
+    if Path(path).suffix != ".zip":
+        raise ValueError(
+            f"--policy {path}: a stable-baselines3 model must be a .zip file (what model.save writes), "
+            f"not {Path(path).suffix or 'a name without one'}"
+        )
     return f"{algo}:{Path(path).resolve()}"
 
 
@@ -81,29 +87,61 @@ def sb3_model_parameters(name: str) -> dict[str, Any]:
     return {"algo": algo, "model_sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
 
 
-# What a saved policy_kwargs may name without unpickling arbitrary code: installed classes of torch and SB3
-# (an optimiser, an activation, a features extractor), never a function to call with the file's arguments.
-_SAFE_MODULES = ("torch.optim", "torch.nn.modules.activation", "stable_baselines3.common.torch_layers")
+@dataclass(frozen=True)
+class AlgorithmRecord:
+    """What an algorithm's model zip records in its ``data`` JSON, readable without unpickling: the module of
+    its policy class (the ``__module__`` SB3 writes beside the pickled class), attributes only that algorithm
+    saves, and attributes it never saves."""
+
+    policy_module: str
+    has: tuple[str, ...]
+    lacks: tuple[str, ...] = ()
+
+    def matches(self, data: dict[str, Any]) -> bool:
+        """Whether ``data`` (a zip's ``data`` JSON) is what this algorithm saves."""
+        return (
+            _policy_module(data) == self.policy_module
+            and all(key in data for key in self.has)
+            and not any(key in data for key in self.lacks)
+        )
 
 
-class _ClassesOnly(pickle.Unpickler):
-    def find_class(self, module: str, name: str) -> Any:
-        if module.split(".")[0] in ("torch", "stable_baselines3") and module.startswith(_SAFE_MODULES):
-            return super().find_class(module, name)
-        raise pickle.UnpicklingError(f"{module}.{name} is not a torch or SB3 class")
+# PPO and A2C share a policy class; PPO alone saves its clipping and epochs, A2C no minibatch size.
+ALGORITHM_RECORDS = {
+    "ppo": AlgorithmRecord("stable_baselines3.common.policies", ("clip_range", "n_epochs")),
+    "a2c": AlgorithmRecord(
+        "stable_baselines3.common.policies", ("gae_lambda",), ("batch_size", "clip_range")
+    ),
+    "sac": AlgorithmRecord("stable_baselines3.sac.policies", ("target_entropy",)),
+    "td3": AlgorithmRecord("stable_baselines3.td3.policies", ("policy_delay",)),
+    "recurrent_ppo": AlgorithmRecord("sb3_contrib.common.recurrent.policies", ("clip_range", "n_epochs")),
+}
 
-    def persistent_load(self, pid: Any) -> Any:
-        raise pickle.UnpicklingError("persistent ids are refused")
+
+def _policy_module(data: dict[str, Any]) -> str | None:
+    policy_class = data.get("policy_class")
+    return policy_class.get("__module__") if isinstance(policy_class, dict) else None
 
 
-def _classes_only(serialized: str) -> dict[str, Any] | None:
-    """The pickled ``policy_kwargs`` when they name nothing but torch's optimisers and activations or SB3's
-    extractors (A2C saves its RMSprop optimiser so); None when they name anything else."""
-    try:
-        value = _ClassesOnly(io.BytesIO(base64.b64decode(serialized))).load()
-    except Exception:  # refused or malformed: only trust_pickle may read it
-        return None
-    return value if isinstance(value, dict) else None
+def recorded_algorithm(data: dict[str, Any]) -> str | None:
+    """The algorithm of :data:`SB3_ALGORITHMS` whose :data:`ALGORITHM_RECORDS` the zip's ``data`` matches; None
+    when it matches none (another algorithm, or a file that records too little to tell)."""
+    return next((algo for algo, record in ALGORITHM_RECORDS.items() if record.matches(data)), None)
+
+
+def _check_algorithm(algo: str, saved: SavedModel) -> None:
+    recorded = recorded_algorithm(saved.data)
+    if recorded == algo:
+        return
+    if recorded is None:
+        raise ValueError(
+            f"{saved.path} records no algorithm FlowNav can tell (policy class module "
+            f"{_policy_module(saved.data)!r}), so --algo {algo} cannot be checked: it must be a model saved by "
+            f"stable-baselines3's or sb3-contrib's {', '.join(SB3_ALGORITHMS)}"
+        )
+    raise ValueError(
+        f"{saved.path} records a {recorded} model, not the --algo {algo} asked for: pass --algo {recorded}"
+    )
 
 
 def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
@@ -112,9 +150,10 @@ def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
 
     Raises:
         FileNotFoundError: no such file.
-        ValueError: not a stable-baselines3 model, ``policy_kwargs`` pickled with other than torch's or SB3's
-            classes without ``trust_pickle``, or
-            parameters that do not fit the algorithm's network on FlowNav's spaces; the message names the file.
+        ValueError: not a stable-baselines3 model, a model of another algorithm than ``<algo>`` (or one that
+            records none it can tell), ``policy_kwargs`` that :func:`read_policy_kwargs_pickle` refuses without
+            ``trust_pickle`` (with it: any failure of the unpickling load), or parameters that do not fit the
+            algorithm's network on FlowNav's spaces; the message names the file.
     """
     import gymnasium as gym
 
@@ -123,16 +162,20 @@ def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
     algo, path = _split(name)
     algorithm_class = algorithm(algo)
     saved = _saved(path)
+    _check_algorithm(algo, saved)
     network = saved.data.get("policy_kwargs") or {}
     if isinstance(network, dict) and ":serialized:" in network:
-        network = _classes_only(network[":serialized:"])
-    if not isinstance(network, dict):
-        if not trust_pickle:
-            raise ValueError(
-                f"{path}: its policy_kwargs are pickled (a custom class), so only unpickling it, which runs code "
-                "from the file, can rebuild its network: pass --trust-pickle (trust_pickle=True) if you trust it"
-            )
-        return CheckedPolicy(algorithm_class.load(path, device="cpu"), ObservationKeyCheck((), path, None))
+        try:
+            network = read_policy_kwargs_pickle(network[":serialized:"])
+        except RefusedPickle as refusal:
+            if not trust_pickle:
+                raise ValueError(
+                    f"{path}: its policy_kwargs are pickled and the pickle {refusal}; only unpickling it, which "
+                    "runs code from the file, can read it: pass --trust-pickle (trust_pickle=True) only if you "
+                    "trust the file"
+                ) from None
+            model = load_unpickled(algorithm_class, path, algo)
+            return CheckedPolicy(model, ObservationKeyCheck((), path, None))
     env = gym.make("FlowNav-v0", **sb3_model_env_settings(name))
     try:
         observation_space, action_space = env.observation_space, env.action_space

@@ -26,6 +26,7 @@ COMMANDS = {
     "calibrate-tiers": "agents.cli.calibrate_tiers",
     "suite": "agents.cli.suite",
     "score": "agents.cli.score",
+    "describe": "agents.cli.describe",
     "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",
     "ablation": "agents.cli.ablation",
@@ -34,6 +35,14 @@ COMMANDS = {
     "replicate": "agents.cli.replicate",
     "reports": "agents.cli.reports",
 }
+
+# Where a new user starts: the one leading table, and the path of an agent of their own.
+LEADING_TABLE_EPILOG = (
+    "The leading table is results/suite.md (flownav suite): every agent on every tier's frozen test layouts; "
+    "results/leaderboard.md is the clean tier's history, on other layouts. Your own agent: flownav describe "
+    "(what it is given and returns), flownav score --agent my_agent.py:make_agent, then flownav leaderboard "
+    "--include runs/score/score.csv."
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,7 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
     from agents import __version__
     from agents.cli.help_text import ParagraphHelpFormatter, plain_text
 
-    parser = argparse.ArgumentParser(prog="flownav", description=plain_text(__doc__.splitlines()[0]))
+    parser = argparse.ArgumentParser(
+        prog="flownav", description=plain_text(__doc__.splitlines()[0]), epilog=LEADING_TABLE_EPILOG
+    )
     parser.add_argument("--version", action="version", version=f"flownav {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, module_name in COMMANDS.items():

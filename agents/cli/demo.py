@@ -3,8 +3,9 @@
 table (collision and success rates with Wilson 95 % intervals). A learned agent flies its shipped training
 seeds (``results/policies/<agent>/seed_<k>.zip``) in turn over the layouts, as the sweep does; one without
 any flies its single ``<agent>.zip`` if there is one, and says so. A few episodes cannot rank agents, so the
-table comes with how few it rests on and where the full one is: ``results/leaderboard.md``, every agent on 300
-test layouts (``flownav leaderboard``; with ``flownav sweep``, results/benchmark.md)."""
+table comes with how few it rests on and where the leading table is: ``results/suite.md``, every agent on every
+tier's 300 frozen test layouts (``flownav suite``). The layouts flown here are the first of the clean tier's
+history table, ``results/leaderboard.md`` (``flownav leaderboard``), which are other layouts than the suite's."""
 
 from __future__ import annotations
 
@@ -13,8 +14,9 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from agents.cli.arguments import add_workers_argument
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
-from agents.common.seeds import TEST_SEED_START
+from agents.common.seeds import SUITE_LAYOUTS, SUITE_SEED_START, TEST_SEED_START
 
 HELP = "short evaluation of the shipped policies and the baselines (the README's main job)"
 
@@ -23,14 +25,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--episodes", type=int, default=5, help="episodes per agent (default: %(default)s)")
     parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
     parser.add_argument(
-        "--policy-dir",
+        "--policies-dir",
+        "--policy-dir",  # the demo's first spelling, kept; --policies-dir as leaderboard has it
+        dest="policies_dir",
         default=str(POLICIES_DIR),
         help="folder of the PPO policies, <agent>/seed_<k>.zip or <agent>.zip (default: this repository's "
         "%(default)s)",
     )
-    parser.add_argument(
-        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
-    )
+    add_workers_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,13 +44,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    runs = {name: [name] for name in REACTIVE_AGENTS} | learned_runs(Path(args.policy_dir))
+    runs = {name: [name] for name in REACTIVE_AGENTS} | learned_runs(Path(args.policies_dir))
     seeds = range(TEST_SEED_START, TEST_SEED_START + args.episodes)
     tasks = []
     for names in runs.values():
         for index, seed in enumerate(seeds):
             name = names[index % len(names)]  # training seeds in turn over the layouts
-            policy = str(policy_file(name, directory=args.policy_dir)) if is_learned(name) else None
+            policy = str(policy_file(name, directory=args.policies_dir)) if is_learned(name) else None
             tasks.append(EpisodeTask(name, "clean", 0.0, seed, args.env_id, (), policy))
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"
@@ -65,9 +67,9 @@ def run(args: argparse.Namespace) -> int:
 
 def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
     """The demo's table (rows of :func:`~agents.evaluation.statistics.summarise`) without the columns that are
-    the same in every row, under a line saying how few episodes it rests on and where the full table is."""
-    from agents.evaluation.leaderboard import MIN_EPISODES
+    the same in every row, under a line saying how few episodes it rests on and where the leading table is."""
     from agents.evaluation.statistics import format_summary
+    from flownav_env.tiers import TIER_NAMES
 
     constant = [name for name in ("factor", "level") if len({row[name] for row in table}) <= 1]
     widest = max((row["failure_ci_high"] - row["failure_ci_low"] for row in table), default=0.0)
@@ -76,9 +78,11 @@ def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
         f"\n{env_id}, clean sensors, {episodes} held-out test layout{plural} per agent (layout seeds from "
         f"{TEST_SEED_START:,}).\n"
         f"Only {episodes} episode{plural} per agent: a quick look, not a ranking (the "
-        f"widest 95 % interval below spans {widest:.2f}). The full table, every agent on {MIN_EPISODES} test "
-        f"layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'} "
-        "(flownav leaderboard).\n\n" + format_summary(table, omit=constant)
+        f"widest 95 % interval below spans {widest:.2f}). The leading table, every agent on each of the "
+        f"{len(TIER_NAMES)} tiers' {SUITE_LAYOUTS} frozen test layouts (seeds from {SUITE_SEED_START:,}) and "
+        f"learned agents over all their training seeds, is {RESULTS_DIR / 'suite.md'} (flownav suite); these "
+        f"layouts are the first of the clean tier's history table, {RESULTS_DIR / 'leaderboard.md'}, whose "
+        "other layouts give other rates.\n\n" + format_summary(table, omit=constant)
     )
 
 

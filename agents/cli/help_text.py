@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import textwrap
 
 # A role (:mod:`a.b`, :func:`~a.b.c`, :meth:`title <a.b>`), then a literal (``x``, across a line break too),
 # then the default role (`x`): a role's backticks must go before the bare-backtick pattern sees them.
@@ -35,7 +36,12 @@ def plain_text(text: str) -> str:
 
 class ParagraphHelpFormatter(argparse.HelpFormatter):
     """Refills a description to the terminal's width paragraph by paragraph (blank lines apart), where
-    argparse's default runs a docstring's paragraphs into one block."""
+    argparse's default runs a docstring's paragraphs into one block; and wraps an option's help between words
+    only, where argparse's default cuts a word longer than the line (an agent name: ``bee _robust``)."""
+
+    def _split_lines(self, text: str, width: int) -> list[str]:
+        words = " ".join(text.split())
+        return textwrap.wrap(words, width, break_long_words=False, break_on_hyphens=False) or [""]
 
     def _fill_text(self, text: str, width: int, indent: str) -> str:
         paragraphs = re.split(r"\n\s*\n", text.strip())

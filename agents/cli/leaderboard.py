@@ -1,9 +1,11 @@
 """``flownav leaderboard``: every agent on the same clean test layouts, learned agents over all their shipped
-training seeds; writes the clean tier's 300-layout history table (see :mod:`agents.evaluation.leaderboard`).
+training seeds; writes the clean tier's 300-layout history table (see :mod:`agents.evaluation.leaderboard`). The
+leading table is the suite's, ``results/suite.md`` (``flownav suite``): its layouts are others (seeds from
+2,000,000 against this table's from 1,000,000), so the two give the clean tier different rates.
 
 With ``--include score.csv`` (repeatable) it flies nothing: it sets the rows ``flownav score`` wrote beside the
-published suite table (``results/suite.csv``), tier by tier, and writes ``suite_with_included.md`` and ``.csv``
-into ``--out``. Rows of another suite version are refused.
+published suite table (``results/suite.csv``), tier by tier, and writes ``suite_with_included.md``, ``.csv`` and
+``.png`` into ``--out``. A file named twice counts once; rows of another suite version are refused.
 """
 
 from __future__ import annotations
@@ -13,9 +15,13 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.cli.arguments import add_workers_argument
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 
-HELP = "fly every agent (learned ones over their training seeds) on the test layouts; write the leading table"
+HELP = (
+    "fly every agent on the clean tier's 300 history layouts (not the leading table: that is flownav suite's); "
+    "--include sets your score.csv beside the leading table"
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,14 +31,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--agents",
         default=",".join(AGENT_NAMES),
-        help=f"comma-separated agents (default: all, {','.join(AGENT_NAMES)})",
+        help=f"comma-separated agents (default: all, {', '.join(AGENT_NAMES)})",
     )
     parser.add_argument(
         "--episodes", type=int, default=MIN_EPISODES, help="test layouts per run (default: %(default)s)"
     )
-    parser.add_argument(
-        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
-    )
+    add_workers_argument(parser)
     parser.add_argument("--policies-dir", default=str(POLICIES_DIR), help="where the seeds' policies are")
     parser.add_argument(
         "--out",
@@ -79,18 +83,26 @@ def run(args: argparse.Namespace) -> int:
 def _include(args: argparse.Namespace) -> int:
     from agents.common.folders import check_writable_folder, write_text_atomically
     from agents.evaluation.suite import write_summary_csv
-    from agents.evaluation.suite_report import merge_rows, plot_suite, read_suite_csv, tier_tables
+    from agents.evaluation.suite_report import (
+        merge_rows,
+        plot_suite,
+        read_included,
+        read_suite_csv,
+        tier_tables,
+    )
 
     published = read_suite_csv(Path(args.suite))
-    included = [row for path in args.include for row in read_suite_csv(Path(path))]
+    included, files = read_included(args.include)
     rows = merge_rows(published, included)
     out = Path(args.out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
+    count = sum(1 for row in rows if row.get("included"))
     lines = [
-        f"# The suite table with {len(included)} included rows",
+        f"# The suite table with {count} included row{'' if count == 1 else 's'}",
         "",
-        f"Published rows from `{args.suite}`; included rows from {', '.join(f'`{p}`' for p in args.include)}.",
+        f"Published rows from `{args.suite}`; included rows from {', '.join(f'`{p}`' for p in files)}. An included "
+        "row rests on the layouts its `layouts` column says, the first of the published rows' frozen layouts.",
         "",
         *tier_tables(rows),
     ]

@@ -4,8 +4,11 @@ The agent is a FlowNav agent name, one of your own (``my_pkg.my_module:make_agen
 ``path/to/file.py:make_agent``: a callable returning an object with stable-baselines3's ``predict``, or such an
 object), or a stable-baselines3 model (``--policy model.zip --algo sac``). Writes ``<out>/suite_episodes.csv``
 (resumable) and ``<out>/score.csv``; ``flownav leaderboard --include <out>/score.csv`` sets the rows beside the
-published table. In Python: ``agents.evaluation.suite.score``. ``--robustness`` adds the agent's failure-versus-
-error curves on the sweep's sensor factors (``agents.studies.robustness.robustness``).
+published table. What the agent is given and must return (observation keys, shapes and meaning; the action and
+its units; ``predict``'s signature): ``flownav describe [tier]``. ``--name`` sets the name its rows show
+(default: the file's stem and callable, ``my_agent:make_agent``). In Python: ``agents.evaluation.suite.score``.
+``--robustness`` adds the agent's failure-versus-error curves on the sweep's sensor factors
+(``agents.studies.robustness.robustness``).
 """
 
 from __future__ import annotations
@@ -31,6 +34,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--algo", choices=SB3_ALGORITHMS, help="with --policy and no --agent: a stable-baselines3 model"
     )
     parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
+    parser.add_argument(
+        "--name",
+        help="the agent's name in score.csv, tables and figures (default: a file's stem and callable, e.g. "
+        "my_agent:make_agent; episode records keep the full path and the file's hash)",
+    )
     add_tier_arguments(parser)
     parser.add_argument("--out", default="runs/score", help="output folder (default: %(default)s)")
     parser.add_argument(
@@ -78,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         "backend": args.backend,
         "address": args.address,
     }
-    rows = score(agent, tiers=args.tiers, layouts=args.layouts, out=Path(args.out), **common)
+    rows = score(agent, tiers=args.tiers, layouts=args.layouts, out=Path(args.out), name=args.name, **common)
     print("\n".join(tier_tables(rows)))
     print(
         f"rows written to {Path(args.out) / 'score.csv'}; set them beside the published table with "

@@ -12,6 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.cli.arguments import add_workers_argument
 from agents.common.locations import RESULTS_DIR
 
 HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
@@ -33,9 +34,7 @@ def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
         default=SUITE_LAYOUTS,
         help="the first N frozen test layouts per run (default: all %(default)s; fewer is a stated prefix)",
     )
-    parser.add_argument(
-        "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
-    )
+    add_workers_argument(parser)
     parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where episodes fly")
     parser.add_argument("--address", help="Ray cluster address (with --backend ray; default: a local Ray)")
 
@@ -46,7 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--agents",
         default=",".join(AGENT_NAMES),
-        help=f"comma-separated agents, flown in this order (default: all, {','.join(AGENT_NAMES)})",
+        help=f"comma-separated agents, flown in this order (default: all, {', '.join(AGENT_NAMES)})",
     )
     add_tier_arguments(parser)
     parser.add_argument(

@@ -187,6 +187,7 @@ def score(
     workers: int = 1,
     backend: str = "local",
     address: str | None = None,
+    name: str | None = None,
 ) -> list[dict[str, Any]]:
     """Fly ``agent`` on the suite and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
@@ -202,24 +203,28 @@ def score(
         policy: a learned agent's policy file, if not the shipped one.
         trust_pickle: allow unpickling a policy zip without its config (runs its code).
         workers: local worker processes; backend: ``"local"`` or ``"ray"``; address: a Ray cluster's.
+        name: the rows' agent column (default :func:`~agents.policies.external.display_name`: a file's agent
+            as ``my_agent:make_agent``); episode records keep the full spec and its file's hash.
 
     Raises:
-        ValueError: a bad agent, tier, layout count or folder; an agent that needs an observation key or
+        ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
             setting a tier does not give.
     """
     from agents.common.folders import check_writable_folder
+    from agents.policies.external import check_display_name, display_name
 
     tier_names = parse_tiers(tiers)
     agent = resolve_agent(agent, trust_pickle=trust_pickle)
+    shown = check_display_name(display_name(agent) if name is None else name, agent)
     runs = {agent: agent_runs(agent, policy)}
     tasks = suite_tasks(runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / EPISODES_CSV
-    execute(tasks, csv_path, backend=backend, workers=workers, address=address, description=f"score {agent}")
+    execute(tasks, csv_path, backend=backend, workers=workers, address=address, description=f"score {shown}")
     rows = rows_of(tasks, read_records(csv_path))
-    table = summarise_suite(rows, runs, tier_names, layouts)
+    table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts)]
     write_summary_csv(out / "score.csv", table)
     return table
 

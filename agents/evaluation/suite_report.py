@@ -38,46 +38,96 @@ SUMMARY_COLUMNS = [
 HEADROOM_FAILURE = 0.15
 
 
+# Where a suite CSV comes from, for messages about a file that is not one.
+SCORE_CSV_HINT = "flownav score writes one"
+
+
 def read_suite_csv(path: Path) -> list[dict[str, Any]]:
     """Rows of a suite or score CSV (:data:`SUMMARY_COLUMNS`), typed.
 
     Raises:
-        ValueError: not such a CSV, or rows of another suite version (their tiers are other tasks).
+        ValueError: not such a CSV, a torn or edited row, or rows of another suite version (their tiers are
+            other tasks); one line naming ``path`` (and the line, for a row).
         FileNotFoundError: no file at ``path``.
     """
     path = Path(path)
-    with path.open(newline="") as handle:
-        reader = csv.DictReader(handle)
-        missing = [name for name in SUMMARY_COLUMNS if name not in (reader.fieldnames or [])]
-        if missing:
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"no suite CSV at {path} ({SCORE_CSV_HINT}: <out>/score.csv, by default runs/score)"
+        )
+    try:
+        with path.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            missing = [name for name in SUMMARY_COLUMNS if name not in (reader.fieldnames or [])]
+            if missing:
+                raise ValueError(
+                    f"{path} is not a suite CSV ({SCORE_CSV_HINT}): it lacks the columns {', '.join(missing)}"
+                )
+            rows = [(reader.line_num, row) for row in reader]
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise ValueError(f"{path} is not a suite CSV ({SCORE_CSV_HINT}): {error}") from None
+    typed = []
+    for line, row in rows:
+        if None in row or None in row.values():
+            fewer_or_more = "fewer" if None in row.values() else "more"
             raise ValueError(
-                f"{path} is not a suite CSV (flownav score writes one): it lacks the columns {', '.join(missing)}"
+                f"{path}, line {line}: the row has {fewer_or_more} fields than the header (torn or edited); "
+                "score the agent again with flownav score"
             )
-        rows = list(reader)
-    for row in rows:
         if row["suite_version"] != SUITE_VERSION:
             raise ValueError(
                 f"{path} holds rows of suite version {row['suite_version']!r}, but this is suite version "
                 f"{SUITE_VERSION!r}: its tiers are other tasks; score the agent again with flownav score"
             )
-        tier(row["tier"])
+        try:
+            tier(row["tier"])
+        except ValueError as error:
+            raise ValueError(f"{path}, line {line}: {error}") from None
         check_row_task(row, path)
-    return [
-        {
-            name: (
-                float(value)
-                if name.endswith(("_rate", "_low", "_high"))
-                else int(value)
-                if name in ("runs", "layouts", "episodes")
-                else value == "True"
-                if name == "privileged"
-                else value
-            )
-            for name, value in row.items()
-            if name in SUMMARY_COLUMNS
-        }
-        for row in rows
-    ]
+        typed.append(_typed_row(row, path, line))
+    return typed
+
+
+def _typed_row(row: Mapping[str, str], path: Path, line: int) -> dict[str, Any]:
+    """A CSV row's :data:`SUMMARY_COLUMNS` as numbers and flags where they are ones.
+
+    Raises:
+        ValueError: a count or rate that is not a number, naming ``path``, the line and the column.
+    """
+    typed: dict[str, Any] = {}
+    for name in SUMMARY_COLUMNS:
+        value = row[name]
+        try:
+            if name.endswith(("_rate", "_low", "_high")):
+                typed[name] = float(value)
+            elif name in ("runs", "layouts", "episodes"):
+                typed[name] = int(value)
+            else:
+                typed[name] = value == "True" if name == "privileged" else value
+        except ValueError:
+            raise ValueError(
+                f"{path}, line {line}: column {name} is {value!r}, not a number; score the agent again with "
+                "flownav score"
+            ) from None
+    return typed
+
+
+def read_included(paths: Sequence[str | Path]) -> tuple[list[dict[str, Any]], list[Path]]:
+    """The rows of the ``score.csv`` files ``paths`` (:func:`read_suite_csv`), each file read once however
+    often or under whatever spelling it is named, and the files read, in the order first given.
+
+    Raises:
+        ValueError: a file without rows, or any error of :func:`read_suite_csv`.
+        FileNotFoundError: a path with no file.
+    """
+    files = list(dict.fromkeys(Path(path).resolve() for path in paths))
+    rows: list[dict[str, Any]] = []
+    for path in files:
+        found = read_suite_csv(path)
+        if not found:
+            raise ValueError(f"{path} holds no rows: flownav score writes one per tier it flew whole")
+        rows += found
+    return rows, files
 
 
 def check_row_task(row: Mapping[str, Any], path: Path) -> None:
@@ -191,6 +241,7 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
 
     tiers = [name for name in TIER_NAMES if any(r["tier"] == name for r in rows)]
     agents = sorted({r["agent"] for r in rows}, key=lambda a: a.lower())
+    labels = [plot_label(agent, rows) for agent in agents]
     figure, axes = plt.subplots(
         1,
         max(len(tiers), 1),
@@ -217,13 +268,30 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
         axis.set_xlim(0, 1)
         axis.set_title(name)
         axis.set_xlabel("failure rate")
-    axes[0][0].set_yticks(range(len(agents)), [a if len(a) < 28 else a[:25] + "…" for a in agents])
+    axes[0][0].set_yticks(range(len(agents)), labels)
+    for tick, agent in zip(axes[0][0].get_yticklabels(), agents, strict=True):
+        if any(r.get("included") for r in rows if r["agent"] == agent):
+            tick.set_color("tab:red")
+    included = (
+        " (red: included rows, on the layouts their label says)"
+        if any(r.get("included") for r in rows)
+        else ""
+    )
     figure.suptitle(
-        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE})"
+        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}){included}"
     )
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def plot_label(agent: str, rows: Sequence[Mapping[str, Any]]) -> str:
+    """``agent`` in full on the figure's axis; an included agent marked with the layouts its rows rest on."""
+    counts = sorted({r["layouts"] for r in rows if r["agent"] == agent and r.get("included")})
+    if not counts:
+        return agent
+    layouts = str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
+    return f"{agent}\n(included, {layouts} layout{'' if layouts == '1' else 's'})"
 
 
 def suite_report(

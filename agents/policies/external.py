@@ -177,6 +177,28 @@ def display_name(agent: str) -> str:
     return f"{Path(target).stem}:{attribute}" if _is_file_target(target) else str(agent)
 
 
+def check_display_name(name: str, agent: str) -> str:
+    """``name``, checked as the display name of ``agent`` in tables: one line of text that no markdown table or
+    published agent would misread.
+
+    Raises:
+        ValueError: an empty name, one holding a line break, ``|`` or a backtick, or a FlowNav agent's name given
+            to another agent (its included rows would replace that agent's published ones).
+    """
+    from agents.policies.base import AGENT_NAMES
+
+    if not str(name).strip() or any(mark in str(name) for mark in ("\n", "\r", "|", "`")):
+        raise ValueError(
+            f"--name {name!r}: a display name is one line of text without '|' or backticks, e.g. my_agent"
+        )
+    if name in AGENT_NAMES and name != agent:
+        raise ValueError(
+            f"--name {name!r} is a FlowNav agent's name: its rows would replace that agent's published ones; "
+            "choose another"
+        )
+    return str(name).strip()
+
+
 def external_parameters(spec: str) -> dict[str, Any]:
     """What identifies the agent ``spec`` in episode records: the hash of the file that defines it."""
     target = str(spec).rpartition(":")[0]

@@ -163,9 +163,10 @@ def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypa
         in out
     )
     assert (
-        f"every agent on 300 test layouts and learned agents over all their training seeds, is {RESULTS_DIR / 'leaderboard.md'}"
-        in out
+        "The leading table, every agent on each of the 4 tiers' 300 frozen test layouts (seeds from 2,000,000) and "
+        f"learned agents over all their training seeds, is {RESULTS_DIR / 'suite.md'} (flownav suite)" in out
     )
+    assert f"the clean tier's history table, {RESULTS_DIR / 'leaderboard.md'}, whose other layouts" in out
     table = [line for line in out.splitlines() if line.startswith("|")]
     assert table[0].startswith("| agent | episodes | failure rate [95 % CI] |")  # no constant factor, level
     assert any(line.startswith("| ppo_flow | 5 | 0.00 [0.00, 0.43] |") for line in table)  # seeds pooled

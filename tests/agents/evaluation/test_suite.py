@@ -211,7 +211,7 @@ def test_the_example_agent_is_scored_end_to_end_and_included_beside_the_publishe
         == 0
     )
     text = (tmp_path / "board" / "suite_with_included.md").read_text()
-    assert "open_gap_agent.py:make_agent` (included)" in text and "`bee_ttc`" in text
+    assert "`open_gap_agent:make_agent` (included)" in text and "`bee_ttc`" in text
     assert (tmp_path / "board" / "suite_with_included.png").stat().st_size > 0
 
 

@@ -1,0 +1,170 @@
+"""``flownav describe [tier]``: what an agent is given and must return on a tier of the suite.
+
+Read from the env itself, not typed here: a real env of the tier is made (with every optional observation key
+on) and its observation and action spaces give each key's shape, dtype and range; the meaning of each key and
+each action, and the action's units, come from the env's documented tables (``help(flownav_env.FlowNavEnv)``),
+with the scales resolved to the tier's values. An agent is anything with stable-baselines3's ``predict``;
+score it with ``flownav score --agent file.py:make_agent``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from typing import Any
+
+HELP = "the agent contract of a tier: observation keys, shapes and meaning; the action and its units; predict"
+
+# The headings of FlowNavEnv's docstring whose first table is read here.
+OBSERVATION_HEADING = "## Observation Space"
+STATE_HEADING = "``state`` (clipped"
+ACTION_HEADING = "## Action Space"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from flownav_env.tiers import TIER_NAMES
+
+    parser.add_argument(
+        "tier",
+        nargs="?",
+        default=TIER_NAMES[0],
+        help=f"one of {', '.join(TIER_NAMES)} (default: %(default)s)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    print("\n".join(describe_tier(args.tier)))
+    return 0
+
+
+def describe_tier(tier_name: str) -> list[str]:
+    """The agent contract of tier ``tier_name`` as lines of text, from a real env of the tier.
+
+    Raises:
+        ValueError: not a tier; the message lists them.
+    """
+    import gymnasium as gym
+
+    import flownav_env
+    from agents.policies.external import PREDICT_SIGNATURE
+    from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
+    from flownav_env.tiers import tier
+
+    spec = tier(tier_name)
+    every_key = dict.fromkeys(OBSERVATION_KEY_SETTINGS.values(), True)
+    env = gym.make(spec.env_id, **spec.settings, **every_key)
+    try:
+        settings = env.unwrapped.settings
+        observation_space, action_space = env.observation_space, env.action_space
+    finally:
+        env.close()
+    doc = flownav_env.FlowNavEnv.__doc__ or ""
+    fixed = ", ".join(f"{key}={value}" for key, value in spec.settings.items()) or "none (the env's defaults)"
+    return [
+        f"Tier {spec.name} ({spec.env_id}): {spec.why}. Settings it fixes: {fixed}.",
+        "",
+        "An agent is any object with stable-baselines3's",
+        f"    {PREDICT_SIGNATURE}",
+        f"called once per step ({settings.frame_rate:g} steps per second of flight) with deterministic=True; "
+        "state is what the agent returned last (None at the first step), episode_start is [True] at an "
+        "episode's first step. An agent without memory returns (action, None).",
+        "",
+        "Observation: a dict of arrays. Optional keys come only where the agent asks for them with "
+        'env_settings = {"<setting>": True} on the object.',
+        "",
+        _observation_table(observation_space, _doc_table(doc, OBSERVATION_HEADING), OBSERVATION_KEY_SETTINGS),
+        "",
+        "The state entries:",
+        "",
+        _entries_table(observation_space["state"], _doc_table(doc, STATE_HEADING)),
+        "",
+        f"Action: {_space_text(action_space)}. {_doc_paragraph(doc, ACTION_HEADING)} On this tier "
+        f"forward_speed is {settings.forward_speed:g} m/s.",
+        "",
+        _action_table(action_space, _doc_table(doc, ACTION_HEADING), settings),
+        "",
+        f"The env in full: help(flownav_env.FlowNavEnv). Score an agent on this tier: flownav score --agent "
+        f"my_agent.py:make_agent --tiers {spec.name}.",
+    ]
+
+
+def _doc_table(doc: str, heading: str) -> list[list[str]]:
+    """The body rows of the first markdown table after ``heading`` in ``doc``, cells as plain text.
+
+    Raises:
+        ValueError: the docstring has no such heading or table (the env's documentation changed shape).
+    """
+    from agents.cli.help_text import plain_text
+
+    start = doc.find(heading)
+    lines = doc[start:].splitlines() if start >= 0 else []
+    table = []
+    for line in (line.strip() for line in lines[1:]):
+        if line.startswith("|"):
+            table.append([plain_text(cell.strip()) for cell in line.strip("|").split("|")])
+        elif table:
+            break
+    if len(table) < 3:
+        raise ValueError(
+            f"FlowNavEnv's docstring has no table after {heading!r}; flownav describe reads it there"
+        )
+    return table[2:]  # past the header and its separator
+
+
+def _doc_paragraph(doc: str, heading: str) -> str:
+    """The first paragraph after ``heading`` in ``doc`` as one line of plain text."""
+    from agents.cli.help_text import plain_text
+
+    text = doc[doc.find(heading) + len(heading) :] if heading in doc else ""
+    return plain_text(" ".join(text.strip().split("\n\n", 1)[0].split()))
+
+
+def _bounds(space: Any) -> str:
+    low, high = float(space.low.min()), float(space.high.max())
+    if (space.low == low).all() and (space.high == high).all():
+        return f"[{low:g}, {high:g}]"
+    return "per entry, below"
+
+
+def _space_text(space: Any) -> str:
+    return f"{space.dtype} array of shape {space.shape}, each value in {_bounds(space)}"
+
+
+def _observation_table(space: Any, documented: list[list[str]], optional: dict[str, str]) -> str:
+    from agents.common.tables import markdown_table
+
+    meanings = {row[0]: row[-1] for row in documented}
+    rows = []
+    # The keys every agent gets first, then the ones it asks for.
+    for key, box in sorted(space.spaces.items(), key=lambda item: (item[0] in optional, item[0])):
+        meaning = meanings.get(key, "(not in the env's table)")
+        if key in optional:
+            meaning = f"[env_settings {optional[key]}=True] {re.sub(r'^only with [^:]*: ', '', meaning)}"
+        rows.append([key, box.shape, box.dtype, _bounds(box), meaning])
+    return markdown_table(["key", "shape", "dtype", "range", "meaning"], rows)
+
+
+def _entries_table(space: Any, documented: list[list[str]]) -> str:
+    from agents.common.tables import markdown_table
+
+    rows = [
+        [index, row[1], f"{space.low[index]:g}", f"{space.high[index]:g}", row[-1]]
+        for index, row in enumerate(documented)
+    ]
+    return markdown_table(["index", "observation", "min", "max", "unit"], rows)
+
+
+def _action_table(space: Any, documented: list[list[str]], settings: Any) -> str:
+    """The action's entries with the bounds of ``space`` and each scale's setting resolved to the tier's value."""
+    from dataclasses import fields
+
+    from agents.common.tables import markdown_table
+
+    names = {item.name for item in fields(settings)}
+    rows = []
+    for index, row in enumerate(documented):
+        scale = row[4]
+        for name in (word for word in re.findall(r"\w+", scale) if word in names):
+            scale += f" = ±{getattr(settings, name):g}"
+        rows.append([index, row[1], f"{space.low[index]:g}", f"{space.high[index]:g}", scale, row[5]])
+    return markdown_table(["index", "action", "min", "max", "1 means", "unit"], rows)

@@ -1,0 +1,57 @@
+"""Options shared by several commands: ``--env`` keys checked with the env's own suggestion, one ``--workers``
+default, one name for the policies folder, and help that never cuts an agent name."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from agents.cli import build_parser, main
+from agents.cli.arguments import DEFAULT_WORKERS, env_kwarg
+from agents.policies import AGENT_NAMES
+
+
+@pytest.mark.parametrize(
+    "command", [["evaluate", "--agent", "straight"], ["ablation", "--configs", "c.yaml"]]
+)
+def test_an_env_key_typo_says_which_key_was_meant_and_exits_2(
+    command: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as stopped:
+        main([*command, "--env", "rotation_eror=0.1"])
+    assert stopped.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith(f"flownav {command[0]}: error: argument --env: unknown setting 'rotation_eror'")
+    assert error.endswith("(did you mean 'rotation_error'?)")
+
+
+def test_env_pairs_are_read_as_yaml() -> None:
+    assert env_kwarg("obstacle_density=0.18") == ("obstacle_density", 0.18)
+    with pytest.raises(argparse.ArgumentTypeError, match="expected KEY=VALUE, got 'obstacle_density'"):
+        env_kwarg("obstacle_density")
+
+
+def test_every_flying_command_shares_one_workers_default() -> None:
+    commands = build_parser()._subparsers._group_actions[0].choices
+    for name in ("demo", "leaderboard", "suite", "score"):
+        (workers,) = [action for action in commands[name]._actions if action.dest == "workers"]
+        assert workers.default == DEFAULT_WORKERS, name
+
+
+def test_demo_takes_the_policies_folder_by_leaderboard_s_name_and_its_old_one() -> None:
+    parser = build_parser()
+    for option in ("--policies-dir", "--policy-dir"):
+        assert parser.parse_args(["demo", option, "/tmp/policies"]).policies_dir == "/tmp/policies"
+    assert parser.parse_args(["leaderboard", "--policies-dir", "/tmp/p"]).policies_dir == "/tmp/p"
+
+
+@pytest.mark.parametrize("command", ["leaderboard", "suite"])
+def test_help_never_cuts_an_agent_name(
+    command: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "80")
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    words = {word.strip("()") for word in capsys.readouterr().out.replace(",", " ").split()}
+    assert set(AGENT_NAMES) <= words

@@ -1,0 +1,190 @@
+"""An outside agent's rows beside the published ones: shown by a short name, each file counted once, every bad
+file or row refused in one line naming it (exit status 2), and the figure marking the included rows."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from agents.cli import main
+from agents.evaluation.records import read_records
+from agents.evaluation.suite_report import plot_label, plot_suite, read_included, read_suite_csv
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
+ONE_LAYOUT = ["--tiers", "clean", "--layouts", "1", "--workers", "1"]
+
+
+@pytest.fixture(scope="module")
+def scored(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Real score.csv files of one layout: the example agent's (included) and straight's (the published table)."""
+    folder = tmp_path_factory.mktemp("scored")
+    mine, published = folder / "mine", folder / "published"
+    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *ONE_LAYOUT, "--out", str(mine)]) == 0
+    assert main(["score", "--agent", "straight", *ONE_LAYOUT, "--out", str(published)]) == 0
+    return {"mine": mine, "published": published / "score.csv"}
+
+
+def one_error_line(capsys: pytest.CaptureFixture[str], command: str) -> str:
+    err = capsys.readouterr().err.strip()
+    lines = [line for line in err.splitlines() if "episode/s]" not in line]
+    assert (
+        "Traceback" not in err and len(lines) == 1 and lines[0].startswith(f"flownav {command}: error: ")
+    ), err
+    return lines[0]
+
+
+def include(scored: dict[str, Path], out: Path, *files: Path | str) -> int:
+    argv = ["leaderboard", "--suite", str(scored["published"]), "--out", str(out)]
+    return main([*argv, *(item for path in files for item in ("--include", str(path)))])
+
+
+def test_an_agent_file_is_shown_by_its_stem_and_callable_and_recorded_in_full(
+    scored: dict[str, Path],
+) -> None:
+    (row,) = read_suite_csv(scored["mine"] / "score.csv")
+    assert row["agent"] == "open_gap_agent:make_agent"
+    (episode,) = read_records(scored["mine"] / "suite_episodes.csv")
+    assert episode["agent"] == f"{EXAMPLE}:make_agent"  # the full path, beside the file's hash
+    assert "source_sha256" in episode["agent_params"]
+
+
+def test_name_sets_the_rows_agent_without_flying_again(scored: dict[str, Path]) -> None:
+    out = scored["mine"]
+    assert (
+        main(
+            [
+                "score",
+                "--agent",
+                f"{EXAMPLE}:make_agent",
+                *ONE_LAYOUT,
+                "--name",
+                "gap rule",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    (row,) = read_suite_csv(out / "score.csv")
+    assert row["agent"] == "gap rule" and len(read_records(out / "suite_episodes.csv")) == 1
+    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *ONE_LAYOUT, "--out", str(out)]) == 0
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        (
+            "bee_ttc",
+            "--name 'bee_ttc' is a FlowNav agent's name: its rows would replace that agent's published ones",
+        ),
+        ("my|agent", "--name 'my|agent': a display name is one line of text without '|' or backticks"),
+        (" ", "--name ' ': a display name is one line of text"),
+    ],
+)
+def test_a_bad_name_is_refused_before_flying(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, message: str
+) -> None:
+    argv = [
+        "score",
+        "--agent",
+        f"{EXAMPLE}:make_agent",
+        *ONE_LAYOUT,
+        "--name",
+        name,
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert main(argv) == 2
+    assert message in one_error_line(capsys, "score")
+    assert not (tmp_path / "o" / "suite_episodes.csv").exists()
+
+
+def test_a_file_included_twice_counts_once(
+    scored: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    score_csv = scored["mine"] / "score.csv"
+    monkeypatch.chdir(score_csv.parent)
+    assert include(scored, tmp_path / "board", score_csv, "./score.csv") == 0
+    text = (tmp_path / "board" / "suite_with_included.md").read_text()
+    assert text.startswith("# The suite table with 1 included row\n")
+    assert text.count(str(score_csv)) == 1
+    rows, files = read_included([score_csv, Path("score.csv")])
+    assert len(rows) == 1 and files == [score_csv]
+
+
+def test_a_missing_include_file_is_one_line(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert include(scored, tmp_path / "board", tmp_path / "nowhere.csv") == 2
+    line = one_error_line(capsys, "leaderboard")
+    assert f"no suite CSV at {tmp_path / 'nowhere.csv'} (flownav score writes one" in line
+    assert "Errno" not in line
+
+
+def _edited(source: Path, target: Path, edit) -> Path:
+    lines = source.read_text().splitlines()
+    target.write_text("\n".join([lines[0], *(edit(line) for line in lines[1:])]) + "\n")
+    return target
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda line: line.rsplit(",", 3)[0],
+            "line 2: the row has fewer fields than the header (torn or edited)",
+        ),
+        (lambda line: line + ",extra", "line 2: the row has more fields than the header"),
+        (
+            lambda line: line.replace(",clean,", ",cleen,", 1),
+            "line 2: tier must be one of clean, hard, noisy, hard_noisy, got 'cleen'",
+        ),
+    ],
+)
+def test_a_torn_or_edited_row_names_the_file_and_line(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str], edit, message: str
+) -> None:
+    bad = _edited(scored["mine"] / "score.csv", tmp_path / "score.csv", edit)
+    assert include(scored, tmp_path / "board", bad) == 2
+    line = one_error_line(capsys, "leaderboard")
+    assert line.startswith(f"flownav leaderboard: error: {bad}, ") and message in line
+
+
+def test_a_rate_that_is_not_a_number_names_its_column(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with (scored["mine"] / "score.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    rows[0]["failure_rate"] = "n/a"
+    bad = tmp_path / "score.csv"
+    with bad.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    assert include(scored, tmp_path / "board", bad) == 2
+    assert f"{bad}, line 2: column failure_rate is 'n/a', not a number" in one_error_line(
+        capsys, "leaderboard"
+    )
+
+
+def test_an_include_file_without_rows_is_refused(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    empty = tmp_path / "score.csv"
+    empty.write_text((scored["mine"] / "score.csv").read_text().splitlines()[0] + "\n")
+    assert include(scored, tmp_path / "board", empty) == 2
+    assert f"{empty} holds no rows" in one_error_line(capsys, "leaderboard")
+
+
+def test_the_figure_marks_included_rows_with_their_layouts(scored: dict[str, Path], tmp_path: Path) -> None:
+    rows, _ = read_included([scored["mine"] / "score.csv"])
+    marked = [{**row, "included": True} for row in rows]
+    published = read_suite_csv(scored["published"])
+    long_name = "ppo_flow_course_approach_curriculum_slow_oracle"
+    assert plot_label(long_name, [{**published[0], "agent": long_name}]) == long_name  # never cut
+    assert plot_label("straight", published) == "straight"
+    assert plot_label(rows[0]["agent"], marked) == f"{rows[0]['agent']}\n(included, 1 layout)"
+    plot_suite([*published, *marked], tmp_path / "suite.png")
+    assert (tmp_path / "suite.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -23,7 +23,7 @@ import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary que
 from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.machine import code_version
-from agents.common.seeds import TEST_SEED_START
+from agents.common.seeds import SUITE_SEED_START, TEST_SEED_START
 from agents.common.tables import markdown_table, today, write_csv
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.over_seeds import (
@@ -214,10 +214,14 @@ def report_lines(
         for r in table
     ]
     lines = [
-        "# Leaderboard: every agent on the same clean test layouts",
+        "# Leaderboard: the clean tier's history, every agent on the same clean test layouts",
         "",
         f"Generated {today()} by `{command}` (code: {code_version()}), on {len(layouts)} test layouts "
         f"(seeds {layouts[0]:,}–{layouts[-1]:,}). {machine_summary()}",
+        "",
+        "The leading table is the suite's, `suite.md` (`flownav suite`): every agent on every tier's frozen test "
+        f"layouts, seeds from {SUITE_SEED_START:,}. Those are other layouts than these, so its clean tier's rates "
+        "differ from this table's; this one is kept as the clean tier's history.",
         "",
         "A learned agent is every training seed shipped in `results/policies/<agent>/seed_<k>.zip`, each flying "
         "every layout; its rates are means over runs, with a 95 % interval from a two-level bootstrap (runs, "

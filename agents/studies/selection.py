@@ -11,11 +11,11 @@ becomes the run's policy (a tie goes to the last checkpoint, which trained longe
 from __future__ import annotations
 
 import json
-import os
 import shutil
 from pathlib import Path
 from typing import Any
 
+from agents.common.folders import copy_atomically, write_text_atomically
 from agents.common.manifest import record_in_manifest
 from agents.common.saved_models import latest_checkpoint
 from agents.common.seeds import checkpoint_selection_seed
@@ -92,9 +92,7 @@ def select_finalist(
     }
     # Most successes; on a tie the later candidate (the last checkpoint, which trained longest).
     chosen = max(reversed(list(successes)), key=lambda label: successes[label])
-    temporary = files.policy.with_name(f"{files.policy.stem}.tmp.zip")
-    shutil.copyfile(staged[chosen], temporary)
-    os.replace(temporary, files.policy)
+    copy_atomically(staged[chosen], files.policy)
     scores = ", ".join(f"{label} {count}/{episodes}" for label, count in successes.items())
     selected = f"finalist on {episodes} validation layouts from {seeds[0]:,}: {chosen} ({scores})"
     _note_in_record(files, selected, successes, episodes)
@@ -106,6 +104,4 @@ def _note_in_record(files: RunFiles, selected: str, successes: dict[str, int], e
     record["selected_in_training"] = record.get("selected_in_training", record.get("selected"))
     record["selected"] = selected
     record["finalists"] = {label: count / episodes for label, count in successes.items()}
-    temporary = files.record.with_name(f"{files.record.stem}.tmp.json")
-    temporary.write_text(json.dumps(record, indent=2) + "\n")
-    os.replace(temporary, files.record)
+    write_text_atomically(files.record, json.dumps(record, indent=2) + "\n")

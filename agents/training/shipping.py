@@ -9,11 +9,11 @@ new policy's hash.
 
 from __future__ import annotations
 
-import os
 import shutil
+from contextlib import ExitStack
 from pathlib import Path
 
-from agents.common.folders import check_writable_folder
+from agents.common.folders import check_writable_folder, replacing_atomically
 from agents.common.manifest import record_in_manifest
 from agents.training.outputs import RunFiles
 
@@ -39,18 +39,10 @@ def ship_run(files: RunFiles, ship_to: Path) -> list[Path]:
     ship_to.mkdir(parents=True, exist_ok=True)
     copies = {source: ship_to / name for source, name in files.shipped_names().items() if source.is_file()}
     stale = [ship_to / name for source, name in files.shipped_names().items() if not source.is_file()]
-    temporaries: dict[Path, Path] = {}
-    try:
+    # All copied before any is renamed: a failed copy leaves the shipped files as they were.
+    with ExitStack() as renames:
         for source, target in copies.items():
-            temporary = target.with_name(f".{target.name}.shipping")
-            shutil.copyfile(source, temporary)
-            temporaries[temporary] = target
-    except BaseException:
-        for temporary in temporaries:
-            temporary.unlink(missing_ok=True)
-        raise
-    for temporary, target in temporaries.items():
-        os.replace(temporary, target)
+            shutil.copyfile(source, renames.enter_context(replacing_atomically(target)))
     for path in stale:
         path.unlink(missing_ok=True)
     manifest = record_in_manifest(ship_to, [files.policy.name])

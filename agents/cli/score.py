@@ -22,6 +22,7 @@ HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
     from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
     from agents.policies.sb3_models import SB3_ALGORITHMS
 
@@ -41,6 +42,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_tier_arguments(parser)
     parser.add_argument("--out", default="runs/score", help="output folder (default: %(default)s)")
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start a new suite_episodes.csv: the old one is moved to suite_episodes.csv.bak-<time>, nothing "
+        "is deleted (after editing your agent, whose old episodes no longer describe it)",
+    )
+    parser.add_argument(
+        STEP_TIMEOUT_OPTION,
+        type=float,
+        default=DEFAULT_STEP_TIMEOUT_S,
+        metavar="SECONDS",
+        help="the most an outside agent's predict may take per call; past it the run stops, naming the "
+        "episode (default: %(default)s; 0 = no limit)",
+    )
     parser.add_argument(
         "--robustness",
         action="store_true",
@@ -86,7 +101,16 @@ def run(args: argparse.Namespace) -> int:
         "backend": args.backend,
         "address": args.address,
     }
-    rows = score(agent, tiers=args.tiers, layouts=args.layouts, out=Path(args.out), name=args.name, **common)
+    rows = score(
+        agent,
+        tiers=args.tiers,
+        layouts=args.layouts,
+        out=Path(args.out),
+        name=args.name,
+        overwrite=args.overwrite,
+        step_timeout_s=args.step_timeout,
+        **common,
+    )
     print("\n".join(tier_tables(rows)))
     print(
         f"rows written to {Path(args.out) / 'score.csv'}; set them beside the published table with "

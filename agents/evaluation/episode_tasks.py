@@ -234,31 +234,36 @@ def _conflict(path: Path, key: tuple, identity: tuple[str, ...], found: set, rem
         for name, old, new in zip(IDENTITY_FIELDS, there or (None,) * len(identity), identity, strict=True)
         if old != new
     ]
-    differences = ", ".join(f"{name} {old!r} there, {new!r} now" for name, old, new in changed)
-    cause = next(
-        (_edited_file(name, old, new) for name, old, new in changed if _edited_file(name, old, new)), ""
+    causes = [cause for name, old, new in changed if (cause := _edited_file(name, old, new))]
+    differences = ", ".join(causes) or ", ".join(
+        f"{name} {old!r} there, {new!r} now" for name, old, new in changed
     )
     return (
-        f"{path} already holds episode {_describe(key)} flown with other settings ({cause}{differences}); "
+        f"{path} already holds episode {_describe(key)} flown with other settings ({differences}); "
         f"resuming would mix them. To fly these settings, {remedy}"
     )
 
 
 def _edited_file(name: str, old: str | None, new: str) -> str:
-    """The plain cause when an identity field differs because a file changed: an outside agent's source
-    (its ``source_sha256`` in ``agent_params``) or a learned agent's policy; else ""."""
-    if name == "policy_sha256":
-        return "the policy file changed since these episodes were flown: "
+    """The plain cause when an identity field differs because a file changed, an outside agent's source (its
+    ``source_sha256`` in ``agent_params``) or a learned agent's policy, with the two hashes cut short; else
+    ""."""
+    if name == "policy_sha256" and old:
+        return f"the policy file changed since these episodes were flown: policy_sha256 {old[:12]} there, {new[:12]} now"
     if name != "agent_params" or old is None:
         return ""
     try:
         before, after = json.loads(old), json.loads(new)
     except json.JSONDecodeError:
         return ""
-    if isinstance(before, dict) and isinstance(after, dict) and "source_sha256" in before:
-        if before.get("source_sha256") != after.get("source_sha256"):
-            return "your agent's file changed since these episodes were flown: "
-    return ""
+    if not (isinstance(before, dict) and isinstance(after, dict)) or set(before) != set(after):
+        return ""
+    if set(before) != {"source_sha256"} or before == after:
+        return ""
+    return (
+        "your agent's file changed since these episodes were flown: source_sha256 "
+        f"{before['source_sha256'][:12]} there, {after['source_sha256'][:12]} now"
+    )
 
 
 def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -57,6 +57,8 @@ class EpisodeProgress:
                 # them ended: its pace is timed from then, not from the start of the run.
                 bar.start_t = self.last_done
             bar.update()
+            if bar.n == bar.total:
+                bar.close()  # now, so its time and pace stay those of its own episodes
         self.total.update()
         self.last_done = now
 

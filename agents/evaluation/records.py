@@ -52,12 +52,18 @@ IDENTITY_FIELDS = ("env_id", "env_kwargs", "agent_params", "policy_sha256")
 _FIELD_TYPES = {f.name: f.type for f in fields(EpisodeRecord)}
 _REQUIRED_TEXT = ("agent", "factor")
 
+
+def overwrite_hint(out_names: str = "file") -> str:
+    """The remedy of a command with ``--overwrite`` whose ``--out`` names a ``out_names`` (file or folder)."""
+    return (
+        f"write to another {out_names} (--out), or start a new one with --overwrite "
+        "(the old file is moved to <name>.bak-<time>, nothing is deleted)"
+    )
+
+
 # How to get past episodes that cannot be resumed, for commands with --out and --overwrite. FRESH_FILE_HINT,
 # the default, names no option, so no message suggests one that its command lacks.
-OVERWRITE_HINT = (
-    "write to another file (--out), or start a new one with --overwrite "
-    "(the old file is moved to <name>.bak-<time>, nothing is deleted)"
-)
+OVERWRITE_HINT = overwrite_hint()
 FRESH_FILE_HINT = "rename the file (nothing is lost) or write to another output folder, and run again"
 
 

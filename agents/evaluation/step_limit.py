@@ -35,6 +35,16 @@ def timeout_message(agent: str, episode: str, limit_s: float) -> str:
     )
 
 
+class _OutOfTime(BaseException):
+    """What the timer raises inside the agent's code: not an Exception, so that no ``except Exception`` in the
+    agent or in the wrappers around it turns it into something else; :class:`TimeLimitedAgent` turns it into
+    :class:`PredictTimeout`."""
+
+
+def _out_of_time(signum: int, frame: Any) -> None:
+    raise _OutOfTime
+
+
 class TimeLimitedAgent:
     """``agent`` whose every ``predict`` call is cut off after ``limit_s`` seconds with :class:`PredictTimeout`
     (message: ``message``)."""
@@ -60,16 +70,17 @@ class TimeLimitedAgent:
             return self.agent.predict(
                 observation, state=state, episode_start=episode_start, deterministic=deterministic
             )
-
-        def out_of_time(signum: int, frame: Any) -> None:
-            raise PredictTimeout(self.message)
-
-        previous = signal.signal(signal.SIGALRM, out_of_time)
+        previous = signal.signal(signal.SIGALRM, _out_of_time)
         signal.setitimer(signal.ITIMER_REAL, self.limit_s)
         try:
-            return self.agent.predict(
-                observation, state=state, episode_start=episode_start, deterministic=deterministic
-            )
+            try:
+                result = self.agent.predict(
+                    observation, state=state, episode_start=episode_start, deterministic=deterministic
+                )
+            finally:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+        except _OutOfTime:  # also when the timer fired just as predict returned: it did reach the limit
+            raise PredictTimeout(self.message) from None
         finally:
-            signal.setitimer(signal.ITIMER_REAL, 0)
             signal.signal(signal.SIGALRM, previous)
+        return result

@@ -22,9 +22,10 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.over_seeds import episode_outcomes
-from agents.evaluation.records import read_records
+from agents.evaluation.records import overwrite_hint, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
+from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite, suite_report
 from agents.policies import (
     agent_env_kwargs,
@@ -188,6 +189,8 @@ def score(
     backend: str = "local",
     address: str | None = None,
     name: str | None = None,
+    overwrite: bool = False,
+    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
 ) -> list[dict[str, Any]]:
     """Fly ``agent`` on the suite and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
@@ -205,6 +208,9 @@ def score(
         workers: local worker processes; backend: ``"local"`` or ``"ray"``; address: a Ray cluster's.
         name: the rows' agent column (default :func:`~agents.policies.external.display_name`: a file's agent
             as ``my_agent:make_agent``); episode records keep the full spec and its file's hash.
+        overwrite: move ``suite_episodes.csv`` to ``suite_episodes.csv.bak-<time>`` first and start afresh.
+        step_timeout_s: the most an outside agent's ``predict`` may take per call (0: no limit); past it the
+            run stops with one line naming the episode, and that episode is not recorded.
 
     Raises:
         ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
@@ -222,7 +228,19 @@ def score(
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / EPISODES_CSV
-    execute(tasks, csv_path, backend=backend, workers=workers, address=address, description=f"score {shown}")
+    if overwrite and (moved := start_new_file(csv_path)) is not None:
+        print(f"--overwrite: moved {csv_path} to {moved}")
+    execute(
+        tasks,
+        csv_path,
+        backend=backend,
+        workers=workers,
+        address=address,
+        description=f"score {shown}",
+        remedy=overwrite_hint("folder"),
+        step_timeout_s=step_timeout_s,
+        by_factor=True,
+    )
     rows = rows_of(tasks, read_records(csv_path))
     table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts)]
     write_summary_csv(out / "score.csv", table)

@@ -26,8 +26,8 @@ from agents.common.seeds import TEST_SEED_START
 from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.records import (
-    OVERWRITE_HINT,
     drop_agents,
+    overwrite_hint,
     read_episodes,
     read_records,
     start_new_file,
@@ -52,7 +52,9 @@ from flownav_env.settings_check import check_env_kwargs, check_setting
 # ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
 ALL_SEEDS = "@all"
 # What the sweep offers when its CSV cannot be resumed: its own --overwrite, or --refly for a retrained agent.
-SWEEP_REMEDY = f"{OVERWRITE_HINT}; after retraining an agent, --refly AGENT flies just its episodes again"
+SWEEP_REMEDY = (
+    f"{overwrite_hint('folder')}; after retraining an agent, --refly AGENT flies just its episodes again"
+)
 SWEEP_FACTORS = (
     "rotation_error",
     "translation_error",

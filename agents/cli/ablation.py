@@ -1,4 +1,4 @@
-"""``flownav ablation``: training configs compared over their seeds on validation layouts (issue 16's levers),
+"""``flownav ablation``: training configs compared over their seeds on validation layouts (the flow-gap levers),
 see :mod:`agents.studies.ablation`."""
 
 from __future__ import annotations

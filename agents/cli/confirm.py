@@ -1,5 +1,5 @@
-"""``flownav confirm``: issue 16's pick against its first stage and ``ppo_flow`` on fresh validation layouts,
-every training seed on every layout, clean and under issue 16's conditions (see
+"""``flownav confirm``: the lever search's pick against its first stage and ``ppo_flow`` on fresh validation
+layouts, every training seed on every layout, clean and under the two robustness conditions (see
 :mod:`agents.studies.confirmation`). Resumable: run it again after an interruption."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import shlex
 import sys
 from pathlib import Path
 
-HELP = "confirm issue 16's pick on fresh validation layouts, paired by layout -> confirmation.md"
+HELP = "confirm the lever search's pick on fresh validation layouts, paired by layout -> confirmation.md"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,5 +1,5 @@
-"""Training configs compared over their seeds on validation layouts (``flownav ablation``): the issue-16 table of
-what each lever buys, decided without touching a test layout.
+"""Training configs compared over their seeds on validation layouts (``flownav ablation``): the lever search's table
+of what each lever buys, decided without touching a test layout.
 
 Each config's seeds are the runs ``runs/<name>/seed_<k>/`` of ``flownav train --config ... --seeds``, or, where
 that folder is gone (a new checkout), the seed's shipped policy ``results/policies/<name>/seed_<k>.zip``; every run
@@ -48,7 +48,7 @@ def ablation_tasks(
     policy: Path | None, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
 ) -> list[EpisodeTask]:
     """One run's episodes on validation layouts ``ABLATION_SEED_START ..``: clean, or with the env settings
-    ``env`` on top of the run's own (issue 16's robustness conditions, such as ``obstacle_density=0.18``).
+    ``env`` on top of the run's own (the robustness conditions, such as ``obstacle_density=0.18``).
     ``policy`` None: a reactive ``agent``.
 
     Raises:

@@ -14,15 +14,16 @@ from typing import Any
 
 from agents.policies.base import base_agent_name
 
-# Issue 16's winner, chosen on validation layouts (results/flow_gap.md): the reports call it "the winner".
+# The lever search's winner, chosen on validation layouts (results/flow_gap.md): the reports call it "the winner".
 WINNER = "ppo_flow_course_approach_curriculum_slow"
-# The winner's recipe, both stages and the same budget, on the true depths at the same tracked points (issue 33).
+# The winner's recipe, both stages and the same budget, on the true depths at the same tracked points: the
+# true-depth comparison.
 WINNER_ON_TRUE_DEPTHS = f"{WINNER}_oracle"
 
 
 def display_name(agent: str) -> str:
     """How the reports name an agent: its base name in backticks (``ppo_flow@all`` → `` `ppo_flow` ``), and
-    issue 16's winner "the winner"."""
+    the lever search's winner "the winner"."""
     base = base_agent_name(agent)
     return "the winner" if base == WINNER else f"`{base}`"
 

@@ -34,7 +34,7 @@ INPUTS = {
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
     "thesis/three_capsule.json": "flownav replicate --out results/thesis",
 }
-# The ablations on validation layouts (flownav ablation): the clean folder and issue 16's two conditions.
+# The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
 ABLATION_DIR = "ablation"
 ABLATION_CONDITIONS = {"clean": "", "density": "density_0.18", "speed": "speed_1.5"}
 REFERENCE_DIR = "reference"

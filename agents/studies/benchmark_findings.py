@@ -61,7 +61,7 @@ def _pct(level: float | None) -> str:
 
 
 def winner_values(data: BenchmarkData) -> Values:
-    """Issue 16's winner against ``ppo_flow`` in the sweep: task factors, direct depth errors, and the cells
+    """The winner against ``ppo_flow`` in the sweep: task factors, direct depth errors, and the cells
     where it fails materially more."""
     pairs = [
         (key[1], key[2], data.cells[(WINNER_POOLED, *key[1:])], data.cells[key])

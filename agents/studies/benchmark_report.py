@@ -31,7 +31,7 @@ from agents.studies.benchmark_findings import (
 from agents.studies.benchmark_sweep import breaking_values
 from agents.studies.benchmark_values import (
     Values,
-    issue16_values,
+    flow_gap_target_values,
     leaderboard_values,
     reactive_gap_values,
     setup_values,
@@ -69,7 +69,7 @@ def report_values(data: BenchmarkData) -> Values:
         leaderboard_values,
         reactive_gap_values,
         validation_values,
-        issue16_values,
+        flow_gap_target_values,
         setup_values,
         breaking_values,
         winner_values,

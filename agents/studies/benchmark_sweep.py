@@ -54,7 +54,7 @@ FACTORS = {
 }
 DIRECT_DEPTH = ("depth_noise", "depth_outliers", "depth_dropout")
 TOLD_ROTATION = ("rotation_error", "rotation_bias", "rotation_drift", "rotation_noise_deg")
-# A difference of failure rates the report calls material: issue 16's robustness limit.
+# A difference of failure rates the report calls material: the robustness limit of the flow-gap targets.
 MATERIAL = 0.10
 # The largest relative per-frame error the thesis tested.
 THESIS_MAX_RELATIVE = 0.10

@@ -1,5 +1,5 @@
 """The values of the benchmark's clean-course sections: the leading table, what the reactive rules leave to
-learning, issue 16's levers on validation layouts and its targets on test layouts, and the set-up. Each figure
+learning, the flow-gap levers on validation layouts and the flow-gap targets on test layouts, and the set-up. Each figure
 is computed from :class:`~agents.studies.benchmark_data.BenchmarkData`; each verdict is a ``bool`` that picks a
 wording in the template, or a phrase built by :mod:`agents.studies.benchmark_claims`."""
 
@@ -28,15 +28,15 @@ from agents.studies.benchmark_data import BenchmarkData, Rate, commit_of
 from agents.studies.error_analysis import is_flow_agent
 from flownav_env.settings import EnvSettings
 
-# Issue 16's targets: the best flow-only agent fails at most this much on clean test layouts and no worse than
+# The flow-gap targets: the best flow-only agent fails at most this much on clean test layouts and no worse than
 # this multiple of the oracle's rate, stays within this much of its clean rate at the speed and density below,
 # and trains in at most this many minutes per seed.
-ISSUE_MAX_FAILURE = 0.12
-ISSUE_ORACLE_FACTOR = 2.0
-ISSUE_MAX_LOSS = 0.10
-ISSUE_SPEED = 1.5
-ISSUE_DENSITY = 0.18
-ISSUE_MINUTES = 60.0
+TARGET_MAX_FAILURE = 0.12
+TARGET_ORACLE_FACTOR = 2.0
+ROBUSTNESS_MAX_RISE = 0.10
+ROBUSTNESS_SPEED = 1.5
+ROBUSTNESS_DENSITY = 0.18
+TRAINING_BUDGET_MINUTES = 60.0
 
 # What each agent is, for the tables.
 DESCRIPTIONS = {
@@ -48,7 +48,7 @@ DESCRIPTIONS = {
     "ppo_flow": "PPO on flow depths",
     "ppo_robust": "PPO on flow, sensor errors in training",
     "ppo_oracle": "PPO on true depths, same points",
-    WINNER: "PPO on flow and the rate of approach, over speeds and densities; issue 16's winner",
+    WINNER: "PPO on flow and the rate of approach, over speeds and densities; the lever search's winner",
     WINNER_ON_TRUE_DEPTHS: "the winner's recipe on true depths, same points",
 }
 VSEP = "–"
@@ -178,7 +178,7 @@ def reactive_gap_values(data: BenchmarkData) -> Values:
         return row["failure_low"] > ttc["failure_high"]
 
     closing = (flow["failure_rate"] - winner["failure_rate"]) / (flow["failure_rate"] - ttc["failure_rate"])
-    # The winner's recipe on true depths (issue 33) once it is in the leading table.
+    # The winner's recipe on true depths (the true-depth comparison) once it is in the leading table.
     truth = next((r for r in data.leaderboard if r["agent"] == WINNER_ON_TRUE_DEPTHS), None)
     truth_relation = intervals_relation(_row_interval(winner), _row_interval(truth)) if truth else ""
     return {
@@ -209,11 +209,11 @@ def reactive_gap_values(data: BenchmarkData) -> Values:
 
 
 def _within(clean: Rate, *conditions: Rate) -> bool:
-    return all(c.rate - clean.rate <= ISSUE_MAX_LOSS for c in conditions)
+    return all(c.rate - clean.rate <= ROBUSTNESS_MAX_RISE for c in conditions)
 
 
 def validation_values(data: BenchmarkData) -> Values:
-    """Issue 16's levers and the reactive references on validation layouts: clean, at density 0.18 and at
+    """The flow-gap levers and the reactive references on validation layouts: clean, at density 0.18 and at
     1.5 m/s, each with its difference from clean."""
     clean, density, speed = (data.validation[c] for c in ("clean", "density", "speed"))
     names = [name for name in clean if name in density and name in speed]
@@ -235,8 +235,8 @@ def validation_values(data: BenchmarkData) -> Values:
                 "yes" if ok else "no",
             ]
         )
-    header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {ISSUE_DENSITY:g} (Δ)"]
-    header += [f"{ISSUE_SPEED:g} m/s (Δ)", f"within +{ISSUE_MAX_LOSS:.2f} at both"]
+    header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {ROBUSTNESS_DENSITY:g} (Δ)"]
+    header += [f"{ROBUSTNESS_SPEED:g} m/s (Δ)", f"within +{ROBUSTNESS_MAX_RISE:.2f} at both"]
     per_run = {c: {r.episodes // r.runs for r in data.validation[c].values()} for c in data.validation}
     stage1, stage2 = data.training[WINNER].init_config or {}, data.training[WINNER].config
     return {
@@ -247,14 +247,14 @@ def validation_values(data: BenchmarkData) -> Values:
         "stage2_steps": count(stage2["total_timesteps"]),
         "stage2_lr": learning_rate(stage2["ppo"]["learning_rate"]),
         "stage1_lr": learning_rate(stage1.get("ppo", {}).get("learning_rate", float("nan"))),
-        "issue_limit": f"{ISSUE_MAX_LOSS:.2f}",
-        "issue_density": f"{ISSUE_DENSITY:g}",
-        "issue_speed": f"{ISSUE_SPEED:g}",
+        "robustness_limit": f"{ROBUSTNESS_MAX_RISE:.2f}",
+        "robustness_density": f"{ROBUSTNESS_DENSITY:g}",
+        "robustness_speed": f"{ROBUSTNESS_SPEED:g}",
     }
 
 
 def robustness(data: BenchmarkData) -> dict[str, tuple[float, float]]:
-    """Per sweep agent (base name): its failure at issue 16's speed and density on the sweep's test cells, less
+    """Per sweep agent (base name): its failure at the robustness speed and density on the sweep's test cells, less
     its clean failure on the leading table's layouts."""
     found = {}
     for row in data.leaderboard:
@@ -262,7 +262,7 @@ def robustness(data: BenchmarkData) -> dict[str, tuple[float, float]]:
         try:
             cells = [
                 data.cell(agent, f, x)
-                for f, x in (("forward_speed", ISSUE_SPEED), ("obstacle_density", ISSUE_DENSITY))
+                for f, x in (("forward_speed", ROBUSTNESS_SPEED), ("obstacle_density", ROBUSTNESS_DENSITY))
             ]
         except KeyError:
             continue
@@ -270,11 +270,11 @@ def robustness(data: BenchmarkData) -> dict[str, tuple[float, float]]:
     return found
 
 
-def issue16_values(data: BenchmarkData) -> Values:
-    """Issue 16's targets on test layouts: the flow–truth gap, who meets the first target, who stays within the
+def flow_gap_target_values(data: BenchmarkData) -> Values:
+    """The flow-gap targets on test layouts: the flow–truth gap, who meets the first target, who stays within the
     robustness limit, and the winner's training time."""
     flow, oracle, winner = data.row("ppo_flow"), data.row("ppo_oracle"), data.row(WINNER)
-    limit = min(ISSUE_MAX_FAILURE, ISSUE_ORACLE_FACTOR * oracle["failure_rate"])
+    limit = min(TARGET_MAX_FAILURE, TARGET_ORACLE_FACTOR * oracle["failure_rate"])
     flow_agents = [
         r
         for r in data.leaderboard
@@ -282,15 +282,15 @@ def issue16_values(data: BenchmarkData) -> Values:
     ]
     first = [r for r in flow_agents if r["failure_rate"] <= limit]
     losses = robustness(data)
-    robust = [a for a, (s, d) in losses.items() if s <= ISSUE_MAX_LOSS and d <= ISSUE_MAX_LOSS]
+    robust = [a for a, (s, d) in losses.items() if s <= ROBUSTNESS_MAX_RISE and d <= ROBUSTNESS_MAX_RISE]
     minutes = data.training[WINNER].minutes
-    in_time = max(minutes) <= ISSUE_MINUTES
+    in_time = max(minutes) <= TRAINING_BUDGET_MINUTES
     overlapping = intervals_relation(_row_interval(flow), _row_interval(oracle)) == "intervals overlapping"
     return {
         "flow_vs_oracle": intervals_relation(_row_interval(flow), _row_interval(oracle)),
         "flow_costs_nothing": overlapping,
-        "issue_max_failure": f"{ISSUE_MAX_FAILURE:.2f}",
-        "issue_oracle_factor": f"{ISSUE_ORACLE_FACTOR:g}",
+        "target_max_failure": f"{TARGET_MAX_FAILURE:.2f}",
+        "target_oracle_factor": f"{TARGET_ORACLE_FACTOR:g}",
         "oracle_rate": rate(oracle["failure_rate"]),
         "first_target_met": join_words(
             [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first]
@@ -305,8 +305,8 @@ def issue16_values(data: BenchmarkData) -> Values:
         "winner_minutes": span(minutes),
         "winner_cores": "/".join(map(str, data.training[WINNER].cores)),
         "winner_in_time": in_time,
-        "issue_minutes": f"{ISSUE_MINUTES:.0f}",
-        "issue_met": winner in first and WINNER in robust and in_time,
+        "budget_minutes": f"{TRAINING_BUDGET_MINUTES:.0f}",
+        "targets_met": winner in first and WINNER in robust and in_time,
         "winner_vs_oracle": intervals_relation(_row_interval(winner), _row_interval(oracle)),
     }
 

@@ -1,7 +1,7 @@
-"""Confirming issue 16's pick on validation layouts its search never saw (``flownav confirm``).
+"""Confirming the lever search's pick on validation layouts the search never saw (``flownav confirm``).
 
-Issue 16 tried configurations one after another on the ablation layouts and stopped at the first whose point
-estimates met its conditions: a best-of-many pick. Here the pick (:data:`PICK`) and what it is compared with
+The lever search tried configurations one after another on the ablation layouts and stopped at the first whose
+point estimates met the robustness conditions: a best-of-many pick. Here the pick (:data:`PICK`) and what it is compared with
 (:data:`COMPARED`) fly every shipped training seed on :data:`CONFIRMATION_LAYOUTS` fresh validation layouts from
 ``CONFIRMATION_SEED_START``, clean and under each of :data:`CONDITIONS`. Every run flies every layout, so
 comparisons are paired by layout; intervals come from a bootstrap that resamples training seeds (of each agent
@@ -29,7 +29,7 @@ PICK = WINNER
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.
 COMPARED = ("ppo_flow_course_approach", "ppo_flow")
 # The pick's recipe, both stages and the same budget, trained on the true depths at the same tracked points
-# (issue 33): the pick minus it is what optical flow costs this learned policy. Flown once its seeds are shipped.
+# (the true-depth comparison): the pick minus it is what optical flow costs this learned policy. Flown once its seeds are shipped.
 TRUE_DEPTH_RECIPE = WINNER_ON_TRUE_DEPTHS
 CONDITIONS: dict[str, dict[str, float]] = {
     "clean": {},
@@ -37,7 +37,7 @@ CONDITIONS: dict[str, dict[str, float]] = {
     "speed 1.5 m/s": {"forward_speed": 1.5},
 }
 CONFIRMATION_LAYOUTS = 200
-# Issue 16's condition: under each harder course, failure at most this much above the agent's own clean rate.
+# The robustness condition: under each harder course, failure at most this much above the agent's own clean rate.
 ALLOWED_RISE = 0.10
 # Any learned name loads the policy file it is given; runs of different agents live in different CSVs.
 RUN_LABEL = "ppo_flow"
@@ -192,15 +192,15 @@ def run_confirmation(
     return {"layouts": layouts, "rates": rates, "differences": differences, "rises": rises}
 
 
-# Where issue 16's ablation kept each condition's runs, under results/ablation/.
+# Where the lever search's ablation kept each condition's runs, under results/ablation/.
 SEARCH_FOLDERS = {"clean": ".", "density 0.18": "density_0.18", "speed 1.5 m/s": "speed_1.5"}
-# Configs flown under the same conditions after issue 16's search ended, so not part of it: issue 31's recipe.
+# Configs flown under the same conditions after the lever search ended, so not part of it: the teacher recipe.
 FLOWN_AFTER_THE_SEARCH = ("ppo_flow_teacher",)
 
 
 def search_record(ablation_dir: Path) -> dict[str, Any]:
-    """What issue 16's search was, read from its committed episodes: the configurations flown under its two
-    conditions, the validation layouts they flew, and the pick minus its first stage there, paired by layout
+    """What the lever search was, read from its committed episodes: the configurations flown under the two
+    robustness conditions, the validation layouts they flew, and the pick minus its first stage there, paired by layout
     (:func:`paired_difference`), per condition."""
     tried, layouts = [], set()
     for condition in sorted(Path(ablation_dir).glob("*_*/")):
@@ -258,13 +258,13 @@ def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: 
     layouts = result["layouts"]
     first, last = (search["layouts"][0], search["layouts"][-1]) if search["layouts"] else (0, 0)
     lines = [
-        "# Confirming issue 16's pick on fresh validation layouts",
+        "# Confirming the lever search's pick on fresh validation layouts",
         "",
         f"Generated {today()} by `{command}`.",
         "",
         "## The search as it happened",
         "",
-        f"Issue 16 flew {len(search['configs'])} PPO configurations under its two conditions (obstacle density "
+        f"The lever search flew {len(search['configs'])} PPO configurations under two robustness conditions (obstacle density "
         f"0.18, forward speed 1.5 m/s), one after another, on the same {len(search['layouts'])} validation "
         f"layouts ({first:,}–{last:,}; `results/ablation/`): {', '.join(f'`{c}`' for c in search['configs'])}. "
         "It stopped at the first whose point estimates rose at most +0.10 over clean under both, "
@@ -331,7 +331,7 @@ def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: 
             "",
         ]
     lines += [
-        f"### Rise over the agent's own clean rate (issue 16's condition: at most +{ALLOWED_RISE:.2f})",
+        f"### Rise over the agent's own clean rate (the robustness condition: at most +{ALLOWED_RISE:.2f})",
         "",
     ]
     rows = []
@@ -350,5 +350,5 @@ def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: 
                 verdict,
             ]
         )
-    lines += [markdown_table(["condition", "agent", "rise [95 % CI]", "issue 16's condition"], rows), ""]
+    lines += [markdown_table(["condition", "agent", "rise [95 % CI]", "robustness condition"], rows), ""]
     return lines

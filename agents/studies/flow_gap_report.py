@@ -2,7 +2,7 @@
 
 The thesis's question for a learned policy is the gap between the same recipe trained on the estimator's depths
 and on the true depths at the same tracked points. Two recipes answer it: the plain one (``ppo_flow`` against
-``ppo_oracle``) and issue 16's pick against its recipe on true depths (:data:`TRUE_DEPTH_RECIPE`). Each gap is
+``ppo_oracle``) and the lever search's pick against its recipe on true depths (:data:`TRUE_DEPTH_RECIPE`). Each gap is
 paired by layout: every training seed of both agents flew the same layouts, the interval resamples training seeds
 (each agent's apart) and layouts (once for both). The sources are the confirmation flights on fresh validation
 layouts (``results/confirmation/``), the suite's frozen test layouts (``results/suite_episodes.csv``) and, for
@@ -31,7 +31,7 @@ from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
 from agents.studies.benchmark_report import TEMPLATES, template_fields
 from agents.studies.benchmark_values import (
     Values,
-    issue16_values,
+    flow_gap_target_values,
     leaderboard_values,
     reactive_gap_values,
     validation_values,
@@ -54,7 +54,7 @@ from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 FLOW_GAP_TEMPLATE = TEMPLATES / "flow_gap.md"
 # The plain recipe: PPO on the estimator's depths and on the true depths, all else the same.
 PLAIN_FLOW, PLAIN_TRUTH = "ppo_flow", "ppo_oracle"
-# How many training seeds a recipe's gap is measured over (issue 33).
+# How many training seeds a recipe's gap is measured over.
 SEEDS_WANTED = 5
 TRUE_DEPTH_STAGES = (
     "configs/experiments/ppo_flow_course_approach_oracle.yaml",
@@ -305,7 +305,7 @@ def flow_gap_values(
         **leaderboard_values(data),
         **reactive_gap_values(data),
         **validation_values(data),
-        **issue16_values(data),
+        **flow_gap_target_values(data),
         **_plain_values(data, results, policies_dir),
         **selection_values(result, search_record(results / "ablation")),
         "pick": PICK,

@@ -190,7 +190,7 @@ _LEVERS = tuple(
         "course_approach_curriculum",
         "course_approach_smooth",
         "course_approach_curriculum_slow",
-        "teacher",  # issue 31's recipe: a teacher start (results/training_performance.md)
+        "teacher",  # the time-to-policy recipe: a teacher start (results/training_performance.md)
     )
 )
 _CLEAN_ABLATION = ("configs/ppo_flow.yaml", "configs/ppo_oracle.yaml", "configs/ppo_robust.yaml", *_LEVERS)
@@ -292,8 +292,8 @@ REPORTS: tuple[Report, ...] = (
         write=_flow_gap,
     ),
     Report(
-        "ablation/issue16_lab_notes.md",
-        reason="issue 16's lab notebook, hand-written lever by lever as each was judged and kept as it was: its "
+        "ablation/lever_lab_notes.md",
+        reason="the lever search's lab notebook, hand-written lever by lever as each was judged and kept as it was: its "
         "figures are those of their day (the current ones are flow_gap.md's and ablation.md's)",
     ),
     *_not_regenerated(

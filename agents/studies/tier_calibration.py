@@ -36,8 +36,8 @@ CANDIDATE_COURSES = tuple(
 # agents trail them everywhere there, results/sweep.md); every agent flies stage 2.
 COURSE_AGENTS = ("bee_robust", "bee_ttc", "ppo_flow_course_approach_curriculum_slow")
 STAGES = ("course", "tiers")
-# The agents the tiers were calibrated with when suite version 1 was frozen; an agent added later (issue 33's
-# true-depth recipe) is scored on the frozen tiers by `flownav suite`, not flown into the calibration.
+# The agents the tiers were calibrated with when suite version 1 was frozen; an agent added later (the winner's
+# recipe on true depths) is scored on the frozen tiers by `flownav suite`, not flown into the calibration.
 TIER_AGENTS = (
     "bee",
     "bee_robust",

@@ -28,7 +28,7 @@ from agents.studies.perf.timing import hardware_summary
 DEPTH_BANDS: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, math.inf)
 #: Flights start from these validation seeds (the ones the throughput work used), one per flight.
 FLIGHT_SEED_START = VALIDATION_SEED_START
-#: The issue's "more valid depths" settings beside the FAST threshold: looser forward-backward, parallax,
+#: The "more valid depths per frame" lever's settings beside the FAST threshold: looser forward-backward, parallax,
 #: epipolar and LK-error limits.
 DEFAULT_SETTINGS: tuple[str, ...] = (
     "fb_max_error_px=1.0",
@@ -229,7 +229,7 @@ def _report(
         "depth). `baseline_frames=k` tracks points frame to frame and ranges each from its oldest view within k "
         "frames, with the told motions composed, or from the previous frame where that fails a check "
         "(`estimator.multiframe`): far points and points near the focus of expansion gain parallax. More valid "
-        "depths per frame at equal accuracy is what issue 16 asks of the estimator.",
+        "depths per frame at equal accuracy is what closing the flow–truth gap asks of the estimator.",
         "",
         "## In FlowNav (160×120, default env, scripted weaving flights)",
         "",

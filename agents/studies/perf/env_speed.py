@@ -24,8 +24,8 @@ from agents.studies.perf.timing import quiet_gc
 
 DEFAULT_RESOLUTIONS = ((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240))
 STAGES = ("physics", "render", "estimator", "ground_truth")
-TARGET_RATIO = 1.3  # issue 13: env step at most 1.3x the bare render + physics loop of the same scene
-# Issue 31 re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does): env / floor.
+TARGET_RATIO = 1.3  # the throughput target: env step at most 1.3x the bare render + physics loop of the same scene
+# The time-to-policy target re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does): env / floor.
 TARGET_FLOOR_RATIO = 1.3
 # Criteria of the default-resolution choice. The env's own test spec asks for a median depth error <= 5 %;
 # two valid points per histogram sector (median) keep most sectors of the observation from being empty.

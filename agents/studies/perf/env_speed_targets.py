@@ -1,5 +1,5 @@
-"""The targets of ``env_performance.md``, each worded from the measured rows: env/bare (issue 13), env/floor with
-where the step goes beyond the floor loop (issue 31), and the real-time factor beside gym-pybullet-drones'."""
+"""The targets of ``env_performance.md``, each worded from the measured rows: env/bare (the throughput target),
+env/floor with where the step goes beyond the floor loop (the time-to-policy target), and the real-time factor beside gym-pybullet-drones'."""
 
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ def ratio_target_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
 
 
 def floor_target_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
-    """Issue 31's target, env / floor at the default config, and where the env's step goes beyond the floor
+    """The time-to-policy target, env / floor at the default config, and where the env's step goes beyond the floor
     loop, component by component (median ms per step).
 
     The floor is the bare loop plus grayscale, FAST and one LK pass; so of the env's stages, rendering is the
@@ -88,7 +88,7 @@ def floor_target_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
     )
     return {
         "floor_target": str(TARGET_FLOOR_RATIO),
-        "floor_target_source": "issue 31's target",
+        "floor_target_source": "the time-to-policy target",
         "env_floor": f"{default['ratio_env_floor']:.2f}",
         "env_floor_low": f"{default['ratio_env_floor_min']:.2f}",
         "env_floor_high": f"{default['ratio_env_floor_max']:.2f}",

@@ -369,7 +369,7 @@ def _target_values(rows: list[dict[str, Any]], depth_rows: list[dict[str, Any]])
 
 
 def _flow_full_vs_lk(rows: list[dict[str, Any]]) -> float:
-    """The flow stage with the full backward search (the estimator before issue 13) over the bare baseline's
+    """The flow stage with the full backward search (the estimator before the throughput work) over the bare baseline's
     LK, median over the working range.
 
     Neither is timed alone: the full search's flow stage is the FB-on flow stage plus what the full search

@@ -1,5 +1,5 @@
 """``flownav bench recipe``: minutes per training seed of whole recipes, measured side by side in one sitting
-(issue 31: time to a policy).
+(the time-to-policy target).
 
 A recipe is its stages' training configs in order (a curriculum's first stage, then the stage that starts from
 it). A seed of a stage does four kinds of work, each counted from its config:

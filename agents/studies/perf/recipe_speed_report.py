@@ -27,9 +27,9 @@ from agents.studies.perf.recipe_speed import (
 )
 from agents.training.train_config import TrainConfig
 
-# The validation quality a recipe must reach (issue 31): the issue-16 winner's bar.
+# The validation quality a faster recipe must reach: the bar the lever search's winner met.
 CLEAN_FAILURE_BAR = 0.05
-# Issue 31's goal: a recipe in at most a third of the reference's minutes per seed.
+# The time-to-policy goal: a recipe in at most a third of the reference's minutes per seed.
 TARGET_TIME_RATIO = 1 / 3
 # flownav ablation's folders per condition, under its --out (results/ablation).
 CONDITIONS = {"clean": "", "density 0.18": "density_0.18", "1.5 m/s": "speed_1.5"}
@@ -254,9 +254,9 @@ def _report(rows: list[dict[str, Any]], command: str, elapsed: float, repeats: i
         quality_table,
         "",
         f"Failure over runs × layouts of `flownav ablation` on validation layouts (clean: 900,000–900,099; the "
-        f"conditions: 900,000–900,049), the recipe's last stage, every seed it has. The bar (issue 31): clean ≤ "
+        f"conditions: 900,000–900,049), the recipe's last stage, every seed it has. The bar: clean ≤ "
         f"{CLEAN_FAILURE_BAR:.2f} and each condition at most +{ALLOWED_RISE:.2f} over clean, by point estimate, "
-        "as the issue-16 winner was picked. Recorded minutes are the seeds' own training records (with the "
+        "as the lever search's winner was picked. Recorded minutes are the seeds' own training records (with the "
         "earlier stage's): trained on whatever machine and load they met, so context, not the comparison.",
         "",
         "## Target",
@@ -277,7 +277,7 @@ def _report(rows: list[dict[str, Any]], command: str, elapsed: float, repeats: i
 
 
 def _target_lines(rows: list[dict[str, Any]]) -> list[str]:
-    """Issue 31's target, worded from the data: a recipe at ≤ 1/3 of the reference's minutes per seed that
+    """The time-to-policy target, worded from the data: a recipe at ≤ 1/3 of the reference's minutes per seed that
     meets the reference's validation bar."""
     reference = rows[0]
     lines = []

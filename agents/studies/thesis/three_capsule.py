@@ -17,7 +17,7 @@ from agents.studies.thesis.playback_runs import RunResult, run_playback
 from flownav_env.playback import PlaybackSettings, PlaybackWorld, save_path
 from flownav_env.rotations import camera_rotation, vector_from_rotation
 
-# The issue maps these variables onto Appendices C–H as a group, not one by one, so no letter is given.
+# These variables are matched to Appendices C–H only as a group, not one by one, so no letter is given.
 SWEEP_VARIABLES = (
     ("attitude_jitter_deg", "angular instability (deg per frame)"),
     ("distance_per_frame", "distance per frame (m)"),

@@ -10,7 +10,7 @@ Sub-ranges with one use each:
 
 | sub-range | seeds | used for |
 |---|---|---|
-| ablation (validation) | ``ABLATION_SEED_START ..`` (900,000-900,099 used) | issue 16's lever search |
+| ablation (validation) | ``ABLATION_SEED_START ..`` (900,000-900,099 used) | the flow-gap lever search |
 | confirmation (validation) | ``CONFIRMATION_SEED_START ..`` | confirming a pick on layouts its search never saw |
 | tier calibration (validation) | ``TIER_CALIBRATION_SEED_START ..`` | choosing the suite's tier settings |
 | sensor pilot (validation) | ``SENSOR_PILOT_SEED_START ..`` | trying versions of the realistic sensor before freezing it |
@@ -35,7 +35,7 @@ MAX_RUN_SEED = VALIDATION_SEED_START // RUN_SEED_STRIDE - 1
 # Validation layouts for comparing training runs and ablations (``flownav ablation``): past the starts of the
 # checkpoint-selection streams of run seeds below 400 (checkpoint_selection_seed), and before the test range.
 ABLATION_SEED_START = 900_000
-# Fresh validation layouts for confirming a selection made on the ablation layouts (issue 33).
+# Fresh validation layouts for confirming a selection made on the ablation layouts (flownav confirm).
 CONFIRMATION_SEED_START = 910_000
 # Validation layouts on which the suite's tiers are calibrated (flownav suite calibrate).
 TIER_CALIBRATION_SEED_START = 920_000

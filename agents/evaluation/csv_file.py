@@ -22,7 +22,7 @@ from pathlib import Path
 
 CHECKSUM_FIELD = "row_crc"
 
-# The columns of episodes CSVs written before episodes carried their identity (issue 12).
+# The columns of episodes CSVs written before episodes carried their identity.
 LEGACY_FIELDS = [
     "agent",
     "factor",

@@ -16,7 +16,7 @@ class EpisodeRecord:
     """What one episode came to, and what defined it; one CSV row.
 
     The identity fields (``env_id`` to ``code_version``) are filled in by the runner from the task that flew
-    the episode, so that a resumed run can tell an episode flown with other settings from its own (issue 12).
+    the episode, so that a resumed run can tell an episode flown with other settings from its own.
     ``env_kwargs`` and ``agent_params`` are canonical JSON (``agent_params``: every parameter of a reactive
     agent, defaults included, :func:`~agents.policies.agent_parameters`); ``policy_sha256`` is the learned policy file's
     content hash ("" for reactive agents). ``code_version`` is recorded for provenance only: resuming does not

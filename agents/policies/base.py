@@ -7,10 +7,10 @@ from typing import Any, Protocol
 import numpy as np
 
 REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
-# ppo_flow_course_approach_curriculum_slow: issue 16's winner, trained from configs/experiments/ (its name lists
+# ppo_flow_course_approach_curriculum_slow: the lever search's winner, trained from configs/experiments/ (its name lists
 # its levers: course distribution, approach input, a gentler second curriculum stage; results/flow_gap.md).
 # ppo_flow_course_approach_curriculum_slow_oracle: the same recipe told the true depths at the same tracked points,
-# the yardstick of what flow costs it (issue 33), as ppo_oracle is ppo_flow's.
+# the yardstick of what flow costs it (the true-depth comparison), as ppo_oracle is ppo_flow's.
 LEARNED_AGENTS = (
     "ppo_flow",
     "ppo_robust",

@@ -1,6 +1,6 @@
 """Which stable-baselines3 algorithm and policy a config's ``ppo`` block means: PPO with a feed-forward
 ``MultiInputPolicy``, or, with ``lstm_hidden_size`` > 0, sb3-contrib's RecurrentPPO with a
-``MultiInputLstmPolicy`` (issue 16's memory lever: obstacles leave the 60° view as the drone passes them).
+``MultiInputLstmPolicy`` (the memory lever: obstacles leave the 60° view as the drone passes them).
 Training, resuming and loading all ask here, so the choice is made in one place."""
 
 from __future__ import annotations

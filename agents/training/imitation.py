@@ -1,4 +1,4 @@
-"""A teacher start (issue 31's lever on time to a policy): before PPO, the policy learns to act as a teacher
+"""A teacher start (a lever on the time to a policy): before PPO, the policy learns to act as a teacher
 agent does, by DAgger (Ross, Gordon & Bagnell 2011) on the run's own training envs.
 
 Round 0 flies the teacher and records what it saw and did; every later round flies the student (the policy

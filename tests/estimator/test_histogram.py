@@ -193,7 +193,7 @@ def test_sector_near_depth_rejects_a_quantile_outside_zero_to_one(quantile) -> N
 
 
 def test_a_sector_grid_gives_the_functions_results_from_one_located_frame() -> None:
-    # Issue 30: the env checks its grid once and locates each frame's points once for every product.
+    # The env checks its grid once and locates each frame's points once for every product.
     from estimator.histogram import SectorGrid
 
     points, depth, valid = _random_points(400, seed=3)

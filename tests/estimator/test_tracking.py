@@ -30,7 +30,7 @@ def _textured_image(seed: int = 0, size: tuple[int, int] = (480, 640)) -> np.nda
 
 
 # None: the backward check repeats the forward search; 0: it starts at the forward track's origin on the
-# full-resolution level only (the estimator's default since issue 13), which must not let more mistracks through.
+# full-resolution level only (the estimator's default since the throughput work), which must not let more mistracks through.
 @pytest.mark.parametrize("backward_max_level", [None, 0])
 def test_rubberwhale_lk_endpoint_error(backward_max_level):
     if not RUBBERWHALE.is_dir():

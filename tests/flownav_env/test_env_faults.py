@@ -1,5 +1,5 @@
 """Misuse of the env fails at once with one clear line: a closed env, a wrong action, an unsupported render
-mode; and Gymnasium's array wrappers work over FlattenObservation, as the README shows (issue 29)."""
+mode; and Gymnasium's array wrappers work over FlattenObservation, as the README shows."""
 
 from __future__ import annotations
 

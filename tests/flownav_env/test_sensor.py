@@ -75,7 +75,7 @@ def test_pipeline_needs_a_first_frame() -> None:
 
 
 def test_the_pipeline_takes_poses_not_callbacks() -> None:
-    # Issue 30: the env moves and renders the camera itself; the sensor is handed the result, never a callback.
+    # The env moves and renders the camera itself; the sensor is handed the result, never a callback.
     for method in (SensorPipeline.jitter, SensorPipeline.start, SensorPipeline.motion):
         annotations = inspect.signature(method).parameters.values()
         assert not any("Callable" in str(parameter.annotation) for parameter in annotations), method

@@ -23,7 +23,7 @@ from flownav_env.settings import (
 )
 from flownav_env.settings_check import check_setting, setting_range
 
-# The sensor error models beside the thesis's variables (issue 15): each one's range and a value outside it.
+# The sensor error models beside the thesis's variables: each one's range and a value outside it.
 ERROR_MODELS = {
     "rotation_bias": ("[-0.9, 0.9]", 0.95),
     "translation_bias": ("[-0.9, 0.9]", -1.0),
@@ -119,7 +119,7 @@ def test_sensor_rules_are_the_env_rules() -> None:
 
 
 def test_the_env_constructor_lists_no_setting_by_hand() -> None:
-    # Issue 30: EnvSettings is the one declaration; the env takes it whole, or any of its fields by keyword.
+    # EnvSettings is the one declaration; the env takes it whole, or any of its fields by keyword.
     parameters = inspect.signature(FlowNavEnv.__init__).parameters
     assert list(parameters) == ["self", "settings", "render_mode", "overrides"]
     assert parameters["overrides"].kind is inspect.Parameter.VAR_KEYWORD

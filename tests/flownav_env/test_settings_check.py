@@ -1,5 +1,5 @@
 """flownav_env.settings_check: the one validator of FlowNav settings by name, shared by FlowNavEnv's keywords,
-gymnasium.make and the YAML configs, which checks without building an env (issue 30)."""
+gymnasium.make and the YAML configs, which checks without building an env."""
 
 from __future__ import annotations
 

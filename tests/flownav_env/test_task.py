@@ -1,4 +1,4 @@
-"""flownav_env.task and the env's step (issue 30): a step runs its stages in the order the data flows, with no
+"""flownav_env.task and the env's step: a step runs its stages in the order the data flows, with no
 callback into the env, and the Task bins each frame's points once, its grid checked once, not every step."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Help pages read as plain text: the docstrings they come from lose their reStructuredText markup, keep their
-paragraphs, and say where the commands really write (issue 29)."""
+paragraphs, and say where the commands really write."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
-"""Same seeds, same episodes: records flown now equal those flown before the restructure (issue 11).
+"""Same seeds, same episodes: records flown now equal those flown before the restructure.
 
 ``tests/data/same_seed_episodes.csv`` was first flown by commit 1f10a6b, before ``agents/`` was cut into
-subpackages and the env's settings and sensor pipeline got one owner each; the restructure (issue 11) and the
-trust fixes (issue 12) left every record identical. The throughput work (issue 13) changed episodes on
+subpackages and the env's settings and sensor pipeline got one owner each; the restructure and the trust fixes
+(episode identity, checked resumes) left every record identical. The throughput work changed episodes on
 purpose (the controller on plain floats rounds differently, and the backward LK check starts from the forward
 track's origin), again when capsules got a coarser mesh for faster rendering, and again when the camera's near
 plane moved from 1.22 m to 5 cm (near capsules had rendered hollow), and when the bee was re-tuned after that

@@ -219,7 +219,7 @@ def test_relative_policy_dirs_resolve_against_the_repository(tmp_path: Path, mon
     config = load_config(write_sweep_config(tmp_path, agents=["ppo_flow"]), SweepConfig)
     monkeypatch.chdir(tmp_path)
     assert config.policy_folder() == POLICIES_DIR
-    # An agent named alone stands for its first shipped training seed (issue 29: no single ppo_flow.zip).
+    # An agent named alone stands for its first shipped training seed (there is no single ppo_flow.zip).
     assert {Path(t.policy) for t in build_tasks(config, ["ppo_flow"])} == {POLICIES_DIR / "ppo_flow" / "seed_0.zip"}
 
 

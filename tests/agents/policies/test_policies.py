@@ -77,7 +77,7 @@ def test_unknown_agent_and_missing_policy_errors(tmp_path: Path) -> None:
         load_agent("ppo_flow", tmp_path / "none.zip")
 
 
-# A training seed of each agent behind the benchmark, and issue 16's winner, which reads the approach key.
+# A training seed of each agent behind the benchmark, and the lever search's winner, which reads the approach key.
 SHIPPED = ("ppo_flow@0", "ppo_oracle@1", "ppo_robust@2", "ppo_flow_course_approach_curriculum_slow@3")
 
 
@@ -128,7 +128,7 @@ def test_every_learned_agent_ships_verified_training_seeds_that_fly_with_their_o
         assert len(seeds) >= 3 and (name == "ppo_robust" or len(seeds) >= 5), (name, seeds)
         manifest = read_manifest(POLICIES_DIR / name / MANIFEST_NAME)
         assert {f"seed_{k}.zip" for k in seeds} <= set(manifest), name
-    # issue 16's winner reads the approach input it was trained on; its seeds act on a real env.
+    # The winner reads the approach input it was trained on; its seeds act on a real env.
     winner = "ppo_flow_course_approach_curriculum_slow"
     assert agent_env_kwargs(f"{winner}@4")["observe_approach"] is True
     # its recipe on true depths reads the same inputs, the true depth at the same tracked points in place of flow's

@@ -1,4 +1,4 @@
-"""Issue 29: loading a policy never unpickles without an opt-in, a learned agent named alone flies its shipped
+"""Loading a policy never unpickles without an opt-in, a learned agent named alone flies its shipped
 training seeds in turn, and an env lacking an observation key a policy reads fails in one line."""
 
 from __future__ import annotations
@@ -157,7 +157,7 @@ def test_an_agent_named_alone_flies_its_shipped_seeds_one_episode_each_in_turn()
     assert len({tuple(seeds[name].predict(observation)[0]) for name in runs}) > 1
 
 
-def test_issue_16s_winner_loads_by_name_and_flies_run_episodes_seed_by_seed() -> None:
+def test_the_winner_loads_by_name_and_flies_run_episodes_seed_by_seed() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", UnverifiedPolicyWarning)
         agent = load_agent(WINNER)  # was a FileNotFoundError: no single results/policies/<agent>.zip

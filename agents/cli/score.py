@@ -9,6 +9,10 @@ its units; ``predict``'s signature): ``flownav describe [tier]``. ``--name`` set
 (default: the file's stem and callable, ``my_agent:make_agent``). In Python: ``agents.evaluation.suite.score``.
 ``--robustness`` adds the agent's failure-versus-error curves on the sweep's sensor factors
 (``agents.studies.robustness.robustness``).
+
+Before flying it says what ``suite_episodes.csv`` already holds of each tier and what is left. After you edit
+your agent's file its old episodes no longer describe it: ``--overwrite`` starts afresh, keeping the old file
+as ``suite_episodes.csv.bak-<time>``. An outside agent's ``predict`` gets ``--step-timeout`` seconds a call.
 """
 
 from __future__ import annotations

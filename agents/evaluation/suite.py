@@ -20,13 +20,16 @@ import numpy as np
 
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
+from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.over_seeds import episode_outcomes
+from agents.evaluation.paired import seed_interval
 from agents.evaluation.records import overwrite_hint, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
-from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite, suite_report
+from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
+from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
 from agents.policies import (
     agent_env_kwargs,
     is_learned,
@@ -150,7 +153,7 @@ def summarise_suite(
                 "runs": len(names),
                 "layouts": len(seeds),
                 "episodes": len(names) * len(seeds),
-                "interval_over": "layouts (Wilson)" if len(names) == 1 else "runs × layouts (bootstrap)",
+                "interval_over": "layouts (Wilson)" if len(names) == 1 else RUNS_INTERVAL,
                 "env_kwargs": _flown_settings(tier_rows, names),
                 "privileged": is_privileged(agent),
             }
@@ -158,10 +161,21 @@ def summarise_suite(
                 if len(names) == 1:
                     low, high = wilson_interval(int(matrix.sum()), matrix.size)
                 else:
-                    low, high = runs_and_layouts_interval(matrix)
+                    low, high = _runs_interval(matrix)
                 row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
             table.append({column: row[column] for column in SUMMARY_COLUMNS})
     return table
+
+
+# A learned agent's interval: the two-level bootstrap, widened where the t-interval over its runs' own rates is
+# wider (with few runs the bootstrap understates the spread between training runs).
+RUNS_INTERVAL = "runs × layouts (bootstrap, at least the t-interval over runs)"
+
+
+def _runs_interval(matrix: np.ndarray) -> tuple[float, float]:
+    low, high = runs_and_layouts_interval(matrix)
+    t_low, t_high = seed_interval(matrix)
+    return max(0.0, min(low, t_low)), min(1.0, max(high, t_high))
 
 
 def _flown_settings(rows: Sequence[Mapping[str, Any]], runs: Sequence[str]) -> str:
@@ -321,8 +335,17 @@ def run_suite(
     write_summary_csv(out / "suite.csv", table)
     if table:
         plot_suite(table, out / "suite.png")
-    lines = suite_report(
-        table, command=command, layouts=suite_seeds(layouts), machine=machine_summary(), missing=missing
+    seeds = list(suite_seeds(layouts))
+    failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
+    values = suite_values(
+        table,
+        rank_suite(table, failures),
+        command=command,
+        layouts=suite_seeds(layouts),
+        machine=machine_summary(),
+        missing=missing,
+        generated=today(),
     )
-    write_text_atomically(out / "suite.md", "\n".join(lines) + "\n")
-    return lines
+    text = suite_page(values)
+    write_text_atomically(out / "suite.md", text)
+    return text.splitlines()

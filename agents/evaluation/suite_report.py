@@ -1,7 +1,6 @@
-"""The suite's leading table as a report: ``suite.md``, ``suite.png``, and outside rows set beside it.
-
-Every sentence with a number is worded from the table here (the best agent per tier, whether a tier leaves
-room to improve), so the report cannot disagree with its CSV.
+"""The suite's rows: their CSV (``suite.csv``, ``score.csv``), checked when read; their tables per tier and
+figure; outside rows set beside the published ones. ``suite.md`` itself, with its ranking, is
+:mod:`agents.evaluation.suite_page`'s.
 """
 
 from __future__ import annotations
@@ -189,49 +188,6 @@ def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     return lines
 
 
-def reads_true_depths(agent: str) -> bool:
-    """Whether ``agent`` is told the true depths (``obs_source: oracle``): a diagnostic of what flow costs, not
-    an agent that navigates by flow. An agent whose settings cannot be read here (an outside one) counts as
-    flow."""
-    from agents.policies import agent_env_kwargs
-
-    try:
-        return agent_env_kwargs(agent).get("obs_source") == "oracle"
-    except (ValueError, OSError, ImportError):
-        return False
-
-
-def _room(row: Mapping[str, Any]) -> str:
-    if row["failure_rate"] >= HEADROOM_FAILURE:
-        return "room to improve"
-    return f"less than {HEADROOM_FAILURE:.2f} left to improve on"
-
-
-def headroom_lines(rows: Sequence[Mapping[str, Any]]) -> list[str]:
-    """Per tier: its best agent and whether it leaves room (fails ≥ :data:`HEADROOM_FAILURE`); where that agent
-    is told the true depths, the best agent on flow depths too, which is what the suite asks to beat."""
-    lines = []
-    for name in TIER_NAMES:
-        mine = [r for r in rows if r["tier"] == name]
-        if not mine:
-            continue
-        best = min(mine, key=lambda r: (r["failure_rate"], r["agent"]))
-        line = (
-            f"- `{name}`: best `{best['agent']}`, failure {_interval(best, 'failure')}, over {len(mine)} agents "
-            f"flown: {_room(best)}"
-        )
-        if reads_true_depths(best["agent"]):
-            on_flow = [r for r in mine if not reads_true_depths(r["agent"])]
-            if on_flow:
-                flow_best = min(on_flow, key=lambda r: (r["failure_rate"], r["agent"]))
-                line += (
-                    f" (it is told the true depths; the best on flow depths is `{flow_best['agent']}`, failure "
-                    f"{_interval(flow_best, 'failure')}: {_room(flow_best)})"
-                )
-        lines.append(line + ".")
-    return lines
-
-
 def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     """Failure rate with its 95 % interval per agent, a panel per tier."""
     import matplotlib
@@ -261,7 +217,7 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
                 index,
                 xerr=[[max(rate - row["failure_low"], 0.0)], [max(row["failure_high"] - rate, 0.0)]],
                 fmt="o",
-                color="tab:red" if row.get("included") else "tab:blue",
+                color="tab:red" if row.get("included") else "tab:grey" if row.get("privileged") else "tab:blue",
                 capsize=3,
             )
         axis.axvline(HEADROOM_FAILURE, color="grey", linestyle=":", linewidth=1)
@@ -278,7 +234,8 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
         else ""
     )
     figure.suptitle(
-        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}){included}"
+        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}; grey: "
+        f"privileged references, never ranked){included}"
     )
     figure.tight_layout()
     figure.savefig(path, dpi=110)
@@ -288,51 +245,9 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
 def plot_label(agent: str, rows: Sequence[Mapping[str, Any]]) -> str:
     """``agent`` in full on the figure's axis; an included agent marked with the layouts its rows rest on."""
     counts = sorted({r["layouts"] for r in rows if r["agent"] == agent and r.get("included")})
+    if any(r.get("privileged") for r in rows if r["agent"] == agent):
+        agent = f"{agent}\n(privileged reference)"
     if not counts:
         return agent
     layouts = str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
     return f"{agent}\n(included, {layouts} layout{'' if layouts == '1' else 's'})"
-
-
-def suite_report(
-    rows: Sequence[Mapping[str, Any]], *, command: str, layouts: range, machine: str, missing: Sequence[str]
-) -> list[str]:
-    """``suite.md``: what the suite is, the leading table per tier, each tier's headroom, what is unflown."""
-    from agents.common.tables import today
-
-    lines = [
-        f"# FlowNav suite v{SUITE_VERSION}: every agent on every tier's frozen test layouts",
-        "",
-        f"Generated {today()} by `{command}`. {machine}",
-        "",
-        f"Frozen test layouts {layouts.start:,}–{layouts.stop - 1:,} ({len(layouts)} per run; "
-        "`agents/common/seeds.py`, `SUITE_SEED_START`): before the suite was flown nothing flew them but checks "
-        "that the scoring commands work (on the first three at most, into scratch folders, discarded), and "
-        "nothing was chosen by looking at them. The tiers were calibrated on validation layouts "
-        "(`suite_calibration/calibration.md`) and are defined in `flownav_env/tiers.py`. A learned agent is every "
-        "shipped training seed on every layout: its rates are means over runs with a two-level bootstrap "
-        "interval (runs, then layouts); any other agent is one run with Wilson intervals over layouts. A "
-        "failure is any episode that does not reach the goal. Score your own agent with "
-        "`flownav score --agent file.py:make_agent` and set it beside these rows with "
-        "`flownav leaderboard --include runs/score/score.csv`.",
-        "",
-        "## Headroom",
-        "",
-        *headroom_lines(rows),
-        "",
-        "![failure rates per tier](suite.png)",
-        "",
-        "## The table",
-        "",
-        *tier_tables(rows),
-    ]
-    if missing:
-        lines += [
-            "## Not yet flown",
-            "",
-            "These (agent, tier) pairs have not flown every layout yet; the command above resumes them: "
-            + ", ".join(f"`{item}`" for item in missing)
-            + ".",
-            "",
-        ]
-    return lines

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from agents.cli.arguments import add_env_argument
 from agents.common.locations import SCRATCH_DIR
-from agents.common.seeds import TEST_SEED_START
+from agents.common.seeds import TEST_SEED_START, VALIDATION_SEED_START
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
 
@@ -42,7 +42,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
     )
     parser.add_argument(
-        "--seed-start", type=int, default=TEST_SEED_START, help="first seed (default: %(default)s)"
+        "--seed-start",
+        type=int,
+        default=TEST_SEED_START,
+        help=f"first seed (default: %(default)s, the test layouts; from {VALIDATION_SEED_START} for validation "
+        "layouts, to decide on)",
     )
     parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
     add_env_argument(
@@ -90,10 +94,7 @@ def run(args: argparse.Namespace) -> int:
         load_agent(args.agent, trust_pickle=args.trust_pickle)
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    if args.seed_start < TEST_SEED_START:
-        raise ValueError(
-            f"--seed-start must be >= {TEST_SEED_START} (training uses the seeds below), got {args.seed_start}"
-        )
+    check_evaluation_seeds(args.seed_start, args.episodes)
     env_kwargs = check_env_kwargs(dict(args.env), "command line", key="--env")
     factor, level = record_label(env_kwargs)
     runs, message = runs_to_fly(args.agent, args.policy)
@@ -138,3 +139,20 @@ def run(args: argparse.Namespace) -> int:
             f"{episodes.skipped} torn or corrupt rows of {out} were skipped (their episodes were flown again)"
         )
     return 0
+
+
+def check_evaluation_seeds(seed_start: int, episodes: int) -> None:
+    """Refuse seeds a run may not evaluate on: training layouts, or a run that spans validation and test.
+
+    Raises:
+        ValueError: one line naming the seeds and the allowed ranges.
+    """
+    if seed_start < VALIDATION_SEED_START:
+        raise ValueError(
+            f"--seed-start must be >= {VALIDATION_SEED_START} (training uses the seeds below), got {seed_start}"
+        )
+    if seed_start < TEST_SEED_START < seed_start + episodes:
+        raise ValueError(
+            f"seeds {seed_start}-{seed_start + episodes - 1} span validation and test layouts: stay below "
+            f"{TEST_SEED_START} (validation, to decide on) or start at {TEST_SEED_START} or later (test, to report)"
+        )

@@ -14,6 +14,7 @@ Sub-ranges with one use each:
 | confirmation (validation) | ``CONFIRMATION_SEED_START ..`` | confirming a pick on layouts its search never saw |
 | tier calibration (validation) | ``TIER_CALIBRATION_SEED_START ..`` | choosing the suite's tier settings |
 | sensor pilot (validation) | ``SENSOR_PILOT_SEED_START ..`` | trying versions of the realistic sensor before freezing it |
+| sensor reading (validation) | ``SENSOR_READING_SEED_START ..`` | the noisy tier at other readings of its specifications |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
@@ -41,6 +42,8 @@ CONFIRMATION_SEED_START = 910_000
 TIER_CALIBRATION_SEED_START = 920_000
 # Validation layouts on which versions of the suite's realistic sensor were tried (sensor_pilot_episodes.csv).
 SENSOR_PILOT_SEED_START = 930_000
+# Validation layouts on which the noisy tier is flown at other readings of its sensor specifications.
+SENSOR_READING_SEED_START = 940_000
 # The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
 SUITE_SEED_START = 2_000_000
 SUITE_LAYOUTS = 300

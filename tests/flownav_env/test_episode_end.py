@@ -36,7 +36,7 @@ def test_step_after_termination_raises_until_reset() -> None:
         env.step(SIDEWAYS)
     env.reset(seed=3)
     for _ in range(400):
-        _, reward, terminated, _, info = env.step(SIDEWAYS)
+        _, _, terminated, _, info = env.step(SIDEWAYS)
         if terminated:
             break
     assert terminated and info["out_of_bounds"] and not info["success"] and not info["collision"]

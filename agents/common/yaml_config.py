@@ -97,59 +97,94 @@ def _type_name(annotation: Any) -> str:
     return getattr(annotation, "__name__", None) or str(annotation).replace("typing.", "")
 
 
+def _wrong(value: Any, expected: str, source: str, key: str) -> ConfigError:
+    return ConfigError(f"{source}: key '{key}' must be {expected}, got {value!r}")
+
+
+def _is_bool(value: Any) -> bool:
+    return isinstance(value, bool)
+
+
+def _is_integer(value: Any) -> bool:
+    # bool is a subclass of int, but ``true`` for a count is a mistake in the YAML.
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_finite_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _is_string(value: Any) -> bool:
+    return isinstance(value, str)
+
+
+def _unchanged(value: Any) -> Any:
+    return value
+
+
+# Each scalar type a schema may use: the test a value must pass, what the error says it must be, and how the
+# accepted value is stored (a YAML integer given for a float field becomes a float).
+_SCALARS: dict[Any, tuple[Callable[[Any], bool], str, Callable[[Any], Any]]] = {
+    bool: (_is_bool, "true or false", _unchanged),
+    int: (_is_integer, "an integer", _unchanged),
+    float: (_is_finite_number, "a finite number", float),
+    str: (_is_string, "a string", _unchanged),
+}
+
+
 def _convert(value: Any, annotation: Any, source: str, key: str) -> Any:
+    """``value`` checked against the type ``annotation`` and converted to it; ConfigError names ``key``."""
     origin = typing.get_origin(annotation)
-    args = typing.get_args(annotation)
-
-    def wrong(expected: str) -> ConfigError:
-        return ConfigError(f"{source}: key '{key}' must be {expected}, got {value!r}")
-
     if annotation is Any:
         return value
     if origin in (typing.Union, types.UnionType):
-        if value is None and type(None) in args:
-            return None
-        options = [a for a in args if a is not type(None)]
-        errors = []
-        for option in options:
-            try:
-                return _convert(value, option, source, key)
-            except ConfigError as error:
-                errors.append(error)
-        raise wrong(" or ".join(_type_name(a) for a in args))
+        return _convert_union(value, typing.get_args(annotation), source, key)
     if origin is typing.Literal:
-        if value not in args:
-            raise wrong("one of " + ", ".join(repr(a) for a in args))
-        return value
+        return _convert_literal(value, typing.get_args(annotation), source, key)
     if dataclasses.is_dataclass(annotation):
         return from_mapping(value, annotation, source, prefix=f"{key}.")
-    if annotation is bool:
-        if not isinstance(value, bool):
-            raise wrong("true or false")
-        return value
-    if annotation is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise wrong("an integer")
-        return value
-    if annotation is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise wrong("a finite number")
-        return float(value)
-    if annotation is str:
-        if not isinstance(value, str):
-            raise wrong("a string")
-        return value
+    if annotation in _SCALARS:
+        accepts, expected, stored = _SCALARS[annotation]
+        if not accepts(value):
+            raise _wrong(value, expected, source, key)
+        return stored(value)
     if origin in (list, tuple):
-        if not isinstance(value, (list, tuple)):
-            raise wrong(f"a list of {_type_name(args[0]) if args else 'values'}")
-        item_type = args[0] if args else Any
-        items = [_convert(item, item_type, source, f"{key}[{i}]") for i, item in enumerate(value)]
-        return tuple(items) if origin is tuple else items
+        return _convert_sequence(value, origin, typing.get_args(annotation), source, key)
     if origin is dict:
         if not isinstance(value, Mapping):
-            raise wrong("a mapping")
+            raise _wrong(value, "a mapping", source, key)
         return dict(value)
     raise TypeError(f"config schema uses an unsupported type {annotation!r} for '{key}'")
+
+
+def _convert_union(value: Any, options: tuple[Any, ...], source: str, key: str) -> Any:
+    """The first option of a union that ``value`` fits, in the order the annotation lists them."""
+    if value is None and type(None) in options:
+        return None
+    for option in options:
+        if option is type(None):
+            continue
+        try:
+            return _convert(value, option, source, key)
+        except ConfigError:
+            pass
+    raise _wrong(value, " or ".join(_type_name(a) for a in options), source, key)
+
+
+def _convert_literal(value: Any, allowed: tuple[Any, ...], source: str, key: str) -> Any:
+    if value not in allowed:
+        raise _wrong(value, "one of " + ", ".join(repr(a) for a in allowed), source, key)
+    return value
+
+
+def _convert_sequence(
+    value: Any, origin: Any, args: tuple[Any, ...], source: str, key: str
+) -> list[Any] | tuple[Any, ...]:
+    if not isinstance(value, (list, tuple)):
+        raise _wrong(value, f"a list of {_type_name(args[0]) if args else 'values'}", source, key)
+    item_type = args[0] if args else Any
+    items = [_convert(item, item_type, source, f"{key}[{i}]") for i, item in enumerate(value)]
+    return tuple(items) if origin is tuple else items
 
 
 def _check_range(value: Any, bounds: tuple[float | None, float | None] | None, source: str, key: str) -> None:

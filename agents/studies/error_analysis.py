@@ -93,64 +93,101 @@ def tolerance_table(
     cells: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
     for row in rows:
         cells.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
+    clean_rows = _clean_rows(cells, baseline)
+    table = []
+    for agent in sorted({key[0] for key in cells}):
+        if agent not in clean_rows:
+            continue
+        clean, clean_low, clean_high, clean_episodes = _failure(clean_rows[agent][0])
+        clean_fields = {
+            "clean_failure": clean,
+            "clean_low": clean_low,
+            "clean_high": clean_high,
+            "clean_episodes": clean_episodes,
+            "clean_source": clean_rows[agent][1],
+        }
+        for factor in sorted({key[1] for key in cells if key[0] == agent and key[1] != "clean"}):
+            table += _factor_rows(cells, agent, factor, clean_fields)
+    return table
+
+
+def _factor_rows(
+    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]],
+    agent: str,
+    factor: str,
+    clean_fields: Mapping[str, Any],
+) -> list[dict[str, Any]]:
+    """The tolerance rows of one agent and factor: one per side of the neutral level with levels flown."""
+    neutral = neutral_level(factor)
+    levels = sorted(level for (a, f, level) in cells if a == agent and f == factor)
+    rows = []
+    for side, chosen in (
+        ("above", [x for x in levels if x > neutral]),
+        ("below", [x for x in levels if x < neutral][::-1]),
+    ):
+        if chosen:
+            scan = _scan_outward(chosen, [cells[(agent, factor, x)] for x in chosen], neutral, clean_fields)
+            rows.append(
+                {"agent": agent, "factor": factor, "side": side, **clean_fields, **scan}
+                | {"thesis": THESIS_VERDICTS.get(factor, NOT_TESTED)}
+            )
+    return rows
+
+
+def _clean_rows(
+    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]], baseline: Sequence[Mapping[str, Any]]
+) -> dict[str, tuple[list[Mapping[str, Any]], str]]:
+    """Per agent, its clean episodes and where they come from: the baseline's where it has any, else the
+    sweep's clean cell; agents with neither are absent."""
     clean_rows: dict[str, tuple[list[Mapping[str, Any]], str]] = {}
     for row in baseline:
         if row["factor"] == "clean":
             clean_rows.setdefault(row["agent"], ([], BASELINE_SOURCE))[0].append(row)
-    table = []
-    for agent in sorted({key[0] for key in cells}):
-        if agent not in clean_rows and (agent, "clean", 0.0) in cells:
-            clean_rows[agent] = (cells[(agent, "clean", 0.0)], SWEEP_CLEAN_SOURCE)
-        if agent not in clean_rows:
-            continue
-        clean, clean_low, clean_high, clean_episodes = _failure(clean_rows[agent][0])
-        factors = sorted({key[1] for key in cells if key[0] == agent and key[1] != "clean"})
-        for factor in factors:
-            neutral = neutral_level(factor)
-            levels = sorted(level for (a, f, level) in cells if a == agent and f == factor)
-            for side, chosen in (
-                ("above", [x for x in levels if x > neutral]),
-                ("below", [x for x in levels if x < neutral][::-1]),
-            ):
-                if not chosen:
-                    continue
-                tolerated, doubled, broke, breaking = neutral, None, False, None
-                rates = []
-                for level in chosen:
-                    rate, low, high, n = _failure(cells[(agent, factor, level)])
-                    rates.append((level, rate, low, high, n))
-                    if breaking is None and low > clean_high:
-                        breaking = (level, rate)
-                    if not broke and rate <= clean_high:
-                        tolerated = level
-                    else:
-                        broke = True
-                    if doubled is None and 2.0 * clean <= 1.0 and rate >= 2.0 * clean and rate > clean_high:
-                        doubled = level
-                worst = max(rates, key=lambda r: r[1])
-                table.append(
-                    {
-                        "agent": agent,
-                        "factor": factor,
-                        "side": side,
-                        "clean_failure": clean,
-                        "clean_low": clean_low,
-                        "clean_high": clean_high,
-                        "clean_episodes": clean_episodes,
-                        "clean_source": clean_rows[agent][1],
-                        "levels": [r[0] for r in rates],
-                        "tolerated_level": tolerated,
-                        "doubling_level": doubled,
-                        "worst_level": worst[0],
-                        "worst_failure": worst[1],
-                        "worst_low": worst[2],
-                        "breaks": worst[2] > clean_high,
-                        "breaking_level": None if breaking is None else breaking[0],
-                        "breaking_failure": None if breaking is None else breaking[1],
-                        "thesis": THESIS_VERDICTS.get(factor, NOT_TESTED),
-                    }
-                )
-    return table
+    for (agent, factor, level), members in cells.items():
+        if factor == "clean" and level == 0.0:
+            clean_rows.setdefault(agent, (members, SWEEP_CLEAN_SOURCE))
+    return clean_rows
+
+
+def _scan_outward(
+    levels: Sequence[float],
+    cell_rows: Sequence[Sequence[Mapping[str, Any]]],
+    neutral: float,
+    clean_fields: Mapping[str, Any],
+) -> dict[str, Any]:
+    """One side of a factor, its ``levels`` in order outward from ``neutral`` with each level's episodes: the
+    tolerated, doubling, worst and breaking levels (see :func:`tolerance_table`)."""
+    clean, clean_high = clean_fields["clean_failure"], clean_fields["clean_high"]
+    tolerated, doubled, broke, breaking = neutral, None, False, None
+    rates = []
+    for level, members in zip(levels, cell_rows, strict=True):
+        rate, low, high, n = _failure(members)
+        rates.append((level, rate, low, high, n))
+        if breaking is None and low > clean_high:
+            breaking = (level, rate)
+        if not broke and rate <= clean_high:
+            tolerated = level
+        else:
+            broke = True
+        if doubled is None and _doubles(rate, clean, clean_high):
+            doubled = level
+    worst = max(rates, key=lambda r: r[1])
+    return {
+        "levels": [r[0] for r in rates],
+        "tolerated_level": tolerated,
+        "doubling_level": doubled,
+        "worst_level": worst[0],
+        "worst_failure": worst[1],
+        "worst_low": worst[2],
+        "breaks": worst[2] > clean_high,
+        "breaking_level": None if breaking is None else breaking[0],
+        "breaking_failure": None if breaking is None else breaking[1],
+    }
+
+
+def _doubles(rate: float, clean: float, clean_high: float) -> bool:
+    """Whether ``rate`` is twice the clean one and outside its interval; never where twice clean exceeds 1."""
+    return 2.0 * clean <= 1.0 and rate >= 2.0 * clean and rate > clean_high
 
 
 # Episodes that ended within this many metres of the start say nothing of how much the agent weaves.
@@ -172,28 +209,43 @@ def turning_and_rotation_error(
         return []
     table = []
     for agent in sorted({r["agent"] for r in rows}):
-        clean = [
-            float(r["path_length_m"]) / float(r["progress_m"]) - 1.0
-            for r in rows
-            if r["agent"] == agent
-            and r["factor"] == "clean"
-            and float(r["progress_m"]) >= MIN_PROGRESS_FOR_WEAVING_M
-        ]
+        clean = _clean_weaving(rows, agent)
         swept = [r for r in rows if r["agent"] == agent and r["factor"] in ("clean", factor)]
-        levels = sorted({0.0 if r["factor"] == "clean" else float(r["level"]) for r in swept})
-        if not clean or len(levels) < 2:
+        errors = _median_depth_error_by_level(swept)
+        if not clean or len(errors) < 2:
             continue
-        errors = {}
-        for level in levels:
-            depth_errors = [
-                float(r["median_depth_error"])
-                for r in swept
-                if (0.0 if r["factor"] == "clean" else float(r["level"])) == level
-                and math.isfinite(float(r["median_depth_error"]))
-            ]
-            errors[level] = float(np.median(depth_errors)) if depth_errors else math.nan
         table.append({"agent": agent, "weaving": float(np.median(clean)), "depth_error": errors})
     return sorted(table, key=lambda r: r["weaving"])
+
+
+def _level_of(row: Mapping[str, Any]) -> float:
+    """The row's level, 0 for the clean cell (whose level column says nothing of the swept factor)."""
+    return 0.0 if row["factor"] == "clean" else float(row["level"])
+
+
+def _clean_weaving(rows: Sequence[Mapping[str, Any]], agent: str) -> list[float]:
+    """Path length / forward progress − 1 of the agent's clean episodes that made enough progress."""
+    return [
+        float(r["path_length_m"]) / float(r["progress_m"]) - 1.0
+        for r in rows
+        if r["agent"] == agent
+        and r["factor"] == "clean"
+        and float(r["progress_m"]) >= MIN_PROGRESS_FOR_WEAVING_M
+    ]
+
+
+def _median_depth_error_by_level(rows: Sequence[Mapping[str, Any]]) -> dict[float, float]:
+    """Per level, in increasing order, the median of its rows' finite median depth errors."""
+    levels = sorted({_level_of(r) for r in rows})
+    return {level: _median_depth_error([r for r in rows if _level_of(r) == level]) for level in levels}
+
+
+def _median_depth_error(rows: Sequence[Mapping[str, Any]]) -> float:
+    """The median of the rows' finite median depth errors; NaN where none is finite."""
+    depth_errors = [
+        float(r["median_depth_error"]) for r in rows if math.isfinite(float(r["median_depth_error"]))
+    ]
+    return float(np.median(depth_errors)) if depth_errors else math.nan
 
 
 # Agents that never read the depth histogram: their failures cannot respond to depth quality.
@@ -224,14 +276,8 @@ def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], d
     """
     cells: dict[tuple[str, float], list[Mapping[str, Any]]] = {}
     for row in rows:
-        error = float(row["median_depth_error"])
-        if (
-            row["factor"] in TASK_FACTORS
-            or not is_flow_agent(row)
-            or not (math.isfinite(error) and error > 0)
-        ):
-            continue
-        cells.setdefault((row["factor"], float(row["level"])), []).append(row)
+        if _measures_sensor_quality(row):
+            cells.setdefault((row["factor"], float(row["level"])), []).append(row)
     every_outlier = all(
         r.get("mean_depth_outlier_share") is not None and math.isfinite(float(r["mean_depth_outlier_share"]))
         for members in cells.values()
@@ -249,6 +295,13 @@ def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], d
             values.append(float(np.median([float(r["mean_depth_outlier_share"]) for r in chosen])))
         quality[key] = {"values": values, "full_course": chosen is full, "episodes": len(chosen)}
     return quality
+
+
+def _measures_sensor_quality(row: Mapping[str, Any]) -> bool:
+    """Whether an episode counts towards its cell's depth quality: a sensor factor's (not a task factor's),
+    flown by a flow agent, with a positive finite median depth error (its log is taken)."""
+    error = float(row["median_depth_error"])
+    return row["factor"] not in TASK_FACTORS and is_flow_agent(row) and math.isfinite(error) and error > 0
 
 
 def dose_features(

@@ -44,6 +44,26 @@ def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]
     return table
 
 
+# Each factor's axis label in the figure: what the level measures, and in what unit.
+FACTOR_AXIS_LABELS = {
+    "rotation_error": "rotation error (relative)",
+    "translation_error": "translation error (relative)",
+    "attitude_jitter_deg": "attitude jitter (deg)",
+    "brightness": "brightness (1 = daylight)",
+    "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
+    "obstacle_density": "obstacle density (capsules per m²)",
+    "rotation_bias": "rotation bias (relative scale error)",
+    "translation_bias": "translation bias (relative scale error)",
+    "rotation_drift": "rotation bias drift (std after 1 s)",
+    "translation_drift": "translation bias drift (std after 1 s)",
+    "rotation_noise_deg": "rotation noise floor (deg per frame, std)",
+    "translation_noise_m": "translation noise floor (m per frame, std)",
+    "depth_noise": "depth noise (σ of log depth)",
+    "depth_outliers": "depth outliers (fraction)",
+    "depth_dropout": "depth dropout (fraction)",
+}
+
+
 def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
     """A panel per factor: failure rate against level, a line per agent with its Wilson 95 % band shaded, and
     the collision rate dashed in the same colour (the gap between them is leaving the course or the time
@@ -54,45 +74,13 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    neutral = {setting.name: setting.default for setting in dataclasses.fields(EnvSettings)}
-    units = {
-        "rotation_error": "rotation error (relative)",
-        "translation_error": "translation error (relative)",
-        "attitude_jitter_deg": "attitude jitter (deg)",
-        "brightness": "brightness (1 = daylight)",
-        "forward_speed": "forward speed (m/s; ×0.1 = m per frame)",
-        "obstacle_density": "obstacle density (capsules per m²)",
-        "rotation_bias": "rotation bias (relative scale error)",
-        "translation_bias": "translation bias (relative scale error)",
-        "rotation_drift": "rotation bias drift (std after 1 s)",
-        "translation_drift": "translation bias drift (std after 1 s)",
-        "rotation_noise_deg": "rotation noise floor (deg per frame, std)",
-        "translation_noise_m": "translation noise floor (m per frame, std)",
-        "depth_noise": "depth noise (σ of log depth)",
-        "depth_outliers": "depth outliers (fraction)",
-        "depth_dropout": "depth dropout (fraction)",
-    }
-    agents = sorted({r["agent"] for r in table})
-    if not factors:  # a clean-only sweep: one bar per agent
-        clean = [r for r in table if r["factor"] == "clean"]
-        fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
-        rates = [r["failure_rate"] for r in clean]
-        errors = [
-            [r["failure_rate"] - r["failure_ci_low"] for r in clean],
-            [r["failure_ci_high"] - r["failure_rate"] for r in clean],
-        ]
-        names = [r["agent"] for r in clean]
-        ax.bar(names, rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7, label="failure")
-        ax.plot(names, [r["collision_rate"] for r in clean], "k_", markersize=18, label="collision")
-        ax.legend(fontsize=8)
-        ax.set_ylim(0, 1)
-        ax.set_ylabel("failure rate (95 % CI)")
-        ax.set_title("clean sensors", fontsize=9)
-        ax.grid(alpha=0.3, axis="y")
-        fig.tight_layout()
+    if not factors:
+        fig = _clean_bars(plt, [r for r in table if r["factor"] == "clean"])
         fig.savefig(path, dpi=120)
         plt.close(fig)
         return
+    neutral = {setting.name: setting.default for setting in dataclasses.fields(EnvSettings)}
+    agents = sorted({r["agent"] for r in table})
     # A grid, not a row: fifteen factors side by side made a figure 54 inches wide.
     columns = min(4, len(factors))
     rows = -(-len(factors) // columns)
@@ -103,24 +91,8 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
         ax.set_visible(False)
     for ax, factor in zip(axes.flat, factors, strict=False):
         for agent in agents:
-            points = [
-                (neutral.get(factor, 0.0), r) for r in table if r["agent"] == agent and r["factor"] == "clean"
-            ]
-            points += [(r["level"], r) for r in table if r["agent"] == agent and r["factor"] == factor]
-            points.sort(key=lambda p: p[0])
-            if not points:
-                continue
-            xs = [p[0] for p in points]
-            line = ax.plot(xs, [p[1]["failure_rate"] for p in points], marker="o", label=agent)[0]
-            ax.fill_between(
-                xs,
-                [p[1]["failure_ci_low"] for p in points],
-                [p[1]["failure_ci_high"] for p in points],
-                color=line.get_color(),
-                alpha=0.15,
-            )
-            ax.plot(xs, [p[1]["collision_rate"] for p in points], linestyle="--", color=line.get_color())
-        ax.set_xlabel(units.get(factor, factor))
+            _plot_agent_line(ax, table, agent, factor, neutral.get(factor, 0.0))
+        ax.set_xlabel(FACTOR_AXIS_LABELS.get(factor, factor))
         ax.set_ylim(0, 1)
         ax.grid(alpha=0.3)
     for ax in axes[:, 0]:
@@ -130,6 +102,47 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / (3.0 * rows + 0.6)))
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def _clean_bars(plt: Any, clean: list[dict[str, Any]]) -> Any:
+    """The figure of a clean-only sweep: one bar per agent, its failure rate with its interval, the
+    collision rate marked."""
+    fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
+    rates = [r["failure_rate"] for r in clean]
+    errors = [
+        [r["failure_rate"] - r["failure_ci_low"] for r in clean],
+        [r["failure_ci_high"] - r["failure_rate"] for r in clean],
+    ]
+    names = [r["agent"] for r in clean]
+    ax.bar(names, rates, yerr=errors, capsize=4, color="tab:blue", alpha=0.7, label="failure")
+    ax.plot(names, [r["collision_rate"] for r in clean], "k_", markersize=18, label="collision")
+    ax.legend(fontsize=8)
+    ax.set_ylim(0, 1)
+    ax.set_ylabel("failure rate (95 % CI)")
+    ax.set_title("clean sensors", fontsize=9)
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    return fig
+
+
+def _plot_agent_line(ax: Any, table: list[dict[str, Any]], agent: str, factor: str, neutral: float) -> None:
+    """One agent's failure rate against the factor's level (its clean cell at ``neutral``), its interval
+    shaded and its collision rate dashed; nothing where the agent has no cell."""
+    points = [(neutral, r) for r in table if r["agent"] == agent and r["factor"] == "clean"]
+    points += [(r["level"], r) for r in table if r["agent"] == agent and r["factor"] == factor]
+    points.sort(key=lambda p: p[0])
+    if not points:
+        return
+    xs = [p[0] for p in points]
+    line = ax.plot(xs, [p[1]["failure_rate"] for p in points], marker="o", label=agent)[0]
+    ax.fill_between(
+        xs,
+        [p[1]["failure_ci_low"] for p in points],
+        [p[1]["failure_ci_high"] for p in points],
+        color=line.get_color(),
+        alpha=0.15,
+    )
+    ax.plot(xs, [p[1]["collision_rate"] for p in points], linestyle="--", color=line.get_color())
 
 
 def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
@@ -164,6 +177,32 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
     agents = sorted({r["agent"] for r in table})
     cells = {(r["agent"], r["factor"], r["level"]): r for r in table}
     before = {(r["agent"], r["factor"], r["level"]): r for r in baseline}
+    agreement = _same_outcomes(rows, baseline_rows)
+    keys = sorted({(r["factor"], r["level"]) for r in table}, key=lambda k: (k[0] != "clean", k))
+    names = " / ".join(agents)
+    header = (
+        f"| factor | level | episodes | {' | '.join(agents)} | baseline: {names} | same outcome: {names} |"
+    )
+    lines = [header, "|---" * (len(agents) + 5) + "|"]
+    for factor, level in keys:
+        episodes = _episodes_range(cells, agents, factor, level)
+        lines.append(
+            f"| {factor} | {'–' if factor == 'clean' else f'{level:g}'} | {episodes} | "
+            + " | ".join(_collision_rate(cells.get((a, factor, level))) for a in agents)
+            + " | "
+            + " / ".join(_collision_rate(before.get((a, factor, level))) for a in agents)
+            + " | "
+            + " / ".join(_agreement_share(agreement.get((a, factor, level))) for a in agents)
+            + " |"
+        )
+    return "\n".join(lines)
+
+
+def _same_outcomes(
+    rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]
+) -> dict[tuple[str, str, float], list[bool]]:
+    """Per (agent, factor, level), for each seed flown in both sweeps, whether it collided in both or in
+    neither."""
     outcomes: dict[tuple[str, str, float], dict[int, bool]] = {}
     for row in baseline_rows:
         outcomes.setdefault((row["agent"], row["factor"], float(row["level"])), {})[row["seed"]] = row[
@@ -174,34 +213,23 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
         key = (row["agent"], row["factor"], float(row["level"]))
         if row["seed"] in outcomes.get(key, {}):
             agreement.setdefault(key, []).append(outcomes[key][row["seed"]] == row["collision"])
-    keys = sorted({(r["factor"], r["level"]) for r in table}, key=lambda k: (k[0] != "clean", k))
-    names = " / ".join(agents)
-    header = (
-        f"| factor | level | episodes | {' | '.join(agents)} | baseline: {names} | same outcome: {names} |"
-    )
-    lines = [header, "|---" * (len(agents) + 5) + "|"]
+    return agreement
 
-    def rate(row: dict[str, Any] | None) -> str:
-        return "–" if row is None else f"{row['collision_rate']:.2f}"
 
-    def share(same: list[bool] | None) -> str:
-        return "–" if not same else f"{sum(same)}/{len(same)}"
+def _episodes_range(
+    cells: dict[tuple[str, str, float], dict[str, Any]], agents: list[str], factor: str, level: float
+) -> str:
+    """The episodes of a (factor, level)'s cells: one count, or the fewest–most where agents differ."""
+    counts = sorted({cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells})
+    return str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
 
-    for factor, level in keys:
-        counts = sorted(
-            {cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells}
-        )
-        episodes = str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
-        lines.append(
-            f"| {factor} | {'–' if factor == 'clean' else f'{level:g}'} | {episodes} | "
-            + " | ".join(rate(cells.get((a, factor, level))) for a in agents)
-            + " | "
-            + " / ".join(rate(before.get((a, factor, level))) for a in agents)
-            + " | "
-            + " / ".join(share(agreement.get((a, factor, level))) for a in agents)
-            + " |"
-        )
-    return "\n".join(lines)
+
+def _collision_rate(row: dict[str, Any] | None) -> str:
+    return "–" if row is None else f"{row['collision_rate']:.2f}"
+
+
+def _agreement_share(same: list[bool] | None) -> str:
+    return "–" if not same else f"{sum(same)}/{len(same)}"
 
 
 def partial_lines(

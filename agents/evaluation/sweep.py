@@ -224,13 +224,50 @@ def run_sweep(
             be resumed (episodes of other settings, or from before episode identities); the message says which.
         EpisodesInterrupted: Ctrl-C while flying; the episodes flown so far are kept.
     """
+    config = _load_sweep_config(config_path, overrides)
+    agents = _agents_with_policies(config)
+    refly = refly or []
+    _check_flags(config, config_path, refly, compare_with, report_only, overwrite)
+    episodes_csv = _prepare_episodes_csv(out, overwrite)
+    started = time.perf_counter()
+    tasks = build_tasks(config, agents)
+    if refly:
+        _delete_refly_episodes(config, tasks, refly, episodes_csv)
+    flown = 0 if report_only else _fly(config, tasks, episodes_csv, address)
+    rows = _summary_rows(tasks, agents, episodes_csv)
+    table = write_summary(rows, out / "sweep.csv")
+    plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
+    minutes = (time.perf_counter() - started) / 60
+    _write_markdown(
+        out / "sweep.md",
+        config,
+        config_path,
+        table,
+        rows,
+        agents,
+        command=command,
+        minutes=None if report_only else minutes,
+        compare_with=compare_with,
+    )
+    print(format_summary(table))
+    print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
+    return table
+
+
+def _load_sweep_config(config_path: Path, overrides: dict[str, Any] | None) -> SweepConfig:
+    """The config file with the command line's overrides, its counts and env kwargs checked."""
     config = load_config(config_path, SweepConfig)
     for name, value in (overrides or {}).items():
         setattr(config, name, value)
     if config.episodes < 1 or config.workers < 1:
         raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
+    return config
 
+
+def _agents_with_policies(config: SweepConfig) -> list[str]:
+    """The config's agents that can fly: a learned agent without its policy file (or ``<learned>@all`` without
+    any shipped seed) is skipped, with a line saying where its policy was looked for."""
     files = {
         a: policy_file(a, directory=config.policy_folder())
         for a in config.agents
@@ -240,24 +277,38 @@ def run_sweep(
     for agent in config.agents:
         if agent.endswith(ALL_SEEDS) and not seed_rotation(config, agent):
             missing[agent] = config.policy_folder() / agent.removesuffix(ALL_SEEDS) / "seed_<k>.zip"
-    agents = [a for a in config.agents if a not in missing]
     for skipped, path in sorted(missing.items()):
         print(f"skipping {skipped}: no policy at {path}")
-    refly = refly or []
+    return [a for a in config.agents if a not in missing]
+
+
+def _check_flags(
+    config: SweepConfig,
+    config_path: Path,
+    refly: list[str],
+    compare_with: Path | None,
+    report_only: bool,
+    overwrite: bool,
+) -> None:
+    """Refuse, before any file is touched, flags that name unknown agents or files or that contradict each
+    other."""
     for agent in refly:
         if agent not in config.agents:
             raise ValueError(
                 f"--refly: {agent!r} is not an agent of {config_path} ({', '.join(config.agents)})"
             )
-    baseline_path = compare_with
-    if baseline_path is not None and not baseline_path.is_file():
-        raise FileNotFoundError(f"--compare-with: no episodes CSV at {baseline_path}")
+    if compare_with is not None and not compare_with.is_file():
+        raise FileNotFoundError(f"--compare-with: no episodes CSV at {compare_with}")
     if refly and report_only:
         raise ValueError(
             "--refly deletes episodes to fly them again; it cannot be combined with --report-only"
         )
     if overwrite and report_only:
         raise ValueError("--overwrite starts a new episodes CSV; it cannot be combined with --report-only")
+
+
+def _prepare_episodes_csv(out: Path, overwrite: bool) -> Path:
+    """The episodes CSV in ``out`` (created if need be), moved aside first under ``--overwrite``."""
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     episodes_csv = out / "sweep_episodes.csv"
@@ -265,45 +316,66 @@ def run_sweep(
         moved = start_new_file(episodes_csv)
         if moved is not None:
             print(f"--overwrite: moved {episodes_csv} to {moved}")
-    started = time.perf_counter()
-    tasks = build_tasks(config, agents)
-    if refly:
-        runs = [run for agent in refly for run in seed_rotation(config, agent)]
-        # Refuse before deleting anything what the run itself would refuse (a CSV from before identities,
-        # other agents' episodes of other settings), so --refly never deletes episodes and then stops.
-        pending_tasks([t for t in tasks if t.agent not in runs], episodes_csv, SWEEP_REMEDY)
-        print(f"--refly: deleted {drop_agents(episodes_csv, runs)} episodes of {', '.join(refly)}")
-    flown = 0
-    if not report_only:
-        flown = execute(
-            tasks,
-            episodes_csv,
-            backend=config.backend,
-            workers=config.workers,
-            address=address,
-            description="sweep",
-            remedy=SWEEP_REMEDY,
-        )
+    return episodes_csv
+
+
+def _delete_refly_episodes(
+    config: SweepConfig, tasks: list[EpisodeTask], refly: list[str], episodes_csv: Path
+) -> None:
+    """Delete the episodes of the ``--refly`` agents (every training seed of a ``<learned>@all``)."""
+    runs = [run for agent in refly for run in seed_rotation(config, agent)]
+    # Refuse before deleting anything what the run itself would refuse (a CSV from before identities,
+    # other agents' episodes of other settings), so --refly never deletes episodes and then stops.
+    pending_tasks([t for t in tasks if t.agent not in runs], episodes_csv, SWEEP_REMEDY)
+    print(f"--refly: deleted {drop_agents(episodes_csv, runs)} episodes of {', '.join(refly)}")
+
+
+def _fly(config: SweepConfig, tasks: list[EpisodeTask], episodes_csv: Path, address: str | None) -> int:
+    """Fly the tasks not yet in the episodes CSV; the number flown."""
+    return execute(
+        tasks,
+        episodes_csv,
+        backend=config.backend,
+        workers=config.workers,
+        address=address,
+        description="sweep",
+        remedy=SWEEP_REMEDY,
+    )
+
+
+def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Path) -> list[dict[str, Any]]:
+    """The sweep's episodes in the CSV, each ``<learned>@all`` agent's seeds pooled."""
     episodes = read_episodes(episodes_csv)
     rows = pool_seeds(rows_of(tasks, episodes.rows), agents)
     if episodes.skipped:
         print(f"skipped {episodes.skipped} torn or corrupt rows of {episodes_csv}")
-    table = write_summary(rows, out / "sweep.csv")
-    plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
-    minutes = (time.perf_counter() - started) / 60
+    return rows
+
+
+def _write_markdown(
+    path: Path,
+    config: SweepConfig,
+    config_path: Path,
+    table: list[dict[str, Any]],
+    rows: list[dict[str, Any]],
+    agents: list[str],
+    *,
+    command: str,
+    minutes: float | None,
+    compare_with: Path | None,
+) -> None:
+    """``sweep.md``: the summary, the flight time (none for a rebuilt report) and, with ``compare_with``, each
+    cell beside the earlier sweep's."""
     write_report(
-        out / "sweep.md",
+        path,
         table,
         config_path,
         command,
-        None if report_only else minutes,
+        minutes,
         list(config.factors),
         None
-        if baseline_path is None
-        else (baseline_path, comparison_markdown(rows, read_records(baseline_path))),
+        if compare_with is None
+        else (compare_with, comparison_markdown(rows, read_records(compare_with))),
         episodes_per_cell=config.episodes,
         expected_cells=len(agents) * (1 + sum(len(levels) for levels in config.factors.values())),
     )
-    print(format_summary(table))
-    print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
-    return table

@@ -206,24 +206,7 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
         squeeze=False,
     )
     for axis, name in zip(axes[0], tiers, strict=False):
-        found = {r["agent"]: r for r in rows if r["tier"] == name}
-        for index, agent in enumerate(agents):
-            row = found.get(agent)
-            if row is None:
-                continue
-            rate = row["failure_rate"]
-            axis.errorbar(
-                rate,
-                index,
-                xerr=[[max(rate - row["failure_low"], 0.0)], [max(row["failure_high"] - rate, 0.0)]],
-                fmt="o",
-                color="tab:red" if row.get("included") else "tab:grey" if row.get("privileged") else "tab:blue",
-                capsize=3,
-            )
-        axis.axvline(HEADROOM_FAILURE, color="grey", linestyle=":", linewidth=1)
-        axis.set_xlim(0, 1)
-        axis.set_title(name)
-        axis.set_xlabel("failure rate")
+        _plot_tier(axis, name, rows, agents)
     axes[0][0].set_yticks(range(len(agents)), labels)
     for tick, agent in zip(axes[0][0].get_yticklabels(), agents, strict=True):
         if any(r.get("included") for r in rows if r["agent"] == agent):
@@ -240,6 +223,35 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def _plot_tier(axis: Any, name: str, rows: Sequence[Mapping[str, Any]], agents: list[str]) -> None:
+    """One tier's panel: each agent's failure rate with its interval, at the agent's row of the y axis."""
+    found = {r["agent"]: r for r in rows if r["tier"] == name}
+    for index, agent in enumerate(agents):
+        row = found.get(agent)
+        if row is None:
+            continue
+        rate = row["failure_rate"]
+        axis.errorbar(
+            rate,
+            index,
+            xerr=[[max(rate - row["failure_low"], 0.0)], [max(row["failure_high"] - rate, 0.0)]],
+            fmt="o",
+            color=_marker_colour(row),
+            capsize=3,
+        )
+    axis.axvline(HEADROOM_FAILURE, color="grey", linestyle=":", linewidth=1)
+    axis.set_xlim(0, 1)
+    axis.set_title(name)
+    axis.set_xlabel("failure rate")
+
+
+def _marker_colour(row: Mapping[str, Any]) -> str:
+    """Red for an included row, grey for a privileged reference, blue for a scored agent."""
+    if row.get("included"):
+        return "tab:red"
+    return "tab:grey" if row.get("privileged") else "tab:blue"
 
 
 def plot_label(agent: str, rows: Sequence[Mapping[str, Any]]) -> str:

@@ -164,14 +164,7 @@ def execute(
             stopped, the episodes flown so far are kept, and the message says how many are in the CSV and how
             to resume.
     """
-    if backend not in ("local", "ray"):
-        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    if not (math.isfinite(step_timeout_s) and step_timeout_s >= 0):
-        raise ValueError(
-            f"{STEP_TIMEOUT_OPTION} must be a number of seconds >= 0 (0 = no limit), got {step_timeout_s!r}"
-        )
+    _check_run_options(backend, workers, step_timeout_s)
     csv_path = Path(csv_path)
     if (repaired := repair_episodes_header(csv_path)) is not None:
         print(repaired)
@@ -215,6 +208,18 @@ def execute(
             "time; each is in the file once"
         )
     return flown
+
+
+def _check_run_options(backend: str, workers: int, step_timeout_s: float) -> None:
+    """Refuse a backend, worker count or step timeout :func:`execute` cannot run with, before any file is read."""
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if not (math.isfinite(step_timeout_s) and step_timeout_s >= 0):
+        raise ValueError(
+            f"{STEP_TIMEOUT_OPTION} must be a number of seconds >= 0 (0 = no limit), got {step_timeout_s!r}"
+        )
 
 
 def _say_what_does_not_count(csv_path: Path, damaged: int, other_versions: dict[str, int]) -> None:

@@ -57,7 +57,7 @@ class FlowNavEnv(gym.Env):
 
     ## Observation Space
     ``Dict`` of float32 boxes: two, plus one per ``observe_unresolved``, ``observe_counts``, ``observe_nearness``,
-    ``observe_approach``:
+    ``observe_approach``, and four privileged ones with ``observe_layout`` (:mod:`flownav_env.privileged`):
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
@@ -67,6 +67,10 @@ class FlowNavEnv(gym.Env):
     | ``point_counts``  | (rows, cols)            | [0, 1]               | only with ``observe_counts=True``: per sector, the confidence 1 − exp(−n/10) of the n points its histogram counts |
     | ``nearness``      | (rows, cols)            | [0, 1]               | only with ``observe_nearness=True``: per sector, min(1, 0.5 m / d) of a robust near depth d (``estimator.sector_near_depth``: a low quantile of its depths, never one lone point); 0 where no depth counts |
     | ``approach``      | (rows, cols)            | [0, 1]               | only with ``observe_approach=True``: per sector, min(1, 0.5 s · v / d) for the same d and the forward velocity v (0 when flying backwards): the inverse time to contact, as a bee's optic flow gives it; at 1 m/s it equals ``nearness`` |
+    | ``layout``        | (64, 3)                 | [-1000, 1000]        | only with ``observe_layout=True`` (privileged: no sensor gives it): the episode's capsules as world x, y of the axis and radius (m), one row each, padded with zeros to the scene's pool of 64 (``MAX_CAPSULES``) |
+    | ``layout_mask``   | (64,)                   | {0, 1}               | only with ``observe_layout=True``: 1 where a row of ``layout`` is a capsule |
+    | ``true_state``    | (12,)                   | ±1000 m, ±50 m/s, angles, ±100 rad/s | only with ``observe_layout=True``: the true world position x, y, z (m), world velocity (m/s), roll, pitch, yaw (rad) and body rates (rad/s) |
+    | ``course``        | (9,)                    | [0, 1000]            | only with ``observe_layout=True``: goal line x, ``lateral_bound``, ``max_height`` (m), ``forward_speed``, ``max_lateral_speed``, ``max_vertical_speed`` (m/s), ``max_yaw_rate`` (rad/s), the drone's hull radius (m) and ``frame_rate`` (Hz) |
 
     ``state`` (clipped to the bounds of the space):
 

@@ -13,6 +13,7 @@ from gymnasium import spaces
 from estimator import DepthPoints
 from estimator.accuracy import OUTLIER_RELATIVE_ERROR, relative_depth_error
 from estimator.histogram import SectorGrid
+from flownav_env.privileged import privileged_spaces
 from flownav_env.settings import EnvSettings
 
 if TYPE_CHECKING:
@@ -55,6 +56,8 @@ def observation_space(settings: EnvSettings) -> spaces.Dict:
         boxes["nearness"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     if settings.observe_approach:
         boxes["approach"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
+    if settings.observe_layout:
+        boxes.update(privileged_spaces())
     return spaces.Dict(boxes)
 
 

@@ -190,6 +190,12 @@ class EnvSettings(SensorSettings):
         _OBSERVE
         + "``approach``: how soon the drone reaches each sector's nearest surface at its forward speed",
     )
+    observe_layout: bool = _setting(
+        False,
+        Flag(),
+        _OBSERVE + "``layout``, ``layout_mask``, ``true_state`` and ``course``: the capsules, the drone's true "
+        "state and the course's limits, which no sensor gives (privileged: for reference agents only)",
+    )
     near_smoothing: float = _setting(
         1.0,
         Range(0.0, 1.0, low_open=True),

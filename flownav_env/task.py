@@ -23,6 +23,7 @@ from flownav_env.observation import (
     smoothed_near,
 )
 from flownav_env.physics import FlowNavPhysics
+from flownav_env.privileged import privileged_observation
 from flownav_env.quadrotor import velocity_command
 from flownav_env.scene import LAYOUT_FUNCTIONS, material_names
 from flownav_env.settings import EnvSettings
@@ -173,6 +174,8 @@ class FlowNavTask:
         episode's frames."""
         depth, counted = observed_depths(settings.obs_source, points, true_depth)
         raw = assemble_observation(settings, self.grid, drone_state(physics), points, depth, counted)
+        if settings.observe_layout:
+            raw |= privileged_observation(physics, settings, self.goal_x)
         self._observed = smoothed_near(raw, self._observed, settings.near_smoothing)
         return self._observed
 

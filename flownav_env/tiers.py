@@ -152,8 +152,12 @@ AGENT_OBSERVATION_SETTINGS = (
     "observe_approach",
     "near_smoothing",
 )
-# Setting values that show an agent what no tier's sensor gives: asked for only by an agent declared privileged.
-PRIVILEGED_SETTING_VALUES: dict[str, tuple[Any, ...]] = {"obs_source": ("oracle", "oracle_valid")}
+# Setting values that show an agent what no tier's sensor gives: asked for only by an agent declared privileged
+# (true depths; the capsule layout and the drone's true state, flownav_env.privileged).
+PRIVILEGED_SETTING_VALUES: dict[str, tuple[Any, ...]] = {
+    "obs_source": ("oracle", "oracle_valid"),
+    "observe_layout": (True,),
+}
 
 
 def tier_value(tier_name: str, setting: str) -> Any:

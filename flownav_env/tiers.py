@@ -46,10 +46,10 @@ MEDIAN_ABS_NORMAL = 0.6745
 # The same 50 % bound read three ways, as the per-axis σ (m/s) of a normal error. Suite v1 takes the largest,
 # per axis; a 50 % bound on the 3-D speed error |v| (a Maxwell distribution, median 1.5382 σ) or on the 2-D
 # horizontal one (a Rayleigh distribution, median 1.1774 σ) gives a milder sensor.
-VELOCITY_READINGS: dict[str, float] = {
-    "per axis (suite v1)": VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL,
-    "3-D speed": VELOCITY_ACCURACY_M_S / 1.5382,
-    "2-D speed": VELOCITY_ACCURACY_M_S / 1.1774,
+VELOCITY_READINGS: dict[str, tuple[str, float]] = {
+    "per_axis": ("a 50 % bound per axis", VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL),
+    "3d_speed": ("a 50 % bound on the 3-D speed error", VELOCITY_ACCURACY_M_S / 1.5382),
+    "2d_speed": ("a 50 % bound on the 2-D speed error", VELOCITY_ACCURACY_M_S / 1.1774),
 }
 # Camera and IMU clocks that are not hardware-synchronised differ by tens of milliseconds, which is why VIO
 # systems estimate the offset online (Li & Mourikis, "Online temporal calibration for camera-IMU systems",
@@ -60,6 +60,11 @@ CAMERA_IMU_OFFSET_MS = 20.0
 # (Delmerico & Scaramuzza, "A Benchmark Comparison of Monocular Visual-Inertial Odometry Algorithms for
 # Flying Robots", ICRA 2018): a scale error of the told translation.
 ODOMETRY_SCALE_ERROR = 0.01
+
+
+def translation_noise_m(velocity_sigma_m_s: float, frame_rate: float = 10.0) -> float:
+    """The per-frame translation noise (m, per axis) of a velocity error with σ ``velocity_sigma_m_s``."""
+    return round(velocity_sigma_m_s / frame_rate, 6)
 
 
 def realistic_sensor(frame_rate: float = 10.0) -> dict[str, float]:
@@ -77,7 +82,7 @@ def realistic_sensor(frame_rate: float = 10.0) -> dict[str, float]:
     return {
         "rotation_noise_deg": round(GYRO_NOISE_DENSITY_DEG_S_RTHZ * math.sqrt(frame_time), 6),
         "rotation_bias": GYRO_SCALE_TOLERANCE,
-        "translation_noise_m": round(VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL * frame_time, 6),
+        "translation_noise_m": translation_noise_m(VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL, frame_rate),
         "translation_bias": ODOMETRY_SCALE_ERROR,
         "imu_time_offset_ms": CAMERA_IMU_OFFSET_MS,
     }

@@ -28,7 +28,14 @@ from agents.evaluation.records import overwrite_hint, read_records, start_new_fi
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
-from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
+from agents.evaluation.suite_page import (
+    SENSOR_READING_DIR,
+    rank_suite,
+    reading_values,
+    suite_page,
+    suite_values,
+    tier_failures,
+)
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
 from agents.policies import (
     agent_env_kwargs,
@@ -345,6 +352,7 @@ def run_suite(
         machine=machine_summary(),
         missing=missing,
         generated=today(),
+        readings=reading_values(out / SENSOR_READING_DIR),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

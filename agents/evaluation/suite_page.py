@@ -9,16 +9,23 @@ tier's headroom.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from agents.common.jinja_reports import render
 from agents.evaluation.over_seeds import episode_outcomes
-from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, rank_tier
+from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
+from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import is_learned
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
+
+# Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
+# episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).
+SENSOR_READING_DIR = "sensor_reading"
+SUITE_READING = "per_axis"
 
 
 def tier_failures(
@@ -68,6 +75,41 @@ def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking) -> dic
     }
 
 
+def _failures_by_seed(path: Path) -> dict[int, float]:
+    return {int(row["seed"]): float(not row["success"]) for row in read_records(path)}
+
+
+def reading_values(folder: Path) -> list[dict[str, Any]]:
+    """Per agent flown at the suite's reading and at another one of the noisy tier's velocity specification
+    (``<folder>/<agent>_<reading>.csv``), on the same validation layouts: each failure rate and the paired
+    difference (other reading − suite's)."""
+    found = []
+    for path in sorted(Path(folder).glob(f"*_{SUITE_READING}.csv")):
+        agent = path.name.removesuffix(f"_{SUITE_READING}.csv")
+        suite = _failures_by_seed(path)
+        for reading, (meaning, sigma) in VELOCITY_READINGS.items():
+            other_path = path.with_name(f"{agent}_{reading}.csv")
+            if reading == SUITE_READING or not other_path.is_file():
+                continue
+            other = _failures_by_seed(other_path)
+            seeds = sorted(set(suite) & set(other))
+            mine = np.array([[other[seed] for seed in seeds]])
+            base = np.array([[suite[seed] for seed in seeds]])
+            found.append(
+                {
+                    "agent": agent,
+                    "reading": meaning,
+                    "noise_m": translation_noise_m(sigma),
+                    "layouts": len(seeds),
+                    "first_seed": seeds[0],
+                    "suite_failure": float(base.mean()),
+                    "failure": float(mine.mean()),
+                    "comparison": compare(reading, mine, SUITE_READING, base),
+                }
+            )
+    return found
+
+
 def suite_values(
     table: Sequence[Mapping[str, Any]],
     rankings: Mapping[str, TierRanking],
@@ -77,6 +119,7 @@ def suite_values(
     machine: str,
     missing: Sequence[str],
     generated: str,
+    readings: Sequence[Mapping[str, Any]] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -101,6 +144,10 @@ def suite_values(
         "min_seeds": MIN_RANKED_SEEDS,
         "significance": SIGNIFICANCE,
         "missing": list(missing),
+        "readings": list(readings),
+        "suite_noise_m": translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),
+        "suite_reading": VELOCITY_READINGS[SUITE_READING][0],
+        "reading_dir": SENSOR_READING_DIR,
     }
 
 

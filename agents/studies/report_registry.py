@@ -281,7 +281,7 @@ REPORTS: tuple[Report, ...] = (
         "suite.md",
         name="suite",
         command="flownav suite --out results --report-only",
-        inputs=("suite_episodes.csv",),
+        inputs=("suite_episodes.csv", "sensor_reading/*.csv"),
         write=_suite,
     ),
     Report(

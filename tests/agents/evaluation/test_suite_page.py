@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from agents.common.seeds import suite_seeds
 from agents.evaluation.paired import MIN_RANKED_SEEDS
@@ -63,3 +64,19 @@ def test_the_page_renders_every_branch() -> None:
     header = table_lines[0]
     rule = table_lines[1]
     assert header.count("|") == rule.count("|")  # every column has its rule
+
+
+def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
+    from agents.common.locations import RESULTS_DIR
+    from agents.evaluation.suite_page import SENSOR_READING_DIR, reading_values
+    from flownav_env.tiers import VELOCITY_READINGS, translation_noise_m
+
+    readings = reading_values(RESULTS_DIR / SENSOR_READING_DIR)
+    assert {r["agent"] for r in readings} >= {"bee_ttc"}
+    for row in readings:
+        assert row["layouts"] == 100 and row["first_seed"] >= 500_000  # validation layouts only
+        assert row["noise_m"] == translation_noise_m(VELOCITY_READINGS["3d_speed"][1])
+        assert row["comparison"].difference == pytest.approx(row["failure"] - row["suite_failure"])
+    page = suite_page({**_values([]), "readings": readings})
+    assert "## How much of the noisy tier rests on one reading of one specification" in page
+    assert "## How much of the noisy tier" not in suite_page(_values([]))

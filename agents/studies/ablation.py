@@ -13,6 +13,7 @@ Wilson interval: a lever is worth shipping only if it beats what needs no traini
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -103,47 +104,17 @@ def compare_configs(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
+    flights = _Flights(out, episodes, env, workers, report_only)
     rows, missing, curves = [], [], {}
     for config_path in config_paths:
         config = load_config(Path(config_path), TrainConfig)
-        name = config.name
-        outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
-        for seed in seeds:
-            files = seed_files(runs_dir, policies_dir, name, seed, config.total_timesteps)
-            if files is None:
-                steps = RunFiles.of_seed(runs_dir, name, seed).trained_steps()
-                unfinished = f" (unfinished: {steps:,} of {config.total_timesteps:,} steps)" if steps else ""
-                missing.append(f"{name} seed {seed}{unfinished}")
-                continue
-            tasks = ablation_tasks(files.policy, episodes, env)
-            flown = _fly(tasks, out / name / f"seed_{seed}.csv", workers, report_only, f"{name} seed {seed}")
-            if len(flown) < episodes:
-                missing.append(f"{name} seed {seed} ({len(flown)} of {episodes} episodes)")
-                continue
-            by_seed = {int(r["seed"]): r for r in flown}
-            outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
-            per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
-            for key in counts:
-                counts[key] += sum(bool(r[key]) for r in flown)
-            evaluations = files.evaluations
-            if not evaluations.is_file():  # a shipped seed: its evaluations beside the policy
-                evaluations = files.run_dir / files.shipped_names()[files.evaluations]
-            if evaluations.is_file():
-                curves.setdefault(name, {})[f"seed {seed}"] = evaluations
-        if outcomes:
-            rows.append(_config_row(name, np.array(outcomes, float), per_seed, counts))
+        row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)
+        if row is not None:
+            rows.append(row)
     for agent in reference_agents:
-        tasks = ablation_tasks(None, episodes, env, agent=agent)
-        reference_csv = out / "reference" / f"{agent}.csv"
-        if not report_only:
-            set_aside_stale_episodes(
-                tasks, reference_csv, f"{agent}'s parameters have changed; flying it anew"
-            )
-        flown = _fly(tasks, reference_csv, workers, report_only, f"{agent} (reference)")
-        if len(flown) < episodes:
-            missing.append(f"{agent} ({len(flown)} of {episodes} episodes)")
-            continue
-        rows.append(_reference_row(agent, flown))
+        row = _fly_reference(agent, flights, missing)
+        if row is not None:
+            rows.append(row)
     lines = _report(rows, missing, seeds, episodes, command, env)
     if curves:
         plot_grouped_learning_curves(
@@ -152,6 +123,77 @@ def compare_configs(
         lines += ["", "![learning curves](ablation_curves.png)"]
     (out / "ablation.md").write_text("\n".join(lines) + "\n")
     return lines
+
+
+@dataclass(frozen=True)
+class _Flights:
+    """How every run and reference agent of a comparison flies: into CSVs under ``out``, ``episodes`` each,
+    in the env setting ``env``, with ``workers`` processes, or not at all with ``report_only``."""
+
+    out: Path
+    episodes: int
+    env: dict[str, Any]
+    workers: int
+    report_only: bool
+
+
+def _fly_config(
+    config: TrainConfig,
+    seeds: Sequence[int],
+    runs_dir: Path,
+    policies_dir: Path | None,
+    flights: _Flights,
+    missing: list[str],
+    curves: dict[str, dict[str, Path]],
+) -> list[Any] | None:
+    """Fly each finished seed of a config; its report row (None when no seed has every episode). Seeds not
+    trained or not fully flown are added to ``missing``, each seed's evaluations file to ``curves``."""
+    name = config.name
+    outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
+    for seed in seeds:
+        files = seed_files(runs_dir, policies_dir, name, seed, config.total_timesteps)
+        if files is None:
+            steps = RunFiles.of_seed(runs_dir, name, seed).trained_steps()
+            unfinished = f" (unfinished: {steps:,} of {config.total_timesteps:,} steps)" if steps else ""
+            missing.append(f"{name} seed {seed}{unfinished}")
+            continue
+        tasks = ablation_tasks(files.policy, flights.episodes, flights.env)
+        csv_path = flights.out / name / f"seed_{seed}.csv"
+        flown = _fly(tasks, csv_path, flights.workers, flights.report_only, f"{name} seed {seed}")
+        if len(flown) < flights.episodes:
+            missing.append(f"{name} seed {seed} ({len(flown)} of {flights.episodes} episodes)")
+            continue
+        by_seed = {int(r["seed"]): r for r in flown}
+        outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
+        per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
+        for key in counts:
+            counts[key] += sum(bool(r[key]) for r in flown)
+        evaluations = _evaluations_file(files)
+        if evaluations is not None:
+            curves.setdefault(name, {})[f"seed {seed}"] = evaluations
+    return _config_row(name, np.array(outcomes, float), per_seed, counts) if outcomes else None
+
+
+def _evaluations_file(files: RunFiles) -> Path | None:
+    """A seed's evaluations during training: in its run folder, or for a shipped seed beside its policy."""
+    evaluations = files.evaluations
+    if not evaluations.is_file():
+        evaluations = files.run_dir / files.shipped_names()[files.evaluations]
+    return evaluations if evaluations.is_file() else None
+
+
+def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> list[Any] | None:
+    """Fly a reactive reference agent; its report row, or None (and a line in ``missing``) while short of
+    episodes."""
+    tasks = ablation_tasks(None, flights.episodes, flights.env, agent=agent)
+    reference_csv = flights.out / "reference" / f"{agent}.csv"
+    if not flights.report_only:
+        set_aside_stale_episodes(tasks, reference_csv, f"{agent}'s parameters have changed; flying it anew")
+    flown = _fly(tasks, reference_csv, flights.workers, flights.report_only, f"{agent} (reference)")
+    if len(flown) < flights.episodes:
+        missing.append(f"{agent} ({len(flown)} of {flights.episodes} episodes)")
+        return None
+    return _reference_row(agent, flown)
 
 
 def seed_files(

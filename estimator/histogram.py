@@ -264,18 +264,9 @@ def _as_point_arrays(
     points: Any, depth: Any | None, valid: Any, mask_name: str = "valid"
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Checked arrays; ``depth=None`` checks only the points and the mask."""
-    points = np.asarray(points)
-    valid = np.asarray(valid)
-    if points.ndim != 2 or points.shape[1] != 2 or not np.issubdtype(points.dtype, np.number):
-        raise ValueError(f"points must be a numeric (N, 2) array of pixel positions, got {points.shape}")
-    if depth is not None:
-        depth = np.asarray(depth)
-        if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
-            raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
-    if valid.ndim != 1 or valid.dtype != np.bool_:
-        raise ValueError(
-            f"{mask_name} must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}"
-        )
+    points = _pixel_positions(points)
+    depth = None if depth is None else _depth_column(depth)
+    valid = _mask(valid, mask_name)
     arrays = {"points": points, **({"depth": depth} if depth is not None else {}), mask_name: valid}
     if len({len(array) for array in arrays.values()}) != 1:
         raise ValueError(
@@ -287,3 +278,26 @@ def _as_point_arrays(
     if not np.all(np.isfinite(points[valid])):
         raise ValueError(f"points must be finite where {mask_name} is True")
     return points, (None if depth is None else depth.astype(np.float64, copy=False)), valid
+
+
+def _pixel_positions(points: Any) -> np.ndarray:
+    points = np.asarray(points)
+    if points.ndim != 2 or points.shape[1] != 2 or not np.issubdtype(points.dtype, np.number):
+        raise ValueError(f"points must be a numeric (N, 2) array of pixel positions, got {points.shape}")
+    return points
+
+
+def _depth_column(depth: Any) -> np.ndarray:
+    depth = np.asarray(depth)
+    if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
+        raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
+    return depth
+
+
+def _mask(valid: Any, mask_name: str) -> np.ndarray:
+    valid = np.asarray(valid)
+    if valid.ndim != 1 or valid.dtype != np.bool_:
+        raise ValueError(
+            f"{mask_name} must be a bool (N,) array, got shape {valid.shape} and dtype {valid.dtype}"
+        )
+    return valid

@@ -142,6 +142,73 @@ def _sweep_table(rows: list[dict[str, Any]]) -> list[str]:
 DISCUSSION_FILE = "DISCUSSION.md"
 
 
+def _experiment_section(name: str, result: dict[str, Any]) -> list[str]:
+    """One experiment's section of the README: its claim, config, tables, sweeps and figures."""
+    lines = [
+        f"## {result['title']}",
+        "",
+        f"*Thesis:* {result['thesis']}",
+        "",
+        f"Config `{result['config']}`; camera {result['camera']}; wall time {result['wall_s']:.1f} s; "
+        f"`flownav replicate --only {name}`.",
+        "",
+    ]
+    if name == "three_capsule":
+        lines += [
+            f"Recorded base flight: {result['recorded_frames']} frames, {result['recorded_length_m']:.2f} m; "
+            f"capsules at {', '.join(f'({x:.2f}, {y:.2f})' for x, y in result['obstacles'])} m "
+            "(saved as `three_capsule_path.npz`, format in `flownav_env/playback/path.py`).",
+            "",
+        ]
+    if name == "three_capsule" and result.get("sweeps"):
+        lines += [
+            "The thesis's verdicts on its variable tests beside FlowNav's rows:",
+            "",
+            *verdict_table(result["sweeps"]),
+            "",
+        ]
+    if result.get("rows"):
+        lines += [*metrics_table(result["rows"]), ""]
+    if result.get("table2"):
+        lines += [
+            "Table 2, the thesis beside FlowNav (the thesis: one frame pair per case at f = 417 px; "
+            f"FlowNav: f = {result.get('focal_px', math.nan):.1f} px, the mean over 5 frame pairs):",
+            "",
+            *table2_comparison(result["table2"], result.get("focal_px", math.nan)),
+            "",
+            "FlowNav's Table 2 in full (rotation-matrix derotation; the `thesis` method's Euler-angle "
+            "derotation beside it; *Euler order*: how far composing the case's angles in eq. 4.15's Z-Y-X "
+            "order instead of Unity's z-x-y moves the points):",
+            "",
+            *_table2(result["table2"]),
+            "",
+        ]
+    if result.get("table3"):
+        lines += [
+            "Table 3, the thesis beside FlowNav: the thesis's rows at our FAST threshold and at our number of "
+            "points used (other machine, other scene; FlowNav's estimator alone, rendering excluded):",
+            "",
+            *table3_comparison(result["table3"], result["rows"], result.get("fast_threshold", 20)),
+            "",
+        ]
+        lines += [
+            "Table 3 (per-stage time per frame pair of the estimator on this path, from `DepthPoints.timings`; "
+            "render = placing the camera and rendering one frame):",
+            "",
+            *_table3(result["table3"]),
+            "",
+        ]
+    if result.get("sweeps"):
+        lines += [
+            "Sweeps (one variable changed from the base run):",
+            "",
+            *_sweep_table(result["sweeps"]),
+            "",
+        ]
+    lines += [f"![{name}]({figure})" for figure in result.get("figures", [])] + [""]
+    return lines
+
+
 def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
     """Rebuild ``README.md`` from every ``<name>.json`` in ``out_dir`` (and ``DISCUSSION.md`` if present)."""
     out_dir = Path(out_dir)
@@ -171,68 +238,7 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
     ]
     discussion = out_dir / DISCUSSION_FILE
     for name, result in results.items():
-        lines += [
-            f"## {result['title']}",
-            "",
-            f"*Thesis:* {result['thesis']}",
-            "",
-            f"Config `{result['config']}`; camera {result['camera']}; wall time {result['wall_s']:.1f} s; "
-            f"`flownav replicate --only {name}`.",
-            "",
-        ]
-        if name == "three_capsule":
-            lines += [
-                f"Recorded base flight: {result['recorded_frames']} frames, {result['recorded_length_m']:.2f} m; "
-                f"capsules at {', '.join(f'({x:.2f}, {y:.2f})' for x, y in result['obstacles'])} m "
-                "(saved as `three_capsule_path.npz`, format in `flownav_env/playback/path.py`).",
-                "",
-            ]
-        if name == "three_capsule" and result.get("sweeps"):
-            lines += [
-                "The thesis's verdicts on its variable tests beside FlowNav's rows:",
-                "",
-                *verdict_table(result["sweeps"]),
-                "",
-            ]
-        if result.get("rows"):
-            lines += [*metrics_table(result["rows"]), ""]
-        if result.get("table2"):
-            lines += [
-                "Table 2, the thesis beside FlowNav (the thesis: one frame pair per case at f = 417 px; "
-                f"FlowNav: f = {result.get('focal_px', math.nan):.1f} px, the mean over 5 frame pairs):",
-                "",
-                *table2_comparison(result["table2"], result.get("focal_px", math.nan)),
-                "",
-                "FlowNav's Table 2 in full (rotation-matrix derotation; the `thesis` method's Euler-angle "
-                "derotation beside it; *Euler order*: how far composing the case's angles in eq. 4.15's Z-Y-X "
-                "order instead of Unity's z-x-y moves the points):",
-                "",
-                *_table2(result["table2"]),
-                "",
-            ]
-        if result.get("table3"):
-            lines += [
-                "Table 3, the thesis beside FlowNav: the thesis's rows at our FAST threshold and at our number of "
-                "points used (other machine, other scene; FlowNav's estimator alone, rendering excluded):",
-                "",
-                *table3_comparison(result["table3"], result["rows"], result.get("fast_threshold", 20)),
-                "",
-            ]
-            lines += [
-                "Table 3 (per-stage time per frame pair of the estimator on this path, from `DepthPoints.timings`; "
-                "render = placing the camera and rendering one frame):",
-                "",
-                *_table3(result["table3"]),
-                "",
-            ]
-        if result.get("sweeps"):
-            lines += [
-                "Sweeps (one variable changed from the base run):",
-                "",
-                *_sweep_table(result["sweeps"]),
-                "",
-            ]
-        lines += [f"![{name}]({figure})" for figure in result.get("figures", [])] + [""]
+        lines += _experiment_section(name, result)
     if "three_capsule" in results:
         lines += motion_error_section(results["three_capsule"])
     if discussion.is_file():

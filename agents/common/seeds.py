@@ -15,6 +15,7 @@ Sub-ranges with one use each:
 | tier calibration (validation) | ``TIER_CALIBRATION_SEED_START ..`` | choosing the suite's tier settings |
 | sensor pilot (validation) | ``SENSOR_PILOT_SEED_START ..`` | trying versions of the realistic sensor before freezing it |
 | sensor reading (validation) | ``SENSOR_READING_SEED_START ..`` | the noisy tier at other readings of its specifications |
+| planner tuning (validation) | ``PLANNER_TUNING_SEED_START ..`` | tuning the privileged ``planner`` and measuring its failure per tier |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
@@ -44,6 +45,8 @@ TIER_CALIBRATION_SEED_START = 920_000
 SENSOR_PILOT_SEED_START = 930_000
 # Validation layouts on which the noisy tier is flown at other readings of its sensor specifications.
 SENSOR_READING_SEED_START = 940_000
+# Validation layouts on which the privileged planner (agents/policies/planner.py) is tuned and measured.
+PLANNER_TUNING_SEED_START = 950_000
 # The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
 SUITE_SEED_START = 2_000_000
 SUITE_LAYOUTS = 300

@@ -18,11 +18,14 @@ LEARNED_AGENTS = (
     "ppo_flow_course_approach_curriculum_slow",
     "ppo_flow_course_approach_curriculum_slow_oracle",
 )
-AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS
-# The agents that read what a tier's sensor does not give (here: true depths at the tracked points). Each is a
-# reference of what perfect sensing allows: listed apart in every table, never ranked or named best. An agent
-# whose settings ask for privileged data without being listed here is refused by the suite.
-PRIVILEGED_AGENTS = ("ppo_oracle", "ppo_flow_course_approach_curriculum_slow_oracle")
+# Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
+PLANNERS = ("planner",)
+AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
+# The agents that read what a tier's sensor does not give (true depths at the tracked points; the capsule layout
+# and the true state). Each is a reference of what perfect sensing allows: listed apart in every table, never
+# ranked or named best. An agent whose settings ask for privileged data without being listed here is refused by
+# the suite.
+PRIVILEGED_AGENTS = ("ppo_oracle", "ppo_flow_course_approach_curriculum_slow_oracle", "planner")
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
 # results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.
 TRAIN_SEED_MARK = "@"

@@ -28,6 +28,7 @@ from agents.policies.external import (
     load_external_agent,
 )
 from agents.policies.loading import load_policy_file, training_config_beside
+from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
 from agents.policies.sb3_models import (
@@ -133,14 +134,16 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
     ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle
     observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
-    the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
+    the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`; the planner's privileged keys,
+    :data:`~agents.policies.planner.PLANNER_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
     """
     if is_sb3_model_name(name):
         return sb3_model_env_settings(name)
     if is_external_name(name):
         return dict(external_env_settings(name))
     if not is_learned(name):
-        return dict(REACTIVE_ENV_KWARGS.get(split_agent_name(name)[0], {}))
+        base = split_agent_name(name)[0]
+        return dict({**REACTIVE_ENV_KWARGS, **PLANNER_ENV_KWARGS}.get(base, {}))
     config_path = policy_file(name, path).with_suffix(".yaml")
     if not config_path.is_file():
         return {}
@@ -200,6 +203,8 @@ def load_agent(
         return BeeTTCAgent(**bee_params)
     if name == "vfh":
         return VFHAgent(**bee_params)
+    if name == "planner":
+        return PlannerAgent(**bee_params)
     if is_learned(name):
         if policy_path is None and train_seed is None:
             return _shipped_agent(base, trust_pickle)

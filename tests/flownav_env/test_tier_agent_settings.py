@@ -49,6 +49,14 @@ def test_true_depths_only_for_an_agent_declared_privileged(source: str) -> None:
     check_agent_settings("mine", {"obs_source": source}, "noisy", privileged=True)
 
 
+def test_the_capsule_layout_only_for_an_agent_declared_privileged() -> None:
+    assert privileged_requests({"observe_layout": True, "observe_counts": True}) == {"observe_layout": True}
+    with pytest.raises(ValueError, match=re.escape("agent mine asks for observe_layout=True, privileged data")):
+        check_agent_settings("mine", {"observe_layout": True}, "hard")
+    check_agent_settings("mine", {"observe_layout": True}, "hard", privileged=True)
+    check_agent_settings("mine", {"observe_layout": False}, "hard")
+
+
 def test_the_tier_fixes_the_defaults_it_does_not_name() -> None:
     assert tier_value("noisy", "obstacle_density") == EnvSettings().obstacle_density
     assert tier_value("hard", "obstacle_density") == TIERS["hard"].settings["obstacle_density"]

@@ -90,24 +90,16 @@ def run_playback(
     from tqdm import tqdm
 
     from estimator import CameraIntrinsics, FlowDepthEstimator
-    from estimator.geometry import solve_depth, valid_depth_mask
 
     intrinsics = CameraIntrinsics.from_fov(world.width, world.height, world.fov_deg)
     estimators = {m: FlowDepthEstimator(intrinsics, method=m, **estimator_kwargs) for m in METHODS}
-    reference = estimators["thesis"]
     names = list(METHODS) + (list(COMPONENT_VARIANTS) if component_variants else [])
     result = RunResult(methods={name: [] for name in names}, timings={m: {} for m in METHODS})
     references = []
     previous_pose = None
-    if settings.distance_per_frame is not None:
-        total = math.floor(path.arc_length()[-1] / settings.distance_per_frame + 1e-9) + 1
-    else:
-        total = len(path)
-    if settings.max_frames is not None:
-        total = min(total, settings.max_frames)
     frames = play_back(path, world, settings)
     attitude = AttitudeRotationError(attitude_error, np.random.default_rng([settings.seed, 1]))
-    bar = tqdm(total=total, desc=description, disable=not progress, leave=False)
+    bar = tqdm(total=_frame_count(path, settings), desc=description, disable=not progress, leave=False)
     while True:
         # Timed by hand around next(): the generator places the camera and renders inside it.
         start = time.perf_counter()
@@ -116,92 +108,122 @@ def run_playback(
             break
         result.render_s.append(time.perf_counter() - start)
         bar.update()
-        image = frame.image
         told_rotation, told_translation = frame.told_motion
         if attitude_error > 0:
             told_rotation = attitude.told_rotation(frame.rotation, first=frame.index == 0)
-        outputs = {m: estimators[m].update(image, told_rotation, told_translation) for m in METHODS}
+        outputs = {m: estimators[m].update(frame.image, told_rotation, told_translation) for m in METHODS}
         if previous_pose is None:
             previous_pose = (frame.rotation, frame.position)
             continue
-        rotation_prev, position_prev = previous_pose
-        references.append(_reference_depths(world, intrinsics, rotation_prev, position_prev))
-        truth_cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-        def truth(
-            points: np.ndarray, rotation_prev=rotation_prev, position_prev=position_prev, cache=truth_cache
-        ):
-            key = points.tobytes()
-            if key not in cache:
-                rays = intrinsics.rays(points)
-                depth = world.true_depth(rays, rotation_prev, position_prev)
-                hits = position_prev + (rays * depth[:, None]) @ rotation_prev.T
-                cache[key] = (depth, world.label_points(hits))
-            return cache[key]
-
+        references.append(_reference_depths(world, intrinsics, *previous_pose))
+        truth = _GroundTruth(world, intrinsics, *previous_pose)
         for method, points in outputs.items():
-            true_depth, labels = truth(points.points)
-            result.methods[method].append(
-                {
-                    "points": points.points,
-                    "depth": points.depth,
-                    "valid": points.valid,
-                    "true_depth": true_depth,
-                    "labels": labels,
-                    "tracked": points.num_tracked,
-                }
-            )
+            result.methods[method].append(_frame_row(points, points.depth, points.valid, truth))
             for stage, seconds in points.timings.items():
                 result.timings[method].setdefault(stage, []).append(seconds)
         thesis_points = outputs["thesis"]
         if component_variants:
-            normalized_prev = intrinsics.normalize(thesis_points.points)
-            normalized_next = intrinsics.normalize(thesis_points.next_points)
-            true_depth, labels = truth(thesis_points.points)
-            # The epipolar check of the full solution guards the single-component depths against mistracks.
-            full = solve_depth(
-                normalized_prev, normalized_next, told_rotation, told_translation, intrinsics.focal_scale
-            )
-            epipolar_ok = valid_depth_mask(full, 0.0, reference.max_epipolar_error_px)
-            for component, name in enumerate(COMPONENT_VARIANTS):
-                depth, parallax = component_depth(
-                    normalized_prev,
-                    normalized_next,
-                    told_rotation,
-                    told_translation,
-                    intrinsics.focal_scale,
-                    component,
-                )
-                with np.errstate(invalid="ignore"):
-                    valid = (
-                        thesis_points.tracked
-                        & epipolar_ok
-                        & (parallax >= reference.min_parallax_px)
-                        & np.isfinite(depth)
-                        & (depth > 0)
-                    )
-                result.methods[name].append(
-                    {
-                        "points": thesis_points.points,
-                        "depth": depth,
-                        "valid": valid,
-                        "true_depth": true_depth,
-                        "labels": labels,
-                        "tracked": thesis_points.num_tracked,
-                    }
-                )
+            told = (told_rotation, told_translation)
+            for name, (depth, valid) in _component_depths(
+                thesis_points, told, intrinsics, estimators["thesis"]
+            ):
+                result.methods[name].append(_frame_row(thesis_points, depth, valid, truth))
         if keep_residuals:
-            result.residuals.append(
-                {
-                    "points": thesis_points.points,
-                    "next_points": thesis_points.next_points,
-                    "tracked": thesis_points.tracked,
-                    "rotation": told_rotation,
-                    "true_rotation": frame.true_motion[0],
-                    "attitude": frame.rotation,
-                }
-            )
+            result.residuals.append(_residuals(thesis_points, told_rotation, frame))
         previous_pose = (frame.rotation, frame.position)
     bar.close()
     result.references = np.asarray(references).reshape(len(references), len(world.obstacles))
     return result
+
+
+def _residuals(thesis_points: Any, told_rotation: np.ndarray, frame: Any) -> dict[str, np.ndarray]:
+    """What the rotation-residual analysis keeps of a frame: the thesis estimator's tracks, the told and true
+    rotations, and the camera's attitude."""
+    return {
+        "points": thesis_points.points,
+        "next_points": thesis_points.next_points,
+        "tracked": thesis_points.tracked,
+        "rotation": told_rotation,
+        "true_rotation": frame.true_motion[0],
+        "attitude": frame.rotation,
+    }
+
+
+def _frame_count(path: Any, settings: Any) -> int:
+    """How many frames the playback renders: one per ``distance_per_frame`` of arc (else one per pose), at
+    most ``max_frames``."""
+    if settings.distance_per_frame is not None:
+        total = math.floor(path.arc_length()[-1] / settings.distance_per_frame + 1e-9) + 1
+    else:
+        total = len(path)
+    if settings.max_frames is not None:
+        total = min(total, settings.max_frames)
+    return total
+
+
+class _GroundTruth:
+    """True depth and the capsule hit (label) of points seen from one camera pose, by ray casting; each set of
+    points is cast once, as both estimators and the component variants often ask for the same points."""
+
+    def __init__(self, world: Any, intrinsics: Any, rotation: np.ndarray, position: np.ndarray) -> None:
+        self.world, self.intrinsics, self.rotation, self.position = world, intrinsics, rotation, position
+        self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def __call__(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = points.tobytes()
+        if key not in self.cache:
+            rays = self.intrinsics.rays(points)
+            depth = self.world.true_depth(rays, self.rotation, self.position)
+            hits = self.position + (rays * depth[:, None]) @ self.rotation.T
+            self.cache[key] = (depth, self.world.label_points(hits))
+        return self.cache[key]
+
+
+def _frame_row(points: Any, depth: np.ndarray, valid: np.ndarray, truth: _GroundTruth) -> dict[str, Any]:
+    """One frame of a method: its points, their depths and validity, and the truth at those points."""
+    true_depth, labels = truth(points.points)
+    return {
+        "points": points.points,
+        "depth": depth,
+        "valid": valid,
+        "true_depth": true_depth,
+        "labels": labels,
+        "tracked": points.num_tracked,
+    }
+
+
+def _component_depths(
+    thesis_points: Any, told: tuple[np.ndarray, np.ndarray], intrinsics: Any, reference: Any
+) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
+    """Per component variant, the depths of the thesis estimator's tracks from that flow component alone and
+    where they are valid, under the thesis estimator's own parallax and epipolar limits."""
+    from estimator.geometry import solve_depth, valid_depth_mask
+
+    told_rotation, told_translation = told
+    normalized_prev = intrinsics.normalize(thesis_points.points)
+    normalized_next = intrinsics.normalize(thesis_points.next_points)
+    # The epipolar check of the full solution guards the single-component depths against mistracks.
+    full = solve_depth(
+        normalized_prev, normalized_next, told_rotation, told_translation, intrinsics.focal_scale
+    )
+    epipolar_ok = valid_depth_mask(full, 0.0, reference.max_epipolar_error_px)
+    variants = []
+    for component, name in enumerate(COMPONENT_VARIANTS):
+        depth, parallax = component_depth(
+            normalized_prev,
+            normalized_next,
+            told_rotation,
+            told_translation,
+            intrinsics.focal_scale,
+            component,
+        )
+        with np.errstate(invalid="ignore"):
+            valid = (
+                thesis_points.tracked
+                & epipolar_ok
+                & (parallax >= reference.min_parallax_px)
+                & np.isfinite(depth)
+                & (depth > 0)
+            )
+        variants.append((name, (depth, valid)))
+    return variants

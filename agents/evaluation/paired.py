@@ -44,6 +44,16 @@ class Comparison:
         """Whether the corrected test tells the two apart."""
         return self.p_holm < SIGNIFICANCE
 
+    @property
+    def fails_less(self) -> str | None:
+        """The agent that fails less by the 95 % interval of the difference (``agent`` where it lies below 0,
+        ``reference`` where above), None where the interval holds 0: no difference shown."""
+        if self.high < 0.0:
+            return self.agent
+        if self.low > 0.0:
+            return self.reference
+        return None
+
 
 def _check(matrix: np.ndarray, name: str) -> np.ndarray:
     matrix = np.asarray(matrix, float)

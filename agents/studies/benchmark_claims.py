@@ -1,6 +1,6 @@
 """How the benchmark report words its claims: which agents a factor breaks, lists of names, and the comparisons
-of two intervals, each computed from the data so that a sentence such as "breaks every agent" is only written
-when it holds.
+of two agents (from a paired test, :mod:`agents.evaluation.paired`), each computed from the data so that a
+sentence such as "breaks every agent" is only written when it holds.
 
 The tables here are :func:`agents.studies.error_analysis.tolerance_table`'s rows: one per agent, factor and side
 of the neutral level, with the first level at which the agent breaks (``breaking_level``, None where no level
@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from agents.evaluation.paired import Comparison
 from agents.policies.base import base_agent_name
 
 # The lever search's winner, chosen on validation layouts (results/flow_gap.md): the reports call it "the winner".
@@ -134,19 +135,29 @@ def interval(point: float, low: float, high: float) -> str:
     return f"{point:.2f} [{low:.2f}, {high:.2f}]"
 
 
-def intervals_relation(a: tuple[float, float], b: tuple[float, float]) -> str:
-    """ "intervals apart" when two 95 % intervals do not overlap, else "intervals overlapping"."""
-    return "intervals apart" if a[1] < b[0] or b[1] < a[0] else "intervals overlapping"
+def difference(comparison: Comparison) -> str:
+    """A paired difference of failure rates with its 95 % interval: ``+0.021 [+0.002, +0.038]``."""
+    return f"{comparison.difference:+.3f} [{comparison.low:+.3f}, {comparison.high:+.3f}]"
 
 
-def half_side(low: float, high: float) -> str:
-    """Where a probability of improvement's interval lies against 0.5: "clear below 0.5", "clear above 0.5"
-    or "not clear of 0.5"."""
-    if high < 0.5:
-        return "clear below 0.5"
-    if low > 0.5:
-        return "clear above 0.5"
-    return "not clear of 0.5"
+def verdict(comparison: Comparison, agent: str = "", reference: str = "") -> str:
+    """ "X fails less than Y", "Y fails less than X" or "no difference shown", from where the paired interval
+    lies (:attr:`~agents.evaluation.paired.Comparison.fails_less`); the two named by ``agent`` and
+    ``reference``, else by :func:`display_name`."""
+    agent = agent or display_name(comparison.agent)
+    reference = reference or display_name(comparison.reference)
+    if comparison.fails_less == comparison.agent:
+        return f"{agent} fails less than {reference}"
+    if comparison.fails_less == comparison.reference:
+        return f"{reference} fails less than {agent}"
+    return "no difference shown"
+
+
+def paired_reading(comparison: Comparison) -> str:
+    """A comparison of two agents as the reports word it: "paired by layout, the winner − `bee_ttc` = +0.021
+    [+0.002, +0.038]: `bee_ttc` fails less than the winner"."""
+    agent, reference = display_name(comparison.agent), display_name(comparison.reference)
+    return f"paired by layout, {agent} − {reference} = {difference(comparison)}: {verdict(comparison)}"
 
 
 def level_text(level: float, unit: str = "") -> str:

@@ -11,7 +11,7 @@ import csv
 import json
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +19,8 @@ import numpy as np
 import yaml
 
 from agents.evaluation.leaderboard import improvements, summarise_runs
-from agents.evaluation.over_seeds import LAYOUT_BLOCK
+from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
+from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
 from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
 from agents.evaluation.sweep import pool_every_seed
@@ -84,10 +85,18 @@ class BenchmarkData:
     training: dict[str, Training]
     thesis_motion: dict[str, Any]
     block: int = LAYOUT_BLOCK
+    # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
+    # compared by (agents.evaluation.paired).
+    failures: dict[str, np.ndarray] = field(default_factory=dict)
 
     def row(self, agent: str) -> dict[str, Any]:
         """The leaderboard row of ``agent`` (a base name)."""
         return next(r for r in self.leaderboard if r["agent"] == agent)
+
+    def compare(self, agent: str, reference: str) -> Comparison:
+        """``agent`` against ``reference`` (base names) on the leading table's layouts, paired by layout with
+        each one's training runs resampled: failure(agent) − failure(reference)."""
+        return compare(agent, self.failures[agent], reference, self.failures[reference])
 
     def gain(self, learned: str, reactive: str) -> dict[str, Any]:
         """P(``learned`` > ``reactive``) with its interval."""
@@ -142,6 +151,9 @@ def _leaderboard(results: Path) -> dict[str, Any]:
         "layouts": layouts,
         "leaderboard_episodes": len(rows),
         "code_versions": {agent: sorted(versions[agent]) for agent in runs},
+        "failures": {
+            agent: episode_outcomes(rows, names, layouts, "failure") for agent, names in runs.items()
+        },
     }
 
 

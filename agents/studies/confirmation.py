@@ -20,6 +20,7 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
 from agents.evaluation.over_seeds import success_outcomes
+from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.policies import seeded_agent_name, trained_seeds
@@ -115,16 +116,12 @@ def failure_interval_over_runs_and_layouts(
     return float(low), float(high)
 
 
-def paired_difference(
-    first: np.ndarray, second: np.ndarray, seed: int = 0, reps: int = BOOTSTRAP_REPS
-) -> tuple[float, float, float]:
-    """Failure of ``first`` minus ``second`` (both runs × the same layouts) with a 95 % interval: each
-    replicate draws one layout resample for both and resamples each one's training runs apart."""
-    rng = np.random.default_rng(seed)
-    layout_draws = rng.integers(first.shape[1], size=(reps, first.shape[1]))
-    differences = _resampled_means(first, layout_draws, rng) - _resampled_means(second, layout_draws, rng)
-    low, high = np.percentile(differences, [2.5, 97.5])
-    return float(first.mean() - second.mean()), float(low), float(high)
+def paired_difference(first: np.ndarray, second: np.ndarray) -> tuple[float, float, float]:
+    """Failure of ``first`` minus ``second`` (both runs × the same layouts) with its 95 % interval, from the
+    paired test (:func:`agents.evaluation.paired.compare`: layouts drawn once for both, each one's training
+    runs apart)."""
+    found = compare("first", first, "second", second)
+    return found.difference, found.low, found.high
 
 
 def run_confirmation(

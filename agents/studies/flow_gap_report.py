@@ -23,10 +23,18 @@ from agents.common.seeds import suite_seeds
 from agents.common.tables import markdown_table, today
 from agents.common.templates import render_template
 from agents.evaluation.over_seeds import episode_outcomes
+from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
 from agents.evaluation.suite import EPISODES_CSV
 from agents.policies import shipped_seed_runs
-from agents.studies.benchmark_claims import display_name, interval, intervals_relation, join_words
+from agents.studies.benchmark_claims import (
+    difference,
+    display_name,
+    interval,
+    join_words,
+    paired_reading,
+    verdict,
+)
 from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
 from agents.studies.benchmark_report import TEMPLATES, template_fields
 from agents.studies.benchmark_values import (
@@ -44,7 +52,6 @@ from agents.studies.confirmation import (
     TRUE_DEPTH_RECIPE,
     failure_interval_over_runs_and_layouts,
     flow_costs,
-    paired_difference,
     run_confirmation,
     search_record,
 )
@@ -62,22 +69,21 @@ TRUE_DEPTH_STAGES = (
 )
 
 
-def gap_reading(low: float, high: float) -> str:
-    """How flow minus truth reads: flow fails more, less, or no difference is shown."""
-    if low > 0:
-        return "flow fails more"
-    return "flow fails less" if high < 0 else "no difference shown"
+def gap(flow: np.ndarray, truth: np.ndarray) -> Comparison:
+    """Flow minus truth, paired by layout (:func:`agents.evaluation.paired.compare`): both (runs, layouts) of
+    failures on the same layouts."""
+    return compare("flow", flow, "truth", truth)
 
 
 def gap_row(label: str, flow: np.ndarray, truth: np.ndarray) -> list[str]:
-    """A table row: each agent's failure with its interval, flow minus truth paired by layout, its reading."""
-    difference, low, high = paired_difference(flow, truth)
+    """A table row: each agent's failure with its interval, flow minus truth paired by layout, its verdict."""
+    found = gap(flow, truth)
     return [
         label,
         interval(flow.mean(), *failure_interval_over_runs_and_layouts(flow)),
         interval(truth.mean(), *failure_interval_over_runs_and_layouts(truth)),
-        f"{difference:+.3f} [{low:+.3f}, {high:+.3f}]",
-        gap_reading(low, high),
+        difference(found),
+        verdict(found, "flow", "truth"),
     ]
 
 
@@ -136,22 +142,22 @@ def _suite_gap(results: Path, flow: str, truth: str, policies_dir: Path) -> tupl
 
 def confirmation_gap(result: Mapping[str, Any], results: Path, policies_dir: Path) -> tuple[bool, str, str]:
     """The pick against its true-depth recipe on the confirmation layouts: whether flown, the table, and one
-    sentence per condition worded from the intervals."""
+    clause per condition, each a paired difference with its verdict."""
     from agents.studies.confirmation import outcome_matrices
 
-    costs = flow_costs(result)
-    if not costs:
+    if not flow_costs(result):
         return False, "", ""
     matrices = outcome_matrices(
         results / "confirmation", (PICK, TRUE_DEPTH_RECIPE), result["layouts"], policies_dir
     )
-    rows = [
-        gap_row(condition, found[PICK], found[TRUE_DEPTH_RECIPE])
+    flown = {
+        condition: (found[PICK], found[TRUE_DEPTH_RECIPE])
         for condition, found in matrices.items()
         if PICK in found and TRUE_DEPTH_RECIPE in found
-    ]
+    }
+    rows = [gap_row(condition, flow, truth) for condition, (flow, truth) in flown.items()]
     sentence = "; ".join(
-        f"{d['condition']}: {d['difference']:+.3f}, {gap_reading(d['low'], d['high'])}" for d in costs
+        f"{condition}: {row[3]}, {row[4]}" for condition, row in zip(flown, rows, strict=True)
     )
     return True, gap_table(PICK, TRUE_DEPTH_RECIPE, rows, "condition"), sentence
 
@@ -218,6 +224,7 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Val
     clean = data.validation["clean"]
     suite_flown, suite_table = _suite_gap(results, PLAIN_FLOW, PLAIN_TRUTH, policies_dir)
     bounds = [(r["failure_low"], r["failure_high"]) for r in (flow, truth)]
+    plain_test_gap = data.compare(PLAIN_FLOW, PLAIN_TRUTH)
     flow_steps, truth_steps = (data.training[a].config["total_timesteps"] for a in (PLAIN_FLOW, PLAIN_TRUTH))
     return {
         "ppo_steps": f"{flow_steps:,}",
@@ -225,7 +232,7 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Val
         "plain_same_budget": flow_steps == truth_steps,
         "plain_test_flow": interval(flow["failure_rate"], *bounds[0]),
         "plain_test_truth": interval(truth["failure_rate"], *bounds[1]),
-        "plain_test_relation": intervals_relation(*bounds),
+        "plain_test_relation": paired_reading(plain_test_gap),
         "plain_test_runs": f"{flow['runs']} and {truth['runs']}",
         "plain_validation_flow": interval(
             clean[PLAIN_FLOW].rate, clean[PLAIN_FLOW].low, clean[PLAIN_FLOW].high

@@ -42,6 +42,15 @@ def test_identical_agents_are_not_separated() -> None:
     assert comparison.probability_of_improvement == 0.5
 
 
+def test_the_agent_that_fails_less_is_read_from_the_interval() -> None:
+    hard_layouts = _failures(0.3, seed=1)
+    one_more = hard_layouts.copy()
+    one_more[0, np.flatnonzero(hard_layouts[0] == 0)[:15]] = 1.0
+    assert compare("worse", one_more, "better", hard_layouts).fails_less == "better"
+    assert compare("better", hard_layouts, "worse", one_more).fails_less == "better"
+    assert compare("a", hard_layouts, "b", hard_layouts).fails_less is None  # the interval holds 0
+
+
 def test_spread_between_training_runs_widens_the_paired_interval() -> None:
     reference = _failures(0.2, seed=3)
     steady = np.vstack([_failures(0.2, seed=10 + k) for k in range(10)])
@@ -73,16 +82,23 @@ def test_the_top_group_holds_what_no_corrected_test_separates_and_leaves_out_ref
     }
     ranking = rank_tier(failures, privileged=["oracle"], learned=["oracle", "learned"])
     assert ranking.best == "best" and ranking.top_group == ("best", "close")
-    assert ranking.left_out == {"oracle": "privileged: a reference", "learned": f"provisional ({MIN_RANKED_SEEDS - 1} seeds)"}
+    assert ranking.left_out == {
+        "oracle": "privileged: a reference",
+        "learned": f"provisional ({MIN_RANKED_SEEDS - 1} seeds)",
+    }
     assert {c.agent for c in ranking.comparisons} == {"close", "far"}
     far = next(c for c in ranking.comparisons if c.agent == "far")
     assert far.separated and far.p_holm >= far.p_value
 
 
 def test_bad_input_is_one_line() -> None:
-    with pytest.raises(ValueError, match=re.escape("paired agents must share their layouts: 300 against 200")):
+    with pytest.raises(
+        ValueError, match=re.escape("paired agents must share their layouts: 300 against 200")
+    ):
         paired_bootstrap(_failures(0.1), _failures(0.1, layouts=200))
-    with pytest.raises(ValueError, match=re.escape("agent must be a (runs, layouts) matrix with at least 2 layouts")):
+    with pytest.raises(
+        ValueError, match=re.escape("agent must be a (runs, layouts) matrix with at least 2 layouts")
+    ):
         probability_of_improvement(np.zeros(3), np.zeros((1, 3)))
     with pytest.raises(ValueError, match="no agent to rank: every agent is privileged or provisional"):
         rank_tier({"oracle": _failures(0.0)}, privileged=["oracle"])

@@ -13,7 +13,7 @@ from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 from agents.studies.flow_gap_report import (
     confirmation_gap,
-    gap_reading,
+    gap,
     gap_row,
     leaderboard_matrix,
     selection_values,
@@ -42,15 +42,30 @@ def _ship(policies: Path, agent: str, seeds: int) -> None:
 
 
 @pytest.mark.parametrize(
-    ("low", "high", "reading"),
+    ("extra_flow", "extra_truth", "reading"),
     [
-        (0.01, 0.05, "flow fails more"),
-        (-0.05, -0.01, "flow fails less"),
-        (-0.02, 0.03, "no difference shown"),
+        (30, 0, "truth fails less than flow"),
+        (0, 30, "flow fails less than truth"),
+        (0, 0, "no difference shown"),
     ],
 )
-def test_a_gap_is_read_from_where_its_interval_lies(low: float, high: float, reading: str) -> None:
-    assert gap_reading(low, high) == reading
+def test_a_gap_is_the_paired_test_and_read_from_its_interval(
+    extra_flow: int, extra_truth: int, reading: str
+) -> None:
+    from agents.evaluation.paired import compare
+
+    rng = np.random.default_rng(0)
+    shared = (rng.random((5, 200)) < 0.05).astype(float)
+    flow, truth = shared.copy(), shared.copy()
+    flow[:, 100 : 100 + extra_flow] = 1.0
+    truth[:, 100 : 100 + extra_truth] = 1.0
+    found = gap(flow, truth)
+    assert found == compare("flow", flow, "truth", truth)  # paired.py's test, not a second bootstrap
+    assert found.difference == pytest.approx(flow.mean() - truth.mean())
+    assert gap_row("clean", flow, truth)[3:] == [
+        f"{found.difference:+.3f} [{found.low:+.3f}, {found.high:+.3f}]",
+        reading,
+    ]
 
 
 def test_a_gap_row_pairs_the_layouts_both_recipes_flew() -> None:
@@ -61,7 +76,7 @@ def test_a_gap_row_pairs_the_layouts_both_recipes_flew() -> None:
     label, flow_cell, truth_cell, difference, reading = gap_row("clean", flow, truth)
     assert label == "clean"
     expected = flow.mean() - truth.mean()
-    assert difference.startswith(f"{expected:+.3f} [") and reading == "flow fails more"
+    assert difference.startswith(f"{expected:+.3f} [") and reading == "truth fails less than flow"
     assert flow_cell.startswith(f"{flow.mean():.2f} [") and truth_cell.startswith(f"{truth.mean():.2f} [")
 
 
@@ -92,7 +107,9 @@ def test_the_clean_test_gap_reads_the_leading_tables_episodes_of_each_shipped_se
     assert found is not None and found.shape == (2, 20) and found.mean() == pytest.approx(0.25)
     # not in the table yet, or no seeds shipped: nothing to pair
     assert leaderboard_matrix(data, tmp_path, TRUE_DEPTH_RECIPE, policies) is None
-    assert leaderboard_matrix(SimpleNamespace(leaderboard=[], layouts=layouts), tmp_path, PICK, policies) is None
+    assert (
+        leaderboard_matrix(SimpleNamespace(leaderboard=[], layouts=layouts), tmp_path, PICK, policies) is None
+    )
 
 
 def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path) -> None:
@@ -111,7 +128,7 @@ def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path
         _write_episodes(flights / f"{agent}.csv", episodes)
     result = run_confirmation(flights, layouts=40, report_only=True, policies_dir=policies)
     flown, table, sentence = confirmation_gap(result, tmp_path, policies)
-    assert flown and table.count("flow fails more") == 3
+    assert flown and table.count("truth fails less than flow") == 3
     assert sentence.startswith("clean: +0.2") and "density 0.18" in sentence and "speed 1.5 m/s" in sentence
 
     (flights / f"{TRUE_DEPTH_RECIPE}.csv").unlink()

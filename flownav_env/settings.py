@@ -193,8 +193,8 @@ class EnvSettings(SensorSettings):
     observe_layout: bool = _setting(
         False,
         Flag(),
-        _OBSERVE + "``layout``, ``layout_mask``, ``true_state`` and ``course``: the capsules, the drone's true "
-        "state and the course's limits, which no sensor gives (privileged: for reference agents only)",
+        "add the observation keys ``layout``, ``layout_mask``, ``true_state`` and ``course``: the capsules, the "
+        "drone's true state and the course's limits, which no sensor gives (privileged: reference agents only)",
     )
     near_smoothing: float = _setting(
         1.0,

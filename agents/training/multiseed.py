@@ -258,55 +258,89 @@ def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
     stop signal here is passed on once, as SIGTERM, to every running seed, which saves; no further seed starts.
     The first error of a seed is raised once the running ones have ended.
     """
-    import multiprocessing
-
     from agents.common.interrupts import stop_signals_interrupt
 
-    context = multiprocessing.get_context("forkserver")
-    results = context.Queue()
-    running: dict[int, Any] = {}
-    outcomes: dict[int, tuple[str | None, BaseException | None]] = {}
-    waiting = list(range(len(jobs)))
-    stopping = False
+    seeds = _SeedProcesses(jobs, parallel)
     try:
         with stop_signals_interrupt():
-            while waiting or running:
-                while waiting and len(running) < parallel and not stopping:
-                    index = waiting.pop(0)
-                    process = context.Process(target=_seed_process, args=(index, jobs[index], results))
-                    process.start()
-                    running[index] = process
-                if not running:
+            while seeds.waiting or seeds.running:
+                seeds.start_free()
+                if not seeds.running:
                     break
                 try:
-                    index, policy, error = results.get(timeout=RESULT_POLL_S)
+                    index, policy, error = seeds.results.get(timeout=RESULT_POLL_S)
                 except queue.Empty:
-                    for index, process in list(running.items()):
-                        if not process.is_alive() and results.empty():  # died without a word (SIGKILL)
-                            running.pop(index).join()
-                            outcomes[index] = (None, RuntimeError(_died(jobs[index], process.exitcode)))
-                            stopping = True
+                    seeds.reap_silent_deaths()
                     continue
                 except KeyboardInterrupt:
-                    if not stopping:
-                        stopping = True
-                        for process in running.values():
-                            process.terminate()  # SIGTERM: the seed saves its checkpoint and record
+                    seeds.stop()
                     continue
-                running.pop(index).join()
-                outcomes[index] = (policy, error)
-                stopping = stopping or error is not None
+                seeds.finish(index, policy, error)
     finally:
-        for process in running.values():  # only left after an error in this loop itself
+        seeds.terminate_running()
+    return seeds.policies()
+
+
+class _SeedProcesses:
+    """The seeds of :func:`_train_side_by_side`: those waiting, those running in their process, and the
+    outcome of each that ended."""
+
+    def __init__(self, jobs: list[SeedJob], parallel: int) -> None:
+        import multiprocessing
+
+        self.jobs, self.parallel = jobs, parallel
+        self.context = multiprocessing.get_context("forkserver")
+        self.results = self.context.Queue()
+        self.running: dict[int, Any] = {}
+        self.outcomes: dict[int, tuple[str | None, BaseException | None]] = {}
+        self.waiting = list(range(len(jobs)))
+        self.stopping = False
+
+    def start_free(self) -> None:
+        """Start waiting seeds while fewer than ``parallel`` run, unless stopping."""
+        while self.waiting and len(self.running) < self.parallel and not self.stopping:
+            index = self.waiting.pop(0)
+            process = self.context.Process(target=_seed_process, args=(index, self.jobs[index], self.results))
+            process.start()
+            self.running[index] = process
+
+    def reap_silent_deaths(self) -> None:
+        """Record as failed, and stop starting seeds after, any process that died without a word (SIGKILL)."""
+        for index, process in list(self.running.items()):
+            if not process.is_alive() and self.results.empty():
+                self.running.pop(index).join()
+                self.outcomes[index] = (None, RuntimeError(_died(self.jobs[index], process.exitcode)))
+                self.stopping = True
+
+    def stop(self) -> None:
+        """A stop signal, passed on once: SIGTERM to every running seed, which saves its checkpoint and record."""
+        if not self.stopping:
+            self.stopping = True
+            for process in self.running.values():
+                process.terminate()
+
+    def finish(self, index: int, policy: str | None, error: BaseException | None) -> None:
+        """A seed's result arrived: its process is joined; an error starts no further seed."""
+        self.running.pop(index).join()
+        self.outcomes[index] = (policy, error)
+        self.stopping = self.stopping or error is not None
+
+    def terminate_running(self) -> None:
+        """Only processes left after an error in the loop itself are still running here."""
+        for process in self.running.values():
             process.terminate()
             process.join()
-    errors = [error for _, error in outcomes.values() if error is not None]
-    failures = [error for error in errors if not isinstance(error, KeyboardInterrupt)]
-    if failures or errors:
-        raise (failures or errors)[0]
-    if waiting:
-        raise KeyboardInterrupt("stopped before every seed had started; run the same command to resume")
-    return [Path(outcomes[index][0]) for index in range(len(jobs))]
+
+    def policies(self) -> list[Path]:
+        """Every seed's policy in job order; else the first error (a failure before an interruption), or
+        KeyboardInterrupt where some seed never started."""
+        errors = [error for _, error in self.outcomes.values() if error is not None]
+        failures = [error for error in errors if not isinstance(error, KeyboardInterrupt)]
+        if failures or errors:
+            raise (failures or errors)[0]
+        if self.waiting:
+            raise KeyboardInterrupt("stopped before every seed had started; run the same command to resume")
+        return [Path(self.outcomes[index][0]) for index in range(len(self.jobs))]
 
 
 def _ray_train(jobs: list[SeedJob], address: str | None) -> Iterator[Path]:

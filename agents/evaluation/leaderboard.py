@@ -29,17 +29,20 @@ from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.over_seeds import (
     LAYOUT_BLOCK,
     block_scores,
+    episode_outcomes,
     interval_estimates,
     probability_of_improvement,
     run_rates,
     success_outcomes,
 )
+from agents.evaluation.paired import Comparison, compare, verdict
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.policies import (
     LEARNED_AGENTS,
+    PRIVILEGED_AGENTS,
     REACTIVE_AGENTS,
     is_learned,
     policy_file,
@@ -195,10 +198,15 @@ def _rate(row: dict, name: str) -> str:
 
 
 def report_lines(
-    table: list[dict], gains: list[dict], layouts: list[int], command: str, block: int = LAYOUT_BLOCK
+    table: list[dict],
+    gains: list[dict],
+    layouts: list[int],
+    command: str,
+    block: int = LAYOUT_BLOCK,
+    against_best: Sequence[Comparison] = (),
 ) -> list[str]:
     """``leaderboard.md``: set-up, the leading table, the probabilities of improvement and the gap the
-    strongest reactive agent leaves to learning."""
+    strongest reactive agent leaves to learning (``against_best``: :func:`against_best_reactive`)."""
     rows = [
         [
             r["agent"],
@@ -265,30 +273,35 @@ def report_lines(
                 ],
             ),
         ]
-    reactive = [r for r in table if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
-    learned = [r for r in table if r["agent"] in LEARNED_AGENTS]
-    if reactive and learned:
-        best = min(reactive, key=lambda r: r["failure_rate"])
+    if against_best:
+        best = against_best[0].reference
         lines += ["", "## What the strongest reactive agent leaves to learning", ""]
-        for r in learned:
-            apart = r["failure_high"] < best["failure_low"]
-            worse = r["failure_low"] > best["failure_high"]
-            verdict = (
-                "lower, intervals apart"
-                if apart
-                else "higher, intervals apart"
-                if worse
-                else "intervals overlap"
-            )
-            lines.append(
-                f"- `{r['agent']}` fails in {r['failure_rate']:.2f} against `{best['agent']}`'s "
-                f"{best['failure_rate']:.2f} ({verdict}; difference {best['failure_rate'] - r['failure_rate']:+.2f})."
-            )
+        lines += [
+            f"- `{c.agent}` − `{best}` = {c.difference:+.3f} [{c.low:+.3f}, {c.high:+.3f}], paired by layout: "
+            f"{verdict(c)}."
+            for c in against_best
+        ]
         lines.append(
-            f"- `{best['agent']}` is the reactive agent with the lowest failure rate here; its success rate "
-            f"({best['success_rate']:.2f}) is what a hand-written rule reaches on the same observations."
+            f"- `{best}` is the reactive agent with the lowest failure rate here; privileged agents (they read "
+            "what the sensor does not give) are references and not set against it."
         )
     return lines
+
+
+def against_best_reactive(
+    table: list[dict], rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int]
+) -> list[Comparison]:
+    """Each learned agent but the privileged ones against the reactive agent (``straight`` aside) with the
+    lowest failure rate, paired by layout (:func:`agents.evaluation.paired.compare`)."""
+    reactive = [r for r in table if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
+    learned = [
+        r["agent"] for r in table if r["agent"] in LEARNED_AGENTS and r["agent"] not in PRIVILEGED_AGENTS
+    ]
+    if not reactive or not learned:
+        return []
+    best = min(reactive, key=lambda r: r["failure_rate"])["agent"]
+    failures = {a: episode_outcomes(rows, runs[a], layouts, "failure") for a in (best, *learned)}
+    return [compare(a, failures[a], best, failures[best]) for a in learned]
 
 
 def run_leaderboard(
@@ -332,6 +345,8 @@ def run_leaderboard(
     )
     gains = improvements(rows, runs, layouts, block)
     plot_leaderboard(table, seed_rows, out / "leaderboard.png")
-    lines = report_lines(table, gains, layouts, command, block)
+    lines = report_lines(
+        table, gains, layouts, command, block, against_best_reactive(table, rows, runs, layouts)
+    )
     (out / "leaderboard.md").write_text("\n".join(lines) + "\n")
     return lines

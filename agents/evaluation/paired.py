@@ -115,6 +115,19 @@ def compare(
     )
 
 
+def verdict(comparison: Comparison, agent: str = "", reference: str = "") -> str:
+    """ "X fails less than Y", "Y fails less than X" or "no difference shown", worded from where the interval of
+    the difference lies (:attr:`Comparison.fails_less`); the two named by ``agent`` and ``reference``, else by
+    their names in backticks."""
+    agent = agent or f"`{comparison.agent}`"
+    reference = reference or f"`{comparison.reference}`"
+    if comparison.fails_less == comparison.agent:
+        return f"{agent} fails less than {reference}"
+    if comparison.fails_less == comparison.reference:
+        return f"{reference} fails less than {agent}"
+    return "no difference shown"
+
+
 def holm(p_values: Sequence[float]) -> list[float]:
     """Holm's step-down correction of ``p_values`` (family-wise error), in their order."""
     order = np.argsort(p_values, kind="stable")

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from agents.evaluation import paired
 from agents.evaluation.paired import Comparison
 from agents.policies.base import base_agent_name
 
@@ -141,16 +142,11 @@ def difference(comparison: Comparison) -> str:
 
 
 def verdict(comparison: Comparison, agent: str = "", reference: str = "") -> str:
-    """ "X fails less than Y", "Y fails less than X" or "no difference shown", from where the paired interval
-    lies (:attr:`~agents.evaluation.paired.Comparison.fails_less`); the two named by ``agent`` and
-    ``reference``, else by :func:`display_name`."""
-    agent = agent or display_name(comparison.agent)
-    reference = reference or display_name(comparison.reference)
-    if comparison.fails_less == comparison.agent:
-        return f"{agent} fails less than {reference}"
-    if comparison.fails_less == comparison.reference:
-        return f"{reference} fails less than {agent}"
-    return "no difference shown"
+    """:func:`agents.evaluation.paired.verdict` with the two named by ``agent`` and ``reference``, else by
+    :func:`display_name`."""
+    return paired.verdict(
+        comparison, agent or display_name(comparison.agent), reference or display_name(comparison.reference)
+    )
 
 
 def paired_reading(comparison: Comparison) -> str:

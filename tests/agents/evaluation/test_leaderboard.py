@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from agents.evaluation.leaderboard import (
+    against_best_reactive,
     improvements,
     leaderboard_runs,
     leaderboard_tasks,
@@ -170,15 +171,26 @@ def test_the_report_leads_with_every_agent_and_compares_learned_with_reactive() 
     gains = improvements(rows, runs, LAYOUTS, block=10)
     assert [(g["learned"], g["reactive"]) for g in gains] == [("ppo_flow", "bee")]
     assert gains[0]["probability"] > 0.9
-    text = "\n".join(report_lines(table, gains, LAYOUTS, "flownav leaderboard --episodes 40", block=10))
+    against_best = against_best_reactive(table, rows, runs, LAYOUTS)
+    assert [(c.agent, c.reference) for c in against_best] == [("ppo_flow", "bee")]
+    assert against_best[0].fails_less == "ppo_flow"
+    text = "\n".join(
+        report_lines(
+            table, gains, LAYOUTS, "flownav leaderboard --episodes 40", block=10, against_best=against_best
+        )
+    )
     assert "| ppo_flow | 3 | 120 |" in text and "| bee | 1 | 40 |" in text
-    assert "`ppo_flow` fails in" in text and "lower, intervals apart" in text
+    assert f"- `ppo_flow` − `bee` = {against_best[0].difference:+.3f} [" in text
+    assert "`ppo_flow` fails less than `bee`" in text and "overlap" not in text
 
 
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--episodes", "0"], "--episodes must be >= 30 (one block of layouts for the intervals over runs), got 0"),
+        (
+            ["--episodes", "0"],
+            "--episodes must be >= 30 (one block of layouts for the intervals over runs), got 0",
+        ),
         (["--workers", "0"], "--workers must be >= 1, got 0"),
         (["--agents", "bee,hawk"], f"agent must be one of {', '.join(REACTIVE_AGENTS)}, ppo_flow"),
     ],

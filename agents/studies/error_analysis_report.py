@@ -24,8 +24,8 @@ from agents.studies.error_analysis import (
     format_p,
     is_flow_agent,
     tolerance_table,
-    turning_and_rotation_error,
 )
+from agents.studies.weaving import turning_and_rotation_error
 from flownav_env.settings_check import setting_range
 
 

@@ -18,7 +18,6 @@ from agents.studies.error_analysis import (
     is_flow_agent,
     neutral_level,
     tolerance_table,
-    turning_and_rotation_error,
 )
 from agents.studies.error_analysis_report import (
     best_learned_flow_agent,
@@ -26,6 +25,7 @@ from agents.studies.error_analysis_report import (
     unbroken_reason,
     write_error_analysis,
 )
+from agents.studies.weaving import turning_and_rotation_error
 
 
 def _cell(

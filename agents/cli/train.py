@@ -92,28 +92,14 @@ def run(args: argparse.Namespace) -> int:
     from agents.common.yaml_config import load_config
     from agents.training.outputs import RunFiles
     from agents.training.ppo import train
-    from agents.training.shipping import ship_run
     from agents.training.train_config import TrainConfig, override
     from flownav_env.settings_check import check_env_kwargs
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)
-    if args.seeds is not None and args.resume:
-        raise ValueError("--seeds always resumes unfinished seeds: drop --resume")
-    if args.park and (args.seeds is None or args.ship or args.ship_only):
-        raise ValueError("--park takes --seeds and no shipping options: it copies unfinished seeds aside")
-    if args.ship_only and args.seeds is not None:
-        from agents.training.multiseed import parse_seeds
-
-        for seed in parse_seeds(args.seeds):
-            ship_run(
-                RunFiles.of_seed(Path(args.runs_dir), config.name, seed), Path(args.ship_to) / config.name
-            )
-        return 0
+    _check_mode_options(args)
     if args.ship_only:
-        if args.resume or args.ship or args.total_timesteps is not None or args.max_minutes is not None:
-            raise ValueError("--ship-only ships a finished run: it takes no training options")
-        ship_run(RunFiles.of(Path(args.runs_dir), config.name), Path(args.ship_to))
+        _ship_only(args, config.name)
         return 0
     override(config, "total_timesteps", args.total_timesteps, "--total-timesteps")
     override(config, "max_minutes", args.max_minutes, "--max-minutes")
@@ -140,6 +126,30 @@ def run(args: argparse.Namespace) -> int:
     )
     _raise_if_interrupted(files, command if args.resume else f"{command} --resume")
     return 0
+
+
+def _check_mode_options(args: argparse.Namespace) -> None:
+    """Refuse options that contradict the mode chosen (several seeds, parking, shipping only)."""
+    if args.seeds is not None and args.resume:
+        raise ValueError("--seeds always resumes unfinished seeds: drop --resume")
+    if args.park and (args.seeds is None or args.ship or args.ship_only):
+        raise ValueError("--park takes --seeds and no shipping options: it copies unfinished seeds aside")
+
+
+def _ship_only(args: argparse.Namespace, name: str) -> None:
+    """``--ship-only``: ship the finished run of config ``name``, or each of its ``--seeds``, training nothing."""
+    from agents.training.outputs import RunFiles
+    from agents.training.shipping import ship_run
+
+    if args.seeds is not None:
+        from agents.training.multiseed import parse_seeds
+
+        for seed in parse_seeds(args.seeds):
+            ship_run(RunFiles.of_seed(Path(args.runs_dir), name, seed), Path(args.ship_to) / name)
+        return
+    if args.resume or args.ship or args.total_timesteps is not None or args.max_minutes is not None:
+        raise ValueError("--ship-only ships a finished run: it takes no training options")
+    ship_run(RunFiles.of(Path(args.runs_dir), name), Path(args.ship_to))
 
 
 def _teacher_maker(config):

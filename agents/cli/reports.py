@@ -41,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.studies.reports import differences, listing, regenerate, select_reports
+    from agents.studies.reports import listing, select_reports
 
     if args.list:
         print("\n".join(listing()))
@@ -49,16 +49,29 @@ def run(args: argparse.Namespace) -> int:
     names = [name.strip() for name in args.only.split(",") if name.strip()] if args.only else None
     select_reports(names)  # a bad name stops here, before anything is written
     if not args.check:
-        out = args.out or DEFAULT_OUT
-        outcomes = regenerate(out, names)
-        for outcome in outcomes:
-            if outcome.written is None:
-                print(f"{outcome.report.path}: skipped, {outcome.skipped}")
-            else:
-                print(f"{outcome.report.path}: written to {outcome.written} ({outcome.seconds:.1f} s)")
+        _write(args.out or DEFAULT_OUT, names)
         return 0
     if args.out is not None:
         raise ValueError("--check writes to a temporary folder of its own; it takes no --out")
+    return _check(names)
+
+
+def _write(out: Path, names: list[str] | None) -> None:
+    """Regenerate the reports into ``out``, a line per report."""
+    from agents.studies.reports import regenerate
+
+    for outcome in regenerate(out, names):
+        if outcome.written is None:
+            print(f"{outcome.report.path}: skipped, {outcome.skipped}")
+        else:
+            print(f"{outcome.report.path}: written to {outcome.written} ({outcome.seconds:.1f} s)")
+
+
+def _check(names: list[str] | None) -> int:
+    """Regenerate the reports into a temporary folder and print per report "same" or its diff; 1 if any
+    differs."""
+    from agents.studies.reports import differences, regenerate
+
     differ = 0
     with tempfile.TemporaryDirectory(prefix="flownav-reports-") as scratch:
         outcomes = regenerate(Path(scratch), names)

@@ -174,37 +174,42 @@ def run_estimator_table(
             bar.update()
     bar.close()
 
-    rows = []
-    for threshold in thresholds:
-        runs = passes[threshold]
-        first = runs[0]
-        row: dict[str, Any] = {
-            "fast_threshold": threshold,
-            "points_found": _median(first["bare"].corners),
-            "points_used": _median(first["fb_on"].valid),
-            # Equal point counts: the uncapped estimator tracks every FAST corner, as the bare baseline does.
-            "equal_counts": first["bare"].corners == first["fb_on"].tracked_in,
-        }
-        for stage in ("prepare", "fast", "flow", "depth"):
-            row[f"ms_{stage}"] = 1e3 * _median([_median(run["fb_on"].stages[stage]) for run in runs])
-        row["ms_total"] = 1e3 * _median([_median(run["fb_on"].seconds) for run in runs])
-        row["fps"] = 1e3 / row["ms_total"] if row["ms_total"] > 0 else math.nan
-        row["ms_bare_fast_lk"] = 1e3 * _median([_median(run["bare"].seconds) for run in runs])
-        for name in ESTIMATOR_CONFIGS:
-            # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
-            # the frames of a pass, then the median and range over the passes.
-            ratios = [_median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
-            if name != "fb_on":
-                row[f"ms_total_{name}"] = 1e3 * _median([_median(run[name].seconds) for run in runs])
-            row[f"ratio_{name}"] = _median(ratios)
-            row[f"ratio_{name}_min"] = min(ratios)
-            row[f"ratio_{name}_max"] = max(ratios)
-        row["depth_error_median_pct"] = 100 * _depth_error(flight, kept[threshold])
-        rows.append(row)
+    rows = [_stream_row(threshold, passes[threshold], flight, kept[threshold]) for threshold in thresholds]
 
     defaults = FlowDepthEstimator(flight.intrinsics)
     depth_rows = _time_depth_stage(flight, thresholds, kept, repeats, loop_frames, defaults, progress)
     return rows, depth_rows
+
+
+def _stream_row(
+    threshold: int, runs: list[dict[str, _Pass]], flight: Flight, kept: list[Any]
+) -> dict[str, Any]:
+    """One threshold's Table 3 row from its timed passes: point counts, per-stage and total times, and each
+    estimator configuration's time against the bare FAST + LK."""
+    first = runs[0]
+    row: dict[str, Any] = {
+        "fast_threshold": threshold,
+        "points_found": _median(first["bare"].corners),
+        "points_used": _median(first["fb_on"].valid),
+        # Equal point counts: the uncapped estimator tracks every FAST corner, as the bare baseline does.
+        "equal_counts": first["bare"].corners == first["fb_on"].tracked_in,
+    }
+    for stage in ("prepare", "fast", "flow", "depth"):
+        row[f"ms_{stage}"] = 1e3 * _median([_median(run["fb_on"].stages[stage]) for run in runs])
+    row["ms_total"] = 1e3 * _median([_median(run["fb_on"].seconds) for run in runs])
+    row["fps"] = 1e3 / row["ms_total"] if row["ms_total"] > 0 else math.nan
+    row["ms_bare_fast_lk"] = 1e3 * _median([_median(run["bare"].seconds) for run in runs])
+    for name in ESTIMATOR_CONFIGS:
+        # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
+        # the frames of a pass, then the median and range over the passes.
+        ratios = [_median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
+        if name != "fb_on":
+            row[f"ms_total_{name}"] = 1e3 * _median([_median(run[name].seconds) for run in runs])
+        row[f"ratio_{name}"] = _median(ratios)
+        row[f"ratio_{name}_min"] = min(ratios)
+        row[f"ratio_{name}_max"] = max(ratios)
+    row["depth_error_median_pct"] = 100 * _depth_error(flight, kept)
+    return row
 
 
 def _depth_error(flight: Flight, kept: list[Any]) -> float:
@@ -249,48 +254,80 @@ def _time_depth_stage(
                 flight.intrinsics,
                 *limits,
             )
-            seconds: dict[str, list[float]] = {name: [] for name in DEPTH_FUNCTIONS}
-            outputs = {}
-            with quiet_gc():
-                for repeat in range(repeats):
-                    names = list(DEPTH_FUNCTIONS)
-                    shift = repeat % len(names)
-                    for name in names[shift:] + names[:shift]:
-                        start = time.perf_counter()
-                        outputs[name] = DEPTH_FUNCTIONS[name](*arguments)
-                        seconds[name].append(time.perf_counter() - start)
+            seconds, outputs = _time_depth_functions(arguments, repeats)
             for name in DEPTH_FUNCTIONS:
                 per_function[name].append(_median(seconds[name]))
             points_per_frame.append(points.num_points)
-            # The loops must compute what the kernel computes, or the speed-up means nothing.
-            reference_depth, reference_valid = outputs["vectorised"]
-            for name in ("loop_floats", "loop_numpy"):
-                depth, valid = outputs[name]
-                both = np.isfinite(depth) & np.isfinite(reference_depth)
-                if both.any():
-                    relative = np.abs(depth[both] - reference_depth[both]) / np.abs(reference_depth[both])
-                    max_depth_difference = max(max_depth_difference, float(relative.max()))
-                mask_agreement.append(float(np.mean(valid == reference_valid)))
+            difference, agreement = _loops_against_kernel(outputs)
+            max_depth_difference = max(max_depth_difference, difference)
+            mask_agreement += agreement
         bar.update()
-        total = {name: float(np.sum(values)) for name, values in per_function.items()}
-        vectorised = total["vectorised"]
-        count = float(np.sum(points_per_frame)) if points_per_frame else math.nan
         rows.append(
-            {
-                "fast_threshold": threshold,
-                "frames": len(points_per_frame),
-                "points_per_frame": count / max(1, len(points_per_frame)),
-                "ms_vectorised": 1e3 * vectorised / max(1, len(points_per_frame)),
-                "ms_loop_floats": 1e3 * total["loop_floats"] / max(1, len(points_per_frame)),
-                "ms_loop_numpy": 1e3 * total["loop_numpy"] / max(1, len(points_per_frame)),
-                "us_per_point_vectorised": 1e6 * vectorised / count,
-                "us_per_point_loop_floats": 1e6 * total["loop_floats"] / count,
-                "us_per_point_loop_numpy": 1e6 * total["loop_numpy"] / count,
-                "speedup_vs_loop_floats": total["loop_floats"] / vectorised if vectorised else math.nan,
-                "speedup_vs_loop_numpy": total["loop_numpy"] / vectorised if vectorised else math.nan,
-                "max_relative_depth_difference": max_depth_difference,
-                "valid_mask_agreement": min(mask_agreement) if mask_agreement else math.nan,
-            }
+            _depth_stage_row(threshold, per_function, points_per_frame, max_depth_difference, mask_agreement)
         )
     bar.close()
     return rows
+
+
+def _time_depth_functions(
+    arguments: tuple[Any, ...], repeats: int
+) -> tuple[dict[str, list[float]], dict[str, Any]]:
+    """Each depth function's seconds on one frame's points over ``repeats`` calls (the order rotated each
+    repeat, so no function always runs with warm caches), and its output."""
+    seconds: dict[str, list[float]] = {name: [] for name in DEPTH_FUNCTIONS}
+    outputs = {}
+    with quiet_gc():
+        for repeat in range(repeats):
+            names = list(DEPTH_FUNCTIONS)
+            shift = repeat % len(names)
+            for name in names[shift:] + names[:shift]:
+                start = time.perf_counter()
+                outputs[name] = DEPTH_FUNCTIONS[name](*arguments)
+                seconds[name].append(time.perf_counter() - start)
+    return seconds, outputs
+
+
+def _loops_against_kernel(outputs: dict[str, Any]) -> tuple[float, list[float]]:
+    """The loops' largest relative depth difference from the vectorised kernel, and each loop's share of
+    points whose validity agrees with it."""
+    # The loops must compute what the kernel computes, or the speed-up means nothing.
+    reference_depth, reference_valid = outputs["vectorised"]
+    max_depth_difference = 0.0
+    mask_agreement = []
+    for name in ("loop_floats", "loop_numpy"):
+        depth, valid = outputs[name]
+        both = np.isfinite(depth) & np.isfinite(reference_depth)
+        if both.any():
+            relative = np.abs(depth[both] - reference_depth[both]) / np.abs(reference_depth[both])
+            max_depth_difference = max(max_depth_difference, float(relative.max()))
+        mask_agreement.append(float(np.mean(valid == reference_valid)))
+    return max_depth_difference, mask_agreement
+
+
+def _depth_stage_row(
+    threshold: int,
+    per_function: dict[str, list[float]],
+    points_per_frame: list[int],
+    max_depth_difference: float,
+    mask_agreement: list[float],
+) -> dict[str, Any]:
+    """One threshold's depth-stage row: per frame and per point times, and the loops' speed-ups and agreement."""
+    total = {name: float(np.sum(values)) for name, values in per_function.items()}
+    vectorised = total["vectorised"]
+    count = float(np.sum(points_per_frame)) if points_per_frame else math.nan
+    frames = max(1, len(points_per_frame))
+    return {
+        "fast_threshold": threshold,
+        "frames": len(points_per_frame),
+        "points_per_frame": count / frames,
+        "ms_vectorised": 1e3 * vectorised / frames,
+        "ms_loop_floats": 1e3 * total["loop_floats"] / frames,
+        "ms_loop_numpy": 1e3 * total["loop_numpy"] / frames,
+        "us_per_point_vectorised": 1e6 * vectorised / count,
+        "us_per_point_loop_floats": 1e6 * total["loop_floats"] / count,
+        "us_per_point_loop_numpy": 1e6 * total["loop_numpy"] / count,
+        "speedup_vs_loop_floats": total["loop_floats"] / vectorised if vectorised else math.nan,
+        "speedup_vs_loop_numpy": total["loop_numpy"] / vectorised if vectorised else math.nan,
+        "max_relative_depth_difference": max_depth_difference,
+        "valid_mask_agreement": min(mask_agreement) if mask_agreement else math.nan,
+    }

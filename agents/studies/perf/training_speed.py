@@ -155,13 +155,7 @@ def run_training_benchmark(
     Raises:
         ValueError: a count below 1, or ``side_by_side`` 1 or negative.
     """
-    if rollouts < 1 or repeats < 1 or not n_envs_options or min(n_envs_options) < 1:
-        raise ValueError(
-            f"--rollouts, --repeats and every --n-envs must be >= 1, got {rollouts}, {repeats}, "
-            f"{list(n_envs_options)}"
-        )
-    if side_by_side == 1 or side_by_side < 0:
-        raise ValueError(f"--side-by-side must be 0 (off) or >= 2 runs, got {side_by_side}")
+    _check_counts(n_envs_options, rollouts, repeats, side_by_side)
     from tqdm import tqdm
 
     started = time.perf_counter()
@@ -187,6 +181,17 @@ def run_training_benchmark(
     )
     md_path.write_text(_report(rows, config, command, time.perf_counter() - started))
     return [md_path, csv_path]
+
+
+def _check_counts(n_envs_options: Sequence[int], rollouts: int, repeats: int, side_by_side: int) -> None:
+    """Refuse counts the benchmark cannot measure, before any env is built."""
+    if rollouts < 1 or repeats < 1 or not n_envs_options or min(n_envs_options) < 1:
+        raise ValueError(
+            f"--rollouts, --repeats and every --n-envs must be >= 1, got {rollouts}, {repeats}, "
+            f"{list(n_envs_options)}"
+        )
+    if side_by_side == 1 or side_by_side < 0:
+        raise ValueError(f"--side-by-side must be 0 (off) or >= 2 runs, got {side_by_side}")
 
 
 def _summary(config: TrainConfig, n_envs: int, runs: int, measured: list[dict[str, float]]) -> dict[str, Any]:

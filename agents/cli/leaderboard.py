@@ -26,12 +26,12 @@ HELP = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from agents.evaluation.leaderboard import MIN_EPISODES
-    from agents.policies import AGENT_NAMES
+    from agents.policies import HISTORY_AGENTS
 
     parser.add_argument(
         "--agents",
-        default=",".join(AGENT_NAMES),
-        help=f"comma-separated agents (default: all, {', '.join(AGENT_NAMES)})",
+        default=",".join(HISTORY_AGENTS),
+        help=f"comma-separated agents (default: all, {', '.join(HISTORY_AGENTS)})",
     )
     parser.add_argument(
         "--episodes", type=int, default=MIN_EPISODES, help="test layouts per run (default: %(default)s)"

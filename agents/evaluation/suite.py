@@ -37,6 +37,7 @@ from agents.evaluation.suite_page import (
     tier_failures,
 )
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
+from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
     agent_env_kwargs,
     is_learned,
@@ -344,15 +345,18 @@ def run_suite(
         plot_suite(table, out / "suite.png")
     seeds = list(suite_seeds(layouts))
     failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
+    rankings = rank_suite(table, failures)
+    bests = {name: ranking.best for name, ranking in rankings.items()}
     values = suite_values(
         table,
-        rank_suite(table, failures),
+        rankings,
         command=command,
         layouts=suite_seeds(layouts),
         machine=machine_summary(),
         missing=missing,
         generated=today(),
         readings=reading_values(out / SENSOR_READING_DIR),
+        bounds=suite_bounds(failures, bests, seeds),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

@@ -120,6 +120,7 @@ def suite_values(
     missing: Sequence[str],
     generated: str,
     readings: Sequence[Mapping[str, Any]] = (),
+    bounds: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -129,7 +130,15 @@ def suite_values(
             continue
         spec = tier(name)
         rows = [row for row in table if row["tier"] == name]
-        tiers.append({"name": name, "env_id": spec.env_id, "why": spec.why, **_tier_values(rows, rankings[name])})
+        tiers.append(
+            {
+                "name": name,
+                "env_id": spec.env_id,
+                "why": spec.why,
+                **_tier_values(rows, rankings[name]),
+                "bound": (bounds or {}).get(name),
+            }
+        )
     return {
         "suite_version": SUITE_VERSION,
         "generated": generated,

@@ -2,6 +2,7 @@
 
 from agents.policies.base import (
     AGENT_NAMES,
+    HISTORY_AGENTS,
     LEARNED_AGENTS,
     PRIVILEGED_AGENTS,
     REACTIVE_AGENTS,
@@ -34,6 +35,7 @@ from agents.policies.training_seeds import TrainingSeedsAgent
 
 __all__ = [
     "AGENT_NAMES",
+    "HISTORY_AGENTS",
     "LEARNED_AGENTS",
     "OBSERVATION_KEY_SETTINGS",
     "POLICY_OPTION_HELP",

@@ -21,6 +21,9 @@ LEARNED_AGENTS = (
 # Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
 PLANNERS = ("planner",)
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
+# The agents of the clean tier's history table and the demo: every agent but the planners, which are flown only
+# on the suite, as each tier's bound.
+HISTORY_AGENTS = REACTIVE_AGENTS + LEARNED_AGENTS
 # The agents that read what a tier's sensor does not give (true depths at the tracked points; the capsule layout
 # and the true state). Each is a reference of what perfect sensing allows: listed apart in every table, never
 # ranked or named best. An agent whose settings ask for privileged data without being listed here is refused by

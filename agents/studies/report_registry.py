@@ -60,9 +60,9 @@ def _repository_as_cwd() -> Iterator[None]:
 
 def _leaderboard(report: Report, folder: Path) -> None:
     from agents.evaluation.leaderboard import run_leaderboard
-    from agents.policies import AGENT_NAMES
+    from agents.policies import HISTORY_AGENTS
 
-    run_leaderboard(AGENT_NAMES, folder, report_only=True, command=report.command)
+    run_leaderboard(HISTORY_AGENTS, folder, report_only=True, command=report.command)
 
 
 def _sweep(report: Report, folder: Path, *, config: str) -> None:

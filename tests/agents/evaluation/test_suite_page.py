@@ -41,6 +41,7 @@ def _values(missing: list[str]) -> dict:
         machine="a test machine",
         missing=missing,
         generated="today",
+        bounds={},
     )
 
 
@@ -80,3 +81,29 @@ def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
     page = suite_page({**_values([]), "readings": readings})
     assert "## How much of the noisy tier rests on one reading of one specification" in page
     assert "## How much of the noisy tier" not in suite_page(_values([]))
+
+
+def test_the_bound_section_classifies_each_planner_failure_by_the_independent_check() -> None:
+    from agents.evaluation.tier_bound import tier_bound
+
+    layouts = list(suite_seeds(60))
+    planner = np.zeros((1, 60))
+    planner[0, [3, 7]] = 1.0  # fails two layouts: the check calls the first infeasible
+    best = np.ones((1, 60))
+    best[0, :30] = 0.0
+    bound = tier_bound("hard", planner, "bee_ttc", best, layouts, feasible=lambda _, seed: seed != layouts[3])
+    assert (bound["failed"], bound["infeasible"], bound["misses"]) == (2, 1, 1)
+    assert bound["infeasible_share"] == pytest.approx(1 / 60)
+    assert bound["gap"].difference == pytest.approx(0.5 - 2 / 60) and bound["gap"].low > 0
+    values = _values([])
+    values["tiers"][0]["bound"] = bound
+    page = suite_page(values)
+    assert "## What each tier allows" in page and "| `hard` | 0.03 [" in page
+    assert "## What each tier allows" not in suite_page(_values([]))
+
+
+def test_a_real_layout_is_checked_from_the_envs_privileged_keys() -> None:
+    from agents.common.seeds import PLANNER_TUNING_SEED_START
+    from agents.evaluation.tier_bound import layout_is_feasible
+
+    assert layout_is_feasible("hard", PLANNER_TUNING_SEED_START) is True  # the planner flies it without a miss

@@ -19,7 +19,7 @@ from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
 from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
-from agents.policies import is_learned
+from agents.policies import is_learned, trained_on
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
 
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
@@ -56,8 +56,15 @@ def rank_suite(
     return rankings
 
 
+def _trained_on(agent: str) -> str:
+    try:
+        return trained_on(agent) or "—"
+    except (ValueError, OSError):  # an included outside agent: nothing of its training is known here
+        return "—"
+
+
 def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking) -> dict[str, Any]:
-    by_agent = {row["agent"]: dict(row) for row in rows}
+    by_agent = {row["agent"]: dict(row) | {"trained_on": _trained_on(row["agent"])} for row in rows}
     compared = {c.agent: c for c in ranking.comparisons}
     ranked = []
     for agent in [ranking.best, *sorted(compared, key=lambda a: (by_agent[a]["failure_rate"], a))]:

@@ -25,6 +25,7 @@ from agents.policies.learned import (
     runs_to_fly,
     shipped_seed_runs,
     single_policy_file,
+    trained_on,
     trained_seeds,
 )
 from agents.policies.loading import UnverifiedPolicyWarning
@@ -67,5 +68,6 @@ __all__ = [
     "shipped_seed_runs",
     "single_policy_file",
     "split_agent_name",
+    "trained_on",
     "trained_seeds",
 ]

@@ -150,6 +150,24 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
     return dict(load_config(config_path, TrainConfig).env)
 
 
+def trained_on(name: str, path: str | Path | None = None) -> str:
+    """What the learned agent ``name`` trained on, from the training config beside its policy: the env id and
+    the settings drawn per episode, e.g. ``FlowNav-v0, forward_speed 0.5-2.0 drawn per episode``; empty for an
+    agent that did not learn or has no config beside its policy."""
+    if is_sb3_model_name(name) or is_external_name(name) or not is_learned(name):
+        return ""
+    config_path = policy_file(name, path).with_suffix(".yaml")
+    if not config_path.is_file():
+        return ""
+    config = load_config(config_path, TrainConfig)
+    drawn = [
+        f"{setting} {bounds[0]:g}-{bounds[1]:g}"
+        for setting, bounds in dataclasses.asdict(config.randomize).items()
+        if bounds
+    ]
+    return config.env_id + (f", {', '.join(drawn)} drawn per episode" if drawn else "")
+
+
 def is_privileged(name: str) -> bool:
     """Whether the agent ``name`` is declared privileged (it may read what a tier's sensor does not give, and is
     a reference, never ranked): a shipped agent of :data:`~agents.policies.base.PRIVILEGED_AGENTS`, or an outside

@@ -107,3 +107,13 @@ def test_a_real_layout_is_checked_from_the_envs_privileged_keys() -> None:
     from agents.evaluation.tier_bound import layout_is_feasible
 
     assert layout_is_feasible("hard", PLANNER_TUNING_SEED_START) is True  # the planner flies it without a miss
+
+
+def test_each_row_says_what_its_agent_trained_on() -> None:
+    from agents.policies import trained_on
+
+    (hard,) = _values([])["tiers"]
+    rows = {row["agent"]: row for row in [*hard["ranked"], *hard["provisional"], *hard["references"]]}
+    assert rows["bee_ttc"]["trained_on"] == "—"
+    assert rows["ppo_flow"]["trained_on"] == trained_on("ppo_flow") and trained_on("ppo_flow").startswith("FlowNav-v0")
+    assert "drawn per episode" in trained_on("ppo_flow_course_approach_curriculum_slow")

@@ -39,7 +39,9 @@ from agents.evaluation.suite_page import (
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
+    AGENT_NAMES,
     agent_env_kwargs,
+    default_runs,
     is_learned,
     is_privileged,
     policy_file,
@@ -301,6 +303,40 @@ def write_summary_csv(path: Path, table: Sequence[Mapping[str, Any]]) -> None:
     for row in table:
         writer.writerow({k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()})
     write_text_atomically(path, text.getvalue())
+
+
+def suite_agents() -> list[str]:
+    """Every agent the suite reports: all of :data:`~agents.policies.base.AGENT_NAMES` but a learned agent with
+    no shipped policy yet (one being trained), which has no runs to report."""
+    return [agent for agent in AGENT_NAMES if not is_learned(agent) or default_runs(agent)[0]]
+
+
+def suite_top_groups(folder: Path, layouts: int = SUITE_LAYOUTS) -> list[dict[str, Any]]:
+    """Per tier flown in full, in suite order: its best ranked agent with its failure, and its top group, from
+    ``folder``'s suite episodes (the ranking of ``suite.md``).
+
+    Raises:
+        FileNotFoundError: no suite episodes in ``folder``.
+    """
+    path = Path(folder) / EPISODES_CSV
+    if not path.is_file():
+        raise FileNotFoundError(f"no suite episodes at {path}: flownav suite --out {folder}")
+    runs = {agent: agent_runs(agent) for agent in suite_agents()}
+    tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, TIER_NAMES, layouts)]
+    rows = rows_of(tasks, read_records(path))
+    table = summarise_suite(rows, runs, TIER_NAMES, layouts)
+    seeds = list(suite_seeds(layouts))
+    rankings = rank_suite(table, {name: tier_failures(rows, runs, name, seeds) for name in TIER_NAMES})
+    failure = {(row["tier"], row["agent"]): row["failure_rate"] for row in table}
+    return [
+        {
+            "tier": name,
+            "best": ranking.best,
+            "best_failure": failure[(name, ranking.best)],
+            "top_group": list(ranking.top_group),
+        }
+        for name, ranking in rankings.items()
+    ]
 
 
 def run_suite(

@@ -33,6 +33,15 @@ _NUMBER_WORDS = (
 )
 
 
+def _suite_top_lines(data: BenchmarkData) -> str:
+    """A line per suite tier: its top group by the paired tests, and its best ranked agent's failure."""
+    return "\n".join(
+        f"- `{t['tier']}`: top group {', '.join(f'`{a}`' for a in t['top_group'])}; best `{t['best']}`, failure "
+        f"{rate(t['best_failure'])}"
+        for t in data.suite_top
+    )
+
+
 def _readme_table(data: BenchmarkData) -> str:
     best_reactive, best_learned = best_agents(data)
     bold = {best_reactive["agent"], best_learned["agent"]}
@@ -82,6 +91,7 @@ def readme_values(data: BenchmarkData) -> Values:
     robust_vs_flow = data.compare("ppo_robust", "ppo_flow")
     oracle = data.oracle_reactive
     return {
+        "suite_top_lines": _suite_top_lines(data),
         "readme_table": _readme_table(data),
         **{
             f"r_{a}": rate(data.row(a)["failure_rate"])

@@ -23,17 +23,20 @@ from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
 from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
+from agents.evaluation.suite import suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, split_agent_name
 from agents.studies.error_analysis import cell_quality, fit_dose_response, is_flow_agent, tolerance_table
 
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
+SUITE_EPISODES = "suite_episodes.csv"
 INPUTS = {
     "leaderboard_episodes.csv": "flownav leaderboard --out results",
     "training_seeds.csv": "flownav leaderboard --out results",
     "sweep_episodes.csv": "flownav sweep --config configs/sweep.yaml --out results",
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
     "thesis/three_capsule.json": "flownav replicate --out results/thesis",
+    SUITE_EPISODES: "flownav suite --out results",
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
 ABLATION_DIR = "ablation"
@@ -88,6 +91,8 @@ class BenchmarkData:
     # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
     # compared by (agents.evaluation.paired).
     failures: dict[str, np.ndarray] = field(default_factory=dict)
+    # Per suite tier: its best ranked agent, that agent's failure and the tier's top group (suite.md's ranking).
+    suite_top: list[dict[str, Any]] = field(default_factory=list)
 
     def row(self, agent: str) -> dict[str, Any]:
         """The leaderboard row of ``agent`` (a base name)."""
@@ -308,6 +313,7 @@ def load_benchmark_data(results_dir: Path) -> BenchmarkData:
             oracle_reactive=_oracle_reactive(results),
             training=_training(results, learned),
             thesis_motion=json.loads((results / "thesis/three_capsule.json").read_text())["motion"],
+            suite_top=suite_top_groups(results),
         )
     return _CACHE[key]
 

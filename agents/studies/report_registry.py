@@ -170,12 +170,9 @@ def _flow_gap(report: Report, folder: Path) -> None:
 
 
 def _suite(report: Report, folder: Path) -> None:
-    from agents.evaluation.suite import run_suite
-    from agents.policies import AGENT_NAMES, default_runs, is_learned
+    from agents.evaluation.suite import run_suite, suite_agents
 
-    # A learned agent with no shipped policy yet (one being trained) has no runs to report, as in the leaderboard.
-    agents = [agent for agent in AGENT_NAMES if not is_learned(agent) or default_runs(agent)[0]]
-    run_suite(agents, folder, report_only=True, command=report.command)
+    run_suite(suite_agents(), folder, report_only=True, command=report.command)
 
 
 ABLATION_SEEDS = range(5)

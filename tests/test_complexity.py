@@ -21,7 +21,6 @@ MAX_COMPLEXITY = 15
 # Split them when their files are free, and remove each entry with its split (the last test insists).
 ALLOWED_ABOVE_LIMIT = frozenset(
     {
-        "agents/evaluation/paired.py:rank_tier",
         "agents/studies/benchmark_findings.py:winner_values",
         "agents/studies/benchmark_sweep.py:breaking_values",
         "agents/studies/benchmark_values.py:flow_gap_target_values",

@@ -164,6 +164,18 @@ class TierRanking:
     left_out: Mapping[str, str]
 
 
+def _left_out(
+    failures: Mapping[str, np.ndarray], privileged: Sequence[str], learned: Sequence[str]
+) -> dict[str, str]:
+    """The agents not ranked, with why: privileged ones, and learned ones with too few training seeds."""
+    left_out = {name: "privileged: a reference" for name in failures if name in privileged}
+    for name in failures:
+        runs = np.asarray(failures[name]).shape[0]
+        if name not in left_out and name in learned and runs < MIN_RANKED_SEEDS:
+            left_out[name] = f"provisional ({runs} seeds)"
+    return left_out
+
+
 def rank_tier(
     failures: Mapping[str, np.ndarray], *, privileged: Sequence[str] = (), learned: Sequence[str] = ()
 ) -> TierRanking:
@@ -175,11 +187,7 @@ def rank_tier(
     Raises:
         ValueError: no rankable agent, or matrices on different numbers of layouts.
     """
-    left_out = {name: "privileged: a reference" for name in failures if name in privileged}
-    for name in failures:
-        runs = np.asarray(failures[name]).shape[0]
-        if name not in left_out and name in learned and runs < MIN_RANKED_SEEDS:
-            left_out[name] = f"provisional ({runs} seeds)"
+    left_out = _left_out(failures, privileged, learned)
     rankable = {name: np.asarray(matrix, float) for name, matrix in failures.items() if name not in left_out}
     if not rankable:
         raise ValueError(f"no agent to rank: every agent is privileged or provisional ({', '.join(failures)})")

@@ -150,6 +150,7 @@ def _thesis_block(report: Report, folder: Path) -> None:
 # What benchmark.md and the thesis's closed-loop paragraph are written from (agents/studies/benchmark_data.py).
 BENCHMARK_INPUTS = (
     "leaderboard_episodes.csv",
+    "suite_episodes.csv",
     "training_seeds.csv",
     "sweep_episodes.csv",
     "diagnostics/reactive_oracle_episodes.csv",
@@ -285,7 +286,7 @@ REPORTS: tuple[Report, ...] = (
         "flow_gap.md",
         name="flow-gap",
         command="flownav reports --out results --only flow-gap",
-        inputs=(*BENCHMARK_INPUTS, "confirmation/*.csv", "suite_episodes.csv"),
+        inputs=(*BENCHMARK_INPUTS, "confirmation/*.csv"),
         write=_flow_gap,
     ),
     Report(

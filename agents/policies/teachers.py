@@ -1,29 +1,73 @@
 """Teachers for a run's teacher start (``imitation.teacher`` in a training config): which agents may teach, and
-the check that the run's env observes everything the teacher reads."""
+the check that the run's env observes everything the teacher reads.
+
+A reactive rule reads the student's own observation, so the config's ``env`` must give it every key. The
+privileged planner reads the layout and true state (``observe_layout=True``): it declares that opt-in itself
+(:attr:`PlannerTeacher.privileged_settings`), the training envs get it, and the student never sees its keys
+(:mod:`agents.training.student_view`), so the config's ``env`` stays that of an ordinary agent.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from typing import Any
 
-from agents.policies.base import REACTIVE_AGENTS
+import numpy as np
+
+from agents.policies.base import PLANNERS, REACTIVE_AGENTS
 from agents.policies.learned import agent_env_kwargs, load_agent
+from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
+from flownav_env.tiers import privileged_requests
+
+TEACHERS = REACTIVE_AGENTS + PLANNERS
+
+
+class PlannerTeacher:
+    """The planner over a batch of envs: one :class:`~agents.policies.planner.PlannerAgent` per env, since each
+    plans its own episode's course and keeps that plan between steps."""
+
+    privileged_settings: Mapping[str, Any] = PLANNER_ENV_KWARGS["planner"]
+
+    def __init__(self) -> None:
+        self.planners: list[PlannerAgent] = []
+
+    def predict(
+        self,
+        observation: dict[str, np.ndarray],
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        count = len(next(iter(observation.values())))
+        while len(self.planners) < count:
+            self.planners.append(PlannerAgent())
+        starts = np.ones(count, bool) if episode_start is None else np.asarray(episode_start, bool)
+        actions = [
+            planner.predict(
+                {key: value[i : i + 1] for key, value in observation.items()},
+                episode_start=starts[i : i + 1],
+            )[0]
+            for i, planner in enumerate(self.planners[:count])
+        ]
+        return np.stack(actions), state
 
 
 def check_teacher(name: str, env: Mapping[str, Any], source: str) -> None:
     """Check that ``name`` can teach a run whose env is made with ``env`` (a config's ``env`` section).
 
     Raises:
-        ValueError: ``name`` is not a reactive agent (a teacher acts from the observation alone, so learned
-            policies, which need their own env settings, are not offered), or the env lacks a setting the
-            teacher reads; the message names the key and the config file ``source``.
+        ValueError: ``name`` is neither a reactive agent nor the planner (a teacher acts from the observation
+            alone, so learned policies, which need their own env settings, are not offered), or the env lacks
+            a setting the teacher reads; the message names the key and the config file ``source``.
     """
-    if name not in REACTIVE_AGENTS:
+    if name not in TEACHERS:
         raise ValueError(
-            f"{source}: key 'imitation.teacher' must be one of {', '.join(REACTIVE_AGENTS)}, got {name!r}"
+            f"{source}: key 'imitation.teacher' must be one of {', '.join(TEACHERS)}, got {name!r}"
         )
-    for setting, value in agent_env_kwargs(name).items():
-        if env.get(setting) != value:
+    wanted = agent_env_kwargs(name)
+    # A privileged teacher's own opt-in is given to the training envs by the teacher start, not by 'env'.
+    for setting, value in wanted.items():
+        if setting not in privileged_requests(wanted) and env.get(setting) != value:
             raise ValueError(
                 f"{source}: the teacher {name!r} reads what the env setting {setting}={value!r} gives; add it "
                 f"to the config's 'env' section (it has {setting}={env.get(setting)!r})"
@@ -31,6 +75,8 @@ def check_teacher(name: str, env: Mapping[str, Any], source: str) -> None:
 
 
 def make_teacher(name: str) -> Any:
-    """The teacher agent ``name``, with its shipped gains (a module-level function, so a training job that
-    carries it pickles)."""
+    """The teacher agent ``name``: a rule with its shipped gains, or the planner over a batch of envs (a
+    module-level function, so a training job that carries it pickles)."""
+    if name in PLANNERS:
+        return PlannerTeacher()
     return load_agent(name)

@@ -8,7 +8,7 @@ workers ignore SIGINT; only the main process handles it, ends learning and saves
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from typing import Any
 
@@ -18,15 +18,18 @@ from agents.training.train_config import TrainConfig
 from flownav_env.limits import episode_step_limit
 
 
-def make_env_factory(config: TrainConfig, rank: int) -> Callable[[], Any]:
+def make_env_factory(
+    config: TrainConfig, rank: int, teacher_settings: Mapping[str, Any] | None = None
+) -> Callable[[], Any]:
     """A picklable-by-closure factory for SubprocVecEnv workers (``rank`` is kept for callers that number
-    their workers; the env's seed comes from the vector env).
+    their workers; the env's seed comes from the vector env). ``teacher_settings`` go on top of the config's
+    ``env``: what a privileged teacher reads (:mod:`agents.training.student_view`).
 
     The closure holds plain values, not the config object: a worker unpickles it with the code on disk when
     it starts, which in a long multi-seed run may be newer than the main process's (a config class that
     gained a field would otherwise break every later seed).
     """
-    env_id, env_kwargs = config.env_id, {"depth_error_info": False, **config.env}
+    env_id, env_kwargs = config.env_id, {"depth_error_info": False, **config.env, **(teacher_settings or {})}
     ranges = {name: list(bounds) for name, bounds in asdict(config.randomize).items() if bounds}
     # Slow episodes need the time to reach the goal: the limit of the slowest speed drawn.
     slowest = {"forward_speed": min(ranges["forward_speed"])} if "forward_speed" in ranges else {}
@@ -67,7 +70,9 @@ class IgnoringInterrupts:
 EVAL_WORKERS = 2
 
 
-def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, Any]:
+def build_envs(
+    config: TrainConfig, *, in_process: bool = False, teacher_settings: Mapping[str, Any] | None = None
+) -> tuple[Any, Any]:
     """The training vector env (``n_envs`` envs, seeded from ``config.seed``) and the evaluation vector env of
     the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two classes differ.
 
@@ -76,10 +81,14 @@ def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, A
     ``in_process=True`` steps the same envs, with the same seeds, in this process (``DummyVecEnv``): for
     several training seeds side by side, one process per core, where a lock-stepped worker per env loses a
     third of the cores to waiting (``results/training_throughput.md``). Both give the same rollouts.
+
+    ``teacher_settings`` (a privileged teacher's ``observe_layout``) are given to the training envs only, and
+    both vector envs are wrapped in :class:`~agents.training.student_view.StudentView`, so the policy built on
+    them never sees the teacher's keys.
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    factories = [make_env_factory(config, i) for i in range(config.n_envs)]
+    factories = [make_env_factory(config, i, teacher_settings) for i in range(config.n_envs)]
     eval_count = EVAL_WORKERS if config.n_envs > 1 else 1
     eval_factories = [make_env_factory(config, i) for i in range(eval_count)]
     if config.n_envs > 1 and not in_process:
@@ -98,6 +107,10 @@ def build_envs(config: TrainConfig, *, in_process: bool = False) -> tuple[Any, A
         envs, eval_env = DummyVecEnv(factories), DummyVecEnv(eval_factories)
     envs.seed(training_env_seed(config.seed))
     eval_env.seed(checkpoint_selection_seed(config.seed))
+    if teacher_settings:
+        from agents.training.student_view import StudentView
+
+        envs, eval_env = StudentView(envs), StudentView(eval_env)
     if config.frame_stack > 1:
         from stable_baselines3.common.vec_env import VecFrameStack
 

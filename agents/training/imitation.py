@@ -11,7 +11,8 @@ value estimate rather than from noise.
 The teacher is any object with stable-baselines3's ``predict(observation, state, episode_start,
 deterministic)`` over a batch; it is passed in (the rules live above this layer, in :mod:`agents.policies`).
 The teacher reads the same observation dict as the student, so the run's env must observe every key the
-teacher reads.
+teacher reads; a privileged teacher (the planner) reads, besides, the keys that only envs wrapped in
+:class:`~agents.training.student_view.StudentView` show it, never the student.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.training.student_view import privileged_settings, teacher_view
 from agents.training.train_config import ImitationParams
 
 
@@ -72,7 +74,7 @@ def fly(envs: Any, teacher: Any, steps: int, gamma: float, student: Any | None =
     labels, rewards, dones = [], [], []
     for _ in range(steps):
         labelled, teacher_state = teacher.predict(
-            observation, state=teacher_state, episode_start=starting, deterministic=True
+            teacher_view(envs, observation), state=teacher_state, episode_start=starting, deterministic=True
         )
         acted = labelled if student is None else student.predict(observation, deterministic=True)[0]
         for key, value in observation.items():
@@ -143,6 +145,8 @@ def imitate(
     steps = params.rounds * params.steps_per_round * envs.num_envs
     return {
         "teacher": params.teacher,
+        # The teacher's own env opt-in (the planner's observe_layout), which the student never saw.
+        "teacher_env": privileged_settings(teacher),
         "env_steps": steps,
         "wall_minutes": round((time.perf_counter() - started) / 60.0, 2),
         "rounds": rounds,

@@ -35,6 +35,7 @@ from agents.training.envs import build_envs, close_quietly
 from agents.training.outputs import RunFiles
 from agents.training.run_record import FAILED, FINISHED, INTERRUPTED, SessionRecord
 from agents.training.shipping import ship_run
+from agents.training.student_view import privileged_settings
 from agents.training.train_config import TrainConfig, checked_config, init_source, rollout_note
 from flownav_env.rendering import gl_renderer_name
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
@@ -183,7 +184,12 @@ def train(
             check_writable_folder(folder)
     files.run_dir.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
-    envs, eval_env = build_envs(config, in_process=in_process_envs)
+    # Built before the envs: a privileged teacher's own settings (the planner's observe_layout) go to the
+    # training envs, behind a view that hides their keys from the student (agents.training.student_view).
+    teacher = make_teacher(config.imitation.teacher) if config.imitation.teacher and make_teacher else None
+    envs, eval_env = build_envs(
+        config, in_process=in_process_envs, teacher_settings=privileged_settings(teacher)
+    )
     # Workers ignore stop signals, so one left open would keep the process from exiting: close them whatever
     # happens.
     try:
@@ -199,7 +205,7 @@ def train(
         callbacks = _callbacks(config, eval_env, files, resume_step, record, progress_bar)
         record.restart_clock()  # the session's minutes count from here: the teacher start and learning
         if resume_step is None and config.imitation.teacher:
-            _teacher_start(model, envs, config, record, make_teacher)
+            _teacher_start(model, envs, config, record, teacher)
         status = _learn(model, config, files, record, callbacks, resume_step, progress_bar)
     finally:
         close_quietly(envs)
@@ -232,17 +238,17 @@ def _teacher_start(
     envs: Any,
     config: TrainConfig,
     record: SessionRecord,
-    make_teacher: Callable[[str], Any] | None,
+    teacher: Any,
 ) -> None:
-    """DAgger against the config's teacher on the training envs, before PPO; its summary goes into the
-    session's record (env steps, minutes, losses per round).
+    """DAgger against ``teacher`` (the config's, built by ``make_teacher``) on the training envs, before PPO;
+    its summary goes into the session's record (env steps, minutes, losses per round).
 
     Raises:
         ValueError: no ``make_teacher`` was given to build the teacher the config names.
     """
     from agents.training.imitation import imitate
 
-    if make_teacher is None:
+    if teacher is None:
         raise ValueError(
             f"config {config.name!r} names the teacher {config.imitation.teacher!r}, but no make_teacher was "
             "given to build it (flownav train passes agents.policies.teachers.make_teacher)"
@@ -252,7 +258,7 @@ def _teacher_start(
             summary = imitate(
                 model,
                 envs,
-                make_teacher(config.imitation.teacher),
+                teacher,
                 config.imitation,
                 config.ppo.gamma,
                 config.seed,

@@ -9,6 +9,7 @@ from typing import Any
 
 from agents.common.seeds import MAX_RUN_SEED
 from agents.common.yaml_config import checked_field, field_range, from_mapping
+from flownav_env.privileged import PRIVILEGED_KEYS
 from flownav_env.settings_check import setting_check
 
 
@@ -44,7 +45,9 @@ class ImitationParams:
     """A teacher start before PPO (:mod:`agents.training.imitation`): DAgger rounds against a teacher agent;
     an empty ``teacher`` skips it."""
 
-    teacher: str = ""  # an agent name (``bee_ttc``); its observation keys must be in the config's ``env``
+    # An agent name (``bee_ttc``); its observation keys must be in the config's ``env``. A privileged teacher
+    # (``planner``) brings its own opt-in (observe_layout), given to the training envs only, never to ``env``.
+    teacher: str = ""
     rounds: int = field_range(1, 100, default=3)
     steps_per_round: int = field_range(1, 1_000_000, default=8192)  # per env
     epochs: int = field_range(1, 1000, default=10)
@@ -67,6 +70,7 @@ class Randomization:
     translation_drift: list[float] = env_setting_field("translation_drift", default_factory=list)
     rotation_noise_deg: list[float] = env_setting_field("rotation_noise_deg", default_factory=list)
     translation_noise_m: list[float] = env_setting_field("translation_noise_m", default_factory=list)
+    imu_time_offset_ms: list[float] = env_setting_field("imu_time_offset_ms", default_factory=list)
     depth_noise: list[float] = env_setting_field("depth_noise", default_factory=list)
     depth_outliers: list[float] = env_setting_field("depth_outliers", default_factory=list)
     depth_dropout: list[float] = env_setting_field("depth_dropout", default_factory=list)
@@ -119,6 +123,11 @@ class TrainConfig:
             raise ValueError(
                 f"key 'imitation.teacher' ({self.imitation.teacher!r}) starts a feed-forward policy from scratch: "
                 "it takes no 'init_from', 'frame_stack' above 1 or 'ppo.lstm_hidden_size' above 0"
+            )
+        if self.imitation.teacher and self.env.get("observe_layout"):
+            raise ValueError(
+                f"key 'env.observe_layout' would show the student of teacher {self.imitation.teacher!r} the "
+                f"privileged keys ({', '.join(PRIVILEGED_KEYS)}): remove it; a privileged teacher gets them alone"
             )
         if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
             raise ValueError(

@@ -128,3 +128,12 @@ def test_the_planner_teacher_plans_each_env_of_a_batch_apart() -> None:
     finally:
         for env in envs:
             env.close()
+
+
+def test_a_student_view_of_an_env_without_dict_observations_is_refused() -> None:
+    import gymnasium as gym
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    envs = DummyVecEnv([lambda: gym.make("Pendulum-v1")])
+    with pytest.raises(ValueError, match=r"StudentView needs a dict observation space, got Box"):
+        StudentView(envs)

@@ -46,13 +46,16 @@ def tier_failures(
 def rank_suite(
     table: Sequence[Mapping[str, Any]], failures: Mapping[str, Mapping[str, np.ndarray]]
 ) -> dict[str, TierRanking]:
-    """Each tier's :class:`~agents.evaluation.paired.TierRanking` of the agents in its rows."""
+    """Each tier's :class:`~agents.evaluation.paired.TierRanking` of the agents in its rows; a tier with no rankable
+    agent flown (privileged or provisional agents only) has none."""
     rankings = {}
     for name, matrices in failures.items():
         privileged = [row["agent"] for row in table if row["tier"] == name and row["privileged"]]
         learned = [agent for agent in matrices if is_learned(agent)]
-        if matrices:
+        try:
             rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned)
+        except ValueError:
+            continue  # nothing rankable flown on this tier (say a reference flown on its own): no ranking
     return rankings
 
 

@@ -117,3 +117,9 @@ def test_each_row_says_what_its_agent_trained_on() -> None:
     assert rows["bee_ttc"]["trained_on"] == "—"
     assert rows["ppo_flow"]["trained_on"] == trained_on("ppo_flow") and trained_on("ppo_flow").startswith("FlowNav-v0")
     assert "drawn per episode" in trained_on("ppo_flow_course_approach_curriculum_slow")
+
+
+def test_a_tier_flown_only_by_references_has_no_ranking() -> None:
+    matrices = {"planner": np.zeros((1, 60))}
+    table = [_row("planner", "hard", matrices["planner"], privileged=True)]
+    assert rank_suite(table, {"hard": matrices}) == {}

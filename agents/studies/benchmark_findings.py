@@ -60,33 +60,29 @@ def _pct(level: float | None) -> str:
     return "no level flown" if level is None else f"{100 * level:.0f} %"
 
 
+# One sweep cell where both the winner and ppo_flow flew: (factor, level, the winner's cell, ppo_flow's cell).
+Pair = tuple[str, float, Any, Any]
+
+
 def winner_values(data: BenchmarkData) -> Values:
     """The winner against ``ppo_flow`` in the sweep: task factors, direct depth errors, and the cells
     where it fails materially more."""
-    pairs = [
+    pairs = _winner_pairs(data)
+    return {**_task_break_values(data), **_direct_depth_values(pairs), **_worse_cell_values(data, pairs)}
+
+
+def _winner_pairs(data: BenchmarkData) -> list[Pair]:
+    """Every sweep cell off the clean course that both the winner and ``ppo_flow`` (pooled) flew."""
+    return [
         (key[1], key[2], data.cells[(WINNER_POOLED, *key[1:])], data.cells[key])
         for key in sorted(data.cells)
         if key[0] == FLOW and key[1] != "clean" and (WINNER_POOLED, *key[1:]) in data.cells
     ]
-    depth = [(f, x, w.rate - p.rate, w, p) for f, x, w, p in pairs if f in DIRECT_DEPTH]
-    worst, best = max(depth, key=lambda d: d[2]), min(depth, key=lambda d: d[2])
 
-    def compared(item: tuple[str, float, float, Any, Any]) -> str:
-        factor, level, difference, mine, theirs = item
-        side = "more" if difference >= 0 else "less"
-        return (
-            f"{abs(difference):.2f} {side} than `ppo_flow` (`{factor}` {level:g}: {rate(mine.rate)} against "
-            f"{rate(theirs.rate)})"
-        )
 
-    worse = [(f, x, w, p) for f, x, w, p in pairs if w.rate - p.rate >= MATERIAL]
-    clear = [f"`{f}` {x:g}" for f, x, w, p in worse if w.low > p.high]
-    if not worse or len(clear) == len(worse):
-        note = ""
-    elif clear:
-        note = f" (clear of both intervals: {', '.join(clear)})"
-    else:
-        note = f" (none of these differences is clear of both intervals on {next(iter(data.cells.values())).episodes} layouts)"
+def _task_break_values(data: BenchmarkData) -> Values:
+    """Where speed and density break the winner and ``ppo_flow``, and whether the winner holds out longer at
+    both."""
     speed = {a: _breaking(data, a, "forward_speed") for a in (FLOW, WINNER_POOLED)}
     density = {a: _breaking(data, a, "obstacle_density") for a in (FLOW, WINNER_POOLED)}
     return {
@@ -96,16 +92,48 @@ def winner_values(data: BenchmarkData) -> Values:
         "winner_density_break": _break_text(density[WINNER_POOLED]),
         "flow_speed_break": _break_text(speed[FLOW], "m/s"),
         "flow_density_break": _break_text(density[FLOW]),
-        "depth_worst": compared(worst),
-        "depth_best": compared(best),
+    }
+
+
+def _direct_depth_values(pairs: list[Pair]) -> Values:
+    """The direct depth error cells where the winner fares worst and best against ``ppo_flow``."""
+    depth = [(f, x, w.rate - p.rate, w, p) for f, x, w, p in pairs if f in DIRECT_DEPTH]
+    worst, best = max(depth, key=lambda d: d[2]), min(depth, key=lambda d: d[2])
+    return {"depth_worst": _compared(worst), "depth_best": _compared(best)}
+
+
+def _compared(item: tuple[str, float, float, Any, Any]) -> str:
+    factor, level, difference, mine, theirs = item
+    side = "more" if difference >= 0 else "less"
+    return (
+        f"{abs(difference):.2f} {side} than `ppo_flow` (`{factor}` {level:g}: {rate(mine.rate)} against "
+        f"{rate(theirs.rate)})"
+    )
+
+
+def _worse_cell_values(data: BenchmarkData, pairs: list[Pair]) -> Values:
+    """The cells where the winner fails materially more than ``ppo_flow``, and whether only told rotation
+    errors do it."""
+    worse = [(f, x, w, p) for f, x, w, p in pairs if w.rate - p.rate >= MATERIAL]
+    return {
         "any_worse": bool(worse),
         "rotation_only": bool(worse) and all(f in TOLD_ROTATION for f, *_ in worse),
         "material": f"{MATERIAL:.2f}",
         "winner_worse_cells": ", ".join(
             f"`{f}` {x:g} ({rate(w.rate)} against {rate(p.rate)})" for f, x, w, p in worse
         ),
-        "worse_clear_note": note,
+        "worse_clear_note": _clear_note(data, worse),
     }
+
+
+def _clear_note(data: BenchmarkData, worse: list[Pair]) -> str:
+    """Which of the worse cells have the two intervals apart; empty when none is worse or all are apart."""
+    clear = [f"`{f}` {x:g}" for f, x, w, p in worse if w.low > p.high]
+    if not worse or len(clear) == len(worse):
+        return ""
+    if clear:
+        return f" (clear of both intervals: {', '.join(clear)})"
+    return f" (none of these differences is clear of both intervals on {next(iter(data.cells.values())).episodes} layouts)"
 
 
 def thesis_model_values(data: BenchmarkData) -> Values:

@@ -168,31 +168,27 @@ def breaking_values(data: BenchmarkData) -> Values:
         {key[1] for key in data.cells} - {"clean"},
         key=lambda f: list(FACTORS).index(f) if f in FACTORS else 99,
     )
-    per_cell = sorted({c.episodes for key, c in data.cells.items()})
-    layouts = sorted({int(r["seed"]) for r in data.sweep_rows})
     best_reactive, _ = best_agents(data)
     learned_best = best_learned_flow_agent(table) or f"{WINNER}@all"
-    columns = ["ppo_flow@all", learned_best, best_reactive["agent"]]
-    speed, frame_rate = neutral_level("forward_speed"), neutral_level("frame_rate")
-    metres_per_frame = speed / frame_rate
-    rows = []
-    for factor in factors:
-        label, _, what = FACTORS.get(factor, (factor, "", ""))
-        if factor == "forward_speed":
-            what += f" ({metres_per_frame:g} m at {speed:g} m/s)"
-        rows.append([label, *(_break_cell(data, a, factor) for a in columns), what])
-    header = ["factor", *(f"{display_name(a)} breaks at" for a in columns), "what it is"]
-    clean = {r["agent"]: r["clean_failure"] for r in table}
-    versions = []
-    for version, n, which in data.sweep_code_versions:
-        note = ""
-        if len(which) < len(agents):
-            named = [display_name(a) for a in which]
-            note = f" (only {join_words(named)})" if len(which) <= len(agents) / 2 else ""
-            left = [display_name(a) for a in agents if base_agent_name(a) not in which]
-            note = note or f" (all but {join_words(left)})"
-        versions.append(f"{count(n)} at {commit_of(version)}{note}")
     learned = [a for a in agents if "@" in a]
+    return {
+        **_sweep_size_values(data, factors, agents),
+        "sweep_learned": join_words(
+            [f"{display_name(a)} ({data.sweep_seeds[base_agent_name(a)]} seeds)" for a in learned]
+        ),
+        "sweep_code": _sweep_code(data, agents),
+        **_clean_values(data, table),
+        "unbroken_headline": _unbroken_headline(data, ["ppo_flow@all", learned_best]),
+        "breaking_table": _breaking_table(
+            data, factors, ["ppo_flow@all", learned_best, best_reactive["agent"]]
+        ),
+    }
+
+
+def _sweep_size_values(data: BenchmarkData, factors: Sequence[str], agents: Sequence[str]) -> Values:
+    """How many episodes, cells, factors, levels, agents and layouts the sweep has."""
+    per_cell = sorted({c.episodes for key, c in data.cells.items()})
+    layouts = sorted({int(r["seed"]) for r in data.sweep_rows})
     return {
         "sweep_episodes": count(len(data.sweep_rows)),
         "sweep_cells_layouts": (
@@ -206,15 +202,45 @@ def breaking_values(data: BenchmarkData) -> Values:
         "sweep_agent_count": str(len(agents)),
         "sweep_layouts_per_cell": "/".join(map(str, per_cell)),
         "sweep_layouts": f"{layouts[0]:,}{VSEP}{layouts[-1]:,}",
-        "sweep_learned": join_words(
-            [f"{display_name(a)} ({data.sweep_seeds[base_agent_name(a)]} seeds)" for a in learned]
-        ),
-        "sweep_code": "; ".join(versions),
+    }
+
+
+def _sweep_code(data: BenchmarkData, agents: Sequence[str]) -> str:
+    """The commits the sweep's episodes were flown at, each with the agents it flew when not all of them."""
+    versions = []
+    for version, n, which in data.sweep_code_versions:
+        note = ""
+        if len(which) < len(agents):
+            named = [display_name(a) for a in which]
+            note = f" (only {join_words(named)})" if len(which) <= len(agents) / 2 else ""
+            left = [display_name(a) for a in agents if base_agent_name(a) not in which]
+            note = note or f" (all but {join_words(left)})"
+        versions.append(f"{count(n)} at {commit_of(version)}{note}")
+    return "; ".join(versions)
+
+
+def _clean_values(data: BenchmarkData, table: Sequence[dict[str, Any]]) -> Values:
+    """Each sweep agent's clean failure, on the leading table's layouts and in the sweep's own clean cell,
+    best first."""
+    clean = {r["agent"]: r["clean_failure"] for r in table}
+    return {
         "clean_list": ", ".join(f"{display_name(a)} {rate(clean[a])}" for a in sorted(clean, key=clean.get)),
         "sweep_clean_list": ", ".join(
             f"{display_name(a)} {rate(data.cells[(a, 'clean', 0.0)].rate)}"
             for a in sorted(clean, key=clean.get)
         ),
-        "unbroken_headline": _unbroken_headline(data, ["ppo_flow@all", learned_best]),
-        "breaking_table": markdown_table(header, rows),
     }
+
+
+def _breaking_table(data: BenchmarkData, factors: Sequence[str], columns: Sequence[str]) -> str:
+    """Where each factor breaks each agent of ``columns``, with what the factor is."""
+    speed, frame_rate = neutral_level("forward_speed"), neutral_level("frame_rate")
+    metres_per_frame = speed / frame_rate
+    rows = []
+    for factor in factors:
+        label, _, what = FACTORS.get(factor, (factor, "", ""))
+        if factor == "forward_speed":
+            what += f" ({metres_per_frame:g} m at {speed:g} m/s)"
+        rows.append([label, *(_break_cell(data, a, factor) for a in columns), what])
+    header = ["factor", *(f"{display_name(a)} breaks at" for a in columns), "what it is"]
+    return markdown_table(header, rows)

@@ -99,6 +99,22 @@ def best_agents(data: BenchmarkData) -> tuple[dict[str, Any], dict[str, Any]]:
 
 def leaderboard_values(data: BenchmarkData) -> Values:
     """The leading table, its provenance, the training seeds' spread and the probabilities of improvement."""
+    complete = all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard)
+    return {
+        "leaderboard_episodes": count(data.leaderboard_episodes),
+        "leaderboard_layouts": f"{data.layouts[0]:,}{VSEP}{data.layouts[-1]:,}",
+        "leaderboard_complete": complete,
+        "leaderboard_code": _code_versions(data),
+        "layouts_per_run": str(len(data.layouts)),
+        "leaderboard_table": _leaderboard_table(data),
+        "block": str(data.block),
+        "seed_ranges": _seed_ranges(data),
+        "improvement_table": _improvement_table(data),
+    }
+
+
+def _leaderboard_table(data: BenchmarkData) -> str:
+    """The leading table, the best reactive and the best learned flow agent in bold."""
     best_reactive, best_learned = best_agents(data)
     bold = {best_reactive["agent"], best_learned["agent"]}
     rows = []
@@ -122,12 +138,21 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         )
     header = ["agent", "runs", "failure rate [95 % CI]", "success rate [95 % CI]", "collision"]
     header += ["out of bounds", "IQM failure [95 % CI]"]
+    return markdown_table(header, rows)
+
+
+def _code_versions(data: BenchmarkData) -> str:
+    """The commits each agent's episodes were flown at, agents with the same commits named together."""
     groups: dict[tuple[str, ...], list[str]] = {}
     for agent, versions in data.code_versions.items():
         groups.setdefault(tuple(commit_of(v) for v in versions), []).append(f"`{agent}`")
-    code = "; ".join(
+    return "; ".join(
         f"{join_words(list(commits))} ({join_words(agents)})" for commits, agents in groups.items()
     )
+
+
+def _improvement_table(data: BenchmarkData) -> str:
+    """The probability that each learned agent fails less than each reactive one (straight aside)."""
     learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
     reactive = [
         r["agent"] for r in data.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"
@@ -139,18 +164,7 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         ]
         for x in learned
     ]
-    complete = all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard)
-    return {
-        "leaderboard_episodes": count(data.leaderboard_episodes),
-        "leaderboard_layouts": f"{data.layouts[0]:,}{VSEP}{data.layouts[-1]:,}",
-        "leaderboard_complete": complete,
-        "leaderboard_code": code,
-        "layouts_per_run": str(len(data.layouts)),
-        "leaderboard_table": markdown_table(header, rows),
-        "block": str(data.block),
-        "seed_ranges": _seed_ranges(data),
-        "improvement_table": markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], improvement),
-    }
+    return markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], improvement)
 
 
 def _seed_ranges(data: BenchmarkData) -> str:
@@ -207,6 +221,23 @@ def _within(clean: Rate, *conditions: Rate) -> bool:
 def validation_values(data: BenchmarkData) -> Values:
     """The flow-gap levers and the reactive references on validation layouts: clean, at density 0.18 and at
     1.5 m/s, each with its difference from clean."""
+    table, within = _validation_table(data)
+    per_run = {c: {r.episodes // r.runs for r in data.validation[c].values()} for c in data.validation}
+    return {
+        "validation_table": table,
+        "validation_within": join_words([f"`{n}`" for n in within]) or "none",
+        "validation_clean_layouts": "/".join(map(str, sorted(per_run["clean"]))),
+        "validation_condition_layouts": "/".join(map(str, sorted(per_run["density"] | per_run["speed"]))),
+        **_winner_training_values(data),
+        "robustness_limit": f"{ROBUSTNESS_MAX_RISE:.2f}",
+        "robustness_density": f"{ROBUSTNESS_DENSITY:g}",
+        "robustness_speed": f"{ROBUSTNESS_SPEED:g}",
+    }
+
+
+def _validation_table(data: BenchmarkData) -> tuple[str, list[str]]:
+    """The validation table (levers first, then the reactive references) and the names within the robustness
+    limit at both conditions."""
     clean, density, speed = (data.validation[c] for c in ("clean", "density", "speed"))
     names = [name for name in clean if name in density and name in speed]
     names = [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
@@ -229,19 +260,16 @@ def validation_values(data: BenchmarkData) -> Values:
         )
     header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {ROBUSTNESS_DENSITY:g} (Δ)"]
     header += [f"{ROBUSTNESS_SPEED:g} m/s (Δ)", f"within +{ROBUSTNESS_MAX_RISE:.2f} at both"]
-    per_run = {c: {r.episodes // r.runs for r in data.validation[c].values()} for c in data.validation}
+    return markdown_table(header, rows), within
+
+
+def _winner_training_values(data: BenchmarkData) -> Values:
+    """The winner's two training stages: the second's length and both learning rates."""
     stage1, stage2 = data.training[WINNER].init_config or {}, data.training[WINNER].config
     return {
-        "validation_table": markdown_table(header, rows),
-        "validation_within": join_words([f"`{n}`" for n in within]) or "none",
-        "validation_clean_layouts": "/".join(map(str, sorted(per_run["clean"]))),
-        "validation_condition_layouts": "/".join(map(str, sorted(per_run["density"] | per_run["speed"]))),
         "stage2_steps": count(stage2["total_timesteps"]),
         "stage2_lr": learning_rate(stage2["ppo"]["learning_rate"]),
         "stage1_lr": learning_rate(stage1.get("ppo", {}).get("learning_rate", float("nan"))),
-        "robustness_limit": f"{ROBUSTNESS_MAX_RISE:.2f}",
-        "robustness_density": f"{ROBUSTNESS_DENSITY:g}",
-        "robustness_speed": f"{ROBUSTNESS_SPEED:g}",
     }
 
 
@@ -265,7 +293,25 @@ def robustness(data: BenchmarkData) -> dict[str, tuple[float, float]]:
 def flow_gap_target_values(data: BenchmarkData) -> Values:
     """The flow-gap targets on test layouts: the flow–truth gap, who meets the first target, who stays within the
     robustness limit, and the winner's training time."""
-    oracle, winner = data.row("ppo_oracle"), data.row(WINNER)
+    first, winner_first = _first_target_values(data)
+    robust, winner_robust = _robustness_target_values(data)
+    training = _training_time_values(data)
+    in_time = training["winner_in_time"] is True
+    # ppo_oracle is ppo_flow's twin on true depths: the two differ only in what the policy reads.
+    flow_gap = data.compare("ppo_flow", "ppo_oracle")
+    return {
+        "flow_vs_oracle": paired_reading(flow_gap),
+        "flow_costs_nothing": flow_gap.fails_less != "ppo_oracle",
+        **first,
+        **robust,
+        **training,
+        "targets_met": winner_first and winner_robust and in_time,
+    }
+
+
+def _first_target_values(data: BenchmarkData) -> tuple[Values, bool]:
+    """The flow agents at or below the first target's failure limit, and whether the winner is one."""
+    oracle = data.row("ppo_oracle")
     limit = min(TARGET_MAX_FAILURE, TARGET_ORACLE_FACTOR * oracle["failure_rate"])
     flow_agents = [
         r
@@ -273,15 +319,7 @@ def flow_gap_target_values(data: BenchmarkData) -> Values:
         if is_flow_agent(r) and r["agent"] != "straight" and r["agent"] != "ppo_oracle"
     ]
     first = [r for r in flow_agents if r["failure_rate"] <= limit]
-    losses = robustness(data)
-    robust = [a for a, (s, d) in losses.items() if s <= ROBUSTNESS_MAX_RISE and d <= ROBUSTNESS_MAX_RISE]
-    minutes = data.training[WINNER].minutes
-    in_time = max(minutes) <= TRAINING_BUDGET_MINUTES
-    # ppo_oracle is ppo_flow's twin on true depths: the two differ only in what the policy reads.
-    flow_gap = data.compare("ppo_flow", "ppo_oracle")
-    return {
-        "flow_vs_oracle": paired_reading(flow_gap),
-        "flow_costs_nothing": flow_gap.fails_less != "ppo_oracle",
+    values: Values = {
         "target_max_failure": f"{TARGET_MAX_FAILURE:.2f}",
         "target_oracle_factor": f"{TARGET_ORACLE_FACTOR:g}",
         "oracle_rate": rate(oracle["failure_rate"]),
@@ -289,17 +327,34 @@ def flow_gap_target_values(data: BenchmarkData) -> Values:
             [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first]
         )
         or "no agent",
+    }
+    return values, data.row(WINNER) in first
+
+
+def _robustness_target_values(data: BenchmarkData) -> tuple[Values, bool]:
+    """Each sweep agent's rise at the robustness speed and density, who stays within the limit at both, and
+    whether the winner does."""
+    losses = robustness(data)
+    robust = [a for a, (s, d) in losses.items() if s <= ROBUSTNESS_MAX_RISE and d <= ROBUSTNESS_MAX_RISE]
+    values: Values = {
         "robustness_lines": "; ".join(
             f"{display_name(a)} {delta(s)} and {delta(d)}" for a, (s, d) in losses.items()
         ),
         "robust_agents": every_or_all_but(
             [display_name(a) for a in losses], [display_name(a) for a in robust], "agent"
         ),
+    }
+    return values, WINNER in robust
+
+
+def _training_time_values(data: BenchmarkData) -> Values:
+    """The winner's training minutes per seed against the budget."""
+    minutes = data.training[WINNER].minutes
+    return {
         "winner_minutes": span(minutes),
         "winner_cores": "/".join(map(str, data.training[WINNER].cores)),
-        "winner_in_time": in_time,
+        "winner_in_time": max(minutes) <= TRAINING_BUDGET_MINUTES,
         "budget_minutes": f"{TRAINING_BUDGET_MINUTES:.0f}",
-        "targets_met": winner in first and WINNER in robust and in_time,
     }
 
 

@@ -169,28 +169,37 @@ def _seed_status(policies_dir: Path) -> str:
     )
 
 
+# The rise over its clean failure rate the pick must stay within at each condition: the robustness limit.
+PICK_RISE_LIMIT = 0.10
+
+
 def selection_values(result: Mapping[str, Any], search: Mapping[str, Any]) -> Values:
     """The search as it happened and what the fresh layouts say about the pick, worded from the numbers."""
     rises = [r for r in result["rises"] if r["agent"] == PICK]
-    limit = 0.10
+    layouts = search["layouts"]
+    return {
+        "search_count": str(len(search["configs"])),
+        "search_layouts": f"{len(layouts)} ({layouts[0]:,}–{layouts[-1]:,})" if layouts else "0",
+        "confirmation_layouts": str(result["layouts"]),
+        "confirmation_flown": bool(rises),
+        "pick_standing": _pick_standing(rises),
+        "first_stage": COMPARED[0],
+        "first_stage_verdict": _stage_verdict(result, COMPARED[0]),
+        "second_stage_shown": any(d["high"] < 0 for d in result["differences"] if d["other"] == COMPARED[0]),
+        "after_the_search": join_words([f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH]),
+        "first_stage_readings": _stage_readings(result, COMPARED[0]),
+        "plain_verdict": _stage_verdict(result, COMPARED[1]),
+        "plain_readings": _stage_readings(result, COMPARED[1]),
+    }
+
+
+def _pick_standing(rises: Sequence[Mapping[str, Any]]) -> str:
+    """Where the pick stays within :data:`PICK_RISE_LIMIT` of its clean rate (by its whole interval or by its
+    point estimate only) and where it misses it."""
+    limit = PICK_RISE_LIMIT
     met = [r["condition"] for r in rises if r["high"] <= limit]
     point_only = [r["condition"] for r in rises if r["rise"] <= limit < r["high"]]
     missed = [r["condition"] for r in rises if r["rise"] > limit]
-
-    def readings(other: str) -> str:
-        found = [d for d in result["differences"] if d["other"] == other]
-        return "; ".join(
-            f"{d['condition']} {d['difference']:+.3f} [{d['low']:+.3f}, {d['high']:+.3f}]" for d in found
-        )
-
-    def verdict(other: str) -> str:
-        found = [d for d in result["differences"] if d["other"] == other]
-        if found and all(d["high"] < 0 for d in found):
-            return "fails less under every condition"
-        if found and all(d["low"] <= 0 <= d["high"] for d in found):
-            return "shows no difference under any condition"
-        return "differs under some conditions only"
-
     parts = [
         f"{how} at {join_words(conditions)}"
         for how, conditions in (
@@ -202,21 +211,25 @@ def selection_values(result: Mapping[str, Any], search: Mapping[str, Any]) -> Va
     standing = f"stays within +{limit:.2f} of its clean rate {'; '.join(parts)}" if parts else ""
     if missed:
         standing += ("; it " if standing else "") + f"misses that limit at {join_words(missed)}"
-    layouts = search["layouts"]
-    return {
-        "search_count": str(len(search["configs"])),
-        "search_layouts": f"{len(layouts)} ({layouts[0]:,}–{layouts[-1]:,})" if layouts else "0",
-        "confirmation_layouts": str(result["layouts"]),
-        "confirmation_flown": bool(rises),
-        "pick_standing": standing,
-        "first_stage": COMPARED[0],
-        "first_stage_verdict": verdict(COMPARED[0]),
-        "second_stage_shown": any(d["high"] < 0 for d in result["differences"] if d["other"] == COMPARED[0]),
-        "after_the_search": join_words([f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH]),
-        "first_stage_readings": readings(COMPARED[0]),
-        "plain_verdict": verdict(COMPARED[1]),
-        "plain_readings": readings(COMPARED[1]),
-    }
+    return standing
+
+
+def _stage_readings(result: Mapping[str, Any], other: str) -> str:
+    """The pick less ``other`` under each condition, with its interval."""
+    found = [d for d in result["differences"] if d["other"] == other]
+    return "; ".join(
+        f"{d['condition']} {d['difference']:+.3f} [{d['low']:+.3f}, {d['high']:+.3f}]" for d in found
+    )
+
+
+def _stage_verdict(result: Mapping[str, Any], other: str) -> str:
+    """What the differences from ``other`` say together: fewer failures everywhere, none anywhere, or mixed."""
+    found = [d for d in result["differences"] if d["other"] == other]
+    if found and all(d["high"] < 0 for d in found):
+        return "fails less under every condition"
+    if found and all(d["low"] <= 0 <= d["high"] for d in found):
+        return "shows no difference under any condition"
+    return "differs under some conditions only"
 
 
 def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> Values:

@@ -1,6 +1,9 @@
 """Reports as Jinja2 templates over values: one function computes a dictionary of numbers and tables from the
 committed data, one template (``<package>/templates/*.md.j2``) words it, and the small filters here turn a
 number into text. Markdown needs no escaping, and an undefined value is an error rather than an empty string.
+
+Block tags alone on their line take the line with them (``trim_blocks``, ``lstrip_blocks``), so sections leave no
+blank lines behind; a block tag inside a line that ends it is written ``{% endif +%}`` to keep the newline.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import jinja2
+import jinja2.meta
 
 
 def rate(value: float) -> str:
@@ -53,11 +57,48 @@ def environment(package: str) -> jinja2.Environment:
     return made
 
 
-def render(package: str, template: str, values: Mapping[str, Any]) -> str:
+def render(package: str, template: str, values: Mapping[str, Any], *, every_value_used: bool = False) -> str:
     """``package``'s ``templates/<template>`` rendered with ``values``.
+
+    Args:
+        package: the package whose ``templates/`` folder holds the template.
+        template: its file name.
+        values: what it names.
+        every_value_used: also fail on a value the template never names: for a writer that computes its
+            values for this one template, a value left unused means the template drifted from its data.
 
     Raises:
         jinja2.TemplateNotFound: no such template.
-        jinja2.UndefinedError: the template names a value ``values`` lacks.
+        jinja2.UndefinedError: the template names a value ``values`` lacks (on the path it renders).
+        ValueError: ``every_value_used`` and a value the template never names.
     """
+    if every_value_used:
+        unused = unused_values(template_source(package, template), values)
+        if unused:
+            raise ValueError(
+                f"template {template!r}: value {unused[0]!r} is not used by the template (drifted?)"
+            )
     return environment(package).get_template(template).render(**values)
+
+
+def names_in(source: str) -> frozenset[str]:
+    """Every value a template's text names (in a field, a condition or a filter's argument)."""
+    return frozenset(jinja2.meta.find_undeclared_variables(jinja2.Environment().parse(source)))
+
+
+def template_source(package: str, template: str) -> str:
+    """The text of ``package``'s ``templates/<template>``."""
+    made = environment(package)
+    assert made.loader is not None  # environment() always gives one
+    source, _, _ = made.loader.get_source(made, template)
+    return source
+
+
+def unused_values(source: str, values: Mapping[str, Any]) -> list[str]:
+    """The names in ``values`` that the template text ``source`` never names, sorted."""
+    return sorted(set(values) - names_in(source))
+
+
+def template_names(package: str, template: str) -> frozenset[str]:
+    """Every value ``package``'s ``templates/<template>`` names."""
+    return names_in(template_source(package, template))

@@ -1,7 +1,8 @@
 """``benchmark.md``, the README's results and the thesis discussion's closed-loop paragraph, written from the
 committed data alone (nothing is flown).
 
-The prose is in ``templates/`` (``benchmark.md``, ``readme_results.md``, ``thesis_closed_loop.md``); every number
+The prose is in Jinja2 templates in ``templates/`` (``benchmark.md.j2``, ``readme_results.md.j2``,
+``thesis_closed_loop.md.j2``, rendered by :mod:`agents.common.jinja_reports`); every number
 and every claim in it is computed by :mod:`agents.studies.benchmark_values`, :mod:`~agents.studies.benchmark_sweep`
 and :mod:`~agents.studies.benchmark_findings` from :func:`~agents.studies.benchmark_data.load_benchmark_data`.
 The README and the thesis discussion are hand-written files with one generated block each, between two marker
@@ -12,12 +13,11 @@ Nothing is written into ``results/`` unless it is the output folder asked for.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 from agents.common.folders import check_writable_folder
+from agents.common.jinja_reports import render, template_names
 from agents.common.tables import today
-from agents.common.templates import load_template, render_template
 from agents.studies.benchmark_blocks import readme_values, thesis_values
 from agents.studies.benchmark_claims import agents_broken_by, every_or_all_but
 from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
@@ -38,13 +38,13 @@ from agents.studies.benchmark_values import (
     validation_values,
 )
 
-TEMPLATES = Path(__file__).with_name("templates")
-BENCHMARK_TEMPLATE = TEMPLATES / "benchmark.md"
-README_TEMPLATE = TEMPLATES / "readme_results.md"
-THESIS_TEMPLATE = TEMPLATES / "thesis_closed_loop.md"
+# The templates, in this package's templates/ folder.
+PACKAGE = "agents.studies"
+BENCHMARK_TEMPLATE = "benchmark.md.j2"
+README_TEMPLATE = "readme_results.md.j2"
+THESIS_TEMPLATE = "thesis_closed_loop.md.j2"
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
-_FIELD = re.compile(r"\{\{\s*(?:if\s+)?(\w+)\s*\}\}")
 # The claim helpers, re-exported: the report's own vocabulary.
 __all__ = [
     "agents_broken_by",
@@ -57,9 +57,9 @@ __all__ = [
 ]
 
 
-def template_fields(path: Path) -> set[str]:
-    """Every field and condition a template names."""
-    return set(_FIELD.findall(load_template(path))) - {"else", "end"}
+def template_fields(template: str) -> frozenset[str]:
+    """Every value this package's template ``template`` names."""
+    return template_names(PACKAGE, template)
 
 
 def report_values(data: BenchmarkData) -> Values:
@@ -84,9 +84,9 @@ def report_values(data: BenchmarkData) -> Values:
     return values
 
 
-def _render(path: Path, values: Values) -> str:
-    fields = template_fields(path)
-    return render_template(path, {key: value for key, value in values.items() if key in fields})
+def _render(template: str, values: Values) -> str:
+    # The three templates share one set of values, each naming the ones it words.
+    return render(PACKAGE, template, values)
 
 
 def write_benchmark(results_dir: Path, out: Path, command: str) -> list[str]:
@@ -152,7 +152,7 @@ def write_thesis_closed_loop(results_dir: Path, text_file: Path) -> str:
     return _rewrite_block(results_dir, Path(text_file), THESIS_TEMPLATE, THESIS_MARKERS)
 
 
-def _rewrite_block(results_dir: Path, text_file: Path, template: Path, markers: tuple[str, str]) -> str:
+def _rewrite_block(results_dir: Path, text_file: Path, template: str, markers: tuple[str, str]) -> str:
     """``text_file`` with the block between ``markers`` rendered from ``template`` and the data; written back
     only where it changed."""
     if not text_file.is_file():

@@ -6,7 +6,7 @@ and on the true depths at the same tracked points. Two recipes answer it: the pl
 paired by layout: every training seed of both agents flew the same layouts, the interval resamples training seeds
 (each agent's apart) and layouts (once for both). The sources are the confirmation flights on fresh validation
 layouts (``results/confirmation/``), the suite's frozen test layouts (``results/suite_episodes.csv``) and, for
-the plain recipe, the leading clean table. The prose is ``templates/flow_gap.md``; nothing is flown.
+the plain recipe, the leading clean table. The prose is ``templates/flow_gap.md.j2``; nothing is flown.
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder, write_text_atomically
+from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
 from agents.common.tables import markdown_table, today
-from agents.common.templates import render_template
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
@@ -36,7 +36,7 @@ from agents.studies.benchmark_claims import (
     verdict,
 )
 from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
-from agents.studies.benchmark_report import TEMPLATES, template_fields
+from agents.studies.benchmark_report import PACKAGE
 from agents.studies.benchmark_values import (
     Values,
     flow_gap_target_values,
@@ -58,7 +58,7 @@ from agents.studies.confirmation import (
 from agents.studies.flow_gap_figure import Cell, plot_gap
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
-FLOW_GAP_TEMPLATE = TEMPLATES / "flow_gap.md"
+FLOW_GAP_TEMPLATE = "flow_gap.md.j2"
 # The plain recipe: PPO on the estimator's depths and on the true depths, all else the same.
 PLAIN_FLOW, PLAIN_TRUTH = "ppo_flow", "ppo_oracle"
 # How many training seeds a recipe's gap is measured over.
@@ -372,8 +372,8 @@ def write_flow_gap(
     result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     values = {**flow_gap_values(results, policies_dir, result), "generated": today(), "command": command}
     panels = gap_bars(load_benchmark_data(results), result, results, policies_dir)
-    fields = template_fields(FLOW_GAP_TEMPLATE)
-    text = render_template(FLOW_GAP_TEMPLATE, {key: value for key, value in values.items() if key in fields})
+    # The values include the benchmark's groups whole (leaderboard, validation, targets); the template words some.
+    text = render(PACKAGE, FLOW_GAP_TEMPLATE, values)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)

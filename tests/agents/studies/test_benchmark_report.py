@@ -13,8 +13,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from agents.common.jinja_reports import render, template_source
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.common.templates import load_template, render_template
 from agents.evaluation.paired import Comparison
 from agents.studies.benchmark_claims import (
     WINNER,
@@ -27,6 +27,7 @@ from agents.studies.benchmark_claims import (
 from agents.studies.benchmark_data import INPUTS, BenchmarkData
 from agents.studies.benchmark_report import (
     BENCHMARK_TEMPLATE,
+    PACKAGE,
     README_MARKERS,
     README_TEMPLATE,
     THESIS_MARKERS,
@@ -156,22 +157,24 @@ def test_the_reactive_gap_is_read_from_paired_tests(
     assert values["ppo_flow_vs_ttc"].endswith("`bee_ttc` fails less than `ppo_flow`")
 
 
-_CONDITION = re.compile(r"\{\{\s*if\s+(\w+)\s*\}\}")
+_CONDITION = re.compile(r"\{%\+?\s*if\s+(\w+)\s*\+?%\}")
 
 
-def _render_with(template: Path, true: set[str]) -> str:
-    conditions = set(_CONDITION.findall(load_template(template)))
+def _render_with(template: str, true: set[str]) -> str:
+    conditions = set(_CONDITION.findall(template_source(PACKAGE, template)))
     values: dict[str, str | bool] = {name: f"<{name}>" for name in template_fields(template) - conditions}
     values.update({name: name in true for name in conditions})
-    return render_template(template, values)
+    return render(PACKAGE, template, values)
 
 
 @pytest.mark.parametrize("template", [BENCHMARK_TEMPLATE, README_TEMPLATE, FLOW_GAP_TEMPLATE])
-def test_every_branch_of_a_template_renders(template: Path) -> None:
-    conditions = set(_CONDITION.findall(load_template(template)))
+def test_every_branch_of_a_template_renders(template: str) -> None:
+    conditions = set(_CONDITION.findall(template_source(PACKAGE, template)))
     texts = {_render_with(template, set()), _render_with(template, conditions)}
     texts |= {_render_with(template, {name}) for name in conditions}
-    assert all("{{" not in text and "overlap" not in text for text in texts)
+    assert conditions and all(
+        "{{" not in text and "{%" not in text and "overlap" not in text for text in texts
+    )
 
 
 @pytest.mark.parametrize(
@@ -201,7 +204,7 @@ def test_every_branch_of_a_template_renders(template: Path) -> None:
         (BENCHMARK_TEMPLATE, set(), "are not told apart** (<best_learned_vs_reactive>)"),
     ],
 )
-def test_the_headline_follows_the_paired_verdict(template: Path, true: set[str], headline: str) -> None:
+def test_the_headline_follows_the_paired_verdict(template: str, true: set[str], headline: str) -> None:
     assert headline in " ".join(_render_with(template, true).split())
 
 

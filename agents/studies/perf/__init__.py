@@ -1,4 +1,4 @@
 """Speed benchmarks that write their tables, CSVs and plots: the estimator per stage (:mod:`.estimator_speed`,
 :mod:`.estimator_speed_report`), the env per step (:mod:`.env_speed`, :mod:`.env_speed_report`) and PPO training
 (:mod:`.training_speed`), on a scripted flight (:mod:`.flight`); depth yield and accuracy per estimator setting
-(:mod:`.depth_yield`). Reports fill the templates in ``templates/`` (:mod:`agents.common.templates`)."""
+(:mod:`.depth_yield`). Reports render the Jinja2 templates in ``templates/`` (:mod:`agents.common.jinja_reports`)."""

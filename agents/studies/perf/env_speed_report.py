@@ -1,5 +1,5 @@
 """``env_performance.md`` and its figure: steps per second per resolution and FAST threshold against the bare
-loop, the per-stage breakdown of a step, and the reasoning behind the env's default resolution and threshold. The prose is ``templates/env_performance.md``;
+loop, the per-stage breakdown of a step, and the reasoning behind the env's default resolution and threshold. The prose is ``templates/env_performance.md.j2``;
 :func:`env_report_values` computes every figure and verdict it states."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.common.jinja_reports import render
 from agents.common.machine import available_cores
 from agents.common.tables import markdown_table, today, write_csv
-from agents.common.templates import render_template
 from agents.evaluation.provenance import gl_renderer, is_software_renderer
 from agents.studies.perf.env_speed import (
     DEFAULT_RESOLUTIONS,
@@ -26,6 +26,7 @@ from agents.studies.perf.env_speed_targets import floor_target_values, ratio_tar
 from agents.studies.perf.timing import hardware_summary
 
 TEMPLATES = Path(__file__).with_name("templates")
+PACKAGE = "agents.studies.perf"
 
 
 def run_env_benchmark(
@@ -135,7 +136,7 @@ def env_report(rows: list[dict[str, Any]], command: str, steps: int, repeats: in
         software_renderer=is_software_renderer(renderer),
         cores=available_cores(),
     )
-    return render_template(TEMPLATES / "env_performance.md", values)
+    return render(PACKAGE, "env_performance.md.j2", values, every_value_used=True)
 
 
 def env_report_values(
@@ -160,7 +161,7 @@ def env_report_values(
         cores: the cores the benchmark could use.
 
     Returns:
-        The values of ``templates/env_performance.md``: text fields and section conditions.
+        The values of ``templates/env_performance.md.j2``: text fields and section conditions.
     """
     default = rows[0]
     return {

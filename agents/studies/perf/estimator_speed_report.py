@@ -1,5 +1,5 @@
 """``estimator_performance.md`` and its figure: the thesis's Table 3 and Figs. 39-40 from the benchmark's rows.
-The prose is ``templates/estimator_performance.md``; :func:`estimator_report_values` computes what it states."""
+The prose is ``templates/estimator_performance.md.j2``; :func:`estimator_report_values` computes what it states."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from agents.common.jinja_reports import render
 from agents.common.tables import markdown_table, today, write_csv
-from agents.common.templates import render_template
 from agents.studies.perf.estimator_speed import (
     DEFAULT_THRESHOLD,
     MAX_LEVEL,
@@ -23,6 +23,7 @@ from agents.studies.perf.flight import record_flight
 from agents.studies.perf.timing import hardware_summary
 
 TEMPLATES = Path(__file__).with_name("templates")
+PACKAGE = "agents.studies.perf"
 # The verdicts judge the rows with at least this many points per frame: at a handful of points every pipeline is
 # dominated by fixed per-call costs.
 WORKING_POINTS = 100
@@ -190,7 +191,7 @@ def estimator_report(
         generated=today(),
         hardware=hardware_summary(),
     )
-    return render_template(TEMPLATES / "estimator_performance.md", values)
+    return render(PACKAGE, "estimator_performance.md.j2", values, every_value_used=True)
 
 
 def estimator_report_values(
@@ -215,7 +216,7 @@ def estimator_report_values(
         hardware: the machine's Markdown list (:func:`hardware_summary`).
 
     Returns:
-        The values of ``templates/estimator_performance.md``: text fields and section conditions.
+        The values of ``templates/estimator_performance.md.j2``: text fields and section conditions.
     """
     return {
         "generated": generated,
@@ -333,7 +334,7 @@ def _working_range_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
 
 
 def _verdict(table: list[dict[str, Any]], count_key: str, key: str, ok: Callable[[float], bool]) -> str:
-    """One target's verdict (``templates/target_verdict.md``): at the default threshold, and over the working
+    """One target's verdict (``templates/target_verdict.md.j2``): at the default threshold, and over the working
     range of point counts, where fixed per-call costs no longer dominate."""
     values = [row[key] for row in _working(table, count_key)]
     at_default = next((row[key] for row in table if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
@@ -346,7 +347,8 @@ def _verdict(table: list[dict[str, Any]], count_key: str, key: str, ok: Callable
     }
     if at_default is not None:
         fields.update(at_default=f"{at_default:.2f}", met=bool(ok(at_default)))
-    return render_template(TEMPLATES / "target_verdict.md", fields, inline=True)
+    # The verdict sits inside a line of the report: the template file's final newline is not part of it.
+    return render(PACKAGE, "target_verdict.md.j2", fields, every_value_used=True).removesuffix("\n")
 
 
 def _target_values(rows: list[dict[str, Any]], depth_rows: list[dict[str, Any]]) -> dict[str, str]:

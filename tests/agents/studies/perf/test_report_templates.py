@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agents.common.templates import render_template
+from agents.common.jinja_reports import names_in, render, template_source, unused_values
 from agents.studies.perf import env_speed_report, estimator_speed_report
 
 DATA = Path(__file__).with_name("data")
@@ -46,7 +46,9 @@ def render_estimator(case: dict[str, Any]) -> str:
         generated=GENERATED,
         hardware=HARDWARE,
     )
-    return render_template(estimator_speed_report.TEMPLATES / "estimator_performance.md", values)
+    return render(
+        estimator_speed_report.PACKAGE, "estimator_performance.md.j2", values, every_value_used=True
+    )
 
 
 def render_env(case: dict[str, Any]) -> str:
@@ -61,7 +63,7 @@ def render_env(case: dict[str, Any]) -> str:
         software_renderer=case["software"],
         cores=case["cores"],
     )
-    return render_template(env_speed_report.TEMPLATES / "env_performance.md", values)
+    return render(env_speed_report.PACKAGE, "env_performance.md.j2", values, every_value_used=True)
 
 
 def as_numpy(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -130,9 +132,9 @@ def test_the_full_writers_fill_their_templates_on_this_machine(monkeypatch: pyte
 ALLOWED_NUMBERS = ("Table 3", "Figs. 39–40", "1000 / total ms", "×2 +")
 
 
-@pytest.mark.parametrize("path", sorted(estimator_speed_report.TEMPLATES.glob("*.md")), ids=lambda p: p.name)
+@pytest.mark.parametrize("path", sorted(estimator_speed_report.TEMPLATES.glob("*.j2")), ids=lambda p: p.name)
 def test_templates_hold_no_typed_figures(path: Path) -> None:
-    prose = re.sub(r"\{\{.*?\}\}", "", path.read_text(encoding="utf-8"))
+    prose = re.sub(r"\{\{.*?\}\}|\{%.*?%\}", "", path.read_text(encoding="utf-8"))
     for label in ALLOWED_NUMBERS:
         prose = prose.replace(label, "")
     assert re.findall(r".{0,30}(?<![\w.])\d+(?:\.\d+)?(?!\w).{0,30}", prose) == []
@@ -147,17 +149,19 @@ def test_templates_ship_as_package_data() -> None:
     package = Path(estimator_speed_report.__file__).parent
     shipped = {path for pattern in package_data["agents.studies.perf"] for path in package.glob(pattern)}
     assert set(estimator_speed_report.TEMPLATES.glob("*")) == shipped
-    assert shipped >= {env_speed_report.TEMPLATES / "env_performance.md"}
+    assert shipped >= {env_speed_report.TEMPLATES / "env_performance.md.j2"}
 
 
-def test_an_edited_template_that_drifts_from_its_values_fails(tmp_path: Path) -> None:
-    template = tmp_path / "estimator_performance.md"
-    text = (estimator_speed_report.TEMPLATES / "estimator_performance.md").read_text(encoding="utf-8")
-    template.write_text(text.replace("{{agreement_pct}}", "100.00"), encoding="utf-8")
+def test_an_edited_template_that_drifts_from_its_values_fails() -> None:
+    text = template_source(estimator_speed_report.PACKAGE, "estimator_performance.md.j2")
+    assert "agreement_pct" in names_in(text)
+    edited = text.replace("{{ agreement_pct }}", "100.00")
     case = copy.deepcopy(estimator_case("full"))
     values = estimator_speed_report.estimator_report_values(
         case["rows"], case["depth_rows"], case["flight"], case["command"], 3, 10, 1.0,
         defaults=case["defaults"], generated=GENERATED, hardware=HARDWARE,
     )  # fmt: skip
-    with pytest.raises(ValueError, match=r"template 'estimator_performance\.md': value 'agreement_pct' is not used"):
-        render_template(template, values)
+    assert unused_values(edited, values) == ["agreement_pct"]
+    drifted = {**values, "extra": "1"}
+    with pytest.raises(ValueError, match=r"template 'estimator_performance\.md\.j2': value 'extra' is not used"):
+        render(estimator_speed_report.PACKAGE, "estimator_performance.md.j2", drifted, every_value_used=True)

@@ -56,7 +56,8 @@ def main() -> None:
     parser.add_argument("--out", default="planner_student_check.jsonl")
     args = parser.parse_args()
     if args.policy:
-        label = Path(args.policy).stem
+        # runs/<dir>/<name>/seed_<k>.zip -> <name>/seed_<k>: the run as well as its seed
+        label = "/".join(Path(args.policy).with_suffix("").parts[-2:])
         agent = load_policy_file(Path(args.policy))
         env_kwargs = dict(_policy_env(Path(args.policy)))
     else:

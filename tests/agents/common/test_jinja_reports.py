@@ -1,0 +1,51 @@
+"""The Jinja2 reports (agents.common.jinja_reports): block tags take their line, a missing value fails, and a
+writer can insist that every value it gives is named."""
+
+from __future__ import annotations
+
+import jinja2
+import pytest
+
+from agents.common.jinja_reports import environment, names_in, render, template_names, unused_values
+
+
+def _render(text: str, **values: object) -> str:
+    # The studies' environment, on a template given as text: the same whitespace rules and filters.
+    return environment("agents.studies").from_string(text).render(**values)
+
+
+def test_a_block_tag_alone_on_its_line_takes_the_line() -> None:
+    text = "head\n  {% if extra %}\n## Extra\n{% endif %}\nend\n"
+    assert _render(text, extra=True) == "head\n## Extra\nend\n"
+    assert _render(text, extra=False) == "head\nend\n"
+
+
+def test_an_inline_block_tag_before_a_newline_keeps_it_when_asked() -> None:
+    assert _render("a {% if x %}b{% endif %}\nc", x=True) == "a bc"
+    assert _render("a {% if x %}b{% endif +%}\nc", x=True) == "a b\nc"
+
+
+def test_a_missing_value_fails_and_filters_format_numbers() -> None:
+    with pytest.raises(jinja2.UndefinedError):
+        _render("{{ speed }} m/s")
+    assert _render("{{ x | rate }} {{ d | signed }} {{ p | p_value }}", x=0.25, d=0.0214, p=0.0004) == (
+        "0.25 +0.021 < 0.001"
+    )
+
+
+def test_names_and_unused_values() -> None:
+    text = "{% if met %}{{ value }}{% else %}{{ low | interval(high) }}{% endif %}"
+    assert names_in(text) == {"met", "value", "low", "high"}
+    assert unused_values(text, {"met": True, "value": "1", "stale": "2"}) == ["stale"]
+    assert "leaderboard_table" in template_names("agents.studies", "benchmark.md.j2")
+
+
+def test_every_value_used_names_the_template_and_the_value() -> None:
+    names = template_names("agents.studies.perf", "target_verdict.md.j2")
+    values = {name: "1" for name in names} | {"swept": True, "met": True, "stale": "x"}
+    with pytest.raises(ValueError, match=r"template 'target_verdict\.md\.j2': value 'stale' is not used"):
+        render("agents.studies.perf", "target_verdict.md.j2", values, every_value_used=True)
+    del values["stale"]
+    assert render("agents.studies.perf", "target_verdict.md.j2", values, every_value_used=True).startswith(
+        "1× → **met**"
+    )

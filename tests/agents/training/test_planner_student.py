@@ -12,6 +12,7 @@ import pytest
 from helpers import SMALL, tiny_train_config
 
 from agents.common.yaml_config import ConfigError, load_config
+from agents.policies.learned import agent_env_kwargs
 from agents.policies.teachers import PlannerTeacher, check_teacher, make_teacher
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fly
@@ -71,7 +72,8 @@ def test_a_planner_taught_run_records_the_teacher_and_ships_an_ordinary_config(t
     assert summary["teacher"] == "planner" and summary["teacher_env"] == {"observe_layout": True}
     assert [r["states"] for r in summary["rounds"]] == [8, 16]
     # The saved env is the student's own: nothing privileged; past the test's small camera, what any tier allows.
-    saved = load_config(files.config, TrainConfig).env
+    saved = agent_env_kwargs("ppo_flow", files.policy)  # what evaluation flies the run's policy with
+    assert saved == load_config(files.config, TrainConfig).env
     assert privileged_requests(saved) == {}
     for tier_name in TIER_NAMES:
         check_agent_settings("student", {k: v for k, v in saved.items() if k not in SMALL}, tier_name)

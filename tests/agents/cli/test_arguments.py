@@ -9,7 +9,7 @@ import pytest
 
 from agents.cli import build_parser, main
 from agents.cli.arguments import DEFAULT_WORKERS, env_kwarg
-from agents.policies import AGENT_NAMES
+from agents.policies import AGENT_NAMES, HISTORY_AGENTS
 
 
 @pytest.mark.parametrize(
@@ -46,12 +46,12 @@ def test_demo_takes_the_policies_folder_by_leaderboard_s_name_and_its_old_one() 
     assert parser.parse_args(["leaderboard", "--policies-dir", "/tmp/p"]).policies_dir == "/tmp/p"
 
 
-@pytest.mark.parametrize("command", ["leaderboard", "suite"])
+@pytest.mark.parametrize(("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", AGENT_NAMES)])
 def test_help_never_cuts_an_agent_name(
-    command: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+    command: str, names: tuple[str, ...], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setenv("COLUMNS", "80")
     with pytest.raises(SystemExit):
         main([command, "--help"])
     words = {word.strip("()") for word in capsys.readouterr().out.replace(",", " ").split()}
-    assert set(AGENT_NAMES) <= words
+    assert set(names) <= words

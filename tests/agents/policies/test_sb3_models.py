@@ -18,6 +18,7 @@ import flownav_env  # noqa: F401
 from agents.cli import main
 from agents.evaluation.records import read_records
 from agents.policies import agent_env_kwargs, agent_parameters, load_agent
+from agents.policies.external import display_name
 from agents.policies.sb3_models import sb3_model_name
 
 SMALL = {"camera_width": 96, "camera_height": 72}
@@ -111,4 +112,5 @@ def test_a_saved_model_is_scored_on_the_suite(algo: str, tmp_path: Path) -> None
     argv = ["score", "--policy", str(path), "--algo", algo, "--tiers", "hard", "--layouts", "1", "--workers", "1"]
     assert main([*argv, "--out", str(out)]) == 0
     (row,) = read_suite_csv(out / "score.csv")
-    assert row["agent"] == sb3_model_name(algo, path) and row["tier"] == "hard" and row["episodes"] == 1
+    assert row["agent"] == display_name(sb3_model_name(algo, path)) == f"{algo}:{path.stem}"
+    assert row["tier"] == "hard" and row["episodes"] == 1

@@ -56,8 +56,8 @@ def main() -> None:
     parser.add_argument("--out", default="planner_student_check.jsonl")
     args = parser.parse_args()
     if args.policy:
-        # runs/<dir>/<name>/seed_<k>.zip -> <name>/seed_<k>: the run as well as its seed
-        label = "/".join(Path(args.policy).with_suffix("").parts[-2:])
+        # runs/<dir>/<name>/seed_<k>/seed_<k>.zip -> <name>/seed_<k>: the run as well as its seed
+        label = f"{Path(args.policy).parent.parent.name}/{Path(args.policy).stem}"
         agent = load_policy_file(Path(args.policy))
         env_kwargs = dict(_policy_env(Path(args.policy)))
     else:

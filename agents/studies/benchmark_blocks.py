@@ -14,8 +14,8 @@ from agents.studies.benchmark_values import (
     ROBUSTNESS_MAX_RISE,
     Values,
     best_agents,
-    robustness,
 )
+from agents.studies.flow_gap_targets import robustness
 
 _NUMBER_WORDS = (
     "no",

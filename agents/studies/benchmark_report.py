@@ -31,12 +31,12 @@ from agents.studies.benchmark_findings import (
 from agents.studies.benchmark_sweep import breaking_values
 from agents.studies.benchmark_values import (
     Values,
-    flow_gap_target_values,
     leaderboard_values,
     reactive_gap_values,
     setup_values,
     validation_values,
 )
+from agents.studies.flow_gap_targets import flow_gap_target_values
 
 # The templates, in this package's templates/ folder.
 PACKAGE = "agents.studies"

@@ -39,7 +39,6 @@ from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
 from agents.studies.benchmark_report import PACKAGE
 from agents.studies.benchmark_values import (
     Values,
-    flow_gap_target_values,
     leaderboard_values,
     reactive_gap_values,
     validation_values,
@@ -56,6 +55,7 @@ from agents.studies.confirmation import (
     search_record,
 )
 from agents.studies.flow_gap_figure import Cell, plot_gap
+from agents.studies.flow_gap_targets import flow_gap_target_values
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 FLOW_GAP_TEMPLATE = "flow_gap.md.j2"

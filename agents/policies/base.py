@@ -11,19 +11,24 @@ REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
 # its levers: course distribution, approach input, a gentler second curriculum stage; results/flow_gap.md).
 # ppo_flow_course_approach_curriculum_slow_oracle: the same recipe told the true depths at the same tracked points,
 # the yardstick of what flow costs it (the true-depth comparison), as ppo_oracle is ppo_flow's.
+# ppo_flow_planner_student: the privileged planner distilled (DAgger) into a flow-only policy, one policy trained
+# across the tiers' courses and sensors (configs/experiments/ppo_flow_planner_student.yaml).
 LEARNED_AGENTS = (
     "ppo_flow",
     "ppo_robust",
     "ppo_oracle",
     "ppo_flow_course_approach_curriculum_slow",
     "ppo_flow_course_approach_curriculum_slow_oracle",
+    "ppo_flow_planner_student",
 )
+# Learned agents trained across the tiers, flown on the suite only: the clean tier's history table predates them.
+SUITE_ONLY_AGENTS = ("ppo_flow_planner_student",)
 # Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
 PLANNERS = ("planner",)
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
 # The agents of the clean tier's history table and the demo: every agent but the planners, which are flown only
-# on the suite, as each tier's bound.
-HISTORY_AGENTS = REACTIVE_AGENTS + LEARNED_AGENTS
+# on the suite, as each tier's bound, and the suite-only learned agents.
+HISTORY_AGENTS = REACTIVE_AGENTS + tuple(agent for agent in LEARNED_AGENTS if agent not in SUITE_ONLY_AGENTS)
 # The agents that read what a tier's sensor does not give (true depths at the tracked points; the capsule layout
 # and the true state). Each is a reference of what perfect sensing allows: listed apart in every table, never
 # ranked or named best. An agent whose settings ask for privileged data without being listed here is refused by

@@ -8,71 +8,71 @@ Every public entry point validates its arguments with these helpers so that bad 
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 # A rotation matrix from a simulator or an IMU pipeline carries float rounding; anything further from
 # orthonormal than this is a bug upstream (e.g. a transposed pose or a scaled matrix), not rounding.
 ROTATION_TOLERANCE = 1e-5
 
 
-def require_positive_finite(name: str, value: Any) -> float:
+def require_positive_finite(name: str, value: object) -> float:
     """Return ``value`` as a float, requiring 0 < value < inf."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a positive finite number (0 < {name} < inf), got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
+    number = float(value)
+    if not math.isfinite(number) or number <= 0.0:
         raise ValueError(f"{name} must be a positive finite number (0 < {name} < inf), got {value!r}")
-    return value
+    return number
 
 
-def require_non_negative_finite(name: str, value: Any) -> float:
+def require_non_negative_finite(name: str, value: object) -> float:
     """Return ``value`` as a float, requiring 0 <= value < inf."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a finite number >= 0 (0 <= {name} < inf), got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0:
+    number = float(value)
+    if not math.isfinite(number) or number < 0.0:
         raise ValueError(f"{name} must be a finite number >= 0 (0 <= {name} < inf), got {value!r}")
-    return value
+    return number
 
 
-def require_finite(name: str, value: Any) -> float:
+def require_finite(name: str, value: object) -> float:
     """Return ``value`` as a float, requiring it to be finite."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
+    number = float(value)
+    if not math.isfinite(number):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
-    return value
+    return number
 
 
-def require_int_in_range(name: str, value: Any, low: int, high: int | None = None) -> int:
+def require_int_in_range(name: str, value: object, low: int, high: int | None = None) -> int:
     """Return ``value`` as an int, requiring low <= value (<= high when given)."""
     allowed = f"{low} <= {name}" + (f" <= {high}" if high is not None else "")
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an integer with {allowed}, got {value!r}")
-    value = int(value)
-    if value < low or (high is not None and value > high):
+    number = int(value)
+    if number < low or (high is not None and number > high):
         raise ValueError(f"{name} must be an integer with {allowed}, got {value!r}")
-    return value
+    return number
 
 
-def require_bool(name: str, value: Any) -> bool:
+def require_bool(name: str, value: object) -> bool:
     """Return ``value`` as a bool, requiring an actual bool (not 0/1 or a string)."""
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {value!r}")
     return bool(value)
 
 
-def as_rotation_matrix(name: str, value: Any) -> np.ndarray:
+def as_rotation_matrix(name: str, value: ArrayLike) -> NDArray[np.float64]:
     """Return ``value`` as a float64 (3, 3) proper rotation matrix (R^T R = I, det R = +1)."""
     matrix = _as_float_array(name, value, "a 3x3 rotation matrix")
     if matrix.shape != (3, 3):
         raise ValueError(f"{name} must be a 3x3 rotation matrix, got an array of shape {matrix.shape}")
     # Plain floats: this runs on every frame, where numpy's per-call cost on a 3x3 is larger than the maths.
     entries = matrix.ravel().tolist()
-    if not all(math.isfinite(value) for value in entries):
+    if not all(math.isfinite(entry) for entry in entries):
         raise ValueError(f"{name} must be a finite 3x3 rotation matrix, got non-finite entries")
     a, b, c, d, e, f, g, h, i = entries
     orthogonality_error = max(  # the entries of R^T R - I, written out
@@ -92,7 +92,7 @@ def as_rotation_matrix(name: str, value: Any) -> np.ndarray:
     return matrix
 
 
-def as_translation_vector(name: str, value: Any) -> np.ndarray:
+def as_translation_vector(name: str, value: ArrayLike) -> NDArray[np.float64]:
     """Return ``value`` as a finite float64 (3,) vector; (3, 1) and (1, 3) are accepted and flattened."""
     vector = _as_float_array(name, value, "a finite 3-vector in metres")
     if vector.size != 3 or vector.ndim > 2:
@@ -103,7 +103,7 @@ def as_translation_vector(name: str, value: Any) -> np.ndarray:
     return vector
 
 
-def _as_float_array(name: str, value: Any, expected: str) -> np.ndarray:
+def _as_float_array(name: str, value: ArrayLike, expected: str) -> NDArray[np.float64]:
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -111,7 +111,7 @@ def _as_float_array(name: str, value: Any, expected: str) -> np.ndarray:
     return array
 
 
-def as_grid(name: str, value: Any) -> tuple[int, int]:
+def as_grid(name: str, value: object) -> tuple[int, int]:
     """Return ``value`` as a ``(rows, cols)`` pair of integers, each in [1, 64]."""
     if not isinstance(value, (tuple, list)) or len(value) != 2:
         raise ValueError(f"{name} must be a (rows, cols) pair of integers in [1, 64], got {value!r}")

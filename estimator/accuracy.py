@@ -25,6 +25,7 @@ import numpy as np
 from estimator.camera import CameraIntrinsics
 from estimator.estimator import FlowDepthEstimator
 from estimator.geometry import predict_next_pixels
+from estimator.points import DepthPoints
 
 _COLOR_SUFFIXES = (".jpg", ".jpeg", ".png")
 _MILLIMETRES_PER_METRE = 1000.0
@@ -233,7 +234,7 @@ def format_error_table(rows: list[dict[str, Any]]) -> str:
 
 def _pair_errors(
     pair: tuple[int, int],
-    result: Any,
+    result: DepthPoints,
     true_depth: np.ndarray,
     rotation: np.ndarray,
     translation: np.ndarray,
@@ -285,7 +286,7 @@ def _load_sequence(sequence_dir: Path) -> tuple[list[np.ndarray], list[Path], li
     return [_read_color(path) for path in color_paths], depth_paths, poses
 
 
-def _format_cell(value: Any, fmt: str) -> str:
+def _format_cell(value: object, fmt: str) -> str:
     if isinstance(value, float) and not np.isfinite(value):
         return "-"
     return fmt.format(value)

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import time
-from typing import Any
 
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike
 
 from estimator import geometry, multiframe, tracking
 from estimator._validation import (
@@ -175,11 +175,11 @@ class FlowDepthEstimator:
         self.max_epipolar_error_px = require_positive_finite("max_epipolar_error_px", max_epipolar_error_px)
         self.baseline_frames = require_int_in_range("baseline_frames", baseline_frames, 1, 16)
         self._window = multiframe.TrackWindow(self.baseline_frames) if self.baseline_frames > 1 else None
-        self._detector = cv2.FastFeatureDetector_create(self.fast_threshold, True)
+        self._detector = cv2.FastFeatureDetector.create(self.fast_threshold, True)
         self._previous: tracking.PreparedFrame | None = None
 
     def estimate(
-        self, prev_image: np.ndarray, next_image: np.ndarray, rotation: Any, translation: Any
+        self, prev_image: np.ndarray, next_image: np.ndarray, rotation: ArrayLike, translation: ArrayLike
     ) -> DepthPoints:
         """Depth of the previous frame's keypoints from one frame pair.
 
@@ -211,7 +211,7 @@ class FlowDepthEstimator:
         current = self._prepare(next_gray, timings)
         return self._estimate_pair(previous, current, rotation, translation, timings, start)
 
-    def update(self, image: np.ndarray, rotation: Any, translation: Any) -> DepthPoints:
+    def update(self, image: np.ndarray, rotation: ArrayLike, translation: ArrayLike) -> DepthPoints:
         """Streaming estimation: depth of the previous frame's keypoints, then remember this frame.
 
         The frame is converted and normalised once and kept as the previous frame of the next call (see
@@ -280,7 +280,8 @@ class FlowDepthEstimator:
         previous_normalized = self.intrinsics.normalize(points)
         next_normalized = self.intrinsics.normalize(tracks.next_points)
         baseline = None
-        if self._window is None:
+        window = self._window
+        if window is None:
             solution = geometry.solve_depth(
                 previous_normalized,
                 next_normalized,
@@ -295,7 +296,7 @@ class FlowDepthEstimator:
             )
         else:
             ranging = self._range_tracks(
-                previous_normalized, next_normalized, tracks, tracked, rotation, translation
+                window, previous_normalized, next_normalized, tracks, tracked, rotation, translation
             )
             depth, parallax, geometry_ok, baseline = (
                 ranging.depth,
@@ -328,6 +329,7 @@ class FlowDepthEstimator:
 
     def _range_tracks(
         self,
+        window: multiframe.TrackWindow,
         previous_normalized: np.ndarray,
         next_normalized: np.ndarray,
         tracks: tracking.Tracks,
@@ -336,7 +338,6 @@ class FlowDepthEstimator:
         translation: np.ndarray,
     ) -> multiframe.Ranging:
         """Depths over the window's baselines; then the window moves on to the next frame."""
-        window = self._window
         anchors, frames_back = window.anchors()
         ranging = multiframe.range_over_baselines(
             self.intrinsics.normalize(anchors),
@@ -386,5 +387,5 @@ class FlowDepthEstimator:
             )
 
     @staticmethod
-    def _check_motion(rotation: Any, translation: Any) -> tuple[np.ndarray, np.ndarray]:
+    def _check_motion(rotation: ArrayLike, translation: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         return as_rotation_matrix("rotation", rotation), as_translation_vector("translation", translation)

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from estimator._validation import require_int_in_range
 
@@ -17,12 +18,12 @@ DEFAULT_SECTORS: tuple[int, int] = (3, 3)
 
 
 def sector_histogram(
-    points: Any,
-    depth: Any,
-    valid: Any,
+    points: ArrayLike,
+    depth: ArrayLike,
+    valid: ArrayLike,
     image_size: tuple[int, int],
     sectors: tuple[int, int] = DEFAULT_SECTORS,
-    bin_edges: Any = DEFAULT_BIN_EDGES,
+    bin_edges: ArrayLike = DEFAULT_BIN_EDGES,
 ) -> np.ndarray:
     """Per image sector, the distribution of valid point depths over depth bins.
 
@@ -60,9 +61,9 @@ def sector_histogram(
 
 
 def sector_fraction(
-    points: Any,
-    selected: Any,
-    among: Any,
+    points: ArrayLike,
+    selected: ArrayLike,
+    among: ArrayLike,
     image_size: tuple[int, int],
     sectors: tuple[int, int] = DEFAULT_SECTORS,
 ) -> np.ndarray:
@@ -98,8 +99,8 @@ def sector_fraction(
 
 
 def sector_counts(
-    points: Any,
-    counted: Any,
+    points: ArrayLike,
+    counted: ArrayLike,
     image_size: tuple[int, int],
     sectors: tuple[int, int] = DEFAULT_SECTORS,
 ) -> np.ndarray:
@@ -118,9 +119,9 @@ def sector_counts(
 
 
 def sector_near_depth(
-    points: Any,
-    depth: Any,
-    valid: Any,
+    points: ArrayLike,
+    depth: ArrayLike,
+    valid: ArrayLike,
     image_size: tuple[int, int],
     sectors: tuple[int, int] = DEFAULT_SECTORS,
     quantile: float = 0.1,
@@ -168,7 +169,7 @@ class SectorGrid:
         self,
         image_size: tuple[int, int],
         sectors: tuple[int, int] = DEFAULT_SECTORS,
-        bin_edges: Any = DEFAULT_BIN_EDGES,
+        bin_edges: ArrayLike = DEFAULT_BIN_EDGES,
     ) -> None:
         self.image_size = _as_pair("image_size", image_size, "(width, height)")
         self.sectors = _as_pair("sectors", sectors, "(rows, cols)")
@@ -236,7 +237,7 @@ class SectorGrid:
         return near.astype(np.float32).reshape(self.sectors)
 
 
-def _as_pair(name: str, value: Any, meaning: str) -> tuple[int, int]:
+def _as_pair(name: str, value: object, meaning: str) -> tuple[int, int]:
     if isinstance(value, np.ndarray):
         value = tuple(value.tolist())
     if not isinstance(value, (tuple, list)) or len(value) != 2:
@@ -246,7 +247,7 @@ def _as_pair(name: str, value: Any, meaning: str) -> tuple[int, int]:
     return first, second
 
 
-def _as_bin_edges(value: Any) -> np.ndarray:
+def _as_bin_edges(value: ArrayLike) -> np.ndarray:
     try:
         edges = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -260,8 +261,20 @@ def _as_bin_edges(value: Any) -> np.ndarray:
     return edges
 
 
+@overload
 def _as_point_arrays(
-    points: Any, depth: Any | None, valid: Any, mask_name: str = "valid"
+    points: ArrayLike, depth: ArrayLike, valid: ArrayLike, mask_name: str = "valid"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+@overload
+def _as_point_arrays(
+    points: ArrayLike, depth: None, valid: ArrayLike, mask_name: str = "valid"
+) -> tuple[np.ndarray, None, np.ndarray]: ...
+
+
+def _as_point_arrays(
+    points: ArrayLike, depth: ArrayLike | None, valid: ArrayLike, mask_name: str = "valid"
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Checked arrays; ``depth=None`` checks only the points and the mask."""
     points = _pixel_positions(points)
@@ -280,21 +293,21 @@ def _as_point_arrays(
     return points, (None if depth is None else depth.astype(np.float64, copy=False)), valid
 
 
-def _pixel_positions(points: Any) -> np.ndarray:
+def _pixel_positions(points: ArrayLike) -> np.ndarray:
     points = np.asarray(points)
     if points.ndim != 2 or points.shape[1] != 2 or not np.issubdtype(points.dtype, np.number):
         raise ValueError(f"points must be a numeric (N, 2) array of pixel positions, got {points.shape}")
     return points
 
 
-def _depth_column(depth: Any) -> np.ndarray:
+def _depth_column(depth: ArrayLike) -> np.ndarray:
     depth = np.asarray(depth)
     if depth.ndim != 1 or not np.issubdtype(depth.dtype, np.number):
         raise ValueError(f"depth must be a numeric (N,) array, got shape {depth.shape}")
     return depth
 
 
-def _mask(valid: Any, mask_name: str) -> np.ndarray:
+def _mask(valid: ArrayLike, mask_name: str) -> np.ndarray:
     valid = np.asarray(valid)
     if valid.ndim != 1 or valid.dtype != np.bool_:
         raise ValueError(

@@ -13,7 +13,7 @@ normalisation) and its FAST corners' source.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -69,7 +69,7 @@ class Tracks(NamedTuple):
     fb_error_px: np.ndarray
 
 
-def to_grayscale(image: Any, name: str, expected_size: tuple[int, int] | None = None) -> np.ndarray:
+def to_grayscale(image: object, name: str, expected_size: tuple[int, int] | None = None) -> np.ndarray:
     """Validate an image and return it as a C-contiguous uint8 (H, W) array.
 
     Args:
@@ -110,8 +110,8 @@ def brightness_map(gray: np.ndarray) -> tuple[float, float]:
 
     Flat frames (std < 1) are only shifted.
     """
-    mean, std = cv2.meanStdDev(gray)
-    mean, std = float(mean[0, 0]), float(std[0, 0])
+    mean_matrix, std_matrix = cv2.meanStdDev(gray)
+    mean, std = float(mean_matrix[0, 0]), float(std_matrix[0, 0])
     gain = _NORMALIZED_STD / std if std >= 1.0 else 1.0
     return gain, _NORMALIZED_MEAN - gain * mean
 
@@ -167,7 +167,7 @@ def detect_keypoints(
     keypoints = detector.detect(gray, mask)
     if not keypoints:
         return np.empty((0, 2), dtype=np.float32)
-    points = cv2.KeyPoint_convert(keypoints).astype(np.float32, copy=False).reshape(-1, 2)
+    points = np.asarray(cv2.KeyPoint.convert(keypoints), dtype=np.float32).reshape(-1, 2)
     if max_points is None or len(points) <= max_points:
         return points
     # Reading the response is the one per-keypoint access OpenCV leaves us (cv2.KeyPoint is a Python object).

@@ -3,7 +3,7 @@ optical flow."""
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -19,6 +19,7 @@ from flownav_env.scene import LayoutParams
 from flownav_env.sensor import SensorPipeline
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import RENDER_MODES, check_render_mode, settings_with
+from flownav_env.stage_timing import StageTimes
 from flownav_env.task import FlowNavTask
 
 
@@ -131,7 +132,7 @@ class FlowNavEnv(gym.Env):
       a success too; trajectories are unchanged) and ``step`` after termination raises.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES), "render_fps": 10}
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
 
     layout = settings_property("layout")
     obs_source = settings_property("obs_source")
@@ -244,11 +245,11 @@ class FlowNavEnv(gym.Env):
         """With ``render_mode="rgb_array"``: the camera frame with tracked points, flow vectors and depth-coloured
         circles (thesis Figs. 25–27; depths after the depth errors), beside a chase view; (240, 640, 3) uint8."""
         self._require_open("render")
-        if self.render_mode != "rgb_array" or self._frame is None:
+        points = self._depth_points
+        if self.render_mode != "rgb_array" or self._frame is None or points is None:
             return None
         if self._view is None:
             self._view = CameraRenderer(self.physics.model, *VIEW_PANEL_SIZE)
-        points = self._depth_points
         panel = camera_panel(
             self._frame,
             points.points,
@@ -278,3 +279,36 @@ class FlowNavEnv(gym.Env):
         # A closed env would quietly make a new GL context; a closed env is a bug in the caller.
         if self._closed:
             raise RuntimeError(f"{method}() called on a closed FlowNavEnv; make a new env instead")
+
+    # --- read-only views for studies and benchmarks -----------------------------------------------------------
+    _stage_times: StageTimes | None = None
+
+    @property
+    def last_frame(self) -> np.ndarray | None:
+        """The onboard camera's RGB frame, (H, W, 3) uint8, that the estimator saw at the last ``reset`` or
+        ``step``; None before the first reset. The env's own array, replaced (not overwritten) by the next
+        frame: read it, do not write to it."""
+        return self._frame
+
+    @property
+    def last_depth_points(self) -> DepthPoints | None:
+        """The estimator's output at the last ``reset`` or ``step``, after the configured depth errors: the
+        tracked points, their depths and validity, and the estimator's per-stage ``timings``; None before the
+        first reset."""
+        return self._depth_points
+
+    def time_stages(self) -> StageTimes:
+        """Start timing the stages of every later ``step`` and ``reset``; the live totals.
+
+        From the first call on, the env's physics (``advance``, ``ray_depths``), onboard camera and estimator
+        add their wall time to the returned :class:`~flownav_env.stage_timing.StageTimes` (about 1 µs per call);
+        a later call returns the same totals. For speed benchmarks: read ``snapshot()`` before and after a step.
+        """
+        if self._stage_times is None:
+            times = self._stage_times = StageTimes()
+            # Instance attributes shadow the methods, so step() calls the timed ones without knowing of them.
+            setattr(self.physics, "advance", times.timed("physics", self.physics.advance))  # noqa: B010
+            setattr(self.physics, "ray_depths", times.timed("ground_truth", self.physics.ray_depths))  # noqa: B010
+            setattr(self._camera, "render", times.timed("render", self._camera.render))  # noqa: B010
+            setattr(self.estimator, "update", times.timed("estimator", self.estimator.update))  # noqa: B010
+        return self._stage_times

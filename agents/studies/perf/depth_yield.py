@@ -91,7 +91,8 @@ def scene_rows(
         for step in range(steps):
             previous_pose = env.physics.camera_pose()
             _, _, terminated, truncated, _ = env.step(scripted_action(step))
-            points = env._depth_points
+            points = env.last_depth_points
+            assert points is not None  # set by every step
             valid = points.valid
             truth = env.physics.ray_depths(env.intrinsics.rays(points.points[valid]), *previous_pose)
             known = np.isfinite(truth)

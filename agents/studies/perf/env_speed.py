@@ -4,8 +4,8 @@ For the default config and each candidate resolution, one process steps ``gymnas
 with a fixed scripted flight and, alternated with it, a bare loop on the same model: ``mujoco.mj_step`` ×
 ``env.substeps`` plus one render of the front camera per step, no controller, no estimator. The flight is the
 same at every resolution (the camera does not act on the dynamics), so the estimator statistics (points per
-frame, median depth error) compare like with like. Each env step is also split into its stages by timing
-the env's own physics, renderer and estimator objects from outside (wrappers around their methods).
+frame, median depth error) compare like with like. Each env step is also split into its stages by the env's
+own stage timing (:meth:`flownav_env.FlowNavEnv.time_stages`).
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ import numpy as np
 import flownav_env  # noqa: F401  (sets the GL backend before anything here imports mujoco)
 from agents.studies.perf.flight import scripted_action
 from agents.studies.perf.timing import quiet_gc
+from flownav_env.stage_timing import STAGES, StageTimes
 
 DEFAULT_RESOLUTIONS = ((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240))
-STAGES = ("physics", "render", "estimator", "ground_truth")
 TARGET_RATIO = 1.3  # the throughput target: env step at most 1.3x the bare render + physics loop of the same scene
 # The time-to-policy target re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does): env / floor.
 TARGET_FLOOR_RATIO = 1.3
@@ -51,7 +51,7 @@ class _Subject:
     bare_data: Any
     bare_renderer: Any
     camera_id: int
-    stage_seconds: dict[str, float] = field(default_factory=lambda: dict.fromkeys(STAGES, 0.0))
+    stage_times: StageTimes
     env_blocks: list[float] = field(default_factory=list)  # seconds per step, one entry per block
     bare_blocks: list[float] = field(default_factory=list)
     floor_blocks: list[float] = field(default_factory=list)
@@ -61,17 +61,6 @@ class _Subject:
     depth_errors: list[float] = field(default_factory=list)
     steps_taken: int = 0
     episodes: int = 0
-
-
-def _timed(function: Callable[..., Any], totals: dict[str, float], key: str) -> Callable[..., Any]:
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
-        try:
-            return function(*args, **kwargs)
-        finally:
-            totals[key] += time.perf_counter() - start
-
-    return wrapper
 
 
 def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _Subject:
@@ -97,13 +86,8 @@ def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _
             inner_physics.model, inner.intrinsics.width, inner.intrinsics.height, onboard=True
         ),
         camera_id=inner_physics.camera_id,
+        stage_times=inner.time_stages(),
     )
-    # Instance attributes shadow the methods: env.step calls these wrappers, which add ~1 µs per call.
-    totals = subject.stage_seconds
-    inner_physics.advance = _timed(inner_physics.advance, totals, "physics")
-    inner_physics.ray_depths = _timed(inner_physics.ray_depths, totals, "ground_truth")
-    inner._camera.render = _timed(inner._camera.render, totals, "render")
-    inner.estimator.update = _timed(inner.estimator.update, totals, "estimator")
     env.reset(seed=seed)
     return subject
 
@@ -174,21 +158,21 @@ def _floor_block(subject: _Subject, steps: int) -> float:
 def _env_block(subject: _Subject, steps: int, seed: int, record: bool) -> float:
     """Seconds per env step over ``steps`` steps of the scripted flight; resets happen untimed."""
 
-    env, totals = subject.env, subject.stage_seconds
+    env, times = subject.env, subject.stage_times
     elapsed = 0.0
     stage_sums = dict.fromkeys((*STAGES, "rest"), 0.0)
     for _ in range(steps):
         action = scripted_action(subject.steps_taken).astype(np.float32)
-        for key in totals:
-            totals[key] = 0.0
+        before = times.snapshot()
         start = time.perf_counter()
         _, _, terminated, truncated, info = env.step(action)
         seconds = time.perf_counter() - start
+        after = times.snapshot()
         elapsed += seconds
         subject.steps_taken += 1
         for key in STAGES:
-            stage_sums[key] += totals[key]
-        stage_sums["rest"] += seconds - sum(totals[key] for key in STAGES)
+            stage_sums[key] += after[key] - before[key]
+        stage_sums["rest"] += seconds - sum(after[key] - before[key] for key in STAGES)
         if record:
             subject.points_tracked.append(int(info["points_tracked"]))
             subject.points_valid.append(int(info["points_valid"]))

@@ -80,7 +80,7 @@ def record_flight(
     try:
         env.reset(seed=seed)
         physics = env.physics
-        gray = [cv2.cvtColor(env._camera.render(physics.data, physics.camera_id), cv2.COLOR_RGB2GRAY)]
+        gray = [cv2.cvtColor(env.last_frame, cv2.COLOR_RGB2GRAY)]
         poses = [physics.camera_pose()]
         rotations, translations = [], []
         for step in range(frames):
@@ -90,9 +90,7 @@ def record_flight(
                     f"the scripted flight ended after {step + 1} of frames={frames} steps "
                     f"(collision={info['collision']}, success={info['success']}); use fewer frames"
                 )
-            # One more render of the same state (deterministic) rather than reaching into the env's last frame.
-            rgb = env._camera.render(physics.data, physics.camera_id)
-            gray.append(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY))
+            gray.append(cv2.cvtColor(env.last_frame, cv2.COLOR_RGB2GRAY))
             poses.append(physics.camera_pose())
             rotations.append(np.asarray(info["true_rotation"], np.float64))
             translations.append(np.asarray(info["true_translation"], np.float64))

@@ -61,12 +61,13 @@ def env_entry_point(**kwargs: Any) -> FlowNavEnv:
         ValueError: A kwarg is unknown or outside its range, ``settings.layout`` is not the id's layout, or
             ``render_mode`` is not one of ``FlowNavEnv.metadata["render_modes"]``.
     """
-    settings, layout = kwargs.get("settings"), kwargs.get("layout")
-    if layout is not None and getattr(settings, "layout", layout) != layout:
+    layout = kwargs.get("layout")
+    settings_layout = getattr(kwargs.get("settings"), "layout", layout)
+    if layout is not None and settings_layout != layout:
         ids = {id_kwargs["layout"]: env_id for env_id, (id_kwargs, _) in ENV_IDS.items()}
         raise ValueError(
-            f"settings.layout is {settings.layout!r} but this env id flies layout {layout!r}: make "
-            f"{ids.get(settings.layout, 'the id of that layout')} or pass layout={settings.layout!r} as well"
+            f"settings.layout is {settings_layout!r} but this env id flies layout {layout!r}: make "
+            f"{ids.get(settings_layout, 'the id of that layout')} or pass layout={settings_layout!r} as well"
         )
     return FlowNavEnv(**kwargs)
 

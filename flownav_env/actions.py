@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from gymnasium import spaces
 
@@ -16,7 +14,7 @@ def action_space() -> spaces.Box:
     return spaces.Box(-1.0, 1.0, ACTION_SHAPE, np.float32)
 
 
-def checked_action(action: Any) -> np.ndarray:
+def checked_action(action: object) -> np.ndarray:
     """``action`` as float64 values clipped to [-1, 1], once it is what the action space declares.
 
     Runs on every step, so it stays a shape comparison and one finiteness test.

@@ -132,7 +132,8 @@ class FlowNavEnv(gym.Env):
       a success too; trajectories are unchanged) and ``step`` after termination raises.
     """
 
-    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
+    # gymnasium.Env declares metadata as a plain attribute, which a ClassVar here would contradict for mypy.
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10}  # noqa: RUF012
 
     layout = settings_property("layout")
     obs_source = settings_property("obs_source")

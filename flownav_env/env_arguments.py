@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import fields
-from typing import Any
 
 from flownav_env.settings import SENSOR_FIELDS, EnvSettings
 
@@ -14,7 +13,7 @@ from flownav_env.settings import SENSOR_FIELDS, EnvSettings
 ROWS_MARKER = "{setting_rows}"
 
 
-def format_default(value: Any) -> str:
+def format_default(value: object) -> str:
     """A default as the Arguments table writes it: ``"field"``, 0.12, (3, 5), None."""
     if isinstance(value, str):
         return f'``"{value}"``'

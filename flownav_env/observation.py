@@ -44,7 +44,7 @@ STATE_HIGH = np.array([5.0, 5.0, 5.0, math.pi, math.pi / 2, 10.0, math.pi], np.f
 def observation_space(settings: EnvSettings) -> spaces.Dict:
     """The ``Dict`` space of the observations these settings produce."""
     rows, cols = settings.histogram_sectors
-    boxes = {
+    boxes: dict[str, spaces.Space[Any]] = {
         "depth_histogram": spaces.Box(0.0, 1.0, (rows, cols, len(settings.depth_bin_edges) - 1), np.float32),
         "state": spaces.Box(STATE_LOW, STATE_HIGH, dtype=np.float32),
     }

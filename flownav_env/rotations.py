@@ -51,9 +51,9 @@ def quat_from_matrix(rotation: np.ndarray) -> np.ndarray:
         else:
             s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
             q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-        q = np.asarray(q)
-        q /= np.linalg.norm(q)
-        quats[i] = -q if q[0] < 0 else q
+        unit = np.asarray(q)
+        unit /= np.linalg.norm(unit)
+        quats[i] = -unit if unit[0] < 0 else unit
     return quats[0] if np.ndim(rotation) == 2 else quats
 
 

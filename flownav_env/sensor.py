@@ -118,7 +118,8 @@ class SensorPipeline:
             raise ValueError(f"frame_rate must be > 0 Hz, got {frame_rate!r}")
         self.frame_interval = 1.0 / frame_rate
         self._previous_pose: Pose | None = None
-        self._previous_told_attitude: np.ndarray | None = None
+        # Set with the pose by start(); motion() refuses to run before it.
+        self._previous_told_attitude: np.ndarray = np.eye(3)
         self._walk = (0.0, 0.0)
 
     @staticmethod

@@ -13,11 +13,14 @@ import inspect
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from estimator import CameraIntrinsics, FlowDepthEstimator
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 _PROBE_CAMERA = CameraIntrinsics.from_fov(16, 16, 60.0)
 
@@ -25,7 +28,7 @@ _PROBE_CAMERA = CameraIntrinsics.from_fov(16, 16, 60.0)
 class Rule(Protocol):
     """What a setting's metadata holds: a check that returns the value in its stored form."""
 
-    def check(self, name: str, value: Any) -> Any: ...
+    def check(self, name: str, value: object) -> object: ...
 
     def describe(self) -> str:
         """What the rule allows, as the Arguments table writes it."""
@@ -74,39 +77,48 @@ class Range:
 
     def contains(self, number: float) -> bool:
         """Whether a finite ``number`` lies inside (the ends open or closed as declared)."""
-        too_low = number <= self.low if self.low_open else number < self.low
+        low = self.low
+        if low is None:
+            raise TypeError(f"this range's low end depends on {self.low_from}; resolve it first")
+        too_low = number <= low if self.low_open else number < low
         too_high = number >= self.high if self.high_open else number > self.high
         return math.isfinite(number) and not too_low and not too_high
 
-    def check(self, name: str, value: Any) -> float | int:
+    def check(self, name: str, value: object) -> float | int:
         """``value`` as a float (or int) inside the range, else a ValueError naming ``name``, value and range."""
-        if self.low is None:
-            raise TypeError(f"{name}'s range depends on {self.low_from}; resolve it first")
-        if self.integer:
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, (int, np.integer))
-                or not self.contains(value)
-            ):
-                raise ValueError(f"{name} must be an integer in {self.interval}, got {value!r}")
-            return int(value)
+        return self.check_int(name, value) if self.integer else self.check_float(name, value)
+
+    def check_int(self, name: str, value: object) -> int:
+        """``value`` as an int inside the range (an integer range's :meth:`check`)."""
+        self._require_low(name)
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not self.contains(int(value)):
+            raise ValueError(f"{name} must be an integer in {self.interval}, got {value!r}")
+        return int(value)
+
+    def check_float(self, name: str, value: object) -> float:
+        """``value`` as a float inside the range (a real range's :meth:`check`)."""
+        self._require_low(name)
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"{name} must be a number in {self.interval}, got {value!r}")
         if not self.contains(float(value)):
             raise ValueError(f"{name} must be in {self.interval}, got {value!r}")
         return float(value)
 
+    def _require_low(self, name: str) -> None:
+        if self.low is None:
+            raise TypeError(f"{name}'s range depends on {self.low_from}; resolve it first")
+
 
 @dataclass(frozen=True)
 class Choice:
     """One of a fixed set of values."""
 
-    options: tuple[Any, ...]
+    options: tuple[object, ...]
 
     def describe(self) -> str:
         return "one of " + ", ".join(f'``"{option}"``' for option in self.options)
 
-    def check(self, name: str, value: Any) -> Any:
+    def check(self, name: str, value: object) -> object:
         if value not in self.options:
             raise ValueError(f"{name} must be one of {', '.join(map(repr, self.options))}, got {value!r}")
         return value
@@ -119,7 +131,7 @@ class Flag:
     def describe(self) -> str:
         return "True or False"
 
-    def check(self, name: str, value: Any) -> bool:
+    def check(self, name: str, value: object) -> bool:
         if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {value!r}")
         return bool(value)
@@ -132,7 +144,7 @@ class AnyInteger:
     def describe(self) -> str:
         return "any integer"
 
-    def check(self, name: str, value: Any) -> int:
+    def check(self, name: str, value: object) -> int:
         if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
             raise ValueError(f"{name} must be an integer, got {value!r}")
         return int(value)
@@ -140,17 +152,17 @@ class AnyInteger:
 
 @dataclass(frozen=True)
 class Sectors:
-    """A (rows, cols) pair, each inside ``each``."""
+    """A (rows, cols) pair of integers, each inside the integer range ``each``."""
 
     each: Range
 
     def describe(self) -> str:
         return f"(rows, cols), each {self.each.describe()}"
 
-    def check(self, name: str, value: Any) -> tuple[int, int]:
+    def check(self, name: str, value: object) -> tuple[int, int]:
         if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
             raise ValueError(f"{name} must be (rows, cols), got {value!r}")
-        return (self.each.check(f"{name}[0]", value[0]), self.each.check(f"{name}[1]", value[1]))
+        return (self.each.check_int(f"{name}[0]", value[0]), self.each.check_int(f"{name}[1]", value[1]))
 
 
 @dataclass(frozen=True)
@@ -160,7 +172,7 @@ class BinEdges:
     def describe(self) -> str:
         return "at least two increasing depths ≥ 0 m"
 
-    def check(self, name: str, value: Any) -> tuple[float, ...]:
+    def check(self, name: str, value: object) -> tuple[float, ...]:
         edges = np.asarray(value, np.float64)
         if (
             edges.ndim != 1
@@ -204,7 +216,7 @@ class EstimatorArguments:
     def describe(self) -> str:
         return "None or a mapping of ``estimator.FlowDepthEstimator`` keyword arguments"
 
-    def check(self, name: str, value: Any) -> Mapping[str, Any]:
+    def check(self, name: str, value: object) -> Mapping[str, Any]:
         if value is None:
             return FrozenMapping({})
         if not isinstance(value, Mapping):
@@ -217,13 +229,13 @@ class EstimatorArguments:
         return FrozenMapping(value)
 
 
-def setting_field(default: Any, rule: Rule, meaning: str) -> Any:
+def setting_field(default: object, rule: Rule, meaning: str) -> Any:
     """A settings dataclass field: its default, the rule that checks it and what it means (one line of
     FlowNavEnv's Arguments table), declared together once."""
     return field(default=default, metadata={"rule": rule, "meaning": meaning})
 
 
-def check_fields(settings: Any) -> None:
+def check_fields(settings: DataclassInstance) -> None:
     """Check and normalise every field of a frozen settings dataclass in declaration order."""
     for item in fields(settings):
         rule = item.metadata["rule"]

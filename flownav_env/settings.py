@@ -295,7 +295,7 @@ class EnvSettings(SensorSettings):
         """The sensor variables of these settings."""
         return SensorSettings(**{name: getattr(self, name) for name in SENSOR_FIELDS})
 
-    def with_sensor(self, **values: Any) -> EnvSettings:
+    def with_sensor(self, **values: float) -> EnvSettings:
         """These settings with some sensor variables changed (and checked).
 
         Raises:
@@ -303,7 +303,7 @@ class EnvSettings(SensorSettings):
         """
         return self._with_some(SENSOR_FIELDS, "sensor settings", values)
 
-    def with_course(self, **values: Any) -> EnvSettings:
+    def with_course(self, **values: float) -> EnvSettings:
         """These settings with the course's speed or obstacle density changed (and checked).
 
         Raises:

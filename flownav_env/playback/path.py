@@ -34,7 +34,7 @@ import math
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TypedDict, Unpack
 
 import numpy as np
 
@@ -155,8 +155,18 @@ class CameraPath:
         )
 
 
+class SceneFields(TypedDict, total=False):
+    """The :class:`CameraPath` fields that describe the scene rather than the camera's motion."""
+
+    obstacles: np.ndarray
+    materials: np.ndarray
+    texture_seed: int
+    obstacle_radius: float
+    obstacle_height: float
+
+
 def path_from_poses(
-    rotations: np.ndarray, positions: np.ndarray, frame_rate: float, **scene: Any
+    rotations: np.ndarray, positions: np.ndarray, frame_rate: float, **scene: Unpack[SceneFields]
 ) -> CameraPath:
     """A :class:`CameraPath` from per-frame camera poses (a scripted path).
 

@@ -5,13 +5,15 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
+from flownav_env.env import FlowNavEnv
 from flownav_env.playback.path import CameraPath, path_from_poses
 
 
 def record_env_flight(
-    env: Any,
+    env: gym.Env,
     policy: Callable[[Any, int], np.ndarray],
     steps: int,
     seed: int | None = None,
@@ -31,11 +33,14 @@ def record_env_flight(
         The camera path (reset frame plus one frame per step) with the episode's obstacles and materials.
 
     Raises:
-        ValueError: ``steps`` is not a positive integer, or the episode ended before a second frame.
+        ValueError: ``env`` is not a FlowNavEnv or a wrapper of one, ``steps`` is not a positive integer, or
+            the episode ended before a second frame.
     """
     if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
         raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
     base = env.unwrapped
+    if not isinstance(base, FlowNavEnv):
+        raise ValueError(f"env must be a FlowNavEnv or a wrapper of one, got {type(base).__name__}")
     observation, _ = env.reset(seed=seed)
     rotations, positions = [], []
 

@@ -32,8 +32,8 @@ class PlaybackWorld:
 
     def __init__(self, path: CameraPath, width: int, height: int, fov_deg: float = 60.0) -> None:
         # The env's camera limits, under playback's own argument names.
-        width = setting_range("camera_width").check("width", width)
-        height = setting_range("camera_height").check("height", height)
+        width = setting_range("camera_width").check_int("width", width)
+        height = setting_range("camera_height").check_int("height", height)
         self.fov_deg = setting_range("camera_fov_deg").check("fov_deg", fov_deg)
         materials = len(material_names())
         if len(path.materials) and (path.materials.min() < 0 or path.materials.max() >= materials):

@@ -7,6 +7,11 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+import gymnasium as gym
+
+# A submodule: importing it has run flownav_env/__init__, which registers the ids gym.spec looks up.
+from flownav_env.settings import EnvSettings
+
 
 def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
     """A time limit that scales with the course: twice the time it takes at the commanded speed, in frames.
@@ -17,11 +22,6 @@ def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
     """
     if not {"forward_speed", "frame_rate", "field_length"} & set(settings):
         return None
-    import gymnasium as gym
-
-    import flownav_env  # noqa: F401  (registers the ids)
-    from flownav_env.settings import EnvSettings
-
     spec = gym.spec(env_id)
     defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
     merged = {**defaults, **spec.kwargs, **settings}

@@ -217,15 +217,13 @@ def build_scene_xml(
 """
 
 
-def paint_textures(model, texture_seed: int) -> None:
+def paint_textures(model: mujoco.MjModel, texture_seed: int) -> None:
     """Fill the placeholder textures of a compiled model with procedural patterns (in place).
 
     Args:
         model: the compiled ``mujoco.MjModel`` from :func:`build_scene_xml`.
         texture_seed: seed of the patterns; the same seed gives the same world look.
     """
-    import mujoco
-
     rng = np.random.default_rng(texture_seed)
 
     def write(name: str, rgb: np.ndarray) -> None:

@@ -11,7 +11,21 @@ from __future__ import annotations
 
 import argparse
 import re
-from typing import Any
+from dataclasses import fields
+from typing import TypeVar
+
+import gymnasium as gym
+from gymnasium import spaces
+
+import flownav_env
+from agents.cli.help_text import plain_text
+from agents.common.tables import markdown_table
+from agents.policies.external import PREDICT_SIGNATURE
+from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
+from flownav_env.settings import EnvSettings
+from flownav_env.tiers import TIER_NAMES, tier
+
+Space = TypeVar("Space", bound=gym.Space)
 
 HELP = "the agent contract of a tier: observation keys, shapes and meaning; the action and its units; predict"
 
@@ -22,8 +36,6 @@ ACTION_HEADING = "## Action Space"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from flownav_env.tiers import TIER_NAMES
-
     parser.add_argument(
         "tier",
         nargs="?",
@@ -43,19 +55,13 @@ def describe_tier(tier_name: str) -> list[str]:
     Raises:
         ValueError: not a tier; the message lists them.
     """
-    import gymnasium as gym
-
-    import flownav_env
-    from agents.policies.external import PREDICT_SIGNATURE
-    from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
-    from flownav_env.tiers import tier
-
     spec = tier(tier_name)
     every_key = dict.fromkeys(OBSERVATION_KEY_SETTINGS.values(), True)
     env = gym.make(spec.env_id, **spec.settings, **every_key)
     try:
-        settings = env.unwrapped.settings
-        observation_space, action_space = env.observation_space, env.action_space
+        settings: EnvSettings = env.get_wrapper_attr("settings")
+        observation_space = _space(env.observation_space, spaces.Dict)
+        action_space = _space(env.action_space, spaces.Box)
     finally:
         env.close()
     doc = flownav_env.FlowNavEnv.__doc__ or ""
@@ -76,7 +82,7 @@ def describe_tier(tier_name: str) -> list[str]:
         "",
         "The state entries:",
         "",
-        _entries_table(observation_space["state"], _doc_table(doc, STATE_HEADING)),
+        _entries_table(_space(observation_space["state"], spaces.Box), _doc_table(doc, STATE_HEADING)),
         "",
         f"Action: {_space_text(action_space)}. {_doc_paragraph(doc, ACTION_HEADING)} On this tier "
         f"forward_speed is {settings.forward_speed:g} m/s.",
@@ -94,8 +100,6 @@ def _doc_table(doc: str, heading: str) -> list[list[str]]:
     Raises:
         ValueError: the docstring has no such heading or table (the env's documentation changed shape).
     """
-    from agents.cli.help_text import plain_text
-
     start = doc.find(heading)
     lines = doc[start:].splitlines() if start >= 0 else []
     table = []
@@ -113,30 +117,38 @@ def _doc_table(doc: str, heading: str) -> list[list[str]]:
 
 def _doc_paragraph(doc: str, heading: str) -> str:
     """The first paragraph after ``heading`` in ``doc`` as one line of plain text."""
-    from agents.cli.help_text import plain_text
-
     text = doc[doc.find(heading) + len(heading) :] if heading in doc else ""
     return plain_text(" ".join(text.strip().split("\n\n", 1)[0].split()))
 
 
-def _bounds(space: Any) -> str:
+def _space(space: gym.Space, kind: type[Space]) -> Space:
+    """``space`` as the ``kind`` of space the env documents it as.
+
+    Raises:
+        TypeError: the env's space is of another kind (its documentation changed shape).
+    """
+    if not isinstance(space, kind):
+        raise TypeError(f"expected a {kind.__name__} space, the env has {space!r}")
+    return space
+
+
+def _bounds(space: spaces.Box) -> str:
     low, high = float(space.low.min()), float(space.high.max())
     if (space.low == low).all() and (space.high == high).all():
         return f"[{low:g}, {high:g}]"
     return "per entry, below"
 
 
-def _space_text(space: Any) -> str:
+def _space_text(space: spaces.Box) -> str:
     return f"{space.dtype} array of shape {space.shape}, each value in {_bounds(space)}"
 
 
-def _observation_table(space: Any, documented: list[list[str]], optional: dict[str, str]) -> str:
-    from agents.common.tables import markdown_table
-
+def _observation_table(space: spaces.Dict, documented: list[list[str]], optional: dict[str, str]) -> str:
     meanings = {row[0]: row[-1] for row in documented}
     rows = []
     # The keys every agent gets first, then the ones it asks for.
-    for key, box in sorted(space.spaces.items(), key=lambda item: (item[0] in optional, item[0])):
+    for key, entry in sorted(space.spaces.items(), key=lambda item: (item[0] in optional, item[0])):
+        box = _space(entry, spaces.Box)
         meaning = meanings.get(key, "(not in the env's table)")
         if key in optional:
             meaning = f"[env_settings {optional[key]}=True] {re.sub(r'^only with [^:]*: ', '', meaning)}"
@@ -144,9 +156,7 @@ def _observation_table(space: Any, documented: list[list[str]], optional: dict[s
     return markdown_table(["key", "shape", "dtype", "range", "meaning"], rows)
 
 
-def _entries_table(space: Any, documented: list[list[str]]) -> str:
-    from agents.common.tables import markdown_table
-
+def _entries_table(space: spaces.Box, documented: list[list[str]]) -> str:
     rows = [
         [index, row[1], f"{space.low[index]:g}", f"{space.high[index]:g}", row[-1]]
         for index, row in enumerate(documented)
@@ -154,12 +164,8 @@ def _entries_table(space: Any, documented: list[list[str]]) -> str:
     return markdown_table(["index", "observation", "min", "max", "unit"], rows)
 
 
-def _action_table(space: Any, documented: list[list[str]], settings: Any) -> str:
+def _action_table(space: spaces.Box, documented: list[list[str]], settings: EnvSettings) -> str:
     """The action's entries with the bounds of ``space`` and each scale's setting resolved to the tier's value."""
-    from dataclasses import fields
-
-    from agents.common.tables import markdown_table
-
     names = {item.name for item in fields(settings)}
     rows = []
     for index, row in enumerate(documented):

@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from agents.evaluation.csv_file import locked
+from agents.evaluation.csv_file import ReadsPerFile, locked
 from agents.evaluation.records import flown_episodes
 
 # An episode flies in seconds; a claim this old belongs to a process that stopped without writing its row.
@@ -79,7 +79,8 @@ class _ClaimsRead:
                     continue  # a torn line: its claim is lost, and the episode may fly twice, never count twice
 
 
-_READS: dict[str, _ClaimsRead] = {}
+# This process's read of each claims file it claims in.
+CLAIMS_READS = ReadsPerFile(_ClaimsRead)
 
 
 def identity_digest(identity: tuple) -> str:
@@ -106,7 +107,7 @@ def claim_episode(csv_path: Path, identity: tuple) -> str:
         path = claims_path(csv_path)
         descriptor = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
         try:
-            read = _READS.setdefault(str(path.resolve()), _ClaimsRead())
+            read = CLAIMS_READS.of(path)
             read.update(descriptor)
             holder = read.claims.get(digest)
             mine = holder is not None and holder.host == socket.gethostname() and holder.pid == os.getpid()
@@ -147,7 +148,7 @@ def release_claims(csv_path: Path) -> None:
         except FileNotFoundError:
             return
         try:
-            read = _READS.setdefault(str(path.resolve()), _ClaimsRead())
+            read = CLAIMS_READS.of(path)
             read.update(descriptor)
             now = time.time()
             others = [

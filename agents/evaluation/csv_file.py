@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Generic, TypeVar
 
 CHECKSUM_FIELD = "row_crc"
 
@@ -43,6 +44,24 @@ LEGACY_FIELDS = [
 ]
 
 LINE_END = "\r\n"  # what csv.writer ends lines with, kept so old and new rows look alike
+
+Read = TypeVar("Read")
+
+
+class ReadsPerFile(Generic[Read]):
+    """A process's reads of files it reads again and again, one per file (by resolved path), each made by
+    ``make`` on first use: a read resumes where the last one stopped, so each check costs only the new lines."""
+
+    def __init__(self, make: Callable[[], Read]) -> None:
+        self.make = make
+        self.reads: dict[str, Read] = {}
+
+    def of(self, path: Path) -> Read:
+        """The read of the file at ``path``, new on the first call for it."""
+        key = str(Path(path).resolve())
+        if key not in self.reads:
+            self.reads[key] = self.make()
+        return self.reads[key]
 
 
 def csv_line(values: list[str]) -> str:

@@ -8,10 +8,12 @@ factor, level, seed). Flying the tasks is :mod:`agents.evaluation.runner`'s job.
 
 from __future__ import annotations
 
+import functools
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 from agents.common.locations import POLICIES_DIR
 from agents.common.manifest import file_sha256
@@ -35,12 +37,9 @@ from agents.policies import (
 )
 
 
-def canonical_json(value: Any) -> str:
+def canonical_json(value: object) -> str:
     """``value`` as JSON with sorted keys and no spaces: equal settings give equal text."""
     return json.dumps(value, sort_keys=True, separators=(",", ":"), default=str)
-
-
-_HASHES: dict[tuple[str, int, int], str] = {}
 
 
 def cached_file_sha256(path: Path) -> str:
@@ -50,10 +49,24 @@ def cached_file_sha256(path: Path) -> str:
         stat = path.stat()
     except OSError:
         return ""
-    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-    if key not in _HASHES:
-        _HASHES[key] = file_sha256(path)
-    return _HASHES[key]
+    return _sha256_of_version(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.cache
+def _sha256_of_version(path: str, mtime_ns: int, size: int) -> str:
+    """The hash of ``path`` as it is at this mtime and size (the two name the file's version, so the result
+    is fixed by the arguments)."""
+    return file_sha256(Path(path))
+
+
+class EpisodeIdentity(TypedDict):
+    """What defines an episode beyond its (agent, factor, level, seed): the
+    :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
+
+    env_id: str
+    env_kwargs: str
+    agent_params: str
+    policy_sha256: str
 
 
 def record_label(env_kwargs: dict[str, Any]) -> tuple[str, float]:
@@ -88,6 +101,11 @@ class EpisodeTask:
     # The most an outside agent's predict may take per call (0: no limit); how it flies, not which episode.
     step_timeout_s: float = 0.0
 
+    @property
+    def tier(self) -> str:
+        """The suite tier this episode is on ("" outside the suite); see :func:`suite_task`."""
+        return self.factor if self.suite_version else ""
+
     def policy_path(self) -> Path | None:
         """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
         if not is_learned(self.agent):
@@ -99,9 +117,8 @@ class EpisodeTask:
         as oracle observations), then this task's on top."""
         return {**agent_env_kwargs(self.agent, self.policy_path()), **dict(self.env_kwargs)}
 
-    def identity(self) -> dict[str, str]:
-        """What defines this task's episode beyond its (agent, factor, level, seed): the
-        :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
+    def identity(self) -> EpisodeIdentity:
+        """What defines this task's episode beyond its (agent, factor, level, seed)."""
         policy = self.policy_path()
         return {
             "env_id": self.env_id,
@@ -109,6 +126,42 @@ class EpisodeTask:
             "agent_params": canonical_json(agent_parameters(self.agent, **dict(self.bee_params))),
             "policy_sha256": "" if policy is None else cached_file_sha256(policy),
         }
+
+
+# The episodes CSV has no tier column: a suite episode keeps its tier in the factor column, at level SUITE_LEVEL,
+# so that it is keyed, resumed and stored like any other episode. suite_task writes that, with_tier reads it.
+SUITE_LEVEL = 0.0
+
+
+def suite_task(
+    run: str,
+    tier_name: str,
+    seed: int,
+    *,
+    env_id: str,
+    settings: Mapping[str, Any],
+    suite_version: str,
+    policy: str | None = None,
+    trust_pickle: bool = False,
+) -> EpisodeTask:
+    """The episode of ``run`` on the suite tier ``tier_name`` (its ``env_id`` and ``settings``) from layout
+    ``seed``, stamped with ``suite_version``."""
+    return EpisodeTask(
+        run,
+        tier_name,
+        SUITE_LEVEL,
+        seed,
+        env_id,
+        tuple(sorted(settings.items())),
+        policy,
+        trust_pickle=trust_pickle,
+        suite_version=suite_version,
+    )
+
+
+def with_tier(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A suite episode's row with its tier under its own key, ``tier``."""
+    return {**row, "tier": row["factor"]}
 
 
 def _identities(tasks: list[EpisodeTask]) -> list[tuple[str, ...]]:

@@ -159,7 +159,7 @@ def improvements(
 
 def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> None:
     """Failure rate per agent with its 95 % interval, and a dot per training seed of a learned agent."""
-    import matplotlib
+    import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

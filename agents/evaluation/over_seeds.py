@@ -46,10 +46,10 @@ def _seeded_global_numpy(seed: int) -> Iterator[None]:
 
 
 def _rliable_estimates(
-    scores: Mapping[str, Any], func: Callable[..., np.ndarray], seed: int, reps: int
+    scores: Mapping[str, Any], func: Callable[..., np.ndarray | float], seed: int, reps: int
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """rliable's point estimates and stratified-bootstrap intervals, the same for the same inputs and seed."""
-    from rliable import library
+    from rliable import library  # heavy (it brings arch and scipy.stats): only a report that needs it pays
 
     with warnings.catch_warnings(), _seeded_global_numpy(seed):
         # arch (under rliable) announces that it will stop taking a RandomState, which rliable passes it.
@@ -142,7 +142,7 @@ def block_scores(outcomes: np.ndarray, block: int = LAYOUT_BLOCK) -> np.ndarray:
 
 
 def _iqm(scores: np.ndarray) -> float:
-    from rliable import metrics
+    from rliable import metrics  # heavy, as above
 
     return float(metrics.aggregate_iqm(scores))
 

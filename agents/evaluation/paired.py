@@ -107,7 +107,7 @@ def compare(
     tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
     low, high = np.percentile(draws, [tail, 100.0 - tail])
     # Two-sided: how often the resampled difference lands on either side of zero; never below 1 / reps.
-    p = min(1.0, 2.0 * min(np.mean(draws <= 0.0), np.mean(draws >= 0.0)))
+    p = min(1.0, 2.0 * min(float(np.mean(draws <= 0.0)), float(np.mean(draws >= 0.0))))
     p = float(max(p, 1.0 / len(draws)))
     difference = float(np.mean(agent) - np.mean(reference))
     return Comparison(

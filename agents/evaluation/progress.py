@@ -11,12 +11,14 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Sequence
-from typing import Any
+from pathlib import Path
+
+from tqdm import tqdm
 
 from agents.evaluation.episode_tasks import EpisodeTask
 
 
-def holdings_line(csv_path: Any, tasks: Sequence[EpisodeTask], todo: Sequence[EpisodeTask]) -> str:
+def holdings_line(csv_path: Path, tasks: Sequence[EpisodeTask], todo: Sequence[EpisodeTask]) -> str:
     """One line: how many of ``tasks`` the CSV holds already, per factor, and how many are left to fly."""
     total = Counter(task.factor for task in tasks)
     left = Counter(task.factor for task in todo)
@@ -34,12 +36,10 @@ class EpisodeProgress:
     """A bar over the run's episodes and, with ``by_factor`` and more than one factor, one per factor."""
 
     def __init__(self, todo: Sequence[EpisodeTask], description: str, *, by_factor: bool = False) -> None:
-        from tqdm import tqdm
-
         # smoothing=0: the ETA comes from the average pace since the bar started, not the last few episodes.
         self.total = tqdm(total=len(todo), desc=description, unit="episode", smoothing=0)
         counts = Counter(task.factor for task in todo)
-        self.bars: dict[str, Any] = {}
+        self.bars: dict[str, tqdm] = {}
         if by_factor and len(counts) > 1:
             for position, (factor, count) in enumerate(counts.items(), start=1):
                 self.bars[factor] = tqdm(

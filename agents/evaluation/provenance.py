@@ -7,6 +7,8 @@ from __future__ import annotations
 import os
 import platform
 
+import cv2
+
 from agents.common.machine import available_cores, cpu_model
 from flownav_env.rendering import gl_renderer_name
 
@@ -29,7 +31,7 @@ def is_software_renderer(renderer: str) -> bool:
 
 def machine_summary() -> str:
     """One line: CPU, cores, Python, MuJoCo and OpenCV versions, the GL backend and its renderer."""
-    import cv2
+    # Here, not at the top: flownav_env (imported above) picks the GL backend before mujoco is first imported.
     import mujoco
 
     return (

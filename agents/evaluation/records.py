@@ -15,11 +15,12 @@ import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from agents.evaluation.csv_file import (
     CHECKSUM_FIELD,
     LEGACY_FIELDS,
+    ReadsPerFile,
     append_line,
     csv_header,
     csv_line,
@@ -47,7 +48,8 @@ _READABLE_HEADERS = [CSV_FIELDS, *reversed(EARLIER_CSV_FIELDS), LEGACY_FIELDS]
 
 # What a resumed run compares besides (agent, factor, level, seed). The record's code_version is left out on
 # purpose: it changes with every commit, and comparing it would fly every episode again after any change.
-IDENTITY_FIELDS = ("env_id", "env_kwargs", "agent_params", "policy_sha256")
+IdentityField = Literal["env_id", "env_kwargs", "agent_params", "policy_sha256"]
+IDENTITY_FIELDS: tuple[IdentityField, ...] = ("env_id", "env_kwargs", "agent_params", "policy_sha256")
 
 _FIELD_TYPES = {f.name: f.type for f in fields(EpisodeRecord)}
 _REQUIRED_TEXT = ("agent", "factor")
@@ -152,7 +154,7 @@ def read_episodes(path: Path) -> EpisodesCsv:
             seen.add(identity)
             episodes.rows.append(row)
     if episodes.duplicates:
-        _say_once(
+        READ_NOTICES.say_once(
             f"{path}: {episodes.duplicates} duplicate rows dropped (the same episode with the same settings "
             "written twice, as runs writing one file at once could); each episode counts once"
         )
@@ -173,14 +175,22 @@ def repair_episodes_header(path: Path) -> str | None:
     )
 
 
-_SAID: set[str] = set()
+class Notices:
+    """Messages printed to stderr once per process: a file is read several times a run, and its problems are
+    said the first time."""
+
+    def __init__(self) -> None:
+        self.said: set[str] = set()
+
+    def say_once(self, message: str) -> None:
+        """Print ``message`` unless this object printed it before."""
+        if message not in self.said:
+            self.said.add(message)
+            print(message, file=sys.stderr)
 
 
-def _say_once(message: str) -> None:
-    """Print ``message`` to stderr the first time this process meets it: a file is read several times a run."""
-    if message not in _SAID:
-        _SAID.add(message)
-        print(message, file=sys.stderr)
+# What this process has said about the episodes CSVs it read.
+READ_NOTICES = Notices()
 
 
 def read_records(path: Path) -> list[dict[str, Any]]:
@@ -225,8 +235,8 @@ def exclusive_outcome(row: dict[str, Any]) -> dict[str, Any]:
 
 def row_identity(row: Mapping[str, Any]) -> tuple[str, ...] | None:
     """The row's :data:`IDENTITY_FIELDS` values; None where the file predates them (unknown)."""
-    values = tuple(row.get(name) for name in IDENTITY_FIELDS)
-    return None if any(value is None for value in values) else values
+    known: list[str] = [value for name in IDENTITY_FIELDS if (value := row.get(name)) is not None]
+    return tuple(known) if len(known) == len(IDENTITY_FIELDS) else None
 
 
 def episode_key(row: Mapping[str, Any]) -> tuple[str, str, float, int]:
@@ -274,14 +284,15 @@ class _EpisodeIndex:
                 self.flown.add(episode_identity(raw))
 
 
-_INDEXES: dict[str, _EpisodeIndex] = {}
+# This process's index of each episodes CSV it appends to or claims in.
+EPISODE_INDEXES = ReadsPerFile(_EpisodeIndex)
 
 
 def flown_episodes(path: Path, handle: io.FileIO) -> set[tuple]:
     """The :func:`episode_identity` of every whole row in the CSV at ``path``, whose lock the caller holds
     (``handle``, from :func:`~agents.evaluation.csv_file.locked`); rows read on an earlier call are not read
     again."""
-    index = _INDEXES.setdefault(str(Path(path).resolve()), _EpisodeIndex())
+    index = EPISODE_INDEXES.of(path)
     index.update(handle)
     return index.flown
 

@@ -12,12 +12,16 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import multiprocessing
 import signal
 import time
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
+
+import flownav_env  # noqa: F401  (registers the env ids in every worker that imports this module)
 from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
@@ -32,61 +36,77 @@ from agents.evaluation.records import (
     repair_episodes_header,
 )
 from agents.evaluation.step_limit import STEP_TIMEOUT_OPTION, TimeLimitedAgent, timeout_message
-from agents.policies import load_agent
+from agents.policies import Agent, load_agent
 from agents.policies.external import is_external_name
 from flownav_env.limits import episode_step_limit
+from flownav_env.tiers import SUITE_VERSION
 
 # How often a run that is done checks whether another run has written the episodes it claimed.
 AWAIT_POLL_S = 0.5
 
-# One env per worker (the settings of the cell it flies) and the agents flown in it lately: a learned agent
-# written <agent>@all flies layout i with training seed i mod k, so consecutive tasks alternate between k
-# policies on the same env, and rebuilding both for each episode cost about 0.4 s on an episode of 1 s.
-_ENV: dict[tuple, Any] = {}
-_AGENTS: dict[tuple, Any] = {}
-MAX_CACHED_AGENTS = 16
 
+class FlightCache:
+    """The env and agents a worker process flies with: one env (the settings of the cell it flies) and the
+    ``max_agents`` agents flown in it lately. A learned agent written <agent>@all flies layout i with training
+    seed i mod k, so consecutive tasks alternate between k policies on the same env, and rebuilding both for
+    each episode cost about 0.4 s on an episode of 1 s."""
 
-def _env_and_agent(task: EpisodeTask) -> tuple[Any, Any]:
-    import gymnasium as gym
+    def __init__(self, max_agents: int = 16) -> None:
+        self.max_agents = max_agents
+        self.envs: dict[tuple[str, str], gym.Env] = {}
+        self.agents: dict[tuple[str, str | None, tuple[tuple[str, float], ...], bool], Agent] = {}
 
-    import flownav_env  # noqa: F401  (registers the ids in this worker)
+    def env_and_agent(self, task: EpisodeTask) -> tuple[gym.Env, Agent]:
+        """The env and agent that fly ``task``, built only when its env settings or agent are new here."""
+        settings = task.env_settings()
+        # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
+        env_key = (task.env_id, canonical_json(settings))
+        if env_key not in self.envs:
+            self.clear()
+            limit = episode_step_limit(task.env_id, settings)
+            self.envs[env_key] = (
+                gym.make(task.env_id, max_episode_steps=limit, **settings)
+                if limit
+                else gym.make(task.env_id, **settings)
+            )
+        agent_key = (task.agent, task.policy, task.bee_params, task.trust_pickle)
+        if agent_key not in self.agents:
+            if len(self.agents) >= self.max_agents:
+                del self.agents[next(iter(self.agents))]  # the oldest
+            self.agents[agent_key] = load_agent(
+                task.agent, task.policy_path(), trust_pickle=task.trust_pickle, **dict(task.bee_params)
+            )
+        return self.envs[env_key], self.agents[agent_key]
 
-    settings = task.env_settings()
-    # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
-    env_key = (task.env_id, canonical_json(settings))
-    if env_key not in _ENV:
-        for env in _ENV.values():
+    def clear(self) -> None:
+        """Close the env and forget it and the agents: the next task builds its own."""
+        for env in self.envs.values():
             env.close()
-        _ENV.clear()
-        limit = episode_step_limit(task.env_id, settings)
-        _ENV[env_key] = gym.make(task.env_id, **settings, **({"max_episode_steps": limit} if limit else {}))
-    agent_key = (task.agent, task.policy, task.bee_params, task.trust_pickle)
-    if agent_key not in _AGENTS:
-        if len(_AGENTS) >= MAX_CACHED_AGENTS:
-            del _AGENTS[next(iter(_AGENTS))]  # the oldest
-        _AGENTS[agent_key] = load_agent(
-            task.agent, task.policy_path(), trust_pickle=task.trust_pickle, **dict(task.bee_params)
-        )
-    return _ENV[env_key], _AGENTS[agent_key]
+        self.envs.clear()
+        self.agents.clear()
 
 
-@functools.lru_cache(maxsize=1)
+# This process's cache: a pool or Ray worker imports this module once and flies many tasks with it.
+WORKER_CACHE = FlightCache()
+
+
+@functools.cache
 def _code_version() -> str:
+    """The code version of this process, read once: it does not change while the process runs."""
     return code_version()
 
 
-def run_task(task: EpisodeTask) -> EpisodeRecord:
-    """Fly the task's episode (in whatever process this runs); the record carries the task's identity and
-    the code version of the process that flew it.
+def run_task(task: EpisodeTask, cache: FlightCache = WORKER_CACHE) -> EpisodeRecord:
+    """Fly the task's episode (in whatever process this runs) with ``cache``'s env and agent; the record
+    carries the task's identity and the code version of the process that flew it.
 
     Raises:
         PredictTimeout: an outside agent's ``predict`` ran past the task's ``step_timeout_s``.
     """
-    import torch
+    import torch  # heavy, and only a worker that flies needs it
 
     torch.set_num_threads(1)
-    env, agent = _env_and_agent(task)
+    env, agent = cache.env_and_agent(task)
     if task.step_timeout_s > 0 and is_external_name(task.agent):
         limit = task.step_timeout_s
         agent = TimeLimitedAgent(agent, limit, timeout_message(task.agent, _episode_name(task), limit))
@@ -98,8 +118,8 @@ def run_task(task: EpisodeTask) -> EpisodeRecord:
 
 def _episode_name(task: EpisodeTask) -> str:
     """The episode in words: a suite's tier and layout, or another run's factor, level and seed."""
-    if task.suite_version:
-        return f"the episode on tier {task.factor}, layout seed {task.seed}"
+    if task.tier:
+        return f"the episode on tier {task.tier}, layout seed {task.seed}"
     return f"the episode ({task.factor}, level {task.level:g}, seed {task.seed})"
 
 
@@ -182,9 +202,10 @@ def execute(
         # SIGTERM too: killed mid-sweep, the parent would die with its pool's workers still sending results
         # into a closed pipe, each printing a traceback.
         with stop_signals_interrupt():
-            elsewhere = []
+            elsewhere: list[EpisodeTask] = []
             for task, found, record in results:
-                if found == CLAIMED:
+                # Only a claiming backend says CLAIMED, and it names the task.
+                if found == CLAIMED and task is not None:
                     elsewhere.append(task)
                     continue
                 flown += record is not None and append_record(csv_path, record)
@@ -230,8 +251,6 @@ def _say_what_does_not_count(csv_path: Path, damaged: int, other_versions: dict[
             f"{damaged} damaged rows in {csv_path} (torn, or failing their checksum) are left out; "
             "their episodes will be flown again"
         )
-    from flownav_env.tiers import SUITE_VERSION
-
     for version, count in other_versions.items():
         print(
             f"{count} rows in {csv_path} were flown under suite version {version!r}, not the current "
@@ -267,7 +286,7 @@ def _ignore_interrupts() -> None:
 
 def _results(
     todo: list[EpisodeTask], csv_path: Path, backend: str, workers: int, address: str | None
-) -> Iterator[tuple[EpisodeTask | None, str, EpisodeRecord | None]]:
+) -> Generator[tuple[EpisodeTask | None, str, EpisodeRecord | None], None, None]:
     """(task, what its claim found, its record) per task; the task only where it is needed (CLAIMED)."""
     if backend == "ray":  # Ray workers may not see this machine's files: the append check alone guards
         for record in _ray_results(todo, address, workers):
@@ -276,8 +295,6 @@ def _results(
         for task in todo:
             yield run_claimed_task(csv_path, task)
     else:
-        import multiprocessing
-
         # forkserver: a forked child would inherit this process's GL state, which hangs EGL.
         context = multiprocessing.get_context("forkserver")
         pool = context.Pool(workers, initializer=_ignore_interrupts)
@@ -292,7 +309,7 @@ def _results(
 
 def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int) -> Iterator[EpisodeRecord]:
     try:
-        import ray
+        import ray  # optional (the flownav[ray] extra), and heavy
     except ImportError as error:
         raise ValueError("backend 'ray' needs Ray: pip install 'flownav[ray]'") from error
     started_here = not ray.is_initialized()

@@ -138,7 +138,7 @@ SUMMARY_COLUMNS = ("agent", "factor", "level", "episodes")
 """The leading columns of :func:`format_summary`, the ones a caller may omit; the rates always show."""
 
 
-def format_summary(table: list[Mapping[str, Any]], *, omit: Iterable[str] = ()) -> str:
+def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = ()) -> str:
     """The summary as a Markdown table.
 
     Args:

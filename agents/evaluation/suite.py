@@ -12,18 +12,22 @@ each stamped with the suite version.
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
-from agents.evaluation.episode_tasks import EpisodeTask, rows_of
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of, suite_task, with_tier
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import seed_interval
+from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import overwrite_hint, read_records, start_new_file
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
@@ -44,10 +48,13 @@ from agents.policies import (
     default_runs,
     is_learned,
     is_privileged,
+    load_agent,
     policy_file,
     runs_to_fly,
     split_agent_name,
 )
+from agents.policies.external import canonical_spec, check_display_name, display_name, is_external_name
+from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
 EPISODES_CSV = "suite_episodes.csv"
@@ -120,19 +127,23 @@ def suite_tasks(
             for agent, names in runs.items():
                 for name in names:
                     tasks.append(
-                        EpisodeTask(
+                        suite_task(
                             name,
                             tier_name,
-                            0.0,
                             seed,
-                            spec.env_id,
-                            tuple(sorted(spec.settings.items())),
-                            policies.get(agent),
-                            trust_pickle=trust_pickle,
+                            env_id=spec.env_id,
+                            settings=spec.settings,
                             suite_version=SUITE_VERSION,
+                            policy=policies.get(agent),
+                            trust_pickle=trust_pickle,
                         )
                     )
     return tasks
+
+
+def suite_rows(tasks: Sequence[EpisodeTask], csv_path: Path) -> list[dict[str, Any]]:
+    """The episodes of ``tasks`` in the episodes CSV at ``csv_path``, each with its ``tier``."""
+    return [with_tier(row) for row in rows_of(list(tasks), read_records(csv_path))]
 
 
 def summarise_suite(
@@ -141,15 +152,16 @@ def summarise_suite(
     tiers: Sequence[str],
     layouts: int = SUITE_LAYOUTS,
 ) -> list[dict[str, Any]]:
-    """One row per (agent, tier) with :data:`SUMMARY_COLUMNS`: each outcome's rate, with a 95 % interval over
-    layouts (Wilson) for one run, or over runs × layouts (two-level bootstrap) for several training seeds.
-    Agents and tiers with episodes missing are left out (a partial flight reports what is whole).
+    """One row per (agent, tier) with :data:`SUMMARY_COLUMNS` from the suite's episode rows (:func:`suite_rows`):
+    each outcome's rate, with a 95 % interval over layouts (Wilson) for one run, or over runs × layouts
+    (two-level bootstrap) for several training seeds. Agents and tiers with episodes missing are left out (a
+    partial flight reports what is whole).
     """
     rows = list(rows)
     seeds = list(suite_seeds(layouts))
     table = []
     for tier_name in tiers:
-        tier_rows = [row for row in rows if row["factor"] == tier_name]
+        tier_rows = [row for row in rows if row["tier"] == tier_name]
         for agent, names in runs.items():
             try:
                 outcomes = {name: episode_outcomes(tier_rows, names, seeds, name) for name in OUTCOMES}
@@ -240,9 +252,6 @@ def score(
         ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
             setting a tier does not give.
     """
-    from agents.common.folders import check_writable_folder
-    from agents.policies.external import check_display_name, display_name
-
     tier_names = parse_tiers(tiers)
     agent = resolve_agent(agent, trust_pickle=trust_pickle)
     shown = check_display_name(display_name(agent) if name is None else name, agent)
@@ -265,7 +274,7 @@ def score(
         step_timeout_s=step_timeout_s,
         by_factor=True,
     )
-    rows = rows_of(tasks, read_records(csv_path))
+    rows = suite_rows(tasks, csv_path)
     table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts)]
     write_summary_csv(out / "score.csv", table)
     return table
@@ -279,10 +288,6 @@ def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
         ValueError: an unknown name, an import path that does not resolve, or a callable that returns
             something without ``predict``.
     """
-    from agents.policies import load_agent
-    from agents.policies.external import canonical_spec, is_external_name
-    from agents.policies.sb3_models import is_sb3_model_name
-
     split_agent_name(agent)
     if is_external_name(agent):
         agent = agent if is_sb3_model_name(agent) else canonical_spec(agent)
@@ -292,11 +297,6 @@ def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
 
 def write_summary_csv(path: Path, table: Sequence[Mapping[str, Any]]) -> None:
     """The suite's rows as CSV (:data:`SUMMARY_COLUMNS`, rates to 4 decimals), replaced atomically."""
-    import csv
-    import io
-
-    from agents.common.folders import write_text_atomically
-
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
     writer.writeheader()
@@ -323,7 +323,7 @@ def suite_top_groups(folder: Path, layouts: int = SUITE_LAYOUTS) -> list[dict[st
         raise FileNotFoundError(f"no suite episodes at {path}: flownav suite --out {folder}")
     runs = {agent: agent_runs(agent) for agent in suite_agents()}
     tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, TIER_NAMES, layouts)]
-    rows = rows_of(tasks, read_records(path))
+    rows = suite_rows(tasks, path)
     table = summarise_suite(rows, runs, TIER_NAMES, layouts)
     seeds = list(suite_seeds(layouts))
     rankings = rank_suite(table, {name: tier_failures(rows, runs, name, seeds) for name in TIER_NAMES})
@@ -358,9 +358,6 @@ def run_suite(
     Raises:
         ValueError: a bad agent, tier, layout count, worker count or folder.
     """
-    from agents.common.folders import check_writable_folder, write_text_atomically
-    from agents.evaluation.provenance import machine_summary
-
     tier_names = parse_tiers(tiers)
     if workers < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")
@@ -372,7 +369,7 @@ def run_suite(
     csv_path = out / EPISODES_CSV
     if not report_only:
         execute(tasks, csv_path, backend=backend, workers=workers, address=address, description="suite")
-    rows = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
+    rows = suite_rows(tasks, csv_path) if csv_path.is_file() else []
     table = summarise_suite(rows, runs, tier_names, layouts)
     whole = {(row["agent"], row["tier"]) for row in table}
     missing = [f"{agent} on {name}" for name in tier_names for agent in runs if (agent, name) not in whole]

@@ -32,8 +32,9 @@ def tier_failures(
     rows: Sequence[Mapping[str, Any]], runs: Mapping[str, Sequence[str]], tier_name: str, layouts: Sequence[int]
 ) -> dict[str, np.ndarray]:
     """Each agent's failures on ``tier_name`` as a (runs, layouts) matrix, for the agents that flew every
-    layout with every run."""
-    mine = [row for row in rows if row["factor"] == tier_name]
+    layout with every run; ``rows`` are suite episode rows with their ``tier``
+    (:func:`~agents.evaluation.episode_tasks.with_tier`)."""
+    mine = [row for row in rows if row["tier"] == tier_name]
     failures = {}
     for agent, names in runs.items():
         try:

@@ -9,9 +9,13 @@ import csv
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from agents.common.tables import markdown_table
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
+
+if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
+    from matplotlib.axes import Axes
 
 # The rates the table reports: failure (did not reach the goal), then the exclusive ways an episode ends
 # (flownav_env.task.EPISODE_OUTCOMES), whose rates sum to 1.
@@ -165,8 +169,6 @@ def _interval(row: Mapping[str, Any], outcome: str) -> str:
 
 def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """A markdown table per tier, best agent first; an included row is marked."""
-    from agents.common.tables import markdown_table
-
     lines: list[str] = []
     for name in TIER_NAMES:
         mine = sorted((r for r in rows if r["tier"] == name), key=lambda r: (r["failure_rate"], r["agent"]))
@@ -190,7 +192,7 @@ def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
 
 def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     """Failure rate with its 95 % interval per agent, a panel per tier."""
-    import matplotlib
+    import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -225,7 +227,7 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     plt.close(figure)
 
 
-def _plot_tier(axis: Any, name: str, rows: Sequence[Mapping[str, Any]], agents: list[str]) -> None:
+def _plot_tier(axis: Axes, name: str, rows: Sequence[Mapping[str, Any]], agents: list[str]) -> None:
     """One tier's panel: each agent's failure rate with its interval, at the agent's row of the y axis."""
     found = {r["agent"]: r for r in rows if r["tier"] == name}
     for index, agent in enumerate(agents):

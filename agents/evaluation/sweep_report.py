@@ -5,12 +5,16 @@ from __future__ import annotations
 import csv
 import dataclasses
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.common.machine import code_version
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.statistics import format_summary, summarise
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
+
+if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 SUMMARY_FIELDS = [
     "agent",
@@ -69,17 +73,22 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     the collision rate dashed in the same colour (the gap between them is leaving the course or the time
     limit). The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per
     agent (failure, with the collision rate marked)."""
-    import matplotlib
+    import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     if not factors:
-        fig = _clean_bars(plt, [r for r in table if r["factor"] == "clean"])
+        fig = _clean_bars([r for r in table if r["factor"] == "clean"])
         fig.savefig(path, dpi=120)
         plt.close(fig)
         return
-    neutral = {setting.name: setting.default for setting in dataclasses.fields(EnvSettings)}
+    # Numeric settings only: a factor is swept over numbers, so only these can be one's neutral level.
+    neutral = {
+        setting.name: float(setting.default)
+        for setting in dataclasses.fields(EnvSettings)
+        if isinstance(setting.default, (int, float))
+    }
     agents = sorted({r["agent"] for r in table})
     # A grid, not a row: fifteen factors side by side made a figure 54 inches wide.
     columns = min(4, len(factors))
@@ -104,9 +113,11 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     plt.close(fig)
 
 
-def _clean_bars(plt: Any, clean: list[dict[str, Any]]) -> Any:
+def _clean_bars(clean: list[dict[str, Any]]) -> Figure:
     """The figure of a clean-only sweep: one bar per agent, its failure rate with its interval, the
     collision rate marked."""
+    import matplotlib.pyplot as plt  # heavy; the caller has chosen the Agg backend
+
     fig, ax = plt.subplots(figsize=(1.0 + 1.2 * len(clean), 3.4))
     rates = [r["failure_rate"] for r in clean]
     errors = [
@@ -125,7 +136,7 @@ def _clean_bars(plt: Any, clean: list[dict[str, Any]]) -> Any:
     return fig
 
 
-def _plot_agent_line(ax: Any, table: list[dict[str, Any]], agent: str, factor: str, neutral: float) -> None:
+def _plot_agent_line(ax: Axes, table: list[dict[str, Any]], agent: str, factor: str, neutral: float) -> None:
     """One agent's failure rate against the factor's level (its clean cell at ``neutral``), its interval
     shaded and its collision rate dashed; nothing where the agent has no cell."""
     points = [(neutral, r) for r in table if r["agent"] == agent and r["factor"] == "clean"]

@@ -6,7 +6,7 @@ own miss. The gap between a tier's best ranked agent and the planner is what is 
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -20,7 +20,7 @@ from flownav_env.tiers import tier
 
 BOUND_AGENT = "planner"
 # The layout does not depend on the camera: the smallest frames make the check cheap.
-_CHECK_FRAME = {"camera_width": 32, "camera_height": 24}
+_CHECK_FRAME: dict[str, Any] = {"camera_width": 32, "camera_height": 24}
 
 
 def layout_is_feasible(tier_name: str, seed: int) -> bool:
@@ -49,7 +49,7 @@ def tier_bound(
     best_name: str,
     best: np.ndarray,
     layouts: Sequence[int],
-    feasible: Any = layout_is_feasible,
+    feasible: Callable[[str, int], bool] = layout_is_feasible,
 ) -> dict[str, Any]:
     """The bound's values for one tier: the planner's failures (1, layouts) on ``layouts``, each failed layout
     classified, and the best ranked agent against the planner, paired by layout.

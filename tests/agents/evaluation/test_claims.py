@@ -95,7 +95,7 @@ def test_a_claimed_episode_is_left_to_its_live_claimant(tmp_path: Path) -> None:
     finally:
         sleeper.kill()
         sleeper.wait()
-    claims._READS.clear()
+    claims.CLAIMS_READS.reads.clear()  # a fresh process: it reads the claims file anew
     assert claim_episode(path, identity) == MINE  # its claimant died without writing it: fly it here
 
 

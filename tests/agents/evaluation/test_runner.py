@@ -250,18 +250,16 @@ def test_alternating_agents_share_one_env_and_fly_as_if_each_had_its_own() -> No
         replace(TASK, agent=agent, seed=TEST_SEED_START + i)
         for i, agent in enumerate(["straight", "bee"] * 2)
     ]
-    runner._ENV.clear()
-    runner._AGENTS.clear()
-    shared = [runner.run_task(task) for task in tasks]
-    assert len(runner._ENV) == 1 and len(runner._AGENTS) == 2
+    cache = runner.FlightCache()
+    shared = [runner.run_task(task, cache) for task in tasks]
+    assert len(cache.envs) == 1 and len(cache.agents) == 2
     alone = []
     for task in tasks:
-        runner._ENV.clear()
-        runner._AGENTS.clear()
-        alone.append(runner.run_task(task))
+        own = runner.FlightCache()
+        alone.append(runner.run_task(task, own))
+        own.clear()
     assert shared == alone
-    runner._ENV.clear()
-    runner._AGENTS.clear()
+    cache.clear()
 
 
 def test_the_time_limit_follows_speed_frame_rate_and_field_length() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -19,12 +20,14 @@ from agents.common.seeds import (
     VALIDATION_SEED_START,
     suite_seeds,
 )
-from agents.evaluation.records import read_records
+from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.records import append_record, read_records
 from agents.evaluation.suite import (
     RUNS_INTERVAL,
     SUMMARY_COLUMNS,
     parse_tiers,
     score,
+    suite_rows,
     suite_tasks,
     summarise_suite,
 )
@@ -60,6 +63,19 @@ def test_suite_tasks_carry_the_tier_settings_and_the_suite_version() -> None:
     task = tasks[0]
     assert task.factor == "hard_noisy" and task.env_id == "FlowNavHardNoisy-v0"
     assert dict(task.env_kwargs) == TIERS["hard_noisy"].settings and task.suite_version == SUITE_VERSION
+    assert task.tier == "hard_noisy" and replace(task, suite_version="").tier == ""
+
+
+def test_suite_rows_read_the_tier_from_the_stored_factor_column(tmp_path: Path) -> None:
+    # The episodes CSV has no tier column: a suite episode's tier is stored as its factor, at level 0.
+    (task,) = suite_tasks({"bee": ["bee"]}, ["noisy"], layouts=1)
+    record = EpisodeRecord(
+        task.agent, task.factor, task.level, task.seed, False, True, False, False,
+        20.0, 20.0, 200, 0.5, 20.0, 100.0, 0.04, 30.0, **task.identity(), suite_version=task.suite_version,
+    )  # fmt: skip
+    append_record(tmp_path / "episodes.csv", record)
+    (row,) = suite_rows([task], tmp_path / "episodes.csv")
+    assert (row["tier"], row["factor"], row["level"]) == ("noisy", "noisy", 0.0)
 
 
 def test_an_agent_that_changes_what_a_tier_fixes_is_refused(tmp_path: Path) -> None:
@@ -100,7 +116,7 @@ def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None
     rows = [
         {
             "agent": run,
-            "factor": "hard",
+            "tier": "hard",
             "seed": seed,
             "success": run == "ppo_flow@0" or seed == seeds[0],
             "collision": False,
@@ -113,7 +129,7 @@ def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None
     rows.append(
         {
             "agent": "bee",
-            "factor": "hard",
+            "tier": "hard",
             "seed": seeds[0],
             "success": True,
             "collision": False,

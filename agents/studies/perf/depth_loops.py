@@ -4,11 +4,11 @@ benchmark can state what vectorising bought."""
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
-# --- the depth stage as per-point loops (the thesis's style), for the speed-up of the vectorised kernel --------
+from estimator import CameraIntrinsics, geometry
+
 _MIN_ROTATED_Z = 1e-9
 _TINY_PX = 1e-12
 
@@ -18,7 +18,7 @@ def depth_loop_floats(
     next_points: np.ndarray,
     rotation: np.ndarray,
     translation: np.ndarray,
-    intrinsics: Any,
+    intrinsics: CameraIntrinsics,
     min_parallax_px: float,
     max_epipolar_error_px: float,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -80,7 +80,7 @@ def depth_loop_numpy(
     next_points: np.ndarray,
     rotation: np.ndarray,
     translation: np.ndarray,
-    intrinsics: Any,
+    intrinsics: CameraIntrinsics,
     min_parallax_px: float,
     max_epipolar_error_px: float,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -129,7 +129,7 @@ def depth_vectorised(
     next_points: np.ndarray,
     rotation: np.ndarray,
     translation: np.ndarray,
-    intrinsics: Any,
+    intrinsics: CameraIntrinsics,
     min_parallax_px: float,
     max_epipolar_error_px: float,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -137,8 +137,6 @@ def depth_vectorised(
 
     Arguments and return value as :func:`depth_loop_floats`.
     """
-    from estimator import geometry
-
     solution = geometry.solve_depth(
         intrinsics.normalize(points),
         intrinsics.normalize(next_points),

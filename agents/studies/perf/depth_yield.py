@@ -18,11 +18,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.studies.perf.flight import scripted_action
-from agents.studies.perf.timing import hardware_summary
+from agents.studies.perf.report_kit import hardware_summary, saved_figure, table, write_report
+from estimator import CameraIntrinsics, FlowDepthEstimator
+from estimator.accuracy import evaluate_stream, relative_depth_error
+from flownav_env import FlowNavEnv
+from flownav_env.settings import EnvSettings
 
 #: True-depth bands (m) of the in-scene breakdown: near obstacles, the course ahead, far, very far.
 DEPTH_BANDS: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, math.inf)
@@ -37,19 +42,18 @@ DEFAULT_SETTINGS: tuple[str, ...] = (
     "max_lk_error=8",
     "fast_threshold=5;baseline_frames=4",
 )
-ICL_INTRINSICS = {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480}
+ICL_NAME = "ICL-NUIM living room 1"
+ICL_INTRINSICS = CameraIntrinsics(fx=525.0, fy=525.0, cx=319.5, cy=239.5, width=640, height=480)
 
 
-def icl_rows(sequence: Path, baseline_frames: Sequence[int], steps: Sequence[int] = (1, 2)) -> list[dict]:
+def icl_rows(
+    sequence: Path, baseline_frames: Sequence[int], steps: Sequence[int] = (1, 2)
+) -> list[dict[str, Any]]:
     """ICL-NUIM streamed every ``step`` frames, per ``baseline_frames``: medians over the streamed pairs."""
-    from estimator import CameraIntrinsics
-    from estimator.accuracy import evaluate_stream
-
-    intrinsics = CameraIntrinsics(**ICL_INTRINSICS)
     rows = []
     for step in steps:
         for frames in baseline_frames:
-            pairs = evaluate_stream(sequence, intrinsics, step=step, baseline_frames=frames)
+            pairs = evaluate_stream(sequence, ICL_INTRINSICS, step=step, baseline_frames=frames)
             last = pairs[-1]
             rows.append(
                 {
@@ -68,21 +72,18 @@ def icl_rows(sequence: Path, baseline_frames: Sequence[int], steps: Sequence[int
 
 def scene_rows(
     variants: dict[str, dict[str, Any]], flights: int, steps: int, progress: bool = True
-) -> tuple[list[dict], list[dict]]:
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Scripted FlowNav flights (160×120, defaults) per named estimator variant (``estimator_kwargs`` over the
     env's), every valid depth against the ray-cast truth at its pixel in the previous camera.
 
     Returns:
         ``(summary, bands)``: one summary row per variant; one row per (variant, true-depth band).
     """
-    from tqdm import tqdm
-
-    from estimator.accuracy import relative_depth_error
-    from flownav_env import FlowNavEnv
-
     summary, bands = [], []
     jobs = [(name, flight) for name in variants for flight in range(flights)]
-    samples: dict[str, dict[str, list]] = {name: _empty_samples() for name in variants}
+    samples: dict[str, dict[str, list[Any]]] = {
+        name: {key: [] for key in ("error", "truth", "valid", "central", "ms")} for name in variants
+    }
     for name, flight in tqdm(jobs, desc="flights", unit="flight", disable=not progress):
         env = FlowNavEnv(estimator_kwargs=variants[name], depth_error_info=False)
         env.reset(seed=FLIGHT_SEED_START + flight)
@@ -92,7 +93,8 @@ def scene_rows(
             previous_pose = env.physics.camera_pose()
             _, _, terminated, truncated, _ = env.step(scripted_action(step))
             points = env.last_depth_points
-            assert points is not None  # set by every step
+            if points is None:
+                raise RuntimeError("FlowNavEnv.step left no depth points")
             valid = points.valid
             truth = env.physics.ray_depths(env.intrinsics.rays(points.points[valid]), *previous_pose)
             known = np.isfinite(truth)
@@ -173,11 +175,9 @@ def run_depth_yield(
     if flights < 1 or steps < 1:
         raise ValueError(f"flights and steps must be >= 1, got {flights} and {steps}")
     variants = variant_settings(baseline_frames, fast_thresholds, settings)
-    from estimator import CameraIntrinsics, FlowDepthEstimator
-
     for name, kwargs in variants.items():  # refuse a bad setting before flying anything
         try:
-            FlowDepthEstimator(CameraIntrinsics(**ICL_INTRINSICS), **kwargs)
+            FlowDepthEstimator(ICL_INTRINSICS, **kwargs)
         except TypeError as error:
             raise ValueError(f"variant {name!r}: {error}") from None
     started = time.perf_counter()
@@ -192,9 +192,17 @@ def run_depth_yield(
         f" --setting {shlex.quote(setting)}" for setting in settings
     )
     command += f" --flights {flights} --steps {steps} --out {out_dir}"
-    report = out_dir / "depth_yield.md"
-    report.write_text(_report(command, time.perf_counter() - started, icl, summary, bands, sequence))
-    return [report, figure]
+    values = yield_report_values(
+        command,
+        time.perf_counter() - started,
+        icl,
+        summary,
+        bands,
+        sequence,
+        generated=today(),
+        hardware=hardware_summary(),
+    )
+    return [write_report(out_dir / "depth_yield.md", "depth_yield.md.j2", values), figure]
 
 
 def _setting_value(text: str) -> Any:
@@ -207,124 +215,93 @@ def _setting_value(text: str) -> Any:
         return float(text)
 
 
-def _empty_samples() -> dict[str, list]:
-    return {"error": [], "truth": [], "valid": [], "central": [], "ms": []}
-
-
 def _band_name(band: tuple[float, float]) -> str:
     low, high = band
     return f"≥ {low:g} m" if math.isinf(high) else f"{low:g}–{high:g} m"
 
 
-def _report(
-    command: str, seconds: float, icl: list[dict], summary: list[dict], bands: list[dict], sequence: Path
-) -> str:
-    lines = [
-        "# Depth yield at equal accuracy: estimator settings and multi-frame baselines in the scene",
-        "",
-        f"Command: `{command}` ({today()}, {seconds / 60:.1f} min).",
-        "",
-        hardware_summary(),
-        "",
-        "Each variant changes one estimator setting over the env's defaults (FAST threshold 10, two-frame "
-        "depth). `baseline_frames=k` tracks points frame to frame and ranges each from its oldest view within k "
-        "frames, with the told motions composed, or from the previous frame where that fails a check "
-        "(`estimator.multiframe`): far points and points near the focus of expansion gain parallax. More valid "
-        "depths per frame at equal accuracy is what closing the flow–truth gap asks of the estimator.",
-        "",
-        "## In FlowNav (160×120, default env, scripted weaving flights)",
-        "",
-        f"Flights from validation seed {FLIGHT_SEED_START:,}; every valid depth is compared with the ray-cast "
-        "z-depth at its pixel in the previous camera (the depth buffer's value, `tests/test_env.py`).",
-        "",
-    ]
-    header = [
-        "variant",
-        "steps",
-        "valid / frame",
-        "in the central third",
-        "median error",
-        "within 10 %",
-        "p90 error",
-    ]
-    header.append("estimator ms (median)")
-    rows = [
+def yield_report_values(
+    command: str,
+    seconds: float,
+    icl: list[dict[str, Any]],
+    summary: list[dict[str, Any]],
+    bands: list[dict[str, Any]],
+    sequence: Path,
+    *,
+    generated: str,
+    hardware: str,
+) -> dict[str, Any]:
+    """Every table of ``templates/depth_yield.md.j2``: :func:`scene_rows`' summary and bands, :func:`icl_rows`
+    (empty where not measured), the command, the seconds it took and the machine's facts."""
+    defaults = EnvSettings()
+    summary_columns = {
+        "variant": "{variant}",
+        "steps": "{steps}",
+        "valid / frame": "{valid_per_frame:.1f}",
+        "in the central third": "{central_per_frame:.1f}",
+        "median error": "{median_rel_error:.2%}",
+        "within 10 %": "{within_10pct:.1%}",
+        "p90 error": "{p90_rel_error:.1%}",
+        "estimator ms (median)": "{estimator_ms:.2f}",
+    }
+    by_band = [
         [
-            row["variant"],
-            row["steps"],
-            f"{row['valid_per_frame']:.1f}",
-            f"{row['central_per_frame']:.1f}",
-            f"{row['median_rel_error']:.2%}",
-            f"{row['within_10pct']:.1%}",
-            f"{row['p90_rel_error']:.1%}",
-            f"{row['estimator_ms']:.2f}",
+            name,
+            *(
+                f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}"
+                for row in bands
+                if row["variant"] == name
+            ),
         ]
-        for row in summary
+        for name in dict.fromkeys(row["variant"] for row in bands)
     ]
-    lines += [markdown_table(header, rows), "", "By true depth (valid depths per frame / median error):", ""]
-    names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
-    by_band = []
-    for name in dict.fromkeys(row["variant"] for row in bands):
-        cells = [
-            f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}"
-            for row in bands
-            if row["variant"] == name
-        ]
-        by_band.append([name, *cells])
-    lines += [markdown_table(["variant", *names], by_band), "", "![depth yield](depth_yield.png)", ""]
-    lines += [
-        "## Multi-frame depth on ICL-NUIM living room 1 (real images, 640×480), streamed with the true motion",
-        "",
-    ]
-    if icl:
-        header = ["streamed every", "k", "pairs", "valid / pair (median)", "valid, last pair"]
-        header += ["median error, last pair", "within 10 %, last pair", "mean baseline (frames), last pair"]
-        rows = [
-            [
-                row["step"],
-                row["baseline_frames"],
-                row["pairs"],
-                f"{row['valid_median']:.0f}",
-                row["valid_last"],
-                f"{row['median_rel_error_last']:.2%}",
-                f"{row['within_10pct_last']:.1%}",
-                f"{row['mean_baseline_last']:.2f}",
-            ]
-            for row in icl
-        ]
-        lines += [markdown_table(header, rows), ""]
-        lines.append("The last pair is where the longest baselines apply (tracks start with the stream).")
-    else:
-        lines.append(
-            f"Not measured: no baseline above 1 asked for, or the sequence `{sequence}` was not found."
-        )
-    return "\n".join(lines) + "\n"
+    band_names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
+    icl_columns = {
+        "streamed every": "{step}",
+        "k": "{baseline_frames}",
+        "pairs": "{pairs}",
+        "valid / pair (median)": "{valid_median:.0f}",
+        "valid, last pair": "{valid_last}",
+        "median error, last pair": "{median_rel_error_last:.2%}",
+        "within 10 %, last pair": "{within_10pct_last:.1%}",
+        "mean baseline (frames), last pair": "{mean_baseline_last:.2f}",
+    }
+    return {
+        "command": command,
+        "generated": generated,
+        "elapsed_min": f"{seconds / 60:.1f}",
+        "hardware": hardware,
+        "env_fast_threshold": defaults.estimator_arguments()["fast_threshold"],
+        "scene_size": f"{defaults.camera_width}×{defaults.camera_height}",
+        "first_seed": f"{FLIGHT_SEED_START:,}",
+        "summary_table": table(summary, summary_columns),
+        "band_table": markdown_table(["variant", *band_names], by_band),
+        "sequence_name": ICL_NAME,
+        "sequence_size": f"{ICL_INTRINSICS.width}×{ICL_INTRINSICS.height}",
+        "icl_table": table(icl, icl_columns) if icl else "",
+        "sequence": sequence,
+    }
 
 
 def _plot(bands: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
     variants = list(dict.fromkeys(row["variant"] for row in bands))
-    figure, (count_axis, error_axis) = plt.subplots(1, 2, figsize=(12, 4.5))
-    width = 0.8 / len(variants)
-    x = np.arange(len(names))
-    for index, name in enumerate(variants):
-        rows = [row for row in bands if row["variant"] == name]
-        offset = x + (index - (len(variants) - 1) / 2) * width
-        count_axis.bar(offset, [row["valid_per_frame"] for row in rows], width, label=name)
-        error_axis.bar(offset, [100 * row["median_rel_error"] for row in rows], width, label=name)
-    for axis, title in ((count_axis, "valid depths per frame"), (error_axis, "median relative error (%)")):
-        axis.set_xticks(x, names)
-        axis.set_xlabel("true depth")
-        axis.set_title(title)
-    count_axis.legend(fontsize=7)
-    figure.suptitle(
-        "Valid depths and their error by true depth, per estimator variant (FlowNav flights, 160×120)"
-    )
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    width, x = 0.8 / len(variants), np.arange(len(names))
+    with saved_figure(path, (12, 4.5)) as figure:
+        count_axis, error_axis = figure.subplots(1, 2)
+        for index, name in enumerate(variants):
+            rows = [row for row in bands if row["variant"] == name]
+            offset = x + (index - (len(variants) - 1) / 2) * width
+            count_axis.bar(offset, [row["valid_per_frame"] for row in rows], width, label=name)
+            error_axis.bar(offset, [100 * row["median_rel_error"] for row in rows], width, label=name)
+        for axis, title in (
+            (count_axis, "valid depths per frame"),
+            (error_axis, "median relative error (%)"),
+        ):
+            axis.set_xticks(x, names)
+            axis.set_xlabel("true depth")
+            axis.set_title(title)
+        count_axis.legend(fontsize=7)
+        figure.suptitle(
+            "Valid depths and their error by true depth, per estimator variant (FlowNav flights, 160×120)"
+        )

@@ -10,22 +10,30 @@ own stage timing (:meth:`flownav_env.FlowNavEnv.time_stages`).
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
+import flownav_env  # first: it picks the GL backend (MUJOCO_GL) before mujoco's first import below
 
-import flownav_env  # noqa: F401  (sets the GL backend before anything here imports mujoco)
+# isort: split
+import cv2
+import gymnasium as gym
+import mujoco
+import numpy as np
+from tqdm import tqdm
+
 from agents.studies.perf.flight import scripted_action
-from agents.studies.perf.timing import quiet_gc
+from agents.studies.perf.report_kit import median, quiet_gc
+from flownav_env.rendering import CameraRenderer
 from flownav_env.stage_timing import STAGES, StageTimes
 
 DEFAULT_RESOLUTIONS = ((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240))
-TARGET_RATIO = 1.3  # the throughput target: env step at most 1.3x the bare render + physics loop of the same scene
-# The time-to-policy target re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does): env / floor.
+TARGET_RATIO = (
+    1.3  # the throughput target: env step at most 1.3x the bare render + physics loop of the same scene
+)
+# The time-to-policy target re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does).
 TARGET_FLOOR_RATIO = 1.3
 # Criteria of the default-resolution choice. The env's own test spec asks for a median depth error <= 5 %;
 # two valid points per histogram sector (median) keep most sectors of the observation from being empty.
@@ -34,6 +42,7 @@ MIN_VALID_PER_SECTOR = 2.0
 TARGET_REAL_TIME_FACTOR = 20.0
 # gym-pybullet-drones' reported real-time factor for one drone with 64×48 vision (their hardware, not ours).
 PYBULLET_DRONES_RTF = 10.8
+PYBULLET_DRONES_VISION = (64, 48)
 WARMUP_STEPS = 5
 
 
@@ -43,14 +52,10 @@ class _Subject:
 
     label: str
     kind: str  # "default", "resolution" or "fast_threshold": which comparison the row belongs to
-    env: Any
-    width: int
-    height: int
-    substeps: int
-    frame_rate: float
-    bare_data: Any
-    bare_renderer: Any
-    camera_id: int
+    env: gym.Env[Any, Any]
+    inner: flownav_env.FlowNavEnv
+    bare_data: mujoco.MjData
+    bare_renderer: CameraRenderer
     stage_times: StageTimes
     env_blocks: list[float] = field(default_factory=list)  # seconds per step, one entry per block
     bare_blocks: list[float] = field(default_factory=list)
@@ -64,39 +69,30 @@ class _Subject:
 
 
 def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _Subject:
-    import gymnasium as gym
-    import mujoco
-
-    from flownav_env.rendering import CameraRenderer
-
     env = gym.make("FlowNav-v0", **kwargs)
     inner = env.unwrapped
-    inner_physics = inner.physics
+    if not isinstance(inner, flownav_env.FlowNavEnv):
+        raise TypeError(f"FlowNav-v0 made a {type(inner).__name__}, not a FlowNavEnv")
+    model, size = inner.physics.model, (inner.intrinsics.width, inner.intrinsics.height)
     subject = _Subject(
         label=label,
         kind=kind,
         env=env,
-        width=inner.intrinsics.width,
-        height=inner.intrinsics.height,
-        substeps=inner.substeps,
-        frame_rate=inner.frame_rate,
-        bare_data=mujoco.MjData(inner_physics.model),
+        inner=inner,
+        bare_data=mujoco.MjData(model),
         # The env's own renderer class, so the bare loop draws exactly what the env draws.
-        bare_renderer=CameraRenderer(
-            inner_physics.model, inner.intrinsics.width, inner.intrinsics.height, onboard=True
-        ),
-        camera_id=inner_physics.camera_id,
+        bare_renderer=CameraRenderer(model, *size, onboard=True),
         stage_times=inner.time_stages(),
     )
     env.reset(seed=seed)
     return subject
 
 
-def _reset_bare(subject: _Subject) -> None:
-    import mujoco
-
-    inner = subject.env.unwrapped
-    model, data = inner.physics.model, subject.bare_data
+def _bare_block(subject: _Subject, steps: int, on_frame: Callable[[np.ndarray], None] | None = None) -> float:
+    """Seconds per step of the bare loop over ``steps`` steps (reset before, not timed); ``on_frame`` is timed
+    work done on each rendered frame (the floor loop's OpenCV work)."""
+    inner, data = subject.inner, subject.bare_data
+    model, camera, substeps = inner.physics.model, inner.physics.camera_id, inner.substeps
     # Obstacles are mocap bodies whose defaults the env wrote into the model, so a reset places them.
     mujoco.mj_resetData(model, data)
     data.qpos[:3] = (0.0, 0.0, inner.settings.flight_height)
@@ -104,26 +100,11 @@ def _reset_bare(subject: _Subject) -> None:
     data.qvel[:3] = (inner.forward_speed, 0.0, 0.0)
     data.ctrl[:] = inner.physics.quad.mass * 9.81 / 4  # hover trim, held: there is no controller
     mujoco.mj_forward(model, data)
-
-
-def _bare_block(subject: _Subject, steps: int, on_frame: Callable[[np.ndarray], None] | None = None) -> float:
-    """Seconds per step of the bare loop over ``steps`` steps (reset before, not timed); ``on_frame`` is timed
-    work done on each rendered frame (the floor loop's OpenCV work)."""
-    import mujoco
-
-    model = subject.env.unwrapped.physics.model
-    data, renderer, camera, substeps = (
-        subject.bare_data,
-        subject.bare_renderer,
-        subject.camera_id,
-        subject.substeps,
-    )
-    _reset_bare(subject)
     start = time.perf_counter()
     for _ in range(steps):
         for _ in range(substeps):
             mujoco.mj_step(model, data)
-        frame = renderer.render(data, camera)
+        frame = subject.bare_renderer.render(data, camera)
         if on_frame is not None:
             on_frame(frame)
     return (time.perf_counter() - start) / steps
@@ -136,17 +117,15 @@ def _floor_block(subject: _Subject, steps: int) -> float:
     Nothing of FlowNav's own runs (no controller, checks, backward pass, depth stage, histogram), so the ratio
     of this loop to the bare one is the least an env that runs the thesis's estimator can reach.
     """
-    import cv2
-
-    estimator = subject.env.unwrapped.estimator
-    detector = cv2.FastFeatureDetector_create(estimator.fast_threshold, True)
+    estimator = subject.inner.estimator
+    detector = cv2.FastFeatureDetector.create(estimator.fast_threshold, True)
     window = (estimator.win_size, estimator.win_size)
     previous: list[np.ndarray] = []
 
     def track(frame: np.ndarray) -> None:
         gray = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
         if previous and (keypoints := detector.detect(previous[0])):
-            points = cv2.KeyPoint_convert(keypoints)[: estimator.max_points].reshape(-1, 1, 2)
+            points = np.asarray(cv2.KeyPoint.convert(keypoints))[: estimator.max_points].reshape(-1, 1, 2)
             cv2.calcOpticalFlowPyrLK(
                 previous[0], gray, points, None, winSize=window, maxLevel=estimator.max_level
             )
@@ -157,7 +136,6 @@ def _floor_block(subject: _Subject, steps: int) -> float:
 
 def _env_block(subject: _Subject, steps: int, seed: int, record: bool) -> float:
     """Seconds per env step over ``steps`` steps of the scripted flight; resets happen untimed."""
-
     env, times = subject.env, subject.stage_times
     elapsed = 0.0
     stage_sums = dict.fromkeys((*STAGES, "rest"), 0.0)
@@ -208,20 +186,18 @@ def measure_env(
         fast_thresholds: FAST thresholds to compare at the default resolution (``estimator_kwargs``).
 
     Returns:
-        One dict per configuration (the default first, then resolutions, then thresholds): steps/s, ratio, real-time factors, per-stage ms,
-        median points per frame and median depth error.
+        One dict per configuration (the default first, then resolutions, then thresholds): steps/s, ratios,
+        real-time factors, per-stage ms, median points per frame and median depth error.
 
     Raises:
         ValueError: ``steps`` or ``repeats`` < 1, or an empty ``resolutions``.
     """
-    from tqdm import tqdm
-
     if steps < 1 or repeats < 1 or not resolutions:
         raise ValueError(
             f"need steps >= 1, repeats >= 1 and at least one resolution, got steps={steps}, "
             f"repeats={repeats}, resolutions={list(resolutions)}"
         )
-    configs = [("FlowNav-v0 (default)", "default", {})]
+    configs: list[tuple[str, str, dict[str, Any]]] = [("FlowNav-v0 (default)", "default", {})]
     configs += [
         (f"{width}×{height}", "resolution", {"camera_width": width, "camera_height": height})
         for width, height in resolutions
@@ -259,46 +235,41 @@ def measure_env(
 
 
 def _summarise(subject: _Subject) -> dict[str, Any]:
-    env_step = float(np.median(subject.env_blocks))
-    bare_step = float(np.median(subject.bare_blocks))
-    ratios = [env / bare for env, bare in zip(subject.env_blocks, subject.bare_blocks, strict=True)]
-    floor_ratios = [
-        floor / bare for floor, bare in zip(subject.floor_blocks, subject.bare_blocks, strict=True)
-    ]
-    env_floor = [env / floor for env, floor in zip(subject.env_blocks, subject.floor_blocks, strict=True)]
+    inner = subject.inner
+    env_step, bare_step = median(subject.env_blocks), median(subject.bare_blocks)
+    sides = {"env": subject.env_blocks, "bare": subject.bare_blocks, "floor": subject.floor_blocks}
     row: dict[str, Any] = {
         "config": subject.label,
         "kind": subject.kind,
-        "fast_threshold": subject.env.unwrapped.estimator.fast_threshold,
-        "width": subject.width,
-        "height": subject.height,
+        "fast_threshold": inner.estimator.fast_threshold,
+        "width": inner.intrinsics.width,
+        "height": inner.intrinsics.height,
         "steps_per_s_env": 1.0 / env_step,
         "steps_per_s_bare": 1.0 / bare_step,
-        "ratio_env_bare": float(np.median(ratios)),
-        "ratio_min": min(ratios),
-        "ratio_max": max(ratios),
-        "ratio_floor_bare": float(np.median(floor_ratios)),
-        "ratio_floor_min": min(floor_ratios),
-        "ratio_floor_max": max(floor_ratios),
-        "ratio_env_floor": float(np.median(env_floor)),
-        "ratio_env_floor_min": min(env_floor),
-        "ratio_env_floor_max": max(env_floor),
-        "ms_floor": 1e3 * float(np.median(subject.floor_blocks)),
+    }
+    # Each ratio block by block, its median and range (column names as in the committed CSVs).
+    for name, prefix, top, bottom in (
+        ("ratio_env_bare", "ratio", "env", "bare"),
+        ("ratio_floor_bare", "ratio_floor", "floor", "bare"),
+        ("ratio_env_floor", "ratio_env_floor", "env", "floor"),
+    ):
+        ratios = [a / b for a, b in zip(sides[top], sides[bottom], strict=True)]
+        row |= {name: median(ratios), f"{prefix}_min": min(ratios), f"{prefix}_max": max(ratios)}
+    row |= {
+        "ms_floor": 1e3 * median(subject.floor_blocks),
         "ms_bare": 1e3 * bare_step,
-        "real_time_factor_env": 1.0 / (env_step * subject.frame_rate),
-        "real_time_factor_bare": 1.0 / (bare_step * subject.frame_rate),
+        "real_time_factor_env": 1.0 / (env_step * inner.frame_rate),
+        "real_time_factor_bare": 1.0 / (bare_step * inner.frame_rate),
         "ms_step": 1e3 * env_step,
     }
-    for key, values in subject.stage_blocks.items():
-        row[f"ms_{key}"] = 1e3 * float(np.median(values))
-    row["points_tracked_median"] = float(np.median(subject.points_tracked))
-    row["points_valid_median"] = float(np.median(subject.points_valid))
-    row["depth_error_median_pct"] = (
-        100 * float(np.median(subject.depth_errors)) if subject.depth_errors else math.nan
-    )
-    row["steps_with_depth_error"] = len(subject.depth_errors) / max(1, len(subject.points_valid))
-    row["frame_rate"] = subject.frame_rate
-    rows_, cols_ = subject.env.unwrapped.histogram_sectors
-    row["histogram_sectors"] = rows_ * cols_
-    row["substeps"] = subject.substeps
-    return row
+    row |= {f"ms_{key}": 1e3 * median(values) for key, values in subject.stage_blocks.items()}
+    rows_, columns = inner.histogram_sectors
+    return row | {
+        "points_tracked_median": median(subject.points_tracked),
+        "points_valid_median": median(subject.points_valid),
+        "depth_error_median_pct": 100 * median(subject.depth_errors),
+        "steps_with_depth_error": len(subject.depth_errors) / max(1, len(subject.points_valid)),
+        "frame_rate": inner.frame_rate,
+        "histogram_sectors": rows_ * columns,
+        "substeps": inner.substeps,
+    }

@@ -1,5 +1,7 @@
 """``env_performance.md`` and its figure: steps per second per resolution and FAST threshold against the bare
-loop, the per-stage breakdown of a step, and the reasoning behind the env's default resolution and threshold. The prose is ``templates/env_performance.md.j2``;
+loop, the per-stage breakdown of a step, the reasoning behind the env's default resolution and threshold, and
+the targets: env/bare (throughput), env/floor with where the step goes beyond the floor loop (time to a policy)
+and the real-time factor beside gym-pybullet-drones'. The prose is ``templates/env_performance.md.j2``;
 :func:`env_report_values` computes every figure and verdict it states."""
 
 from __future__ import annotations
@@ -19,14 +21,25 @@ from agents.studies.perf.env_speed import (
     DEFAULT_RESOLUTIONS,
     MAX_DEPTH_ERROR_PCT,
     MIN_VALID_PER_SECTOR,
-    STAGES,
+    PYBULLET_DRONES_RTF,
+    PYBULLET_DRONES_VISION,
+    TARGET_FLOOR_RATIO,
+    TARGET_RATIO,
+    TARGET_REAL_TIME_FACTOR,
     measure_env,
 )
-from agents.studies.perf.env_speed_targets import floor_target_values, ratio_target_values, real_time_values
-from agents.studies.perf.timing import hardware_summary
+from agents.studies.perf.report_kit import PACKAGE, hardware_summary, rounded, saved_figure, table
+from flownav_env.stage_timing import STAGES
 
-TEMPLATES = Path(__file__).with_name("templates")
-PACKAGE = "agents.studies.perf"
+Row = dict[str, Any]
+# The stacked bars of the figure: a step's stages, bottom to top.
+STAGE_LABELS = {
+    "ms_physics": "physics + controller",
+    "ms_render": "render",
+    "ms_estimator": "estimator",
+    "ms_ground_truth": "ground-truth ray cast",
+    "ms_rest": "rest",
+}
 
 
 def run_env_benchmark(
@@ -38,15 +51,8 @@ def run_env_benchmark(
     progress: bool = True,
     fast_thresholds: Sequence[int] = (),
 ) -> list[Path]:
-    """Run :func:`measure_env` and write ``env_performance.md``, ``.csv`` and ``.png`` to ``out_dir``.
-
-    Args:
-        resolutions, steps, repeats, seed, progress, fast_thresholds: see :func:`measure_env`.
-        out_dir: output folder (created).
-
-    Returns:
-        The written paths.
-    """
+    """Run :func:`measure_env` and write ``env_performance.md``, ``.csv`` and ``.png`` to ``out_dir`` (created);
+    the arguments are :func:`measure_env`'s. Returns the written paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
@@ -58,72 +64,45 @@ def run_env_benchmark(
         + (" --fast-thresholds " + ",".join(map(str, fast_thresholds)) if fast_thresholds else "")
         + f" --steps {steps} --repeats {repeats} --seed {seed} --out {out_dir}"
     )
-    csv_path = out_dir / "env_performance.csv"
-    plot_path = out_dir / "env_performance.png"
-    md_path = out_dir / "env_performance.md"
-    write_csv(
-        csv_path, [{k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()} for row in rows]
-    )
-    plot_env_performance(rows[1:], plot_path)
-    md_path.write_text(env_report(rows, command, steps, repeats, elapsed))
-    return [md_path, csv_path, plot_path]
+    paths = [out_dir / f"env_performance.{ext}" for ext in ("md", "csv", "png")]
+    write_csv(paths[1], rounded(rows))
+    plot_env_performance(rows[1:], paths[2])
+    paths[0].write_text(env_report(rows, command, steps, repeats, elapsed))
+    return paths
 
 
-def plot_env_performance(rows: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def plot_env_performance(rows: list[Row], path: Path) -> None:
+    """Time per step by stage beside the bare loop (left); points per frame and depth error (right)."""
     labels = [row["config"] for row in rows]
     x = np.arange(len(rows))
-    figure, (speed_axis, points_axis) = plt.subplots(1, 2, figsize=(11, 4.2))
-    bottom = np.zeros(len(rows))
-    for key, label in (
-        ("ms_physics", "physics + controller"),
-        ("ms_render", "render"),
-        ("ms_estimator", "estimator"),
-        ("ms_ground_truth", "ground-truth ray cast"),
-        ("ms_rest", "rest"),
-    ):
-        values = np.array([row[key] for row in rows])
-        speed_axis.bar(x, values, bottom=bottom, label=label)
-        bottom += values
-    speed_axis.plot(x, [1e3 / row["steps_per_s_bare"] for row in rows], "k*--", label="bare MuJoCo loop")
-    speed_axis.set_xticks(x, labels, rotation=30)
-    speed_axis.set_ylabel("ms per step (median)")
-    speed_axis.set_title("Time per env step by stage")
-    speed_axis.legend(fontsize=8)
-
-    points_axis.plot(x, [row["points_tracked_median"] for row in rows], "o-", label="points tracked")
-    points_axis.plot(x, [row["points_valid_median"] for row in rows], "s-", label="points valid")
-    points_axis.set_xticks(x, labels, rotation=30)
-    points_axis.set_ylabel("points per frame (median)")
-    points_axis.set_yscale("log")
-    error_axis = points_axis.twinx()
-    error_axis.plot(x, [row["depth_error_median_pct"] for row in rows], "r^:", label="median depth error")
-    error_axis.set_ylabel("median relative depth error (%)", color="r")
-    points_axis.set_title("Estimator output per configuration")
-    handles = points_axis.get_legend_handles_labels()
-    extra = error_axis.get_legend_handles_labels()
-    points_axis.legend(handles[0] + extra[0], handles[1] + extra[1], fontsize=8, loc="center right")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    with saved_figure(path, (11, 4.2)) as figure:
+        speed_axis, points_axis = figure.subplots(1, 2)
+        bottom = np.zeros(len(rows))
+        for key, label in STAGE_LABELS.items():
+            values = np.array([row[key] for row in rows])
+            speed_axis.bar(x, values, bottom=bottom, label=label)
+            bottom += values
+        speed_axis.plot(x, [1e3 / row["steps_per_s_bare"] for row in rows], "k*--", label="bare MuJoCo loop")
+        speed_axis.set_xticks(x, labels, rotation=30)
+        speed_axis.set_ylabel("ms per step (median)")
+        speed_axis.set_title("Time per env step by stage")
+        speed_axis.legend(fontsize=8)
+        points_axis.plot(x, [row["points_tracked_median"] for row in rows], "o-", label="points tracked")
+        points_axis.plot(x, [row["points_valid_median"] for row in rows], "s-", label="points valid")
+        points_axis.set_xticks(x, labels, rotation=30)
+        points_axis.set_ylabel("points per frame (median)")
+        points_axis.set_yscale("log")
+        error_axis = points_axis.twinx()
+        error_axis.plot(x, [row["depth_error_median_pct"] for row in rows], "r^:", label="median depth error")
+        error_axis.set_ylabel("median relative depth error (%)", color="r")
+        points_axis.set_title("Estimator output per configuration")
+        handles, names = points_axis.get_legend_handles_labels()
+        more_handles, more_names = error_axis.get_legend_handles_labels()
+        points_axis.legend(handles + more_handles, names + more_names, fontsize=8, loc="center right")
 
 
-def env_report(rows: list[dict[str, Any]], command: str, steps: int, repeats: int, elapsed: float) -> str:
-    """``env_performance.md``: :func:`env_report_values` on this machine, filled into the template.
-
-    Args:
-        rows: :func:`measure_env`'s rows, the default config first.
-        command: the command line that made the rows.
-        steps, repeats: the benchmark's settings.
-        elapsed: seconds the benchmark took.
-
-    Returns:
-        The Markdown report.
-    """
+def env_report(rows: list[Row], command: str, steps: int, repeats: int, elapsed: float) -> str:
+    """``env_performance.md``: :func:`env_report_values` on this machine, filled into the template."""
     renderer = gl_renderer()
     values = env_report_values(
         rows,
@@ -140,7 +119,7 @@ def env_report(rows: list[dict[str, Any]], command: str, steps: int, repeats: in
 
 
 def env_report_values(
-    rows: list[dict[str, Any]],
+    rows: list[Row],
     command: str,
     steps: int,
     repeats: int,
@@ -151,18 +130,10 @@ def env_report_values(
     software_renderer: bool,
     cores: int,
 ) -> dict[str, str | bool]:
-    """Every figure, table and verdict of the env report, computed from the measured rows.
-
-    Args:
-        rows, command, steps, repeats, elapsed: see :func:`env_report`.
-        generated: the report's time stamp.
-        hardware: the machine's Markdown list (:func:`hardware_summary`).
-        software_renderer: whether MuJoCo rendered on the CPU.
-        cores: the cores the benchmark could use.
-
-    Returns:
-        The values of ``templates/env_performance.md.j2``: text fields and section conditions.
-    """
+    """Every figure, table and verdict of ``templates/env_performance.md.j2``, from :func:`measure_env`'s rows
+    (the default config first), the command and settings that made them and the seconds they took, and the
+    machine's facts: the time stamp, its Markdown list (:func:`hardware_summary`), whether MuJoCo rendered on
+    the CPU and the cores the benchmark could use."""
     default = rows[0]
     return {
         "generated": generated,
@@ -180,58 +151,44 @@ def env_report_values(
         "stage_table": _stage_table(rows),
         **_choice_values(rows),
         **_threshold_values(rows),
-        **ratio_target_values(rows),
-        **floor_target_values(rows),
-        **real_time_values(rows),
+        **_ratio_target_values(rows),
+        **_floor_target_values(default),
+        **_real_time_values(rows),
     }
 
 
-def _speed_table(rows: list[dict[str, Any]]) -> str:
+def _speed_table(rows: list[Row]) -> str:
     """Steps per second, ratios, real-time factors and estimator output per configuration."""
-    header = ["config", "FAST", "steps/s env", "steps/s bare", "env/bare", "floor/bare", "env/floor"]
-    header += ["real-time × env"]
-    header += ["real-time × bare", "points tracked", "points valid", "depth err. %"]
-    return markdown_table(
-        header,
-        [
-            [
-                row["config"],
-                row["fast_threshold"],
-                f"{row['steps_per_s_env']:.1f}",
-                f"{row['steps_per_s_bare']:.1f}",
-                f"{row['ratio_env_bare']:.2f} ({row['ratio_min']:.2f}–{row['ratio_max']:.2f})",
-                f"{row['ratio_floor_bare']:.2f} ({row['ratio_floor_min']:.2f}–{row['ratio_floor_max']:.2f})",
-                f"{row['ratio_env_floor']:.2f} ({row['ratio_env_floor_min']:.2f}–{row['ratio_env_floor_max']:.2f})",
-                f"{row['real_time_factor_env']:.1f}",
-                f"{row['real_time_factor_bare']:.1f}",
-                f"{row['points_tracked_median']:.0f}",
-                f"{row['points_valid_median']:.0f}",
-                f"{row['depth_error_median_pct']:.1f}",
-            ]
-            for row in rows
-        ],
-    )
+    columns = {
+        "config": "{config}",
+        "FAST": "{fast_threshold}",
+        "steps/s env": "{steps_per_s_env:.1f}",
+        "steps/s bare": "{steps_per_s_bare:.1f}",
+        "env/bare": "{ratio_env_bare:.2f} ({ratio_min:.2f}–{ratio_max:.2f})",
+        "floor/bare": "{ratio_floor_bare:.2f} ({ratio_floor_min:.2f}–{ratio_floor_max:.2f})",
+        "env/floor": "{ratio_env_floor:.2f} ({ratio_env_floor_min:.2f}–{ratio_env_floor_max:.2f})",
+        "real-time × env": "{real_time_factor_env:.1f}",
+        "real-time × bare": "{real_time_factor_bare:.1f}",
+        "points tracked": "{points_tracked_median:.0f}",
+        "points valid": "{points_valid_median:.0f}",
+        "depth err. %": "{depth_error_median_pct:.1f}",
+    }
+    return table(rows, columns)
 
 
-def _stage_table(rows: list[dict[str, Any]]) -> str:
+def _stage_table(rows: list[Row]) -> str:
     """Each stage's median ms per step and share of the step, per configuration."""
-    return markdown_table(
-        ["config", "step ms", "physics + controller", "render", "estimator", "ground-truth ray cast", "rest"],
-        [
-            [
-                row["config"],
-                f"{row['ms_step']:.2f}",
-                *(
-                    f"{row[f'ms_{key}']:.2f} ({100 * row[f'ms_{key}'] / row['ms_step']:.0f} %)"
-                    for key in (*STAGES, "rest")
-                ),
-            ]
-            for row in rows
-        ],
-    )
+    shares = [
+        {**row, **{f"share_{key}": 100 * row[f"ms_{key}"] / row["ms_step"] for key in (*STAGES, "rest")}}
+        for row in rows
+    ]
+    columns = {"config": "{config}", "step ms": "{ms_step:.2f}"}
+    for key, label in STAGE_LABELS.items():
+        columns[label] = f"{{{key}:.2f}} ({{share_{key[3:]}:.0f}} %)"
+    return table(shares, columns)
 
 
-def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+def _choice_values(rows: list[Row]) -> dict[str, str | bool]:
     """The default-resolution choice: each candidate against the current default, and the criteria."""
     default = rows[0]
     candidates = [row for row in rows if row["kind"] == "resolution"]
@@ -241,12 +198,12 @@ def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
     reference = same[0] if same else default
     min_valid = MIN_VALID_PER_SECTOR * default["histogram_sectors"]
 
-    def meets(row: dict[str, Any]) -> bool:
+    def meets(row: Row) -> bool:
         return bool(
             row["depth_error_median_pct"] <= MAX_DEPTH_ERROR_PCT and row["points_valid_median"] >= min_valid
         )
 
-    table = markdown_table(
+    choices = markdown_table(
         [
             "resolution",
             "steps/s vs current default",
@@ -271,7 +228,7 @@ def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
         "min_valid": f"{min_valid:.0f}",
         "default_width": str(default["width"]),
         "default_height": str(default["height"]),
-        "choice_table": table,
+        "choice_table": choices,
         "any_candidate_meets": bool(passing),
     }
     if passing:
@@ -279,27 +236,120 @@ def _choice_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
     return values
 
 
-def _threshold_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+def _threshold_values(rows: list[Row]) -> dict[str, str | bool]:
     """The FAST-threshold section: each threshold against the default config, at the default resolution."""
     default = rows[0]
     thresholds = [row for row in rows if row["kind"] == "fast_threshold"]
     if not thresholds:
         return {"has_thresholds": False}
-    table = markdown_table(
-        ["FAST threshold", "steps/s vs default", "valid points", "valid points vs default", "depth err. %"],
-        [
-            [
-                row["fast_threshold"],
-                f"{default['ratio_env_bare'] / row['ratio_env_bare']:.2f}×",
-                f"{row['points_valid_median']:.0f}",
-                f"{row['points_valid_median'] / max(default['points_valid_median'], 1e-9):.2f}×",
-                f"{row['depth_error_median_pct']:.1f}",
-            ]
-            for row in sorted([default, *thresholds], key=lambda row: row["fast_threshold"])
-        ],
-    )
+    compared = [
+        {
+            **row,
+            "speed": default["ratio_env_bare"] / row["ratio_env_bare"],
+            "points": row["points_valid_median"] / max(default["points_valid_median"], 1e-9),
+        }
+        for row in sorted([default, *thresholds], key=lambda row: row["fast_threshold"])
+    ]
+    columns = {
+        "FAST threshold": "{fast_threshold}",
+        "steps/s vs default": "{speed:.2f}×",
+        "valid points": "{points_valid_median:.0f}",
+        "valid points vs default": "{points:.2f}×",
+        "depth err. %": "{depth_error_median_pct:.1f}",
+    }
     return {
         "has_thresholds": True,
         "default_threshold": str(default["fast_threshold"]),
-        "threshold_table": table,
+        "threshold_table": table(compared, columns),
+    }
+
+
+def _ratio_target_values(rows: list[Row]) -> dict[str, str | bool]:
+    """The env/bare target over the configurations, and whether the floor loop (bare + FAST + one LK pass)
+    leaves it reachable at all."""
+    default = rows[0]
+    ratios = [row["ratio_env_bare"] for row in rows]
+    floor = default["ratio_floor_bare"]
+    values: dict[str, str | bool] = {
+        "target_ratio": str(TARGET_RATIO),
+        "ratio_low": f"{min(ratios):.2f}",
+        "ratio_high": f"{max(ratios):.2f}",
+        "ratio_met": bool(max(ratios) <= TARGET_RATIO),
+        "ratio_met_for_some": bool(min(ratios) <= TARGET_RATIO < max(ratios)),
+        "ratio_met_configs": ", ".join(
+            row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO
+        ),
+        "floor": f"{floor:.2f}",
+        "floor_low": f"{default['ratio_floor_min']:.2f}",
+        "floor_high": f"{default['ratio_floor_max']:.2f}",
+        "floor_reaches_target": bool(floor >= TARGET_RATIO),
+    }
+    if floor < TARGET_RATIO:
+        bare_ms = 1e3 / default["steps_per_s_bare"]
+        margin, own = TARGET_RATIO - floor, default["ratio_env_bare"] - floor
+        values |= {
+            "margin": f"{margin:.2f}",
+            "margin_ms": f"{margin * bare_ms:.2f}",
+            "own": f"{own:.2f}",
+            "own_ms": f"{own * bare_ms:.2f}",
+        }
+    return values
+
+
+def _floor_target_values(default: Row) -> dict[str, str | bool]:
+    """The time-to-policy target, env / floor at the default config, and where the env's step goes beyond the
+    floor loop, component by component (median ms per step).
+
+    The floor is the bare loop plus grayscale, FAST and one LK pass; so of the env's stages, rendering is the
+    floor's own, physics + controller exceeds the bare loop's physics (bare minus rendering) by the Python
+    controller and contact checks, and the estimator exceeds the floor's OpenCV work (floor minus bare) by
+    the backward check, the rotation compensation and the depth stage. The parts add up to env − floor.
+    """
+    parts = {
+        "controller and contact checks (physics + controller − the bare loop's physics)": default[
+            "ms_physics"
+        ]
+        - (default["ms_bare"] - default["ms_render"]),
+        "estimator beyond grayscale + FAST + one LK pass (backward check, rotation compensation, depth)": default[
+            "ms_estimator"
+        ]
+        - (default["ms_floor"] - default["ms_bare"]),
+        "ground-truth ray cast": default["ms_ground_truth"],
+        "rest: sensor model, camera mount, histogram, state, reward, wrappers": default["ms_rest"],
+    }
+    beyond = default["ms_step"] - default["ms_floor"]
+    lines = [
+        [name, f"{ms:.2f}", f"{100 * ms / beyond:.0f} %" if beyond > 0 else "-"] for name, ms in parts.items()
+    ]
+    total = "env − floor (sum of the stage medians; the timed blocks' medians differ a little)"
+    lines.append([total, f"{sum(parts.values()):.2f}", ""])
+    return {
+        "floor_target": str(TARGET_FLOOR_RATIO),
+        "env_floor": f"{default['ratio_env_floor']:.2f}",
+        "env_floor_low": f"{default['ratio_env_floor_min']:.2f}",
+        "env_floor_high": f"{default['ratio_env_floor_max']:.2f}",
+        "env_floor_met": bool(default["ratio_env_floor"] <= TARGET_FLOOR_RATIO),
+        "floor_ms": f"{default['ms_floor']:.2f}",
+        "allowed_ms": f"{(TARGET_FLOOR_RATIO - 1) * default['ms_floor']:.2f}",
+        "beyond_floor_table": markdown_table(
+            ["beyond the floor", "ms per step", "share of env − floor"], lines
+        ),
+    }
+
+
+def _real_time_values(rows: list[Row]) -> dict[str, str | bool]:
+    """The real-time target at the default config, and the smallest resolution beside gym-pybullet-drones."""
+    default = rows[0]
+    resolutions = [row for row in rows if row["kind"] == "resolution"] or rows
+    smallest = min(resolutions, key=lambda row: row["width"] * row["height"])
+    return {
+        "target_real_time": f"{TARGET_REAL_TIME_FACTOR:.0f}",
+        "default_real_time": f"{default['real_time_factor_env']:.1f}",
+        "real_time_met": bool(default["real_time_factor_env"] >= TARGET_REAL_TIME_FACTOR),
+        "default_real_time_bare": f"{default['real_time_factor_bare']:.1f}",
+        "pybullet_real_time": str(PYBULLET_DRONES_RTF),
+        "pybullet_vision": "×".join(map(str, PYBULLET_DRONES_VISION)),
+        "smallest_config": smallest["config"],
+        "smallest_real_time": f"{smallest['real_time_factor_env']:.1f}",
+        "smallest_real_time_bare": f"{smallest['real_time_factor_bare']:.1f}",
     }

@@ -22,11 +22,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import cv2
 import numpy as np
+from tqdm import tqdm
 
 from agents.studies.perf.depth_loops import DEPTH_FUNCTIONS
 from agents.studies.perf.flight import Flight
-from agents.studies.perf.timing import quiet_gc
+from agents.studies.perf.report_kit import median, quiet_gc
+from estimator import DepthPoints, FlowDepthEstimator
 
 # The estimator's LK settings (thesis values); the bare baseline uses the same.
 WIN_SIZE = 10
@@ -61,7 +64,7 @@ class _Pass:
 
 
 def _stream_pass(
-    flight: Flight, threshold: int, names: Sequence[str], keep: list[Any] | None = None
+    flight: Flight, threshold: int, names: Sequence[str], keep: list[DepthPoints] | None = None
 ) -> dict[str, _Pass]:
     """One pass over the flight with every configuration, interleaved frame by frame.
 
@@ -69,11 +72,7 @@ def _stream_pass(
     back to back (in an order rotating with the frame) puts each estimator call next to its bare baseline
     in time, so the per-frame ratio sees nearly the same machine on both sides.
     """
-    import cv2
-
-    from estimator import FlowDepthEstimator
-
-    detector = cv2.FastFeatureDetector_create(threshold, True)
+    detector = cv2.FastFeatureDetector.create(threshold, True)
     estimators = {
         name: FlowDepthEstimator(
             flight.intrinsics,
@@ -100,7 +99,7 @@ def _stream_pass(
                 start = time.perf_counter()
                 keypoints = detector.detect(previous)
                 if keypoints:
-                    points = cv2.KeyPoint_convert(keypoints).reshape(-1, 1, 2)
+                    points = np.asarray(cv2.KeyPoint.convert(keypoints)).reshape(-1, 1, 2)
                     cv2.calcOpticalFlowPyrLK(
                         previous, current, points, None, winSize=(WIN_SIZE, WIN_SIZE), maxLevel=MAX_LEVEL
                     )
@@ -117,10 +116,6 @@ def _stream_pass(
             if keep is not None and name == "fb_on":
                 keep.append(depth_points)
     return results
-
-
-def _median(values: Sequence[float]) -> float:
-    return float(np.median(values)) if len(values) else math.nan
 
 
 def run_estimator_table(
@@ -147,10 +142,6 @@ def run_estimator_table(
     Raises:
         ValueError: ``repeats`` or ``loop_frames`` < 1, or an empty ``thresholds``.
     """
-    from tqdm import tqdm
-
-    from estimator import FlowDepthEstimator
-
     if repeats < 1 or loop_frames < 1 or not thresholds:
         raise ValueError(
             f"need repeats >= 1, loop_frames >= 1 and at least one threshold, got repeats={repeats}, "
@@ -158,10 +149,12 @@ def run_estimator_table(
         )
     names = ["bare", *ESTIMATOR_CONFIGS]
     passes: dict[int, list[dict[str, _Pass]]] = {threshold: [] for threshold in thresholds}
-    kept: dict[int, list[Any]] = {threshold: [] for threshold in thresholds}
+    kept: dict[int, list[DepthPoints]] = {threshold: [] for threshold in thresholds}
 
     # Warm-up: first calls allocate OpenCV's buffers and import lazily; not timed.
-    short = Flight(flight.frames[:3], flight.rotations[:2], flight.translations[:2], flight.intrinsics, None)
+    short = Flight(
+        flight.frames[:3], flight.rotations[:2], flight.translations[:2], flight.intrinsics, flight.true_depth
+    )
     _stream_pass(short, thresholds[0], names)
 
     bar = tqdm(total=repeats * len(thresholds), desc="stream passes", disable=not progress)
@@ -182,37 +175,37 @@ def run_estimator_table(
 
 
 def _stream_row(
-    threshold: int, runs: list[dict[str, _Pass]], flight: Flight, kept: list[Any]
+    threshold: int, runs: list[dict[str, _Pass]], flight: Flight, kept: list[DepthPoints]
 ) -> dict[str, Any]:
     """One threshold's Table 3 row from its timed passes: point counts, per-stage and total times, and each
     estimator configuration's time against the bare FAST + LK."""
     first = runs[0]
     row: dict[str, Any] = {
         "fast_threshold": threshold,
-        "points_found": _median(first["bare"].corners),
-        "points_used": _median(first["fb_on"].valid),
+        "points_found": median(first["bare"].corners),
+        "points_used": median(first["fb_on"].valid),
         # Equal point counts: the uncapped estimator tracks every FAST corner, as the bare baseline does.
         "equal_counts": first["bare"].corners == first["fb_on"].tracked_in,
     }
     for stage in ("prepare", "fast", "flow", "depth"):
-        row[f"ms_{stage}"] = 1e3 * _median([_median(run["fb_on"].stages[stage]) for run in runs])
-    row["ms_total"] = 1e3 * _median([_median(run["fb_on"].seconds) for run in runs])
+        row[f"ms_{stage}"] = 1e3 * median([median(run["fb_on"].stages[stage]) for run in runs])
+    row["ms_total"] = 1e3 * median([median(run["fb_on"].seconds) for run in runs])
     row["fps"] = 1e3 / row["ms_total"] if row["ms_total"] > 0 else math.nan
-    row["ms_bare_fast_lk"] = 1e3 * _median([_median(run["bare"].seconds) for run in runs])
+    row["ms_bare_fast_lk"] = 1e3 * median([median(run["bare"].seconds) for run in runs])
     for name in ESTIMATOR_CONFIGS:
         # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
         # the frames of a pass, then the median and range over the passes.
-        ratios = [_median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
+        ratios = [median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
         if name != "fb_on":
-            row[f"ms_total_{name}"] = 1e3 * _median([_median(run[name].seconds) for run in runs])
-        row[f"ratio_{name}"] = _median(ratios)
+            row[f"ms_total_{name}"] = 1e3 * median([median(run[name].seconds) for run in runs])
+        row[f"ratio_{name}"] = median(ratios)
         row[f"ratio_{name}_min"] = min(ratios)
         row[f"ratio_{name}_max"] = max(ratios)
     row["depth_error_median_pct"] = 100 * _depth_error(flight, kept)
     return row
 
 
-def _depth_error(flight: Flight, kept: list[Any]) -> float:
+def _depth_error(flight: Flight, kept: list[DepthPoints]) -> float:
     errors = []
     for index, points in enumerate(kept):
         if points.num_valid == 0:
@@ -226,14 +219,12 @@ def _depth_error(flight: Flight, kept: list[Any]) -> float:
 def _time_depth_stage(
     flight: Flight,
     thresholds: Sequence[int],
-    kept: dict[int, list[Any]],
+    kept: dict[int, list[DepthPoints]],
     repeats: int,
     loop_frames: int,
-    defaults: Any,
+    defaults: FlowDepthEstimator,
     progress: bool,
 ) -> list[dict[str, Any]]:
-    from tqdm import tqdm
-
     limits = (defaults.min_parallax_px, defaults.max_epipolar_error_px)
     rows = []
     bar = tqdm(total=len(thresholds), desc="depth stage", disable=not progress)
@@ -256,7 +247,7 @@ def _time_depth_stage(
             )
             seconds, outputs = _time_depth_functions(arguments, repeats)
             for name in DEPTH_FUNCTIONS:
-                per_function[name].append(_median(seconds[name]))
+                per_function[name].append(median(seconds[name]))
             points_per_frame.append(points.num_points)
             difference, agreement = _loops_against_kernel(outputs)
             max_depth_difference = max(max_depth_difference, difference)

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.jinja_reports import render
-from agents.common.tables import markdown_table, today, write_csv
+from agents.common.tables import today, write_csv
 from agents.studies.perf.estimator_speed import (
     DEFAULT_THRESHOLD,
     MAX_LEVEL,
@@ -20,10 +20,10 @@ from agents.studies.perf.estimator_speed import (
     run_estimator_table,
 )
 from agents.studies.perf.flight import record_flight
-from agents.studies.perf.timing import hardware_summary
+from agents.studies.perf.report_kit import PACKAGE, hardware_summary, rounded, saved_figure, table
+from estimator import CameraIntrinsics, FlowDepthEstimator
 
-TEMPLATES = Path(__file__).with_name("templates")
-PACKAGE = "agents.studies.perf"
+Row = dict[str, Any]
 # The verdicts judge the rows with at least this many points per frame: at a handful of points every pipeline is
 # dominated by fixed per-call costs.
 WORKING_POINTS = 100
@@ -43,7 +43,6 @@ STATED_SETTINGS = (
 _FLOAT_SETTINGS = ("max_lk_error", "fb_max_error_px", "min_parallax_px", "max_epipolar_error_px")
 
 
-# --- the report -------------------------------------------------------------------------------------------------------
 def run_estimator_benchmark(
     frames: int = 40,
     thresholds: Sequence[int] = (50, 40, 30, 20, 15, 10, 5, 3, 1),
@@ -87,63 +86,47 @@ def run_estimator_benchmark(
         f"--thresholds {','.join(map(str, thresholds))} --width {width} --height {height} "
         f"--layout {layout} --seed {seed} --loop-frames {loop_frames} --out {out_dir}"
     )
-    csv_path = out_dir / "estimator_performance.csv"
-    depth_csv_path = out_dir / "estimator_performance_depth_stage.csv"
-    plot_path = out_dir / "estimator_performance.png"
-    md_path = out_dir / "estimator_performance.md"
-    write_csv(csv_path, [_rounded(row) for row in rows])
-    write_csv(depth_csv_path, [_rounded(row) for row in depth_rows])
-    plot_estimator_performance(rows, plot_path)
-    md_path.write_text(
+    stem = out_dir / "estimator_performance"
+    paths = [stem.with_suffix(".md"), stem.with_suffix(".csv"), out_dir / f"{stem.name}_depth_stage.csv"]
+    paths.append(stem.with_suffix(".png"))
+    write_csv(paths[1], rounded(rows))
+    write_csv(paths[2], rounded(depth_rows))
+    plot_estimator_performance(rows, paths[3])
+    paths[0].write_text(
         estimator_report(rows, depth_rows, description, command, repeats, loop_frames, elapsed)
     )
-    return [md_path, csv_path, depth_csv_path, plot_path]
+    return paths
 
 
-def _rounded(row: dict[str, Any]) -> dict[str, Any]:
-    return {key: round(value, 4) if isinstance(value, float) else value for key, value in row.items()}
-
-
-def plot_estimator_performance(rows: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def plot_estimator_performance(rows: list[Row], path: Path) -> None:
+    """Points (left) and ms per stage (right) against the FAST threshold: the thesis's Figs. 39–40."""
     thresholds = [row["fast_threshold"] for row in rows]
-    figure, (points_axis, time_axis) = plt.subplots(1, 2, figsize=(11, 4.2))
-    points_axis.plot(thresholds, [row["points_found"] for row in rows], "o-", label="found (FAST)")
-    points_axis.plot(thresholds, [row["points_used"] for row in rows], "s-", label="used (valid depth)")
-    points_axis.set_yscale("log")
-    points_axis.set_xlabel("FAST threshold")
-    points_axis.set_ylabel("points per frame")
-    points_axis.set_title("Points vs FAST threshold (cf. thesis Fig. 39)")
-    points_axis.invert_xaxis()
-    points_axis.grid(True, which="both", alpha=0.3)
-    points_axis.legend()
-
-    for key, label, style in (
-        ("ms_fast", "FAST", "o-"),
-        ("ms_flow", "flow (LK, both ways)", "s-"),
-        ("ms_depth", "depth", "^-"),
-        ("ms_total", "estimator total (FB on)", "D-"),
-        ("ms_total_fb_off", "estimator total (FB off)", "v-"),
-        ("ms_bare_fast_lk", "bare FAST + LK", "k--"),
-    ):
-        time_axis.plot(thresholds, [max(row[key], 1e-4) for row in rows], style, label=label)
-    time_axis.set_yscale("log")
-    time_axis.set_xlabel("FAST threshold")
-    time_axis.set_ylabel("ms per frame (median)")
-    time_axis.set_title("Time per stage vs FAST threshold (cf. thesis Fig. 40)")
-    time_axis.invert_xaxis()
-    time_axis.grid(True, which="both", alpha=0.3)
-    time_axis.legend(fontsize=8)
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    with saved_figure(path, (11, 4.2)) as figure:
+        points_axis, time_axis = figure.subplots(1, 2)
+        points_axis.plot(thresholds, [row["points_found"] for row in rows], "o-", label="found (FAST)")
+        points_axis.plot(thresholds, [row["points_used"] for row in rows], "s-", label="used (valid depth)")
+        points_axis.set_ylabel("points per frame")
+        points_axis.set_title("Points vs FAST threshold (cf. thesis Fig. 39)")
+        for key, label, style in (
+            ("ms_fast", "FAST", "o-"),
+            ("ms_flow", "flow (LK, both ways)", "s-"),
+            ("ms_depth", "depth", "^-"),
+            ("ms_total", "estimator total (FB on)", "D-"),
+            ("ms_total_fb_off", "estimator total (FB off)", "v-"),
+            ("ms_bare_fast_lk", "bare FAST + LK", "k--"),
+        ):
+            time_axis.plot(thresholds, [max(row[key], 1e-4) for row in rows], style, label=label)
+        time_axis.set_ylabel("ms per frame (median)")
+        time_axis.set_title("Time per stage vs FAST threshold (cf. thesis Fig. 40)")
+        for axis in (points_axis, time_axis):
+            axis.set_yscale("log")
+            axis.set_xlabel("FAST threshold")
+            axis.invert_xaxis()
+            axis.grid(True, which="both", alpha=0.3)
+        points_axis.legend()
+        time_axis.legend(fontsize=8)
 
 
-# --- the report's values ------------------------------------------------------------------------------------------
 def estimator_defaults() -> dict[str, Any]:
     """The settings of a default ``FlowDepthEstimator`` that the report states.
 
@@ -152,15 +135,13 @@ def estimator_defaults() -> dict[str, Any]:
     Returns:
         The attributes named in :data:`STATED_SETTINGS`, by name.
     """
-    from estimator import CameraIntrinsics, FlowDepthEstimator
-
     defaults = FlowDepthEstimator(CameraIntrinsics.from_fov(64, 48, 60.0))
     return {name: getattr(defaults, name) for name in STATED_SETTINGS}
 
 
 def estimator_report(
-    rows: list[dict[str, Any]],
-    depth_rows: list[dict[str, Any]],
+    rows: list[Row],
+    depth_rows: list[Row],
     flight: dict[str, Any],
     command: str,
     repeats: int,
@@ -195,8 +176,8 @@ def estimator_report(
 
 
 def estimator_report_values(
-    rows: list[dict[str, Any]],
-    depth_rows: list[dict[str, Any]],
+    rows: list[Row],
+    depth_rows: list[Row],
     flight: Mapping[str, Any],
     command: str,
     repeats: int,
@@ -265,58 +246,55 @@ def _ms(value: float) -> str:
     return f"{value:.3f}" if value < 1 else f"{value:.2f}"
 
 
-def _stage_table(rows: list[dict[str, Any]]) -> str:
+def _stage_table(rows: list[Row]) -> str:
     """Table 3: points and time per stage for each FAST threshold."""
-    header = ["FAST thr.", "points found", "points used", "prepare ms", "FAST ms", "flow ms", "depth ms"]
-    header += ["total ms", "FPS", "bare FAST+LK ms", "ratio FB on", "ratio FB off", "ratio FB full search"]
-    header += ["depth err. %"]
-    return markdown_table(
-        header,
-        [
-            [
-                row["fast_threshold"],
-                f"{row['points_found']:.0f}",
-                f"{row['points_used']:.0f}",
-                *(_ms(row[key]) for key in ("ms_prepare", "ms_fast", "ms_flow", "ms_depth", "ms_total")),
-                f"{row['fps']:.0f}",
-                _ms(row["ms_bare_fast_lk"]),
-                *(f"{row[key]:.2f}" for key in ("ratio_fb_on", "ratio_fb_off", "ratio_fb_full")),
-                f"{row['depth_error_median_pct']:.1f}",
-            ]
-            for row in rows
-        ],
-    )
+    times = ("prepare", "fast", "flow", "depth", "total", "bare_fast_lk")
+    cells = [row | {f"{key}_ms": _ms(row[f"ms_{key}"]) for key in times} for row in rows]
+    columns = {
+        "FAST thr.": "{fast_threshold}",
+        "points found": "{points_found:.0f}",
+        "points used": "{points_used:.0f}",
+        "prepare ms": "{prepare_ms}",
+        "FAST ms": "{fast_ms}",
+        "flow ms": "{flow_ms}",
+        "depth ms": "{depth_ms}",
+        "total ms": "{total_ms}",
+        "FPS": "{fps:.0f}",
+        "bare FAST+LK ms": "{bare_fast_lk_ms}",
+        "ratio FB on": "{ratio_fb_on:.2f}",
+        "ratio FB off": "{ratio_fb_off:.2f}",
+        "ratio FB full search": "{ratio_fb_full:.2f}",
+        "depth err. %": "{depth_error_median_pct:.1f}",
+    }
+    return table(cells, columns)
 
 
-def _depth_table(depth_rows: list[dict[str, Any]]) -> str:
+def _depth_table(depth_rows: list[Row]) -> str:
     """The depth stage against the two per-point loops, per FAST threshold."""
-    header = ["FAST thr.", "points/frame", "vectorised ms", "loop (floats) ms", "speed-up"]
-    header += ["loop (numpy/pt) ms", "speed-up", "µs/pt vec / floats / numpy"]
-    return markdown_table(
-        header,
-        [
-            [
-                row["fast_threshold"],
-                f"{row['points_per_frame']:.0f}",
-                _ms(row["ms_vectorised"]),
-                _ms(row["ms_loop_floats"]),
-                f"{row['speedup_vs_loop_floats']:.1f}×",
-                _ms(row["ms_loop_numpy"]),
-                f"{row['speedup_vs_loop_numpy']:.1f}×",
-                f"{row['us_per_point_vectorised']:.3f} / {row['us_per_point_loop_floats']:.2f} / "
-                f"{row['us_per_point_loop_numpy']:.1f}",
-            ]
-            for row in depth_rows
-        ],
-    )
+    times = ("vectorised", "loop_floats", "loop_numpy")
+    cells = [row | {f"{key}_ms": _ms(row[f"ms_{key}"]) for key in times} for row in depth_rows]
+    columns = [
+        ("FAST thr.", "{fast_threshold}"),
+        ("points/frame", "{points_per_frame:.0f}"),
+        ("vectorised ms", "{vectorised_ms}"),
+        ("loop (floats) ms", "{loop_floats_ms}"),
+        ("speed-up", "{speedup_vs_loop_floats:.1f}×"),
+        ("loop (numpy/pt) ms", "{loop_numpy_ms}"),
+        ("speed-up", "{speedup_vs_loop_numpy:.1f}×"),
+        (
+            "µs/pt vec / floats / numpy",
+            "{us_per_point_vectorised:.3f} / {us_per_point_loop_floats:.2f} / {us_per_point_loop_numpy:.1f}",
+        ),
+    ]
+    return table(cells, columns)
 
 
-def _working(table: list[dict[str, Any]], count_key: str) -> list[dict[str, Any]]:
+def _working(table: list[Row], count_key: str) -> list[Row]:
     """The rows in the working range of point counts, or all rows where none reaches it."""
     return [row for row in table if row[count_key] >= WORKING_POINTS] or table
 
 
-def _working_range_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+def _working_range_values(rows: list[Row]) -> dict[str, str | bool]:
     """The default threshold's point count and the thresholds the verdicts' ranges run over."""
     default_row = next((row for row in rows if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
     working = [row for row in rows if row["points_found"] >= WORKING_POINTS]
@@ -333,7 +311,7 @@ def _working_range_values(rows: list[dict[str, Any]]) -> dict[str, str | bool]:
     return values
 
 
-def _verdict(table: list[dict[str, Any]], count_key: str, key: str, ok: Callable[[float], bool]) -> str:
+def _verdict(table: list[Row], count_key: str, key: str, ok: Callable[[float], bool]) -> str:
     """One target's verdict (``templates/target_verdict.md.j2``): at the default threshold, and over the working
     range of point counts, where fixed per-call costs no longer dominate."""
     values = [row[key] for row in _working(table, count_key)]
@@ -351,7 +329,7 @@ def _verdict(table: list[dict[str, Any]], count_key: str, key: str, ok: Callable
     return render(PACKAGE, "target_verdict.md.j2", fields, every_value_used=True).removesuffix("\n")
 
 
-def _target_values(rows: list[dict[str, Any]], depth_rows: list[dict[str, Any]]) -> dict[str, str]:
+def _target_values(rows: list[Row], depth_rows: list[Row]) -> dict[str, str]:
     def fast(value: float) -> bool:
         return value <= TARGET_RATIO_BARE
 
@@ -370,7 +348,7 @@ def _target_values(rows: list[dict[str, Any]], depth_rows: list[dict[str, Any]])
     }
 
 
-def _flow_full_vs_lk(rows: list[dict[str, Any]]) -> float:
+def _flow_full_vs_lk(rows: list[Row]) -> float:
     """The flow stage with the full backward search (the estimator before the throughput work) over the bare baseline's
     LK, median over the working range.
 
@@ -386,7 +364,7 @@ def _flow_full_vs_lk(rows: list[dict[str, Any]]) -> float:
     return statistics.median(ratios)
 
 
-def _speedup_growth_values(depth_rows: list[dict[str, Any]]) -> dict[str, str | bool]:
+def _speedup_growth_values(depth_rows: list[Row]) -> dict[str, str | bool]:
     """Whether the depth stage's speed-up grows with the point count, and its fixed cost where it does: its
     time at the fewest points, where the per-point work is negligible."""
     fewest = min(depth_rows, key=lambda row: row["points_per_frame"])

@@ -9,7 +9,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
+import cv2
 import numpy as np
+
+from estimator import CameraIntrinsics
+from flownav_env import FlowNavEnv
 
 
 @dataclass
@@ -28,7 +32,7 @@ class Flight:
     frames: list[np.ndarray]
     rotations: list[np.ndarray]
     translations: list[np.ndarray]
-    intrinsics: Any
+    intrinsics: CameraIntrinsics
     true_depth: Callable[[int, np.ndarray], np.ndarray]
     description: dict[str, Any] = field(default_factory=dict)
 
@@ -72,15 +76,11 @@ def record_flight(
     """
     if isinstance(frames, bool) or not isinstance(frames, int) or frames < 1:
         raise ValueError(f"frames must be an integer >= 1, got {frames!r}")
-    import cv2
-
-    from flownav_env import FlowNavEnv
-
     env = FlowNavEnv(layout=layout, camera_width=width, camera_height=height)
     try:
         env.reset(seed=seed)
         physics = env.physics
-        gray = [cv2.cvtColor(env.last_frame, cv2.COLOR_RGB2GRAY)]
+        gray = [_gray(env)]
         poses = [physics.camera_pose()]
         rotations, translations = [], []
         for step in range(frames):
@@ -90,7 +90,7 @@ def record_flight(
                     f"the scripted flight ended after {step + 1} of frames={frames} steps "
                     f"(collision={info['collision']}, success={info['success']}); use fewer frames"
                 )
-            gray.append(cv2.cvtColor(env.last_frame, cv2.COLOR_RGB2GRAY))
+            gray.append(_gray(env))
             poses.append(physics.camera_pose())
             rotations.append(np.asarray(info["true_rotation"], np.float64))
             translations.append(np.asarray(info["true_translation"], np.float64))
@@ -122,3 +122,11 @@ def record_flight(
         )
     finally:
         env.close()
+
+
+def _gray(env: FlowNavEnv) -> np.ndarray:
+    """The env's last camera frame in grayscale."""
+    frame = env.last_frame
+    if frame is None:
+        raise RuntimeError("the env has rendered no frame: reset it first")
+    return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)

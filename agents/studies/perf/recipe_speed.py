@@ -22,16 +22,20 @@ import dataclasses
 import math
 import statistics
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fit, fly
 from agents.training.ppo import new_model
 from agents.training.train_config import TrainConfig
+
+# Makes the teacher agent a training config names (agents.policies.teachers.make_teacher).
+TeacherFactory = Callable[[str], Any]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,12 +68,13 @@ def stage_work(config: TrainConfig) -> dict[str, int]:
 
 
 def measure_stage(
-    config: TrainConfig, rollouts: int, make_teacher: Any = None, teacher_steps: int = 256
+    config: TrainConfig, rollouts: int, make_teacher: TeacherFactory | None = None, teacher_steps: int = 256
 ) -> dict[str, float]:
     """Seconds per unit of each kind of work of ``config``'s seed, on envs and a model built as training builds
     them: ``startup_s`` (envs and model, once), ``ppo_s_per_step``, ``evaluation_s_per_episode`` and, with a
     teacher, ``teacher_s_per_step`` (flying the student, labelling with the teacher) and
     ``fit_s_per_state_epoch``."""
+    # torch and stable-baselines3 are imported here: they are slow to import and only the measurement needs them.
     import torch
     from stable_baselines3.common.evaluation import evaluate_policy
 
@@ -88,6 +93,10 @@ def measure_stage(
         evaluate_policy(model, eval_env, n_eval_episodes=config.eval_episodes, deterministic=True)
         measured["evaluation_s_per_episode"] = (time.perf_counter() - begun) / config.eval_episodes
         if config.imitation.teacher:
+            if make_teacher is None:
+                raise ValueError(
+                    f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher"
+                )
             teacher = make_teacher(config.imitation.teacher)
             begun = time.perf_counter()
             flights = fly(envs, teacher, teacher_steps, config.ppo.gamma, student=model)
@@ -116,7 +125,11 @@ def stage_minutes(work: dict[str, int], measured: dict[str, float]) -> dict[str,
 
 
 def measure_recipes(
-    recipes: Sequence[Recipe], rollouts: int, repeats: int, make_teacher: Any = None, progress: bool = True
+    recipes: Sequence[Recipe],
+    rollouts: int,
+    repeats: int,
+    make_teacher: TeacherFactory | None = None,
+    progress: bool = True,
 ) -> dict[str, list[dict[str, Any]]]:
     """Every stage of every recipe measured ``repeats`` times, recipes alternating block by block; per recipe,
     one entry per repeat: its minutes per seed by kind of work and in total, and the stages' measurements.
@@ -128,18 +141,15 @@ def measure_recipes(
         raise ValueError(f"--rollouts and --repeats must be >= 1, got {rollouts}, {repeats}")
     if len(recipes) < 2:
         raise ValueError(f"give at least two recipes to compare, got {len(recipes)}")
-    from tqdm import tqdm
-
     results: dict[str, list[dict[str, Any]]] = {recipe.name: [] for recipe in recipes}
     blocks = [(repeat, recipe) for repeat in range(repeats) for recipe in recipes]
     for _, recipe in tqdm(blocks, desc="bench recipe", unit="recipe", disable=not progress):
         stages = []
+        minutes = dict.fromkeys(("startup", "ppo", "evaluation", "teacher"), 0.0)
         for config in recipe.stages:
-            measured = measure_stage(config, rollouts, make_teacher)
-            stages.append({"work": stage_work(config), "measured": measured})
-        minutes = {kind: 0.0 for kind in ("startup", "ppo", "evaluation", "teacher")}
-        for stage in stages:
-            for kind, value in stage_minutes(stage["work"], stage["measured"]).items():
+            work, measured = stage_work(config), measure_stage(config, rollouts, make_teacher)
+            stages.append({"work": work, "measured": measured})
+            for kind, value in stage_minutes(work, measured).items():
                 minutes[kind] += value
         results[recipe.name].append({"minutes": minutes, "total": sum(minutes.values()), "stages": stages})
     return results

@@ -13,18 +13,23 @@ from typing import Any
 
 import numpy as np
 
+from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
 from agents.common.machine import available_cores
-from agents.common.tables import markdown_table, today, write_csv
+from agents.common.seeds import ABLATION_SEED_START
+from agents.common.tables import today, write_csv
 from agents.common.yaml_config import load_config
-from agents.studies.confirmation import ALLOWED_RISE, seed_failure_matrix
+from agents.studies.benchmark_data import seed_failures
+from agents.studies.confirmation import ALLOWED_RISE
 from agents.studies.perf.recipe_speed import (
     Recipe,
+    TeacherFactory,
     block_ratios,
     measure_recipes,
     median_minutes,
     stage_work,
 )
+from agents.studies.perf.report_kit import PACKAGE, hardware_summary, saved_figure, table
 from agents.training.train_config import TrainConfig
 
 # The validation quality a faster recipe must reach: the bar the lever search's winner met.
@@ -33,7 +38,11 @@ CLEAN_FAILURE_BAR = 0.05
 TARGET_TIME_RATIO = 1 / 3
 # flownav ablation's folders per condition, under its --out (results/ablation).
 CONDITIONS = {"clean": "", "density 0.18": "density_0.18", "1.5 m/s": "speed_1.5"}
+# Validation layouts flownav ablation flies per seed: clean, and under each condition.
+ABLATION_LAYOUTS = {"clean": 100, "conditions": 50}
 KINDS = ("startup", "ppo", "evaluation", "teacher")
+# The wider machine the seeds-per-hour estimate scales to.
+WIDE_CORES = 16
 
 
 def parse_recipe(text: str) -> Recipe:
@@ -57,7 +66,7 @@ def quality(recipe: Recipe, ablation_dir: Path) -> dict[str, Any]:
     name = recipe.stages[-1].name
     rates: dict[str, Any] = {}
     for label, folder in CONDITIONS.items():
-        matrix = seed_failure_matrix(ablation_dir / folder / name)
+        matrix = seed_failures(ablation_dir / folder / name)
         rates[label] = None if matrix is None else (float(matrix.mean()), len(matrix), matrix.shape[1])
     clean = rates["clean"]
     meets = None
@@ -91,7 +100,7 @@ def run_recipe_benchmark(
     repeats: int,
     out_dir: Path,
     *,
-    make_teacher: Any = None,
+    make_teacher: TeacherFactory | None = None,
     ablation_dir: Path = Path("results/ablation"),
     runs_dir: Path = Path("runs"),
     progress: bool = True,
@@ -141,7 +150,16 @@ def run_recipe_benchmark(
         + " ".join(f"--recipe {r.name}={','.join(map(str, r.paths))}" for r in recipes)
         + f" --rollouts {rollouts} --repeats {repeats} --out {out_dir}"
     )
-    paths[0].write_text(_report(rows, command, time.perf_counter() - started, repeats))
+    values = recipe_report_values(
+        rows,
+        command,
+        time.perf_counter() - started,
+        repeats,
+        generated=today(),
+        hardware=hardware_summary(),
+        cores=available_cores(),
+    )
+    paths[0].write_text(render(PACKAGE, "training_performance.md.j2", values, every_value_used=True))
     return paths
 
 
@@ -156,150 +174,106 @@ def _quality_columns(judged: dict[str, Any]) -> dict[str, Any]:
 
 
 def _plot(rows: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    figure, axis = plt.subplots(figsize=(7, 0.9 + 0.7 * len(rows)))
-    left = np.zeros(len(rows))
-    names = [row["recipe"] for row in rows]
-    for kind in KINDS:
-        widths = np.array([row[f"minutes_{kind}"] for row in rows], float)
-        axis.barh(names, widths, left=left, label=kind)
-        left += widths
-    axis.set_xlabel("minutes per training seed (median over alternated blocks)")
-    axis.invert_yaxis()
-    axis.legend(loc="lower right", fontsize=8)
-    figure.tight_layout()
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
+    with saved_figure(path, (7, 0.9 + 0.7 * len(rows)), dpi=120) as figure:
+        axis = figure.subplots()
+        left = np.zeros(len(rows))
+        names = [row["recipe"] for row in rows]
+        for kind in KINDS:
+            widths = np.array([row[f"minutes_{kind}"] for row in rows], float)
+            axis.barh(names, widths, left=left, label=kind)
+            left += widths
+        axis.set_xlabel("minutes per training seed (median over alternated blocks)")
+        axis.invert_yaxis()
+        axis.legend(loc="lower right", fontsize=8)
 
 
-def _report(rows: list[dict[str, Any]], command: str, elapsed: float, repeats: int) -> str:
-    from agents.studies.perf.timing import hardware_summary
-
+def recipe_report_values(
+    rows: list[dict[str, Any]],
+    command: str,
+    elapsed: float,
+    repeats: int,
+    *,
+    generated: str,
+    hardware: str,
+    cores: int,
+) -> dict[str, Any]:
+    """Every figure, table and verdict of ``templates/training_performance.md.j2``, from the recipes' rows (the
+    reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the command, the seconds it took
+    and the number of blocks, and the machine's facts: time stamp, Markdown list and cores."""
     reference = rows[0]
-    table = markdown_table(
-        [
-            "recipe",
-            "PPO steps",
-            "teacher steps",
-            "eval episodes",
-            *(f"min {k}" for k in KINDS),
-            "min per seed",
-            "× reference [min–max]",
-            "PPO steps/s",
-        ],
-        [
-            [
-                r["recipe"],
-                f"{r['ppo_steps']:,}",
-                f"{r['teacher_env_steps']:,}",
-                r["evaluation_episodes"],
-                *(r[f"minutes_{k}"] for k in KINDS),
-                r["minutes_per_seed"],
-                f"{r['ratio_to_reference']:.2f} [{r['ratio_min']:.2f}–{r['ratio_max']:.2f}]",
-                r["ppo_steps_per_s"],
-            ]
-            for r in rows
-        ],
-    )
-    quality_table = markdown_table(
-        [
-            "recipe",
-            "clean",
-            "density 0.18",
-            "1.5 m/s",
-            "seeds",
-            "meets the bar",
-            "recorded min per seed (median, seeds)",
-        ],
-        [
-            [
-                r["recipe"],
-                _rate(r["failure_clean"]),
-                _rate(r["failure_density_018"]),
-                _rate(r["failure_15_m/s"]),
-                r["seeds_clean"],
-                {True: "yes", False: "no", "": "not flown"}[r["meets_quality"]],
-                f"{r['recorded_minutes_median']} ({r['recorded_seeds']})" if r["recorded_seeds"] else "-",
-            ]
-            for r in rows
-        ],
-    )
-    cores = available_cores()
-    lines = [
-        "# Time to a policy: minutes per training seed, recipes side by side",
-        "",
-        f"Generated {today()} by `{command}` in {elapsed / 60:.1f} min.",
-        "",
-        hardware_summary(),
-        "",
-        "## Minutes per seed (measured in one sitting, alternated)",
-        "",
-        table,
-        "",
-        f"Each recipe's stages were built as training builds them (worker processes for n_envs > 1), and each kind "
-        f"of work was timed on them: a few PPO rollouts, one held-out evaluation, one teacher round and fit. "
-        f"Minutes per seed are the config's counts times those seconds (`agents/studies/perf/recipe_speed.py`). "
-        f"The recipes alternated block by block, {repeats} times; the ratio to `{reference['recipe']}` is taken per "
-        f"block, then the median (min–max over blocks). 'startup' is building the envs and model and a warm-up "
-        f"rollout, once per stage.",
-        "",
-        "![minutes per seed by kind of work](training_performance.png)",
-        "",
-        "## Quality on the validation layouts",
-        "",
-        quality_table,
-        "",
-        f"Failure over runs × layouts of `flownav ablation` on validation layouts (clean: 900,000–900,099; the "
-        f"conditions: 900,000–900,049), the recipe's last stage, every seed it has. The bar: clean ≤ "
-        f"{CLEAN_FAILURE_BAR:.2f} and each condition at most +{ALLOWED_RISE:.2f} over clean, by point estimate, "
-        "as the lever search's winner was picked. Recorded minutes are the seeds' own training records (with the "
-        "earlier stage's): trained on whatever machine and load they met, so context, not the comparison.",
-        "",
-        "## Target",
-        "",
-        *_target_lines(rows),
-        "",
-        "## Seeds per hour",
-        "",
-        f"Here ({cores} cores, one seed's envs on all of them): "
-        + "; ".join(f"`{r['recipe']}` {r['seeds_per_hour_here']:.2f}" for r in rows)
-        + f". A 16-core machine trains seeds side by side (`flownav train --seeds --parallel`, or `--backend ray`), "
-        f"each on {cores} cores as here: an estimate from the per-core rate, not a measurement, is "
-        + "; ".join(f"`{r['recipe']}` {r['seeds_per_hour_here'] * 16 / cores:.1f}" for r in rows)
-        + " seeds per hour, if rendering (software, on the CPU) scales with cores as it does here.",
-        "",
+    times = [
+        row | {"ratio": f"{row['ratio_to_reference']:.2f} [{row['ratio_min']:.2f}–{row['ratio_max']:.2f}]"}
+        for row in rows
     ]
-    return "\n".join(lines)
+    minutes = {
+        "recipe": "{recipe}",
+        "PPO steps": "{ppo_steps:,}",
+        "teacher steps": "{teacher_env_steps:,}",
+        "eval episodes": "{evaluation_episodes}",
+        **{f"min {kind}": f"{{minutes_{kind}}}" for kind in KINDS},
+        "min per seed": "{minutes_per_seed}",
+        "× reference [min–max]": "{ratio}",
+        "PPO steps/s": "{ppo_steps_per_s}",
+    }
+    judged = [
+        row
+        | {key: _rate(row[f"failure_{key}"]) for key in ("clean", "density_018")}
+        | {
+            "speed": _rate(row["failure_15_m/s"]),
+            "meets": {True: "yes", False: "no", "": "not flown"}[row["meets_quality"]],
+            "recorded": f"{row['recorded_minutes_median']} ({row['recorded_seeds']})"
+            if row["recorded_seeds"]
+            else "-",
+        }
+        for row in rows
+    ]
+    quality = {
+        "recipe": "{recipe}",
+        "clean": "{clean}",
+        "density 0.18": "{density_018}",
+        "1.5 m/s": "{speed}",
+        "seeds": "{seeds_clean}",
+        "meets the bar": "{meets}",
+        "recorded min per seed (median, seeds)": "{recorded}",
+    }
+    first, clean, conditions = ABLATION_SEED_START, ABLATION_LAYOUTS["clean"], ABLATION_LAYOUTS["conditions"]
+    return {
+        "generated": generated,
+        "command": command,
+        "elapsed_min": f"{elapsed / 60:.1f}",
+        "hardware": hardware,
+        "table": table(times, minutes),
+        "repeats": str(repeats),
+        "reference": reference["recipe"],
+        "quality_table": table(judged, quality),
+        "clean_layouts": f"{first:,}–{first + clean - 1:,}",
+        "condition_layouts": f"{first:,}–{first + conditions - 1:,}",
+        "clean_bar": f"{CLEAN_FAILURE_BAR:.2f}",
+        "allowed_rise": f"{ALLOWED_RISE:.2f}",
+        "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
+        "targets": [_target(row) for row in rows[1:]],
+        "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
+        "cores": str(cores),
+        "wide_cores": str(WIDE_CORES),
+        "seeds_per_hour": "; ".join(f"`{row['recipe']}` {row['seeds_per_hour_here']:.2f}" for row in rows),
+        "seeds_per_hour_wide": "; ".join(
+            f"`{row['recipe']}` {row['seeds_per_hour_here'] * WIDE_CORES / cores:.1f}" for row in rows
+        ),
+    }
 
 
-def _target_lines(rows: list[dict[str, Any]]) -> list[str]:
-    """The time-to-policy target, worded from the data: a recipe at ≤ 1/3 of the reference's minutes per seed that
-    meets the reference's validation bar."""
-    reference = rows[0]
-    lines = []
-    for row in rows[1:]:
-        fast = row["ratio_to_reference"] <= TARGET_TIME_RATIO
-        judged = {True: "meets", False: "misses", "": "has not been flown against"}[row["meets_quality"]]
-        met = fast and row["meets_quality"] is True
-        lines.append(
-            f"- `{row['recipe']}`: {row['ratio_to_reference']:.2f}× the minutes per seed of `{reference['recipe']}` "
-            f"(target ≤ {TARGET_TIME_RATIO:.2f}×), and it {judged} the validation bar → **{'met' if met else 'missed'}**."
-        )
-    teachers = [row["recipe"] for row in rows if row["teacher_env_steps"]]
-    if teachers:
-        lines += [
-            "",
-            "A teacher start counts only its own work per seed: the teacher rule's gains were tuned once for the "
-            "benchmark (`flownav tune`, `results/tuning/`), not per seed, and the student starts from what that "
-            "rule does, so it needs a rule worth imitating on the task; its PPO stage is what may carry it past "
-            "the rule. Recipes with a teacher here: " + ", ".join(f"`{name}`" for name in teachers) + ".",
-        ]
-    return lines
+def _target(row: dict[str, Any]) -> dict[str, Any]:
+    """The time-to-policy target for one recipe: at most a third of the reference's minutes per seed, and the
+    reference's validation bar met (None: not flown against it)."""
+    meets = None if row["meets_quality"] == "" else bool(row["meets_quality"])
+    fast = row["ratio_to_reference"] <= TARGET_TIME_RATIO
+    return {
+        "recipe": row["recipe"],
+        "ratio": f"{row['ratio_to_reference']:.2f}",
+        "meets": meets,
+        "met": fast and meets is True,
+    }
 
 
-def _rate(value: Any) -> str:
+def _rate(value: float | str) -> str:
     return "-" if value == "" else f"{value:.2f}"

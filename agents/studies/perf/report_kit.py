@@ -1,4 +1,5 @@
-"""What both speed benchmarks share: a timed block without garbage collection, and the report's hardware lines.
+"""What the speed benchmarks share: a timed block without garbage collection, the report's hardware lines, and
+the writers of their tables, figures and reports.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -8,13 +9,26 @@ shared with other jobs shifts both sides alike.
 from __future__ import annotations
 
 import gc
+import math
 import os
 import platform
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
+from agents.common.jinja_reports import render
 from agents.common.machine import code_version, cpu_model
+from agents.common.tables import markdown_table
 from agents.evaluation.provenance import gl_renderer, is_software_renderer
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+PACKAGE = "agents.studies.perf"
+TEMPLATES = Path(__file__).with_name("templates")
 
 
 @contextmanager
@@ -29,9 +43,14 @@ def quiet_gc() -> Iterator[None]:
         gc.enable()
 
 
+def median(values: Sequence[float] | np.ndarray) -> float:
+    """The median, NaN for no values."""
+    return float(np.median(values)) if len(values) else math.nan
+
+
 def hardware_summary(renderer: str | None = None) -> str:
     """CPU model, core count, load and GL renderer facts for the report header (one Markdown list).
-    ``renderer``: :func:`agents.common.machine.gl_renderer`'s answer where the caller already asked for it."""
+    ``renderer``: :func:`agents.evaluation.provenance.gl_renderer`'s answer where the caller already asked."""
     lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
     lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
     try:
@@ -44,3 +63,41 @@ def hardware_summary(renderer: str | None = None) -> str:
     lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
     lines.append(f"- code: {code_version()}")
     return "\n".join(lines)
+
+
+def table(rows: Iterable[Mapping[str, Any]], columns: Mapping[str, str] | Sequence[tuple[str, str]]) -> str:
+    """A Markdown table with one column per ``header: format`` entry (pairs where headers repeat); each cell is
+    ``format.format_map(row)``."""
+    pairs = list(columns.items()) if isinstance(columns, Mapping) else list(columns)
+    return markdown_table(
+        [h for h, _ in pairs], [[cell.format_map(row) for _, cell in pairs] for row in rows]
+    )
+
+
+def rounded(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """The rows with their floats rounded to four decimals, for a CSV file."""
+    return [{key: round(v, 4) if isinstance(v, float) else v for key, v in row.items()} for row in rows]
+
+
+def write_report(path: Path, template: str, values: Mapping[str, Any]) -> Path:
+    """``templates/<template>`` filled with ``values`` (every one of them used), written to ``path``."""
+    path.write_text(render(PACKAGE, template, values, every_value_used=True))
+    return path
+
+
+@contextmanager
+def saved_figure(path: Path, size: tuple[float, float], dpi: int = 110) -> Iterator[Figure]:
+    """A matplotlib figure of ``size`` inches, laid out tight and saved to ``path`` when the block ends."""
+    # matplotlib is imported here: it is slow to import and only the figures need it.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure = plt.figure(figsize=size)
+    try:
+        yield figure
+        figure.tight_layout()
+        figure.savefig(path, dpi=dpi)
+    finally:
+        plt.close(figure)

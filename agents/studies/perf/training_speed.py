@@ -18,21 +18,30 @@ the repeats with their spread, so that a machine shared with other jobs shifts a
 from __future__ import annotations
 
 import dataclasses
+import multiprocessing
 import statistics
 import time
 from collections.abc import Sequence
+from multiprocessing.queues import Queue
+from multiprocessing.synchronize import Barrier
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm
+
 from agents.common.machine import available_cores
-from agents.common.tables import markdown_table, today, write_csv
+from agents.common.tables import today, write_csv
+from agents.studies.perf.report_kit import hardware_summary, table, write_report
 from agents.training.envs import build_envs, close_quietly
 from agents.training.ppo import new_model
 from agents.training.train_config import TrainConfig
 
+TORCH_THREADS = 1  # per process: the env workers, not torch, are what n_envs spreads over the cores
+
 
 def _phase_timer() -> Any:
     """An SB3 callback that adds up the seconds spent collecting rollouts and, between them, updating."""
+    # stable-baselines3 is imported here: it pulls in torch, slow to import, and only the measurement needs it.
     from stable_baselines3.common.callbacks import BaseCallback
 
     class PhaseTimer(BaseCallback):
@@ -62,10 +71,9 @@ def measure_training(
     config: TrainConfig,
     n_envs: int,
     rollouts: int,
-    torch_threads: int = 1,
     *,
     in_process: bool = False,
-    start_together: Any = None,
+    start_together: Barrier | None = None,
 ) -> dict[str, float]:
     """Steps per second of ``rollouts`` PPO rollouts (and their updates) with ``n_envs`` envs, in worker
     processes or, ``in_process``, in this one; ``start_together`` is a barrier that runs side by side wait at
@@ -74,9 +82,10 @@ def measure_training(
     Returns:
         ``steps``, ``seconds``, ``steps_per_s``, ``collect_s`` and ``update_s`` of the timed rollouts.
     """
+    # torch is imported here: it is slow to import and only the measurement needs it.
     import torch
 
-    torch.set_num_threads(torch_threads)
+    torch.set_num_threads(TORCH_THREADS)
     config = dataclasses.replace(config, n_envs=n_envs)
     envs, eval_env = build_envs(config, in_process=in_process)
     close_quietly(eval_env)
@@ -105,7 +114,9 @@ def measure_training(
     }
 
 
-def _side_by_side_run(config: TrainConfig, rollouts: int, barrier: Any, results: Any) -> None:
+def _side_by_side_run(
+    config: TrainConfig, rollouts: int, barrier: Barrier, results: Queue[dict[str, float]]
+) -> None:
     results.put(measure_training(config, config.n_envs, rollouts, in_process=True, start_together=barrier))
 
 
@@ -116,8 +127,6 @@ def measure_side_by_side(config: TrainConfig, runs: int, rollouts: int) -> dict[
         As :func:`measure_training`, summed over the runs (``steps_per_s`` is the machine's rate), with
         ``per_run_steps_per_s`` the slowest run's own rate.
     """
-    import multiprocessing
-
     context = multiprocessing.get_context("forkserver")  # EGL cannot render in a forked child
     barrier, results = context.Barrier(runs), context.Queue()
     processes = [
@@ -156,8 +165,6 @@ def run_training_benchmark(
         ValueError: a count below 1, or ``side_by_side`` 1 or negative.
     """
     _check_counts(n_envs_options, rollouts, repeats, side_by_side)
-    from tqdm import tqdm
-
     started = time.perf_counter()
     settings = [(n, 1) for n in n_envs_options] + ([(config.n_envs, side_by_side)] if side_by_side else [])
     runs: dict[tuple[int, int], list[dict[str, float]]] = {setting: [] for setting in settings}
@@ -179,8 +186,16 @@ def run_training_benchmark(
         + (f" --side-by-side {side_by_side}" if side_by_side else "")
         + f" --out {out_dir}"
     )
-    md_path.write_text(_report(rows, config, command, time.perf_counter() - started))
-    return [md_path, csv_path]
+    values = throughput_report_values(
+        rows,
+        config,
+        command,
+        time.perf_counter() - started,
+        generated=today(),
+        hardware=hardware_summary(),
+        cores=available_cores(),
+    )
+    return [write_report(md_path, "training_throughput.md.j2", values), csv_path]
 
 
 def _check_counts(n_envs_options: Sequence[int], rollouts: int, repeats: int, side_by_side: int) -> None:
@@ -214,72 +229,59 @@ def _summary(config: TrainConfig, n_envs: int, runs: int, measured: list[dict[st
     }
 
 
-def _report(rows: list[dict[str, Any]], config: TrainConfig, command: str, elapsed: float) -> str:
-    from agents.studies.perf.timing import hardware_summary
-
-    table = markdown_table(
-        [
-            "n_envs",
-            "runs at once",
-            "env workers",
-            "steps per rollout",
-            "steps/s, machine (median)",
-            "min–max",
-            "steps/s per run",
-            "collect ms/step",
-            "update ms/step",
-        ],
-        [
-            [
-                r["n_envs"],
-                r["runs_side_by_side"],
-                r["env_workers"],
-                r["rollout_steps"],
-                r["steps_per_s_median"],
-                f"{r['steps_per_s_min']}–{r['steps_per_s_max']}",
-                r["per_run_steps_per_s_median"],
-                r["collect_ms_per_step"],
-                r["update_ms_per_step"],
-            ]
-            for r in rows
-        ],
-    )
+def throughput_report_values(
+    rows: list[dict[str, Any]],
+    config: TrainConfig,
+    command: str,
+    elapsed: float,
+    *,
+    generated: str,
+    hardware: str,
+    cores: int,
+) -> dict[str, Any]:
+    """Every figure and table of ``templates/training_throughput.md.j2``, from the settings' rows (the single
+    runs first, as the CSV has them), the config, the command and the seconds it took, and the machine's facts:
+    time stamp, Markdown list and cores."""
+    columns = {
+        "n_envs": "{n_envs}",
+        "runs at once": "{runs_side_by_side}",
+        "env workers": "{env_workers}",
+        "steps per rollout": "{rollout_steps}",
+        "steps/s, machine (median)": "{steps_per_s_median}",
+        "min–max": "{steps_per_s_min}–{steps_per_s_max}",
+        "steps/s per run": "{per_run_steps_per_s_median}",
+        "collect ms/step": "{collect_ms_per_step}",
+        "update ms/step": "{update_ms_per_step}",
+    }
     best = max(rows, key=lambda r: r["steps_per_s_median"])
     single = [r for r in rows if r["runs_side_by_side"] == 1]
-    lines = [
-        "# Training throughput: PPO steps per second against env workers and runs side by side",
-        "",
-        f"Command: `{command}` ({today()}, {elapsed / 60:.1f} min).  ",
-        f"Config `{config.name}`: env `{config.env_id}` {config.env or '(defaults)'}, PPO n_steps "
-        f"{config.ppo.n_steps} per env, batch {config.ppo.batch_size}, {config.ppo.n_epochs} epochs, "
-        f"network {config.ppo.net_arch}; torch on 1 thread per process; {available_cores()} cores.",
-        "",
-        hardware_summary(),
-        "",
-        table,
-        "",
-        "Steps/s is the median over the repeats (each repeat a fresh set of workers, the settings "
-        "alternated), with its min–max; for runs side by side it is the machine's rate, the sum over the runs "
-        "timed from a common start, and 'per run' is the slowest run's own. Collect is the wall time of "
-        "filling the rollout buffer (the envs stepping, the policy acting; summed over runs side by side); "
-        "update is the PPO epochs over the buffer. The held-out evaluation of a real run is not included.",
-        "",
-        f"Fastest here: n_envs = {best['n_envs']} with {best['runs_side_by_side']} run(s) at once, "
-        f"{best['steps_per_s_median']} steps/s. More workers than cores only help while the main process has "
-        "work of its own between steps; past that they share the same cores. A different n_envs also changes "
-        "the rollout size (n_steps × n_envs), and with it what one update sees: compare learning curves per "
-        "step before adopting one. Runs side by side keep their config's n_envs and rollouts: each trains "
-        "exactly what it trains alone (`tests/agents/test_multiseed.py`), only more slowly per run.",
-        "",
+    reference = next((r for r in single if r["n_envs"] == config.n_envs), single[0]) if single else None
+    side_by_side = [
+        {
+            "runs": row["runs_side_by_side"],
+            "ratio": f"{row['steps_per_s_median'] / reference['steps_per_s_median']:.2f}",
+            "n_envs": reference["n_envs"],
+        }
+        for row in rows[len(single) :]
+        if reference is not None
     ]
-    if len(rows) > len(single) and single:
-        reference = next((r for r in single if r["n_envs"] == config.n_envs), single[0])
-        for row in rows[len(single) :]:
-            ratio = row["steps_per_s_median"] / reference["steps_per_s_median"]
-            lines.insert(
-                -1,
-                f"{row['runs_side_by_side']} runs side by side train {ratio:.2f}× the steps per second of "
-                f"one run with n_envs = {reference['n_envs']} in worker processes (medians, same process).",
-            )
-            lines.insert(-1, "")
-    return "\n".join(lines)
+    return {
+        "command": command,
+        "generated": generated,
+        "elapsed_min": f"{elapsed / 60:.1f}",
+        "config": config.name,
+        "env_id": config.env_id,
+        "env": config.env or "(defaults)",
+        "n_steps": config.ppo.n_steps,
+        "batch_size": config.ppo.batch_size,
+        "n_epochs": config.ppo.n_epochs,
+        "net_arch": config.ppo.net_arch,
+        "torch_threads": TORCH_THREADS,
+        "cores": cores,
+        "hardware": hardware,
+        "table": table(rows, columns),
+        "best_n_envs": best["n_envs"],
+        "best_runs": best["runs_side_by_side"],
+        "best_steps_per_s": best["steps_per_s_median"],
+        "side_by_side": side_by_side,
+    }

@@ -8,10 +8,11 @@ from pathlib import Path
 import pytest
 from helpers import SMALL, tiny_train_config
 
+from agents.common.jinja_reports import render
 from agents.common.yaml_config import load_config
 from agents.policies.teachers import make_teacher
 from agents.studies.perf.recipe_speed import block_ratios, stage_minutes, stage_work
-from agents.studies.perf.recipe_speed_report import _target_lines, parse_recipe, run_recipe_benchmark
+from agents.studies.perf.recipe_speed_report import parse_recipe, recipe_report_values, run_recipe_benchmark
 from agents.training.train_config import TrainConfig
 
 EXPERIMENTS = Path(__file__).resolve().parents[4] / "configs" / "experiments"
@@ -88,21 +89,51 @@ def test_one_recipe_alone_is_refused(tmp_path: Path) -> None:
         run_recipe_benchmark([str(old)], 1, 1, tmp_path / "out", progress=False)
 
 
+def recipe_row(name: str, ratio: float, meets: bool | str, teacher_steps: int) -> dict:
+    return {
+        "recipe": name,
+        "ppo_steps": 1000,
+        "teacher_env_steps": teacher_steps,
+        "evaluation_episodes": 10,
+        **{f"minutes_{kind}": 1.0 for kind in ("startup", "ppo", "evaluation", "teacher")},
+        "minutes_per_seed": 4.0,
+        "ratio_to_reference": ratio,
+        "ratio_min": ratio,
+        "ratio_max": ratio,
+        "ppo_steps_per_s": 100.0,
+        "seeds_per_hour_here": 15.0,
+        **{f"failure_{key}": 0.04 for key in ("clean", "density_018", "15_m/s")},
+        "seeds_clean": 5,
+        "meets_quality": meets,
+        "recorded_minutes_median": "",
+        "recorded_seeds": 0,
+    }
+
+
 @pytest.mark.parametrize(
     ("ratio", "meets", "verdict"),
     [
-        (0.30, True, "**met**"),
-        (0.40, True, "**missed**"),
-        (0.30, False, "**missed**"),
-        (0.30, "", "**missed**"),
+        (0.30, True, "meets the validation bar → **met**"),
+        (0.40, True, "meets the validation bar → **missed**"),
+        (0.30, False, "misses the validation bar → **missed**"),
+        (0.30, "", "has not been flown against the validation bar → **missed**"),
     ],
 )
 def test_the_target_needs_both_a_third_of_the_time_and_the_quality(ratio, meets, verdict) -> None:
-    rows = [
-        {"recipe": "old", "ratio_to_reference": 1.0, "meets_quality": True, "teacher_env_steps": 0},
-        {"recipe": "new", "ratio_to_reference": ratio, "meets_quality": meets, "teacher_env_steps": 10},
+    rows = [recipe_row("old", 1.0, True, 0), recipe_row("new", ratio, meets, 10)]
+    values = recipe_report_values(
+        rows, "flownav bench recipe", 60.0, 3, generated="now", hardware="-", cores=2
+    )
+    assert values["targets"] == [
+        {
+            "recipe": "new",
+            "ratio": f"{ratio:.2f}",
+            "meets": None if meets == "" else meets,
+            "met": verdict.endswith("**met**"),
+        }
     ]
-    lines = _target_lines(rows)
-    assert lines[0].startswith(f"- `new`: {ratio:.2f}× the minutes per seed of `old` (target ≤ 0.33×)")
-    assert lines[0].endswith(f"→ {verdict}.")
-    assert "Recipes with a teacher here: `new`." in lines[-1]
+    report = render("agents.studies.perf", "training_performance.md.j2", values, every_value_used=True)
+    assert (
+        f"- `new`: {ratio:.2f}× the minutes per seed of `old` (target ≤ 0.33×), and it {verdict}." in report
+    )
+    assert "Recipes with a teacher here: `new`." in report

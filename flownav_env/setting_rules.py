@@ -91,7 +91,11 @@ class Range:
     def check_int(self, name: str, value: object) -> int:
         """``value`` as an int inside the range (an integer range's :meth:`check`)."""
         self._require_low(name)
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not self.contains(int(value)):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, np.integer))
+            or not self.contains(int(value))
+        ):
             raise ValueError(f"{name} must be an integer in {self.interval}, got {value!r}")
         return int(value)
 

@@ -83,7 +83,9 @@ def is_learned(name: str) -> bool:
 
 
 class Agent(Protocol):
-    """What the evaluation needs of an agent: stable-baselines3's ``predict``."""
+    """What the evaluation needs of an agent: stable-baselines3's ``predict``. ``state`` is whatever the agent
+    keeps between calls (an LSTM's state, a frame stack; None for a memoryless agent): opaque to its caller,
+    who passes back what the last call returned."""
 
     def predict(
         self,
@@ -92,3 +94,30 @@ class Agent(Protocol):
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]: ...
+
+
+class AgentWrapper:
+    """An agent that flies another one, ``agent``: ``predict`` passes each call through, on what
+    :meth:`observe` makes of the observation. A wrapper overrides :meth:`observe` to check or convert the
+    observation, and ``predict`` itself (calling this one) to change the call around it.
+    """
+
+    def __init__(self, agent: Agent) -> None:
+        self.agent = agent
+
+    def predict(
+        self,
+        observation: dict[str, np.ndarray],
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """``agent``'s ``predict`` on :meth:`observe`'s view of ``observation``."""
+        return self.agent.predict(
+            self.observe(observation), state=state, episode_start=episode_start, deterministic=deterministic
+        )
+
+    def observe(self, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """What ``agent`` is given of ``observation``: the observation itself, unless a wrapper checks or
+        converts it here (raising a ValueError for one it refuses)."""
+        return observation

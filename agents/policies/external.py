@@ -25,12 +25,14 @@ import sys
 import traceback
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import Any, NoReturn
 
 import numpy as np
 
-from agents.policies.base import Agent
+from agents.policies.base import AGENT_NAMES, Agent, AgentWrapper
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
+from agents.policies.sb3_models import is_sb3_model_name
 
 SPEC_HELP = "module.path:callable or path/to/file.py:callable"
 # What an agent's predict is called with and gives back, as SB3's; `flownav describe` prints it.
@@ -57,7 +59,7 @@ def _is_file_target(target: str) -> bool:
 
 
 @functools.lru_cache(maxsize=32)
-def _module(target: str) -> Any:
+def _module(target: str) -> ModuleType:
     if _is_file_target(target):
         path = Path(target)
         if not path.is_file():
@@ -89,7 +91,7 @@ def describe_error(error: BaseException, source: Path | str | None = None) -> st
     if isinstance(error, SyntaxError):
         message = " ".join(str(error.msg).split())
         return f"SyntaxError: {message} (at {error.filename}:{error.lineno})"
-    frames = traceback.extract_tb(error.__traceback__)
+    frames: list[traceback.FrameSummary] = list(traceback.extract_tb(error.__traceback__))
     if source is not None:
         wanted = str(Path(source).resolve())
         frames = [frame for frame in frames if str(Path(frame.filename).resolve()) == wanted] or frames
@@ -108,7 +110,7 @@ def load_external_agent(spec: str) -> Agent:
     return ExternalAgent(spec, _resolve(spec))
 
 
-def _resolve(spec: str) -> Any:
+def _resolve(spec: str) -> Agent:
     target, colon, attribute = str(spec).rpartition(":")
     if not colon or not target or not attribute.isidentifier():
         raise ValueError(f"agent {spec!r}: expected {SPEC_HELP}")
@@ -166,8 +168,6 @@ def display_name(agent: str) -> str:
     callable (``/home/me/my_agent.py:make_agent`` -> ``my_agent:make_agent``), an SB3 model by its algorithm and
     the zip's stem (``sac:/home/me/model.zip`` -> ``sac:model``); a FlowNav agent or a module path is itself.
     Episode records keep the full spec."""
-    from agents.policies.sb3_models import is_sb3_model_name
-
     if is_sb3_model_name(agent):
         algo, _, path = str(agent).partition(":")
         return f"{algo}:{Path(path).stem}"
@@ -185,8 +185,6 @@ def check_display_name(name: str, agent: str) -> str:
         ValueError: an empty name, one holding a line break, ``|`` or a backtick, or a FlowNav agent's name given
             to another agent (its included rows would replace that agent's published ones).
     """
-    from agents.policies.base import AGENT_NAMES
-
     if not str(name).strip() or any(mark in str(name) for mark in ("\n", "\r", "|", "`")):
         raise ValueError(
             f"--name {name!r}: a display name is one line of text without '|' or backticks, e.g. my_agent"
@@ -211,11 +209,11 @@ class MissingObservationKey(ValueError):
     """The agent read an observation key the env does not give (see :class:`KeyNamingObservation`)."""
 
 
-class KeyNamingObservation(dict):
+class KeyNamingObservation(dict[str, np.ndarray]):
     """An observation that answers a key the env does not give with one clear line (a ValueError) naming the
     key and the env setting that gives it."""
 
-    def __missing__(self, key: Any) -> Any:
+    def __missing__(self, key: str) -> NoReturn:
         setting = OBSERVATION_KEY_SETTINGS.get(key)
         remedy = (
             f": declare env_settings = {{{setting!r}: True}} on the agent (or make the env with {setting}=True)"
@@ -227,12 +225,16 @@ class KeyNamingObservation(dict):
         )
 
 
-class ExternalAgent:
+class ExternalAgent(AgentWrapper):
     """An outside agent behind FlowNav's ``predict``: its observations as :class:`KeyNamingObservation`."""
 
-    def __init__(self, spec: str, agent: Any) -> None:
+    def __init__(self, spec: str, agent: Agent) -> None:
+        super().__init__(agent)
         self.spec = spec
-        self.agent = agent
+
+    def observe(self, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The observation as a :class:`KeyNamingObservation`."""
+        return KeyNamingObservation(observation)
 
     def predict(
         self,
@@ -248,12 +250,7 @@ class ExternalAgent:
                 agent and where in its code), or it returned something other than ``(action, state)``.
         """
         try:
-            result = self.agent.predict(
-                KeyNamingObservation(observation),
-                state=state,
-                episode_start=episode_start,
-                deterministic=deterministic,
-            )
+            result = super().predict(observation, state, episode_start, deterministic)
         except MissingObservationKey:
             raise
         except Exception as error:
@@ -267,7 +264,7 @@ class ExternalAgent:
         return result[0], result[1]
 
 
-def _shape_of(value: Any) -> str:
+def _shape_of(value: object) -> str:
     """What ``value`` is, for a message: ``an ndarray of shape (3,)``, ``a tuple of 3``, ``a float``."""
     if isinstance(value, np.ndarray):
         return f"an ndarray of shape {value.shape}"

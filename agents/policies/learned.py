@@ -7,10 +7,14 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
+import gymnasium as gym
+
+import flownav_env  # noqa: F401  (registers the env ids that LoadedPolicy.make_env makes)
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
 from agents.policies.base import (
@@ -40,7 +44,23 @@ from agents.policies.sb3_models import (
 from agents.policies.training_seeds import TrainingSeedsAgent
 from agents.training.train_config import TrainConfig
 
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+    class RuleAgent(Agent, DataclassInstance, Protocol):
+        """An agent that is a dataclass of its gains (a reactive rule, the planner)."""
+
+
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
+# The agents that are a dataclass of their gains, built with a caller's gains over the defaults (the straight
+# flight, whose gains hold its height, takes none).
+_GAIN_AGENTS: dict[str, Callable[..., RuleAgent]] = {
+    "bee": BeeAgent,
+    "bee_robust": BeeRobustAgent,
+    "bee_ttc": BeeTTCAgent,
+    "vfh": VFHAgent,
+    "planner": PlannerAgent,
+}
 
 POLICY_OPTION_HELP = (
     "PPO policy .zip (default: the agent's shipped training seeds, results/policies/<agent>/seed_<k>.zip in "
@@ -211,18 +231,8 @@ def load_agent(
         return load_sb3_model(name, trust_pickle=trust_pickle)
     if is_external_name(name):
         return load_external_agent(name)
-    if name == "straight":
-        return StraightAgent()
-    if name == "bee":
-        return BeeAgent(**bee_params)
-    if name == "bee_robust":
-        return BeeRobustAgent(**bee_params)
-    if name == "bee_ttc":
-        return BeeTTCAgent(**bee_params)
-    if name == "vfh":
-        return VFHAgent(**bee_params)
-    if name == "planner":
-        return PlannerAgent(**bee_params)
+    if name == "straight" or name in _GAIN_AGENTS:
+        return _rule_agent(name, bee_params)
     if is_learned(name):
         if policy_path is None and train_seed is None:
             return _shipped_agent(base, trust_pickle)
@@ -231,6 +241,13 @@ def load_agent(
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
         return load_policy_file(path, trust_pickle=trust_pickle)
     raise AssertionError(f"agent {base!r} is in AGENT_NAMES but has no constructor here")
+
+
+def _rule_agent(name: str, gains: Mapping[str, float]) -> RuleAgent:
+    """The reactive agent or the planner ``name``, with ``gains`` over its defaults."""
+    if name == "straight":
+        return StraightAgent()
+    return _GAIN_AGENTS[name](**gains)
 
 
 def _shipped_agent(agent: str, trust_pickle: bool) -> Agent:
@@ -268,7 +285,7 @@ def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
     if is_external_name(name):
         return {**external_parameters(name), **overrides}
     try:
-        agent = load_agent(name, **overrides)
+        agent = _rule_agent(name, overrides)
     except TypeError as error:  # an unknown field: the dataclass names it
         raise ValueError(f"agent {name!r} has no such parameter: {error}") from None
     return dataclasses.asdict(agent)
@@ -285,12 +302,8 @@ class LoadedPolicy:
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
 
-    def make_env(self, **overrides: Any) -> Any:
+    def make_env(self, **overrides: Any) -> gym.Env:
         """The env the policy was trained for, with ``overrides`` (a sensor error, ``render_mode``) on top."""
-        import gymnasium as gym
-
-        import flownav_env  # noqa: F401  (registers the env ids)
-
         return gym.make(self.env_id, **{**self.env_kwargs, **overrides})
 
 

@@ -14,7 +14,12 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
+from typing import Any
 
+import gymnasium as gym
+from gymnasium import spaces
+
+import flownav_env  # noqa: F401  (registers the env ids that env_spaces makes)
 from agents.common.manifest import manifest_problem
 from agents.common.saved_models import SavedModel, load_unpickled, read_saved_model
 from agents.common.yaml_config import ConfigError, load_config
@@ -39,6 +44,18 @@ def training_config_beside(path: Path) -> TrainConfig | None:
     return load_config(config_path, TrainConfig) if config_path.is_file() else None
 
 
+def env_spaces(env_id: str, env_kwargs: dict[str, Any]) -> tuple[spaces.Dict, spaces.Space[Any]]:
+    """The observation and action spaces of the env ``env_id`` made with ``env_kwargs`` (then closed)."""
+    env = gym.make(env_id, **env_kwargs)
+    try:
+        observation_space, action_space = env.observation_space, env.action_space
+    finally:
+        env.close()
+    if not isinstance(observation_space, spaces.Dict):
+        raise ValueError(f"{env_id} observes a {type(observation_space).__name__}, not named arrays (a Dict)")
+    return observation_space, action_space
+
+
 def policy_from_parameters(saved: SavedModel, config: TrainConfig, config_path: Path | None = None) -> Agent:
     """The stable-baselines3 policy network described by ``config`` (MultiInputPolicy, or MultiInputLstmPolicy
     for a recurrent run, with its ``net_arch`` and ``log_std_init``; spaces from ``config``'s env) holding the
@@ -51,10 +68,6 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig, config_path: 
     Raises:
         ValueError: the zip's network does not match the config's; the message names the file.
     """
-    import gymnasium as gym
-
-    import flownav_env  # noqa: F401  (registers the env ids)
-
     network = network_kwargs(config.ppo)
     saved_network = saved.data.get("policy_kwargs")
     if isinstance(saved_network, dict) and ":serialized:" not in saved_network and saved_network != network:
@@ -62,11 +75,7 @@ def policy_from_parameters(saved: SavedModel, config: TrainConfig, config_path: 
             f"{saved.path}: its network {saved_network} differs from the config beside it ({network}): "
             "the config belongs to another run"
         )
-    env = gym.make(config.env_id, **config.env)
-    try:
-        observation_space, action_space = env.observation_space, env.action_space
-    finally:
-        env.close()
+    observation_space, action_space = env_spaces(config.env_id, config.env)
     policy_class = algorithm_class(config.ppo).policy_aliases[policy_alias(config.ppo)]
     policy_space = (
         stacked_space(observation_space, config.frame_stack) if config.frame_stack > 1 else observation_space
@@ -134,6 +143,7 @@ def load_policy_file(path: Path, *, trust_pickle: bool = False) -> Agent:
 
 
 def _load_pickled(path: Path) -> Agent:
+    # stable-baselines3 (and torch with it) is heavy: imported only when a pickled policy loads.
     from stable_baselines3 import PPO
 
     model = load_unpickled(PPO, path, "PPO")

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+
+from agents.policies.base import Agent, AgentWrapper
 
 # The env's optional observation keys, each with the FlowNav setting that adds it (flownav_env.observation's
 # observation_space): the env's documentation names them per key, but nothing there maps one to the other.
@@ -53,7 +54,7 @@ class ObservationKeyCheck:
         self.policy = Path(policy)
         self.config = config
 
-    def __call__(self, observation: Any) -> None:
+    def __call__(self, observation: object) -> None:
         """Check ``observation`` (a dict, batched or not).
 
         Raises:
@@ -66,26 +67,18 @@ class ObservationKeyCheck:
             raise ValueError(missing_keys_message(missing, self.policy, self.config))
 
 
-class CheckedPolicy:
+class CheckedPolicy(AgentWrapper):
     """A loaded policy whose ``predict`` first checks that the observation has every key the policy reads."""
 
-    def __init__(self, policy: Any, check: ObservationKeyCheck) -> None:
-        self.policy = policy
+    def __init__(self, policy: Agent, check: ObservationKeyCheck) -> None:
+        super().__init__(policy)
         self.check = check
 
-    def predict(
-        self,
-        observation: dict[str, np.ndarray],
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
-        """The policy's ``predict``, after :class:`ObservationKeyCheck`.
+    def observe(self, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The observation, after :class:`ObservationKeyCheck`.
 
         Raises:
             ValueError: the observation lacks a key the policy reads.
         """
         self.check(observation)
-        return self.policy.predict(
-            observation, state=state, episode_start=episode_start, deterministic=deterministic
-        )
+        return observation

@@ -102,9 +102,10 @@ def plan_grid(
 
 
 def command_cost(
-    u: np.ndarray, u_prev: np.ndarray, control_weight: float, change_weight: float
-) -> np.ndarray:
-    """What commanding ``u`` after ``u_prev`` costs (m/s in, per stage)."""
+    u: np.ndarray | float, u_prev: np.ndarray | float, control_weight: float, change_weight: float
+) -> np.ndarray | float:
+    """What commanding ``u`` after ``u_prev`` costs (m/s in, per stage): arrays broadcast, one command is a
+    float."""
     return control_weight * u**2 + change_weight * (u - u_prev) ** 2
 
 

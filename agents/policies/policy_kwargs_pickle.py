@@ -18,7 +18,7 @@ import importlib
 import io
 import pickle
 import pickletools
-from typing import Any
+from typing import Any, NoReturn
 
 from agents.common.saved_models import describe_error
 
@@ -71,6 +71,7 @@ class RefusedPickle(ValueError):
 
 
 def _kind_class(kind: str) -> type:
+    # torch and stable-baselines3 are heavy: imported only when a pickle names a class to check.
     import torch
     from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
@@ -104,10 +105,10 @@ def allowed_class(module: str, name: str) -> type:
 
 
 class _AllowedClassesOnly(pickle.Unpickler):
-    def find_class(self, module: str, name: str) -> Any:
+    def find_class(self, module: str, name: str) -> type:
         return allowed_class(module, name)
 
-    def persistent_load(self, pid: Any) -> Any:
+    def persistent_load(self, pid: object) -> NoReturn:
         raise RefusedPickle(f"holds a persistent id ({pid!r}), which is never resolved")
 
 
@@ -124,7 +125,7 @@ def _pop(stack: list[Any], count: int) -> list[Any]:
     return popped
 
 
-def _follow(opcode: pickletools.OpcodeInfo, arg: Any, stack: list[Any], memo: dict[Any, Any]) -> None:
+def _follow(opcode: pickletools.OpcodeInfo, arg: object, stack: list[Any], memo: dict[object, Any]) -> None:
     """Apply ``opcode``'s effect on the stack and memo, keeping the values of what it pushes as literals and
     None for what it builds: enough to know the strings a STACK_GLOBAL takes its module and name from."""
     name, before, after = opcode.name, opcode.stack_before, opcode.stack_after

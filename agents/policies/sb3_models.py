@@ -17,17 +17,21 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.common.saved_models import SavedModel, load_unpickled, read_saved_model
 from agents.policies.base import Agent
+from agents.policies.loading import env_spaces
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS, CheckedPolicy, ObservationKeyCheck
 from agents.policies.policy_kwargs_pickle import RefusedPickle, read_policy_kwargs_pickle
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.base_class import BaseAlgorithm
 
 SB3_ALGORITHMS = ("ppo", "sac", "a2c", "td3", "recurrent_ppo")
 
 
-def algorithm(name: str) -> Any:
+def algorithm(name: str) -> type[BaseAlgorithm]:
     """The stable-baselines3 (or sb3-contrib) class of the algorithm ``name``.
 
     Raises:
@@ -35,6 +39,7 @@ def algorithm(name: str) -> Any:
     """
     if name not in SB3_ALGORITHMS:
         raise ValueError(f"--algo must be one of {', '.join(SB3_ALGORITHMS)}, got {name!r}")
+    # stable-baselines3 (and torch with it) is heavy, sb3-contrib optional: imported only when a model loads.
     if name == "recurrent_ppo":
         from sb3_contrib import RecurrentPPO
 
@@ -155,10 +160,6 @@ def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
             ``trust_pickle`` (with it: any failure of the unpickling load), or parameters that do not fit the
             algorithm's network on FlowNav's spaces; the message names the file.
     """
-    import gymnasium as gym
-
-    import flownav_env  # noqa: F401  (registers the env ids)
-
     algo, path = _split(name)
     algorithm_class = algorithm(algo)
     saved = _saved(path)
@@ -176,11 +177,7 @@ def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
                 ) from None
             model = load_unpickled(algorithm_class, path, algo)
             return CheckedPolicy(model, ObservationKeyCheck((), path, None))
-    env = gym.make("FlowNav-v0", **sb3_model_env_settings(name))
-    try:
-        observation_space, action_space = env.observation_space, env.action_space
-    finally:
-        env.close()
+    observation_space, action_space = env_spaces("FlowNav-v0", sb3_model_env_settings(name))
     alias = "MultiInputLstmPolicy" if algo == "recurrent_ppo" else "MultiInputPolicy"
     policy = algorithm_class.policy_aliases[alias](observation_space, action_space, lambda _: 0.0, **network)
     try:

@@ -9,34 +9,46 @@ evaluation exactly the stacks it saw in training.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from gymnasium import spaces
 
+from agents.policies.base import Agent, AgentWrapper
 
-def stacked_space(space: spaces.Space, frame_stack: int) -> spaces.Space:
+if TYPE_CHECKING:
+    from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
+
+
+def stacked_space(space: spaces.Dict, frame_stack: int) -> spaces.Space[Any]:
     """The observation space a ``VecFrameStack`` of ``frame_stack`` frames gives for ``space``."""
+    # stable-baselines3 (and torch with it) is heavy: imported only when a stacked policy loads.
     from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
     return StackedObservations(1, frame_stack, space).stacked_observation_space
 
 
-class FrameStackedAgent:
+class FrameStackedAgent(AgentWrapper):
     """SB3's ``predict`` over the last ``frame_stack`` observations of one env, the stack kept as ``state``;
     ``check`` (if given) sees each observation first, before a missing key fails inside the stack."""
 
     def __init__(
         self,
-        policy: Any,
+        policy: Agent,
         frame_stack: int,
         observation_space: spaces.Dict,
-        check: Callable[[Any], None] | None = None,
+        check: Callable[[object], None] | None = None,
     ) -> None:
-        self.policy = policy
+        super().__init__(policy)
         self.frame_stack = frame_stack
         self.observation_space = observation_space
         self.check = check
+
+    def observe(self, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The observation, after ``check``."""
+        if self.check is not None:
+            self.check(observation)
+        return observation
 
     def predict(
         self,
@@ -45,16 +57,19 @@ class FrameStackedAgent:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
+        """The policy's action for the stack ending with ``observation``; the stack is the returned state."""
+        # stable-baselines3 (and torch with it) is heavy: imported only when a stacked policy flies.
         from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
-        if self.check is not None:
-            self.check(observation)
+        observation = self.observe(observation)
         batched = {key: np.asarray(value)[None] for key, value in observation.items()}
         starting = state is None or (episode_start is not None and bool(np.asarray(episode_start).any()))
+        stack: StackedObservations[dict[str, np.ndarray]]
         if starting:
-            state = StackedObservations(1, self.frame_stack, self.observation_space)
-            stacked = state.reset(batched)
+            stack = StackedObservations(1, self.frame_stack, self.observation_space)
+            stacked = stack.reset(batched)
         else:
-            stacked, _ = state.update(batched, np.zeros(1, bool), [{}])
-        action, _ = self.policy.predict(stacked, deterministic=deterministic)
-        return action[0], state
+            stack = state
+            stacked, _ = stack.update(batched, np.zeros(1, bool), [{}])
+        action, _ = self.agent.predict(stacked, deterministic=deterministic)
+        return action[0], stack

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import PLANNERS, REACTIVE_AGENTS
+from agents.policies.base import PLANNERS, REACTIVE_AGENTS, Agent
 from agents.policies.learned import agent_env_kwargs, load_agent
 from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
 from flownav_env.tiers import privileged_requests
@@ -74,7 +74,7 @@ def check_teacher(name: str, env: Mapping[str, Any], source: str) -> None:
             )
 
 
-def make_teacher(name: str) -> Any:
+def make_teacher(name: str) -> Agent:
     """The teacher agent ``name``: a rule with its shipped gains, or the planner over a batch of envs (a
     module-level function, so a training job that carries it pickles)."""
     if name in PLANNERS:

@@ -15,14 +15,15 @@ from typing import Any
 
 import numpy as np
 
-from agents.policies.base import Agent
+from agents.policies.base import Agent, AgentWrapper
 
 
-class TrainingSeedsAgent:
+class TrainingSeedsAgent(AgentWrapper):
     """Several training seeds' policies behind one ``predict``, the next seed at each episode start.
 
     A caller that never passes ``episode_start`` keeps the first seed throughout. It flies one env at a time:
     a batch of observations is flown by the current seed, which moves on when any of them starts an episode.
+    ``agent`` is the policy of the latest call's seed.
     """
 
     def __init__(self, runs: Sequence[tuple[str, Agent]]) -> None:
@@ -33,6 +34,7 @@ class TrainingSeedsAgent:
         """
         if not runs:
             raise ValueError("a TrainingSeedsAgent needs at least one (run name, policy), got none")
+        super().__init__(runs[0][1])
         self.runs = list(runs)
         self._current: int | None = None
 
@@ -66,10 +68,8 @@ class TrainingSeedsAgent:
             state = (
                 None  # the previous seed's memory (a frame stack, an LSTM state) means nothing to this one
             )
-        _, agent = self.runs[current]
-        result = agent.predict(
-            observation, state=state, episode_start=episode_start, deterministic=deterministic
-        )
+        self.agent = self.runs[current][1]
+        result = super().predict(observation, state, episode_start, deterministic)
         # Only an episode that got its first action moves the turn on: a refused one (an env lacking a key the
         # policies read) leaves the next attempt to the same seed.
         self._current = current

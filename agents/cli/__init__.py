@@ -13,6 +13,9 @@ import importlib.util
 import sys
 from collections.abc import Sequence
 
+from agents import __version__
+from agents.cli.help_text import ParagraphHelpFormatter, plain_text
+
 COMMANDS = {
     "demo": "agents.cli.demo",
     "eval-estimator": "agents.cli.eval_estimator",
@@ -51,9 +54,6 @@ def build_parser() -> argparse.ArgumentParser:
     Returns:
         The parser; each subcommand's parsed arguments carry its ``run`` as ``handler``.
     """
-    from agents import __version__
-    from agents.cli.help_text import ParagraphHelpFormatter, plain_text
-
     parser = argparse.ArgumentParser(
         prog="flownav", description=plain_text(__doc__.splitlines()[0]), epilog=LEADING_TABLE_EPILOG
     )
@@ -99,6 +99,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as error:
         if not _is_gymnasium_error(error):
             raise
+        # Imported on this error path only: importing agents.cli loads no env until a subcommand needs one.
         from flownav_env import ENV_IDS
 
         print(

@@ -6,6 +6,8 @@ import argparse
 
 import yaml
 
+from flownav_env.settings_check import ENV_ARGUMENTS, unknown_setting_message
+
 # Every command that flies episodes in local processes starts from this many unless told (--workers): two, as
 # the machines FlowNav is developed and benchmarked on have two cores (results/training_throughput.md).
 DEFAULT_WORKERS = 2
@@ -18,7 +20,6 @@ def env_kwarg(text: str) -> tuple[str, object]:
         argparse.ArgumentTypeError: no ``=``, or a key that is no env argument (with the nearest one, as the
             env itself says it).
     """
-    from flownav_env.settings_check import ENV_ARGUMENTS, unknown_setting_message
 
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")

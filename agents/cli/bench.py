@@ -23,6 +23,8 @@ import argparse
 from pathlib import Path
 
 from agents.common.locations import CONFIGS_DIR
+from agents.common.yaml_config import load_config
+from agents.training.train_config import TrainConfig
 
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
@@ -163,6 +165,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
     if args.target == "estimator":
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.studies.perf.estimator_speed_report import run_estimator_benchmark
 
         paths = run_estimator_benchmark(
@@ -178,6 +181,7 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
     elif args.target == "yield":
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.studies.perf.depth_yield import DEFAULT_SETTINGS, run_depth_yield
 
         paths = run_depth_yield(
@@ -191,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
     elif args.target == "recipe":
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.policies.teachers import make_teacher
         from agents.studies.perf.recipe_speed_report import run_recipe_benchmark
 
@@ -204,9 +209,8 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
     elif args.target == "train":
-        from agents.common.yaml_config import load_config
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.studies.perf.training_speed import run_training_benchmark
-        from agents.training.train_config import TrainConfig
 
         paths = run_training_benchmark(
             load_config(args.config, TrainConfig),
@@ -219,6 +223,7 @@ def run(args: argparse.Namespace) -> int:
             side_by_side=args.side_by_side,
         )
     else:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.studies.perf.env_speed_report import run_env_benchmark
 
         paths = run_env_benchmark(

@@ -8,12 +8,13 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.common.folders import write_text_atomically
+from agents.studies.tier_calibration import CALIBRATION_LAYOUTS, report_lines, run_calibration
+
 HELP = "choose the suite's hard course on validation layouts and check every tier -> calibration.md"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.studies.tier_calibration import CALIBRATION_LAYOUTS
-
     parser.add_argument(
         "--layouts",
         type=int,
@@ -36,9 +37,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.folders import write_text_atomically
-    from agents.studies.tier_calibration import report_lines, run_calibration
-
     if args.layouts < 1:
         raise ValueError(f"--layouts must be >= 1, got {args.layouts}")
     if args.workers < 1:

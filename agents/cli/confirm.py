@@ -9,12 +9,14 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.common.folders import write_text_atomically
+from agents.common.locations import RESULTS_DIR
+from agents.studies.confirmation import CONFIRMATION_LAYOUTS, report_lines, run_confirmation, search_record
+
 HELP = "confirm the lever search's pick on fresh validation layouts, paired by layout -> confirmation.md"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.studies.confirmation import CONFIRMATION_LAYOUTS
-
     parser.add_argument(
         "--layouts",
         type=int,
@@ -29,10 +31,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.folders import write_text_atomically
-    from agents.common.locations import RESULTS_DIR
-    from agents.studies.confirmation import report_lines, run_confirmation, search_record
-
     command = "flownav confirm " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     result = run_confirmation(
         Path(args.out), layouts=args.layouts, workers=args.workers, report_only=args.report_only

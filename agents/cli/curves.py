@@ -28,6 +28,7 @@ def run(args: argparse.Namespace) -> int:
     for path in paths:
         if not path.is_file():
             raise FileNotFoundError(f"evaluations file not found: {path}")
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.training.curves import plot_learning_curves, run_label
 
     curves = {run_label(path): path for path in paths}

@@ -17,6 +17,12 @@ from typing import Any
 from agents.cli.arguments import add_workers_argument
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, SUITE_SEED_START, TEST_SEED_START
+from agents.evaluation import runner  # by module: tests stand in for runner.execute
+from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds
+from agents.evaluation.records import read_records
+from agents.evaluation.statistics import format_summary, summarise
+from agents.policies import LEARNED_AGENTS, REACTIVE_AGENTS, default_runs, is_learned, policy_file
+from flownav_env.tiers import TIER_NAMES
 
 HELP = "short evaluation of the shipped policies and the baselines (the README's main job)"
 
@@ -36,12 +42,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds
-    from agents.evaluation.records import read_records
-    from agents.evaluation.runner import EpisodesInterrupted, execute
-    from agents.evaluation.statistics import summarise
-    from agents.policies import REACTIVE_AGENTS, is_learned, policy_file
-
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     runs = {name: [name] for name in REACTIVE_AGENTS} | learned_runs(Path(args.policies_dir))
@@ -55,8 +55,8 @@ def run(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory() as scratch:
         episodes = Path(scratch) / "demo.csv"
         try:
-            execute(tasks, episodes, workers=args.workers, description="demo")
-        except EpisodesInterrupted:
+            runner.execute(tasks, episodes, workers=args.workers, description="demo")
+        except runner.EpisodesInterrupted:
             # Its CSV was a scratch file: there is nothing to resume, whatever the runner's message says.
             raise KeyboardInterrupt("the demo keeps no episodes; run it again to start over") from None
         rows = pooled_over_training_seeds(read_records(episodes))
@@ -68,8 +68,6 @@ def run(args: argparse.Namespace) -> int:
 def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
     """The demo's table (rows of :func:`~agents.evaluation.statistics.summarise`) without the columns that are
     the same in every row, under a line saying how few episodes it rests on and where the leading table is."""
-    from agents.evaluation.statistics import format_summary
-    from flownav_env.tiers import TIER_NAMES
 
     constant = [name for name in ("factor", "level") if len({row[name] for row in table}) <= 1]
     widest = max((row["failure_ci_high"] - row["failure_ci_low"] for row in table), default=0.0)
@@ -89,7 +87,6 @@ def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
 def learned_runs(policy_dir: Path) -> dict[str, list[str]]:
     """Each learned agent's runs to fly: its shipped training seeds (``ppo_flow@0``, ...), else its single
     ``<agent>.zip``; an agent with neither is left out. Says which, for every agent."""
-    from agents.policies import LEARNED_AGENTS, default_runs
 
     runs: dict[str, list[str]] = {}
     for agent in LEARNED_AGENTS:

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from agents.common.locations import RESULTS_DIR, SCRATCH_DIR
+from agents.evaluation.records import read_records
 
 HELP = (
     "tolerance table and dose-response fits from a sweep's episodes -> error_analysis.md, dose_response.png"
@@ -35,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.evaluation.records import read_records
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.sweep import pool_every_seed
     from agents.studies.error_analysis_report import write_error_analysis
 

@@ -7,6 +7,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from estimator import CameraIntrinsics
+from estimator.accuracy import evaluate_sequence, format_error_table
+
 HELP = "depth error of the estimator on a real RGB-D sequence (trajectory.log + depth PNGs)"
 
 
@@ -23,9 +26,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from estimator import CameraIntrinsics
-    from estimator.accuracy import evaluate_sequence, format_error_table
-
     intrinsics = CameraIntrinsics(
         fx=args.fx, fy=args.fy, cx=args.cx, cy=args.cy, width=args.width, height=args.height
     )

@@ -12,16 +12,30 @@ import argparse
 from pathlib import Path
 
 from agents.cli.arguments import add_env_argument
+from agents.common.folders import check_writable_folder
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START, VALIDATION_SEED_START
+from agents.evaluation import runner  # by module: tests stand in for runner.execute
+from agents.evaluation.csv_file import check_is_file_target
+from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
+from agents.evaluation.records import OVERWRITE_HINT, read_episodes, start_new_file
+from agents.evaluation.statistics import format_summary, summarise
+from agents.policies import (
+    AGENT_NAMES,
+    POLICY_OPTION_HELP,
+    TRUST_PICKLE_HELP,
+    load_agent,
+    runs_to_fly,
+    split_agent_name,
+)
+from agents.policies.external import canonical_spec, is_external_name
+from agents.policies.sb3_models import SB3_ALGORITHMS, is_sb3_model_name, sb3_model_name
+from flownav_env.settings_check import check_env_kwargs
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP
-    from agents.policies.sb3_models import SB3_ALGORITHMS
-
     parser.add_argument(
         "--agent",
         help=f"who flies: {', '.join(AGENT_NAMES)}, or a training seed of a learned one (ppo_flow@3 flies "
@@ -69,17 +83,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.folders import check_writable_folder
-    from agents.evaluation.csv_file import check_is_file_target
-    from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
-    from agents.evaluation.records import OVERWRITE_HINT, read_episodes, start_new_file
-    from agents.evaluation.runner import execute
-    from agents.evaluation.statistics import format_summary, summarise
-    from agents.policies import load_agent, runs_to_fly, split_agent_name
-    from agents.policies.external import canonical_spec, is_external_name
-    from agents.policies.sb3_models import is_sb3_model_name, sb3_model_name
-    from flownav_env.settings_check import check_env_kwargs
-
     if args.algo:
         if args.agent or not args.policy:
             raise ValueError(
@@ -122,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         if moved is not None:
             print(f"--overwrite: moved {out} to {moved}")
     # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are) with exit 130.
-    flown = execute(
+    flown = runner.execute(
         tasks, out, workers=args.workers, description=f"evaluate {args.agent}", remedy=OVERWRITE_HINT
     )
     episodes = read_episodes(out)

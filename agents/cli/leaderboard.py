@@ -16,7 +16,11 @@ import sys
 from pathlib import Path
 
 from agents.cli.arguments import add_workers_argument
+from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
+from agents.evaluation.leaderboard import MIN_EPISODES, run_leaderboard
+from agents.evaluation.suite_report import merge_rows, plot_suite, read_included, read_suite_csv, tier_tables
+from agents.policies import HISTORY_AGENTS
 
 HELP = (
     "fly every agent on the clean tier's 300 history layouts (not the leading table: that is flownav suite's); "
@@ -25,9 +29,6 @@ HELP = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.evaluation.leaderboard import MIN_EPISODES
-    from agents.policies import HISTORY_AGENTS
-
     parser.add_argument(
         "--agents",
         default=",".join(HISTORY_AGENTS),
@@ -63,7 +64,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.include:
         return _include(args)
-    from agents.evaluation.leaderboard import run_leaderboard
 
     agents = [name.strip() for name in args.agents.split(",") if name.strip()]
     command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
@@ -81,15 +81,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _include(args: argparse.Namespace) -> int:
-    from agents.common.folders import check_writable_folder, write_text_atomically
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import write_summary_csv
-    from agents.evaluation.suite_report import (
-        merge_rows,
-        plot_suite,
-        read_included,
-        read_suite_csv,
-        tier_tables,
-    )
 
     published = read_suite_csv(Path(args.suite))
     included, files = read_included(args.include)

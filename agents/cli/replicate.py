@@ -37,6 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the selected experiments, then rewrite the README from all results in ``--out``."""
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.thesis.report import run_experiment, write_readme
 
     names = args.only or list(EXPERIMENT_NAMES)

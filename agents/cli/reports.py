@@ -41,6 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.reports import listing, select_reports
 
     if args.list:
@@ -58,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _write(out: Path, names: list[str] | None) -> None:
     """Regenerate the reports into ``out``, a line per report."""
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.reports import regenerate
 
     for outcome in regenerate(out, names):
@@ -70,6 +72,7 @@ def _write(out: Path, names: list[str] | None) -> None:
 def _check(names: list[str] | None) -> int:
     """Regenerate the reports into a temporary folder and print per report "same" or its diff; 1 if any
     differs."""
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.reports import differences, regenerate
 
     differ = 0

@@ -21,15 +21,15 @@ import argparse
 from pathlib import Path
 
 from agents.cli.suite import add_tier_arguments
+from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
+from agents.evaluation.suite_report import tier_tables
+from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
+from agents.policies.sb3_models import SB3_ALGORITHMS, sb3_model_name
 
 HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
-    from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
-    from agents.policies.sb3_models import SB3_ALGORITHMS
-
     parser.add_argument(
         "--agent",
         help="a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent",
@@ -78,9 +78,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import score
-    from agents.evaluation.suite_report import tier_tables
-    from agents.policies.sb3_models import sb3_model_name
 
     agent, policy = args.agent, args.policy
     if args.algo:
@@ -94,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.robustness and (args.factors or args.robustness_layouts is not None):
         raise ValueError("--factors and --robustness-layouts go with --robustness")
     if args.robustness:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.studies.robustness import robustness_cells
 
         robustness_cells(args.factors, args.robustness_layouts)  # bad options fail before anything flies
@@ -121,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
         f"flownav leaderboard --include {Path(args.out) / 'score.csv'}"
     )
     if args.robustness:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.evaluation.suite import resolve_agent
         from agents.studies.robustness import robustness, summary_lines
 

@@ -7,6 +7,9 @@ import argparse
 from pathlib import Path
 
 from agents.common.locations import POLICIES_DIR
+from agents.common.yaml_config import load_config
+from agents.training.outputs import RunFiles
+from agents.training.train_config import TrainConfig
 
 HELP = "choose each finished seed's policy among its finalists on 50 more validation layouts (resumable)"
 
@@ -25,12 +28,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.yaml_config import load_config
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.selection import select_finalist
     from agents.training.multiseed import parse_seeds
-    from agents.training.outputs import RunFiles
     from agents.training.shipping import ship_run
-    from agents.training.train_config import TrainConfig
 
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")

@@ -14,14 +14,15 @@ from pathlib import Path
 
 from agents.cli.arguments import add_workers_argument
 from agents.common.locations import RESULTS_DIR
+from agents.common.seeds import SUITE_LAYOUTS
+from agents.policies import AGENT_NAMES
+from flownav_env.tiers import TIER_NAMES
 
 HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
 
 
 def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
     """The options ``suite`` and ``score`` share: which tiers, how many layouts, where to fly."""
-    from agents.common.seeds import SUITE_LAYOUTS
-    from flownav_env.tiers import TIER_NAMES
 
     parser.add_argument(
         "--tiers",
@@ -40,8 +41,6 @@ def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES
-
     parser.add_argument(
         "--agents",
         default=",".join(AGENT_NAMES),
@@ -57,6 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import run_suite
 
     command = "flownav suite " + " ".join(shlex.quote(a) for a in sys.argv[2:])

@@ -60,6 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.sweep import run_sweep
 
     options = {

@@ -13,13 +13,14 @@ import io
 import shlex
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
+from agents.common.yaml_config import load_config
+from agents.training.outputs import RunFiles
 from agents.training.parking import PARKED_DIR
-
-if TYPE_CHECKING:
-    from agents.training.outputs import RunFiles
+from agents.training.train_config import TrainConfig, override
+from flownav_env.settings_check import check_env_kwargs
 
 HELP = "train a PPO policy from a YAML config into runs/<name>/ (resumable; --ship to publish it)"
 
@@ -89,11 +90,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.common.yaml_config import load_config
-    from agents.training.outputs import RunFiles
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.training.ppo import train
-    from agents.training.train_config import TrainConfig, override
-    from flownav_env.settings_check import check_env_kwargs
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)
@@ -105,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
     override(config, "max_minutes", args.max_minutes, "--max-minutes")
     check_env_kwargs(config.env, str(config_path))
     if config.imitation.teacher:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.policies.teachers import check_teacher
 
         check_teacher(config.imitation.teacher, config.env, str(config_path))
@@ -138,10 +137,11 @@ def _check_mode_options(args: argparse.Namespace) -> None:
 
 def _ship_only(args: argparse.Namespace, name: str) -> None:
     """``--ship-only``: ship the finished run of config ``name``, or each of its ``--seeds``, training nothing."""
-    from agents.training.outputs import RunFiles
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.training.shipping import ship_run
 
     if args.seeds is not None:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.training.multiseed import parse_seeds
 
         for seed in parse_seeds(args.seeds):
@@ -156,6 +156,7 @@ def _teacher_maker(config):
     """What builds the config's teacher (the rules live above the training layer), or None without one."""
     if not config.imitation.teacher:
         return None
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.policies.teachers import make_teacher
 
     return make_teacher
@@ -198,7 +199,6 @@ def _check_output_folders(args: argparse.Namespace, name: str) -> None:
     Raises:
         ValueError: a folder that cannot be created or written, named with its option.
     """
-    from agents.common.folders import check_writable_folder
 
     check_writable_folder(Path(args.runs_dir) / name, "--runs-dir")
     if args.ship:
@@ -215,6 +215,7 @@ def _raise_if_interrupted(files: RunFiles, resume_command: str) -> None:
     Raises:
         KeyboardInterrupt: the run's last session was interrupted.
     """
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.training.run_record import interrupted_at
 
     steps = interrupted_at(files)
@@ -223,6 +224,7 @@ def _raise_if_interrupted(files: RunFiles, resume_command: str) -> None:
 
 
 def _train_seeds(args: argparse.Namespace, config, config_path: Path) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.training.multiseed import park_seeds, parse_seeds, seed_jobs, train_seeds
 
     jobs = seed_jobs(

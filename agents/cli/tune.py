@@ -58,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.tuning import Budget, tune
 
     budget = Budget(args.trials, args.search_episodes, args.finalists, args.final_episodes)

@@ -14,13 +14,12 @@ from pathlib import Path
 
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
+from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP, runs_to_fly
 
 HELP = "record an mp4 of an agent's episode with the flow overlay"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP
-
     parser.add_argument(
         "--agent",
         required=True,
@@ -36,13 +35,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.policies import runs_to_fly
-
     runs, message = runs_to_fly(args.agent, args.policy)
     args.agent = runs[0]
     if message:
         print(f"{message}; this video flies {args.agent}")
     out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{args.env_id}_{args.seed}.mp4")
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.video import record_episode
 
     with warnings.catch_warnings(record=True) as caught:

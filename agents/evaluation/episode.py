@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from agents.policies import Agent
@@ -56,7 +56,13 @@ class EpisodeRecord:
 
 
 def run_episode(
-    env: Any, agent: Agent, seed: int, *, label: str = "", factor: str = "clean", level: float = 0.0
+    env: gym.Env[dict[str, np.ndarray], np.ndarray],
+    agent: Agent,
+    seed: int,
+    *,
+    label: str = "",
+    factor: str = "clean",
+    level: float = 0.0,
 ) -> EpisodeRecord:
     """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
     observation, info = env.reset(seed=seed)
@@ -73,7 +79,7 @@ def run_episode(
         episode_start = np.zeros(1, bool)
         observation, reward, terminated, truncated, info = env.step(action)
         steps += 1
-        total_return += reward
+        total_return += float(reward)
         new_position = info["position"]
         if steps > 1:
             path_length += float(np.linalg.norm(new_position - position))
@@ -82,7 +88,7 @@ def run_episode(
         if "depth_error_median" in info:
             depth_errors.append(info["depth_error_median"])
             outlier_shares.append(info["depth_outlier_share"])
-    frame_rate = env.unwrapped.frame_rate
+    frame_rate = env.get_wrapper_attr("frame_rate")
     return EpisodeRecord(
         agent=label,
         factor=factor,

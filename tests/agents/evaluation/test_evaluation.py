@@ -153,7 +153,9 @@ def test_demo_finds_the_shipped_policies_from_any_folder(tmp_path: Path, monkeyp
     for name in LEARNED_AGENTS:
         policies = {t.policy for t in flown if t.agent.partition("@")[0] == name}
         expected = POLICIES_DIR / name / f"seed_{trained_seeds(name)[0]}.zip" if trained_seeds(name) else None
-        assert policies == {str(expected or POLICIES_DIR / f"{name}.zip")}
+        single = POLICIES_DIR / f"{name}.zip"
+        # An agent with no policy shipped yet (one still in training) is left out, as the demo says.
+        assert policies == ({str(expected or single)} if expected or single.is_file() else set())
 
 
 def test_evaluate_flies_a_learned_agents_shipped_training_seeds_from_another_folder(

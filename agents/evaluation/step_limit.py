@@ -11,9 +11,13 @@ from __future__ import annotations
 
 import signal
 import threading
+from types import FrameType
 from typing import Any
 
 import numpy as np
+
+from agents.policies import Agent
+from agents.policies.base import AgentWrapper
 
 # What an outside agent's predict may take by default; generous (a policy answers in milliseconds) so only a
 # predict that hangs meets it.
@@ -41,16 +45,16 @@ class _OutOfTime(BaseException):
     :class:`PredictTimeout`."""
 
 
-def _out_of_time(signum: int, frame: Any) -> None:
+def _out_of_time(signum: int, frame: FrameType | None) -> None:
     raise _OutOfTime
 
 
-class TimeLimitedAgent:
+class TimeLimitedAgent(AgentWrapper):
     """``agent`` whose every ``predict`` call is cut off after ``limit_s`` seconds with :class:`PredictTimeout`
     (message: ``message``)."""
 
-    def __init__(self, agent: Any, limit_s: float, message: str) -> None:
-        self.agent = agent
+    def __init__(self, agent: Agent, limit_s: float, message: str) -> None:
+        super().__init__(agent)
         self.limit_s = limit_s
         self.message = message
 
@@ -67,16 +71,12 @@ class TimeLimitedAgent:
             PredictTimeout: the call ran past ``limit_s``.
         """
         if threading.current_thread() is not threading.main_thread():
-            return self.agent.predict(
-                observation, state=state, episode_start=episode_start, deterministic=deterministic
-            )
+            return super().predict(observation, state, episode_start, deterministic)
         previous = signal.signal(signal.SIGALRM, _out_of_time)
         signal.setitimer(signal.ITIMER_REAL, self.limit_s)
         try:
             try:
-                result = self.agent.predict(
-                    observation, state=state, episode_start=episode_start, deterministic=deterministic
-                )
+                result = super().predict(observation, state, episode_start, deterministic)
             finally:
                 signal.setitimer(signal.ITIMER_REAL, 0)
         except _OutOfTime:  # also when the timer fired just as predict returned: it did reach the limit

@@ -162,7 +162,7 @@ def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> No
     import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # only once the backend is chosen
 
     labels = [f"{r['agent']} ({r['runs']} run{'s' * (r['runs'] > 1)})" for r in table]
     # The axis keeps ~5.5 in for its title and x label whatever the longest agent name takes beside it.

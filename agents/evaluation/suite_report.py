@@ -195,7 +195,7 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # only once the backend is chosen
 
     tiers = [name for name in TIER_NAMES if any(r["tier"] == name for r in rows)]
     agents = sorted({r["agent"] for r in rows}, key=lambda a: a.lower())

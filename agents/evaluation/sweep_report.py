@@ -76,7 +76,7 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # only once the backend is chosen
 
     if not factors:
         fig = _clean_bars([r for r in table if r["factor"] == "clean"])

@@ -1,0 +1,38 @@
+"""The best ranked learned agent against the best ranked rule, per tier."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from agents.evaluation.learning_gain import learning_gain, learning_gains
+from agents.evaluation.paired import rank_tier
+
+
+def _failures(rng: np.random.Generator) -> dict[str, np.ndarray]:
+    layouts = 200
+    return {
+        "bee_ttc": (rng.random((1, layouts)) < 0.40).astype(float),
+        "vfh": (rng.random((1, layouts)) < 0.60).astype(float),
+        "ppo_flow": (rng.random((10, layouts)) < 0.10).astype(float),
+        "ppo_oracle": np.zeros((5, layouts)),
+    }
+
+
+def test_the_learned_agent_that_fails_least_is_set_against_the_rule_that_fails_least():
+    failures = _failures(np.random.default_rng(0))
+    ranking = rank_tier(failures, privileged=["ppo_oracle"], learned=["ppo_flow", "ppo_oracle"])
+    gain = learning_gain("hard", failures, ranking)
+    assert gain is not None
+    assert (gain.learned, gain.rule) == ("ppo_flow", "bee_ttc")
+    assert gain.learned_failure == float(failures["ppo_flow"].mean())
+    assert gain.comparison.difference == gain.learned_failure - gain.rule_failure
+    assert gain.comparison.high < 0.0  # 0.10 against 0.40 on 200 layouts is told apart
+    assert gain.comparison.fails_less == "ppo_flow"
+
+
+def test_a_tier_with_no_ranked_learned_agent_has_no_gain():
+    failures = _failures(np.random.default_rng(1))
+    failures["ppo_flow"] = failures["ppo_flow"][:3]  # provisional: 3 seeds
+    ranking = rank_tier(failures, privileged=["ppo_oracle"], learned=["ppo_flow", "ppo_oracle"])
+    assert learning_gain("hard", failures, ranking) is None
+    assert learning_gains({"hard": failures}, {"hard": ranking}) == []

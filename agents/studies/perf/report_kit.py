@@ -1,5 +1,5 @@
 """What the speed benchmarks share: a timed block without garbage collection, the report's hardware lines, and
-the writers of their tables, figures and reports.
+the writers of their tables, figures (the thesis replication's too) and reports.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -86,8 +86,14 @@ def write_report(path: Path, template: str, values: Mapping[str, Any]) -> Path:
 
 
 @contextmanager
-def saved_figure(path: Path, size: tuple[float, float], dpi: int = 110) -> Iterator[Figure]:
-    """A matplotlib figure of ``size`` inches, laid out tight and saved to ``path`` when the block ends."""
+def saved_figure(
+    path: Path,
+    size: tuple[float, float],
+    dpi: int = 110,
+    rect: tuple[float, float, float, float] = (0, 0, 1, 1),
+) -> Iterator[Figure]:
+    """A matplotlib figure of ``size`` inches, laid out tight within ``rect`` (the figure's fraction the axes
+    may fill) and saved to ``path`` (its folder created) when the block ends."""
     # matplotlib is imported here: it is slow to import and only the figures need it.
     import matplotlib
 
@@ -97,7 +103,8 @@ def saved_figure(path: Path, size: tuple[float, float], dpi: int = 110) -> Itera
     figure = plt.figure(figsize=size)
     try:
         yield figure
-        figure.tight_layout()
+        figure.tight_layout(rect=rect)
+        path.parent.mkdir(parents=True, exist_ok=True)
         figure.savefig(path, dpi=dpi)
     finally:
         plt.close(figure)

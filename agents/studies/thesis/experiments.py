@@ -36,41 +36,42 @@ from agents.studies.thesis.experiment_configs import (
 )
 from agents.studies.thesis.figures import save_depth_figure
 from agents.studies.thesis.metrics import METHODS, metric_rows
-from agents.studies.thesis.playback_runs import run_playback
+from agents.studies.thesis.playback_runs import RunResult, run_playback
 from agents.studies.thesis.rotation import run_rotation
 from agents.studies.thesis.three_capsule import SWEEP_VARIABLES, run_three_capsule
-from flownav_env.playback import PlaybackSettings, PlaybackWorld
+from estimator import CameraIntrinsics, FlowDepthEstimator
+from flownav_env.playback import CameraPath, PlaybackSettings, PlaybackWorld
 
 __all__ = ["EXPERIMENTS", "SWEEP_VARIABLES", "Experiment"]
 
 
-def _settings(config: ExperimentConfig, **kwargs: Any) -> Any:
-
-    return PlaybackSettings(seed=config.seed, **kwargs)
-
-
-def _world(path: Any, config: ExperimentConfig) -> Any:
-
-    return PlaybackWorld(path, config.camera.width, config.camera.height, config.camera.fov_deg)
+def _play(
+    path: CameraPath,
+    config: ExperimentConfig,
+    description: str,
+    progress: bool,
+    component_variants: bool = False,
+) -> RunResult:
+    """One playback of ``path`` through both estimators, in a world of its own closed afterwards."""
+    world = PlaybackWorld(path, config.camera.width, config.camera.height, config.camera.fov_deg)
+    try:
+        settings = PlaybackSettings(seed=config.seed)
+        return run_playback(
+            path,
+            world,
+            settings,
+            config.estimator,
+            component_variants=component_variants,
+            progress=progress,
+            description=description,
+        )
+    finally:
+        world.close()
 
 
 def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 1 (Figs. 22–24): straight flight toward one capsule; four depth variants."""
-    path = straight_path(config)
-    world = _world(path, config)
-    try:
-        result = run_playback(
-            path,
-            world,
-            _settings(config),
-            config.estimator,
-            component_variants=True,
-            progress=progress,
-            description="straight",
-        )
-    finally:
-        world.close()
-    names = ["x-flow", "y-flow", "thesis", "triangulation"]
+    result = _play(straight_path(config), config, "straight", progress, component_variants=True)
     titles = {
         "x-flow": "x-flow only (Fig. 22)",
         "y-flow": "y-flow only (Fig. 23)",
@@ -78,91 +79,57 @@ def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -
         "triangulation": "triangulation (both components, least squares)",
     }
     figure = save_depth_figure(
-        [(titles[n], result.methods[n], result.references) for n in names],
+        [(title, result.methods[name], result.references) for name, title in titles.items()],
         out_dir / "straight.png",
         f"Straight flight toward one capsule, {config.distance_per_frame} m/frame",
     )
-    return {"rows": metric_rows("straight", result, names), "figures": [figure.name]}
+    return {"rows": metric_rows("straight", result.methods, titles), "figures": [figure.name]}
 
 
 def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 3 (Figs. 33, 35): x then y translation past each scene's capsules."""
-    rows, panels, marks = [], [], {}
+    rows: list[dict[str, Any]] = []
+    panels: list[tuple[str, list[dict[str, Any]], np.ndarray]] = []
+    marks: dict[int, float] = {}
     for scene in config.scenes:
         path, turn = translation_path(config, scene)
-        world = _world(path, config)
-        try:
-            result = run_playback(
-                path,
-                world,
-                _settings(config),
-                config.estimator,
-                progress=progress,
-                description=f"translation {scene.name}",
-            )
-        finally:
-            world.close()
-        rows += metric_rows(scene.name, result, METHODS)
+        result = _play(path, config, f"translation {scene.name}", progress)
+        rows += metric_rows(scene.name, result.methods, METHODS)
         for method in METHODS:
             marks[len(panels)] = turn - 0.5
             panels.append((f"{scene.name}: {method}", result.methods[method], result.references))
-    figure = save_depth_figure(
-        panels, out_dir / "translation.png", "x translation, then y translation (dashed: the turn)"
-    )
+    title = "x translation, then y translation (dashed: the turn)"
+    figure = save_depth_figure(panels, out_dir / "translation.png", title, marks=marks)
     return {"rows": rows, "figures": [figure.name]}
 
 
 def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 4 (Fig. 38, Table 3): random 6-DoF path; depth errors and per-stage timings."""
-    path = random_6dof_path(config)
-    world = _world(path, config)
-    try:
-        result = run_playback(
-            path, world, _settings(config), config.estimator, progress=progress, description="random6dof"
-        )
-    finally:
-        world.close()
+    result = _play(random_6dof_path(config), config, "random6dof", progress)
     figure = save_depth_figure(
         [(method, result.methods[method], result.references) for method in METHODS],
         out_dir / "random6dof.png",
         "Human-like random 6-DoF path in front of one capsule",
     )
-    timings = []
-    for method in METHODS:
-        for stage, seconds in result.timings[method].items():
-            values = np.asarray(seconds) * 1e3
-            timings.append(
-                {
-                    "method": method,
-                    "stage": stage,
-                    "mean_ms": float(values.mean()),
-                    "median_ms": float(np.median(values)),
-                }
-            )
-    render = np.asarray(result.render_s) * 1e3
-    timings.append(
-        {
-            "method": "-",
-            "stage": "render (MuJoCo)",
-            "mean_ms": float(render.mean()),
-            "median_ms": float(np.median(render)),
-        }
-    )
+    timings = [
+        _timing_row(method, stage, seconds)
+        for method in METHODS
+        for stage, seconds in result.timings[method].items()
+    ]
+    timings.append(_timing_row("-", "render (MuJoCo)", result.render_s))
+    intrinsics = CameraIntrinsics.from_fov(config.camera.width, config.camera.height, config.camera.fov_deg)
     return {
-        "rows": metric_rows("random6dof", result, METHODS),
+        "rows": metric_rows("random6dof", result.methods, METHODS),
         "table3": timings,
         "figures": [figure.name],
-        "fast_threshold": _fast_threshold(config),
+        "fast_threshold": FlowDepthEstimator(intrinsics, **config.estimator).fast_threshold,
     }
 
 
-def _fast_threshold(config: ExperimentConfig) -> int:
-    import inspect
-
-    from estimator import FlowDepthEstimator
-
-    default = inspect.signature(FlowDepthEstimator).parameters["fast_threshold"].default
-    return int(config.estimator.get("fast_threshold", default))
+def _timing_row(method: str, stage: str, seconds: list[float]) -> dict[str, Any]:
+    milliseconds = np.asarray(seconds) * 1e3
+    mean, median = float(milliseconds.mean()), float(np.median(milliseconds))
+    return {"method": method, "stage": stage, "mean_ms": mean, "median_ms": median}
 
 
 @dataclass(frozen=True)
@@ -171,7 +138,7 @@ class Experiment:
 
     name: str
     title: str
-    schema: type
+    schema: type[ExperimentConfig]
     runner: Callable[..., dict[str, Any]]
     thesis: str
 

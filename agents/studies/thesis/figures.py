@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from agents.studies.perf.report_kit import saved_figure
+
+if TYPE_CHECKING:  # matplotlib is slow to import: the figures import it when they draw
+    from matplotlib.axes import Axes
 
 # Depths plotted up to this many metres: the scenes' obstacles stand within 10 m.
 PLOT_MAX_DEPTH = 10.0
@@ -15,7 +20,7 @@ PLOT_MAX_DEPTH = 10.0
 _OBSTACLE_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown")
 
 
-def plot_depth_panel(ax: Any, frames: list[dict[str, Any]], references: np.ndarray, title: str) -> None:
+def plot_depth_panel(ax: Axes, frames: list[dict[str, Any]], references: np.ndarray, title: str) -> None:
     """The thesis's plot style: each valid point's depth per frame, against each obstacle's true depth line.
 
     Points on a capsule take the capsule's colour; ground points are grey. Lines are the ground truth.
@@ -57,25 +62,17 @@ def save_depth_figure(
     marks: dict[int, float] | None = None,
 ) -> Path:
     """A figure of :func:`plot_depth_panel` panels; ``marks`` draws a dashed line at a frame in some panels."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     rows = math.ceil(len(panels) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(5.0 * columns, 3.4 * rows), squeeze=False)
-    for index, (ax, (title, frames, references)) in enumerate(zip(axes.flat, panels, strict=False)):
-        plot_depth_panel(ax, frames, references, title)
-        if marks and index in marks:
-            ax.axvline(marks[index], c="k", ls="--", lw=0.8)
-    for ax in list(axes.flat)[len(panels) :]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    if handles:
-        fig.legend(handles, labels, loc="lower center", ncol=min(len(handles), 4), fontsize=8)
-    fig.suptitle(suptitle, fontsize=10)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.97))
-    file.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(file, dpi=110)
-    plt.close(fig)
+    with saved_figure(file, (5.0 * columns, 3.4 * rows), rect=(0, 0.05, 1, 0.97)) as fig:
+        axes = fig.subplots(rows, columns, squeeze=False)
+        for index, (ax, (title, frames, references)) in enumerate(zip(axes.flat, panels, strict=False)):
+            plot_depth_panel(ax, frames, references, title)
+            if marks and index in marks:
+                ax.axvline(marks[index], c="k", ls="--", lw=0.8)
+        for ax in list(axes.flat)[len(panels) :]:
+            ax.axis("off")
+        handles, labels = axes.flat[0].get_legend_handles_labels()
+        if handles:
+            fig.legend(handles, labels, loc="lower center", ncol=min(len(handles), 4), fontsize=8)
+        fig.suptitle(suptitle, fontsize=10)
     return file

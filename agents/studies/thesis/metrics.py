@@ -4,12 +4,14 @@ rotation residuals of Table 2."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
+from estimator import CameraIntrinsics
 from estimator.accuracy import relative_depth_error
+from estimator.geometry import derotate, euler_zyx_to_rotation, rotation_to_euler_zyx
 
 METHODS = ("thesis", "triangulation")
 COMPONENT_VARIANTS = ("x-flow", "y-flow")
@@ -45,8 +47,6 @@ def component_depth(
     Raises:
         ValueError: ``component`` is not 0 or 1.
     """
-    from estimator.geometry import derotate
-
     if component not in (0, 1):
         raise ValueError(f"component must be 0 (x-flow) or 1 (y-flow), got {component!r}")
     normalized_next = np.asarray(normalized_next, np.float64).reshape(-1, 2)
@@ -94,12 +94,14 @@ def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = Fa
     }
 
 
-def metric_rows(run: str, result: Any, names: Iterable[str]) -> list[dict[str, Any]]:
-    """One row of :func:`depth_metrics` per method of a :class:`~agents.studies.thesis.playback_runs.RunResult`, with
-    the capsule-only error and count beside it."""
+def metric_rows(
+    run: str, methods: Mapping[str, list[dict[str, Any]]], names: Iterable[str]
+) -> list[dict[str, Any]]:
+    """One row of :func:`depth_metrics` per method named in ``names``, from a playback's per-method frames
+    (``RunResult.methods``), with the capsule-only error and count beside it."""
     rows = []
     for name in names:
-        frames = result.methods[name]
+        frames = methods[name]
         row = {"run": run, "method": name, **depth_metrics(frames)}
         obstacle = depth_metrics(frames, obstacles_only=True)
         row["obstacle_median_rel_error"] = obstacle["median_rel_error"]
@@ -112,7 +114,7 @@ def rotation_residuals(
     points: np.ndarray,
     next_points: np.ndarray,
     rotation: np.ndarray,
-    intrinsics: Any,
+    intrinsics: CameraIntrinsics,
     thesis_derotation: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Distances |p2 - p2′| (tracked minus derotated) and |p2 - p1| (no compensation), in pixels.
@@ -128,8 +130,6 @@ def rotation_residuals(
     Returns:
         ``(compensated, uncompensated)``, both (N,) pixel distances.
     """
-    from estimator.geometry import derotate, euler_zyx_to_rotation, rotation_to_euler_zyx
-
     if thesis_derotation:
         rotation = euler_zyx_to_rotation(*rotation_to_euler_zyx(rotation))
     derotated, _ = derotate(intrinsics.normalize(points), rotation)

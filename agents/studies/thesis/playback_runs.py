@@ -8,10 +8,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from agents.studies.thesis.attitude import AttitudeRotationError
 from agents.studies.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
-from flownav_env.playback import play_back
+from estimator import CameraIntrinsics, DepthPoints, FlowDepthEstimator
+from estimator.geometry import solve_depth, valid_depth_mask
+from flownav_env.playback import CameraPath, PlaybackFrame, PlaybackSettings, PlaybackWorld, play_back
 
 
 @dataclass
@@ -36,7 +39,9 @@ class RunResult:
     residuals: list[dict[str, np.ndarray]] = field(default_factory=list)
 
 
-def _reference_depths(world: Any, intrinsics: Any, rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+def _reference_depths(
+    world: PlaybackWorld, intrinsics: CameraIntrinsics, rotation: np.ndarray, position: np.ndarray
+) -> np.ndarray:
     # The line the thesis plots each obstacle against: the capsule surface straight in front of its axis, at
     # the camera's height, where that point is in view and not hidden behind another capsule.
     layout = world.layout
@@ -58,9 +63,9 @@ def _reference_depths(world: Any, intrinsics: Any, rotation: np.ndarray, positio
 
 
 def run_playback(
-    path: Any,
-    world: Any,
-    settings: Any,
+    path: CameraPath,
+    world: PlaybackWorld,
+    settings: PlaybackSettings,
     estimator_kwargs: dict[str, Any],
     *,
     component_variants: bool = False,
@@ -87,10 +92,6 @@ def run_playback(
     Returns:
         A :class:`RunResult`.
     """
-    from tqdm import tqdm
-
-    from estimator import CameraIntrinsics, FlowDepthEstimator
-
     intrinsics = CameraIntrinsics.from_fov(world.width, world.height, world.fov_deg)
     estimators = {m: FlowDepthEstimator(intrinsics, method=m, **estimator_kwargs) for m in METHODS}
     names = list(METHODS) + (list(COMPONENT_VARIANTS) if component_variants else [])
@@ -136,7 +137,9 @@ def run_playback(
     return result
 
 
-def _residuals(thesis_points: Any, told_rotation: np.ndarray, frame: Any) -> dict[str, np.ndarray]:
+def _residuals(
+    thesis_points: DepthPoints, told_rotation: np.ndarray, frame: PlaybackFrame
+) -> dict[str, np.ndarray]:
     """What the rotation-residual analysis keeps of a frame: the thesis estimator's tracks, the told and true
     rotations, and the camera's attitude."""
     return {
@@ -149,7 +152,7 @@ def _residuals(thesis_points: Any, told_rotation: np.ndarray, frame: Any) -> dic
     }
 
 
-def _frame_count(path: Any, settings: Any) -> int:
+def _frame_count(path: CameraPath, settings: PlaybackSettings) -> int:
     """How many frames the playback renders: one per ``distance_per_frame`` of arc (else one per pose), at
     most ``max_frames``."""
     if settings.distance_per_frame is not None:
@@ -165,7 +168,9 @@ class _GroundTruth:
     """True depth and the capsule hit (label) of points seen from one camera pose, by ray casting; each set of
     points is cast once, as both estimators and the component variants often ask for the same points."""
 
-    def __init__(self, world: Any, intrinsics: Any, rotation: np.ndarray, position: np.ndarray) -> None:
+    def __init__(
+        self, world: PlaybackWorld, intrinsics: CameraIntrinsics, rotation: np.ndarray, position: np.ndarray
+    ) -> None:
         self.world, self.intrinsics, self.rotation, self.position = world, intrinsics, rotation, position
         self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -179,7 +184,9 @@ class _GroundTruth:
         return self.cache[key]
 
 
-def _frame_row(points: Any, depth: np.ndarray, valid: np.ndarray, truth: _GroundTruth) -> dict[str, Any]:
+def _frame_row(
+    points: DepthPoints, depth: np.ndarray, valid: np.ndarray, truth: _GroundTruth
+) -> dict[str, Any]:
     """One frame of a method: its points, their depths and validity, and the truth at those points."""
     true_depth, labels = truth(points.points)
     return {
@@ -193,12 +200,13 @@ def _frame_row(points: Any, depth: np.ndarray, valid: np.ndarray, truth: _Ground
 
 
 def _component_depths(
-    thesis_points: Any, told: tuple[np.ndarray, np.ndarray], intrinsics: Any, reference: Any
+    thesis_points: DepthPoints,
+    told: tuple[np.ndarray, np.ndarray],
+    intrinsics: CameraIntrinsics,
+    reference: FlowDepthEstimator,
 ) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
     """Per component variant, the depths of the thesis estimator's tracks from that flow component alone and
     where they are valid, under the thesis estimator's own parallax and epipolar limits."""
-    from estimator.geometry import solve_depth, valid_depth_mask
-
     told_rotation, told_translation = told
     normalized_prev = intrinsics.normalize(thesis_points.points)
     normalized_next = intrinsics.normalize(thesis_points.next_points)

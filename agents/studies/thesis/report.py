@@ -10,12 +10,27 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from agents.common.jinja_reports import render
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.provenance import machine_summary
-from agents.studies.thesis.comparison import table2_comparison, table3_comparison, verdict_table
+from agents.studies.thesis.comparison import (
+    metrics_table,
+    sweep_table,
+    table2_comparison,
+    table2_reading,
+    table2_table,
+    table3_comparison,
+    table3_table,
+    verdict_table,
+)
 from agents.studies.thesis.experiments import EXPERIMENTS
-from agents.studies.thesis.motion_errors import motion_error_section
+from agents.studies.thesis.motion_errors import motion_values
+from agents.studies.thesis.reference import THESIS_FOCAL_PX
+
+DISCUSSION_FILE = "DISCUSSION.md"
 
 
 def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool = True) -> dict[str, Any]:
@@ -64,9 +79,7 @@ def _display_path(path: Path) -> str:
         return str(path)
 
 
-def _json_default(value: Any) -> Any:
-    import numpy as np
-
+def _json_default(value: object) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
@@ -74,177 +87,68 @@ def _json_default(value: Any) -> Any:
     return str(value)
 
 
-# --- the README ------------------------------------------------------------------------------------------------
-def _pct(value: float) -> str:
-    return (
-        "–" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.1f} %"
+def _experiment_values(name: str, result: dict[str, Any]) -> dict[str, Any]:
+    """One experiment's section of the README: its claim, config, tables and figures."""
+    section: dict[str, Any] = {key: result[key] for key in ("title", "thesis", "config", "camera")}
+    section |= {"name": name, "wall_s": f"{result['wall_s']:.1f}", "figures": result.get("figures", [])}
+    # The parts an experiment lacks stay None: the template leaves them out.
+    section |= dict.fromkeys(
+        ("recorded", "verdict_table", "metrics_table", "table2", "table3", "sweep_table")
     )
-
-
-def _num(value: float, digits: int = 1) -> str:
-    return "–" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}"
-
-
-def metrics_table(rows: list[dict[str, Any]], first: str = "run") -> list[str]:
-    """Markdown table of depth metric rows (one per run and method)."""
-    lines = [
-        f"| {first} | method | median abs. rel. depth error | within 10 % | valid points / frame | tracked / frame "
-        "| median error, capsule points only | capsule points / frame | evaluated points |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for row in rows:
-        lines.append(
-            f"| {row.get(first, row['run'])} | {row['method']} | {_pct(row['median_rel_error'])} | "
-            f"{_pct(row['within_10pct'])} | {_num(row['valid_per_frame'])} | {_num(row['tracked_per_frame'])} | "
-            f"{_pct(row['obstacle_median_rel_error'])} | {_num(row['obstacle_valid_per_frame'])} | {row['evaluated']} |"
-        )
-    return lines
-
-
-def _table2(rows: list[dict[str, Any]]) -> list[str]:
-    lines = [
-        "| case | frame pairs | points detected | points tracked | mean \\|p2 − p2′\\| incl. outliers (px) "
-        "| excl. outliers (px) | outliers (> 5 px) | Euler-angle derotation (thesis), incl. / excl. (px) "
-        "| Euler order (px) | mean \\|p2 − p1\\| without compensation (px) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['case']} | {r['frame_pairs']} | {r['detected']} | {r['tracked']} | {_num(r['matrix_mean_px'], 3)} | "
-            f"{_num(r['matrix_mean_inliers_px'], 3)} | {r['matrix_outliers']} | {_num(r['euler_mean_px'], 3)} / "
-            f"{_num(r['euler_mean_inliers_px'], 3)} | {_num(r.get('euler_order_shift_px', math.nan), 2)} | "
-            f"{_num(r['uncompensated_mean_px'], 2)} |"
-        )
-    return lines
-
-
-def _table3(rows: list[dict[str, Any]]) -> list[str]:
-    lines = ["| method | stage | mean (ms) | median (ms) |", "|---|---|---|---|"]
-    lines += [f"| {r['method']} | {r['stage']} | {r['mean_ms']:.2f} | {r['median_ms']:.2f} |" for r in rows]
-    return lines
-
-
-def _sweep_table(rows: list[dict[str, Any]]) -> list[str]:
-    lines = [
-        "| variable | value | method | median abs. rel. depth error | within 10 % | valid points / frame "
-        "| median error, capsule points only | frames |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['variable']} | {r['value']:g} | {r['method']} | {_pct(r['median_rel_error'])} | "
-            f"{_pct(r['within_10pct'])} | {_num(r['valid_per_frame'])} | {_pct(r['obstacle_median_rel_error'])} | "
-            f"{r['frames']} |"
-        )
-    return lines
-
-
-DISCUSSION_FILE = "DISCUSSION.md"
-
-
-def _experiment_section(name: str, result: dict[str, Any]) -> list[str]:
-    """One experiment's section of the README: its claim, config, tables, sweeps and figures."""
-    lines = [
-        f"## {result['title']}",
-        "",
-        f"*Thesis:* {result['thesis']}",
-        "",
-        f"Config `{result['config']}`; camera {result['camera']}; wall time {result['wall_s']:.1f} s; "
-        f"`flownav replicate --only {name}`.",
-        "",
-    ]
     if name == "three_capsule":
-        lines += [
-            f"Recorded base flight: {result['recorded_frames']} frames, {result['recorded_length_m']:.2f} m; "
-            f"capsules at {', '.join(f'({x:.2f}, {y:.2f})' for x, y in result['obstacles'])} m "
-            "(saved as `three_capsule_path.npz`, format in `flownav_env/playback/path.py`).",
-            "",
-        ]
+        section["recorded"] = {
+            "frames": result["recorded_frames"],
+            "length_m": f"{result['recorded_length_m']:.2f}",
+            "capsules": ", ".join(f"({x:.2f}, {y:.2f})" for x, y in result["obstacles"]),
+        }
     if name == "three_capsule" and result.get("sweeps"):
-        lines += [
-            "The thesis's verdicts on its variable tests beside FlowNav's rows:",
-            "",
-            *verdict_table(result["sweeps"]),
-            "",
-        ]
+        section["verdict_table"] = verdict_table(result["sweeps"])
     if result.get("rows"):
-        lines += [*metrics_table(result["rows"]), ""]
+        section["metrics_table"] = metrics_table(result["rows"])
     if result.get("table2"):
-        lines += [
-            "Table 2, the thesis beside FlowNav (the thesis: one frame pair per case at f = 417 px; "
-            f"FlowNav: f = {result.get('focal_px', math.nan):.1f} px, the mean over 5 frame pairs):",
-            "",
-            *table2_comparison(result["table2"], result.get("focal_px", math.nan)),
-            "",
-            "FlowNav's Table 2 in full (rotation-matrix derotation; the `thesis` method's Euler-angle "
-            "derotation beside it; *Euler order*: how far composing the case's angles in eq. 4.15's Z-Y-X "
-            "order instead of Unity's z-x-y moves the points):",
-            "",
-            *_table2(result["table2"]),
-            "",
-        ]
+        section["table2"] = {
+            "focal_px": f"{result.get('focal_px', math.nan):.1f}",
+            "comparison": table2_comparison(result["table2"]),
+            "reading": table2_reading(result["table2"]),
+            "full": table2_table(result["table2"]),
+        }
     if result.get("table3"):
-        lines += [
-            "Table 3, the thesis beside FlowNav: the thesis's rows at our FAST threshold and at our number of "
-            "points used (other machine, other scene; FlowNav's estimator alone, rendering excluded):",
-            "",
-            *table3_comparison(result["table3"], result["rows"], result.get("fast_threshold", 20)),
-            "",
-        ]
-        lines += [
-            "Table 3 (per-stage time per frame pair of the estimator on this path, from `DepthPoints.timings`; "
-            "render = placing the camera and rendering one frame):",
-            "",
-            *_table3(result["table3"]),
-            "",
-        ]
+        section["table3"] = {
+            "comparison": table3_comparison(
+                result["table3"], result["rows"], result.get("fast_threshold", 20)
+            ),
+            "full": table3_table(result["table3"]),
+        }
     if result.get("sweeps"):
-        lines += [
-            "Sweeps (one variable changed from the base run):",
-            "",
-            *_sweep_table(result["sweeps"]),
-            "",
-        ]
-    lines += [f"![{name}]({figure})" for figure in result.get("figures", [])] + [""]
-    return lines
+        section["sweep_table"] = sweep_table(result["sweeps"])
+    return section
+
+
+def readme_values(
+    results: dict[str, dict[str, Any]], ran: list[str], wall_s: float, discussion: str
+) -> dict[str, Any]:
+    """What ``agents/studies/templates/thesis_readme.md.j2`` states: every experiment's section from its JSON
+    result, the rotation- and translation-error section from the three-capsule one, the hand-written
+    ``discussion`` (may be empty) and the machine of the first result."""
+    return {
+        "ran": ", ".join(ran),
+        "wall_s": f"{wall_s:.0f}",
+        "thesis_focal_px": f"{THESIS_FOCAL_PX:g}",
+        "experiments": [_experiment_values(name, result) for name, result in results.items()],
+        "motion": motion_values(results["three_capsule"]) if "three_capsule" in results else None,
+        "discussion": discussion,
+        "hardware": next(iter(results.values()))["hardware"] if results else "",
+    }
 
 
 def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
     """Rebuild ``README.md`` from every ``<name>.json`` in ``out_dir`` (and ``DISCUSSION.md`` if present)."""
     out_dir = Path(out_dir)
-    results = {}
-    for name in EXPERIMENTS:
-        file = out_dir / f"{name}.json"
-        if file.is_file():
-            results[name] = json.loads(file.read_text())
-    lines = [
-        "# Thesis experiments reproduced in FlowNav",
-        "",
-        "Produced by `flownav replicate` (all five experiments; `flownav replicate --only NAME` reruns one and "
-        "rebuilds this file from the JSON results beside it). Configs: `configs/thesis/<name>.yaml`. "
-        "Figures: the thesis's style, each valid point's estimated depth per frame (dots, coloured by the "
-        "capsule its ray actually hits; grey = ground) against the true depth of each capsule's facing "
-        "surface (lines).",
-        "",
-        f"Last invocation ran: {', '.join(ran)} in {wall_s:.0f} s wall time.",
-        "",
-        "Metrics, per run and method: *median absolute relative depth error* |d − d_true| / d_true over all "
-        "valid points (d_true: exact z-depth by ray casting at the keypoint in the scene), *within 10 %*: share "
-        "of those points with error ≤ 10 %, *valid points / frame*: mean per estimated frame pair. Both depth "
-        "methods of `estimator.FlowDepthEstimator` run on the same rendered frames: `thesis` (Euler-angle "
-        "derotation, per point the larger flow component, eqs. 4.12/4.15/4.18) and `triangulation` (least "
-        "squares over both components).",
-        "",
-    ]
+    files = {name: out_dir / f"{name}.json" for name in EXPERIMENTS}
+    results = {name: json.loads(file.read_text()) for name, file in files.items() if file.is_file()}
     discussion = out_dir / DISCUSSION_FILE
-    for name, result in results.items():
-        lines += _experiment_section(name, result)
-    if "three_capsule" in results:
-        lines += motion_error_section(results["three_capsule"])
-    if discussion.is_file():
-        lines += [discussion.read_text().strip(), ""]
-    if results:
-        lines += ["## Hardware", "", next(iter(results.values()))["hardware"], ""]
+    text = discussion.read_text().strip() if discussion.is_file() else ""
+    values = readme_values(results, ran, wall_s, text)
     readme = out_dir / "README.md"
-    readme.write_text("\n".join(lines))
+    readme.write_text(render("agents.studies", "thesis_readme.md.j2", values, every_value_used=True))
     return readme

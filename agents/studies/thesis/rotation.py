@@ -4,23 +4,27 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from agents.studies.perf.report_kit import saved_figure
 from agents.studies.thesis.attitude import unity_order_rotation, zyx_order_rotation
 from agents.studies.thesis.camera_paths import rotation_path
 from agents.studies.thesis.experiment_configs import RotationCase, RotationConfig
 from agents.studies.thesis.metrics import rotation_residuals
 from agents.studies.thesis.playback_runs import run_playback
+from estimator import CameraIntrinsics
+from estimator.geometry import derotate
 from flownav_env.playback import PlaybackSettings, PlaybackWorld
 
+if TYPE_CHECKING:  # matplotlib is slow to import: the figure imports it when it draws
+    from matplotlib.axes import Axes
 
-def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: Any) -> np.ndarray:
+
+def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: CameraIntrinsics) -> np.ndarray:
     """How far the case's angles composed in the thesis's Z-Y-X order (eq. 4.15) move each point from the
     same angles composed in Unity's order (z, then x, then y), in pixels: what an Euler-order mix-up costs."""
-    from estimator.geometry import derotate
-
     angles = np.deg2rad([case.pitch_deg, case.yaw_deg, case.roll_deg])
     normalized = intrinsics.normalize(np.asarray(points, np.float64).reshape(-1, 2))
     unity, _ = derotate(normalized, unity_order_rotation(*angles))
@@ -29,8 +33,8 @@ def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: Any
 
 
 def _case_row(
-    case: RotationCase, residuals: list[dict[str, Any]], config: RotationConfig, intrinsics: Any
-) -> dict:
+    case: RotationCase, residuals: list[dict[str, Any]], config: RotationConfig, intrinsics: CameraIntrinsics
+) -> dict[str, Any]:
     row: dict[str, Any] = {
         "case": case.name,
         "frame_pairs": len(residuals),
@@ -77,12 +81,11 @@ def _case_row(
 
 
 def _save_figure(table: list[dict[str, Any]], outlier_px: float, file: Path) -> None:
-    import matplotlib
+    with saved_figure(file, (10, 3.8)) as fig:
+        _plot_table2(fig.subplots(), table, outlier_px)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(10, 3.8))
+def _plot_table2(ax: Axes, table: list[dict[str, Any]], outlier_px: float) -> None:
     x = np.arange(len(table))
     thesis = [r.get("thesis") or {} for r in table]
     ax.bar(x - 0.3, [r["matrix_mean_px"] for r in table], 0.2, label="FlowNav, incl. outliers")
@@ -105,16 +108,10 @@ def _save_figure(table: list[dict[str, Any]], outlier_px: float, file: Path) -> 
     ax.set_title("Rotation compensation on pure rotations (Table 2): FlowNav beside the thesis", fontsize=10)
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    file.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(file, dpi=110)
-    plt.close(fig)
 
 
 def run_rotation(config: RotationConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 2 (Table 2): pure rotations; residual distance after rotation compensation."""
-    from estimator import CameraIntrinsics
-
     intrinsics = CameraIntrinsics.from_fov(config.camera.width, config.camera.height, config.camera.fov_deg)
     table = []
     world = None

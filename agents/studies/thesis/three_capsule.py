@@ -8,12 +8,15 @@ from typing import Any
 
 import numpy as np
 
+from agents.studies.perf.report_kit import saved_figure
 from agents.studies.thesis.attitude import unity_angles
 from agents.studies.thesis.camera_paths import record_three_capsule_flight, scene_kwargs
 from agents.studies.thesis.experiment_configs import ThreeCapsuleConfig
 from agents.studies.thesis.figures import save_depth_figure
 from agents.studies.thesis.metrics import METHODS, metric_rows
 from agents.studies.thesis.playback_runs import RunResult, run_playback
+from estimator import CameraIntrinsics
+from estimator.geometry import derotate
 from flownav_env.playback import PlaybackSettings, PlaybackWorld, save_path
 from flownav_env.rotations import camera_rotation, vector_from_rotation
 
@@ -30,7 +33,7 @@ SWEEP_VARIABLES = (
 ROTATION_ERROR_VARIABLES = ("rotation_error", "attitude_rotation_error")
 
 
-def measure_motion(result: RunResult, intrinsics: Any) -> dict[str, Any]:
+def measure_motion(result: RunResult, intrinsics: CameraIntrinsics) -> dict[str, Any]:
     """What a relative rotation error is relative to, and the parallax it competes with, on one run.
 
     Needs ``result`` from :func:`run_playback` with ``keep_residuals``. Returns medians over frame pairs of the
@@ -38,20 +41,18 @@ def measure_motion(result: RunResult, intrinsics: Any) -> dict[str, Any]:
     order them, and as Unity reports them in [0°, 360°)), and the median and lower-quartile parallax (pixels,
     after derotation with the true rotation) of the thesis method's valid points on a capsule.
     """
-    from estimator.geometry import derotate
-
     level = camera_rotation(0.0)
-    rotation, attitude, parallax = [], [], []
+    rotations, attitudes, parallax = [], [], []
     for frame, residual in zip(result.methods["thesis"], result.residuals, strict=True):
-        rotation.append(np.rad2deg(vector_from_rotation(residual["true_rotation"])))
-        attitude.append(np.rad2deg(unity_angles(level.T @ residual["attitude"])))
+        rotations.append(np.rad2deg(vector_from_rotation(residual["true_rotation"])))
+        attitudes.append(np.rad2deg(unity_angles(level.T @ residual["attitude"])))
         on_capsule = np.asarray(frame["valid"], bool) & (np.asarray(frame["labels"]) >= 0)
         derotated, _ = derotate(
             intrinsics.normalize(residual["points"][on_capsule]), residual["true_rotation"]
         )
         shift = residual["next_points"][on_capsule] - intrinsics.denormalize(derotated)
         parallax.append(np.linalg.norm(shift, axis=1))
-    rotation, attitude, flow = np.array(rotation), np.array(attitude), np.concatenate(parallax)
+    rotation, attitude, flow = np.array(rotations), np.array(attitudes), np.concatenate(parallax)
     return {
         "focal_px": float(intrinsics.fx),
         "frame_pairs": len(rotation),
@@ -67,14 +68,15 @@ def measure_motion(result: RunResult, intrinsics: Any) -> dict[str, Any]:
 
 
 def _sweep_figure(sweeps: list[dict[str, Any]], file: Path) -> None:
-    import matplotlib
+    with saved_figure(file, (3.2 * len(SWEEP_VARIABLES), 5.6)) as fig:
+        axes = fig.subplots(2, len(SWEEP_VARIABLES), squeeze=False)
+        _plot_sweeps(axes, sweeps)
+        fig.suptitle(
+            "Three capsules: one test variable changed from the base run (Appendices C–H)", fontsize=10
+        )
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(
-        2, len(SWEEP_VARIABLES), figsize=(3.2 * len(SWEEP_VARIABLES), 5.6), squeeze=False
-    )
+def _plot_sweeps(axes: np.ndarray, sweeps: list[dict[str, Any]]) -> None:
     for column, (variable, label) in enumerate(SWEEP_VARIABLES):
         for method, marker in zip(METHODS, ("o", "s"), strict=True):
             points = [r for r in sweeps if r["variable"] == variable and r["method"] == method]
@@ -93,16 +95,10 @@ def _sweep_figure(sweeps: list[dict[str, Any]], file: Path) -> None:
     axes[0, 0].set_ylabel("median |rel. depth error| (%)")
     axes[1, 0].set_ylabel("valid points per frame")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle("Three capsules: one test variable changed from the base run (Appendices C–H)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(file, dpi=110)
-    plt.close(fig)
 
 
 def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 5 (Figs. 41–43, Appendices C–H): recorded flight, base run, one sweep per variable."""
-    from estimator import CameraIntrinsics
-
     path = record_three_capsule_flight(config)
     if config.obstacles:
         # An explicit capsule list in the config overrides the env layout's capsules for the playback.
@@ -121,15 +117,24 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
     world = PlaybackWorld(path, camera.width, camera.height, camera.fov_deg)
     rows, sweeps = [], []
 
-    def play(settings: dict[str, Any], description: str, **kwargs: Any) -> RunResult:
+    def play(
+        settings: dict[str, Any], description: str, keep_residuals: bool = False, attitude_error: float = 0.0
+    ) -> RunResult:
         playback = PlaybackSettings(seed=config.seed, **settings)
         return run_playback(
-            path, world, playback, config.estimator, progress=progress, description=description, **kwargs
+            path,
+            world,
+            playback,
+            config.estimator,
+            keep_residuals=keep_residuals,
+            attitude_error=attitude_error,
+            progress=progress,
+            description=description,
         )
 
     try:
         base_result = play(base, "three base")
-        rows += metric_rows("base", base_result, METHODS)
+        rows += metric_rows("base", base_result.methods, METHODS)
         unsteady = {**base, "attitude_jitter_deg": config.rotation_error_jitter_deg}
         motion = measure_motion(
             play(unsteady, "three motion", keep_residuals=True),
@@ -145,7 +150,7 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
                 if settings["distance_per_frame"] > path.arc_length()[-1]:
                     continue
                 result = play(settings, f"{variable}={value:g}", attitude_error=attitude_error)
-                for row in metric_rows(f"{variable}={value:g}", result, METHODS):
+                for row in metric_rows(f"{variable}={value:g}", result.methods, METHODS):
                     sweeps.append({"variable": variable, "value": value, **row})
     finally:
         world.close()

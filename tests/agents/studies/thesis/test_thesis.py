@@ -21,7 +21,7 @@ from agents.studies.thesis.comparison import table2_comparison, verdict_table
 from agents.studies.thesis.experiment_configs import RotationConfig, StraightConfig
 from agents.studies.thesis.experiments import EXPERIMENTS
 from agents.studies.thesis.metrics import component_depth, depth_metrics
-from agents.studies.thesis.motion_errors import angle_for_shift_deg, derotation_error_px, motion_error_section
+from agents.studies.thesis.motion_errors import angle_for_shift_deg, derotation_error_px, motion_values
 from agents.studies.thesis.report import run_experiment, write_readme
 from estimator import CameraIntrinsics
 from estimator.geometry import project_points
@@ -205,7 +205,7 @@ def test_tiny_rotation_compensates_two_axis_case_and_sets_thesis_beside_ours(tmp
     # The exact rotation compensates a two-axis turn to well under the thesis's 12 px (and under 1 px).
     assert two_axis["matrix_mean_inliers_px"] < 1.0
     assert two_axis["euler_order_shift_px"] == pytest.approx(0.0, abs=1e-9)  # x + y: both orders agree
-    lines = table2_comparison(result["table2"], result["focal_px"])
+    lines = table2_comparison(result["table2"]).splitlines()
     assert lines[2].startswith("| 9 (-1.4, -4.9, 0) | 1.4, -4.9, 0 | 12.070 / ")
     assert "all outliers /" in lines[2] and lines[3].startswith("| ours (ours) |")
     readme = write_readme(tmp_path / "out", ["rotation"], 1.0).read_text()
@@ -234,7 +234,7 @@ def test_verdict_table_and_motion_error_section_use_the_rows() -> None:
         _sweep("translation_error", 0.0, 0.009),
         _sweep("translation_error", 0.1, 0.054),
     ]
-    table = "\n".join(verdict_table(sweeps))
+    table = verdict_table(sweeps)
     assert "at 0, 0.08, 0.1: median error 1.0, 2.7, 3.3 %" in table and "a strong threat" in table
     assert "angular instability" not in table  # no rows, no line
     # f = 415.7 px: 8 % of 1 deg misplaces points by 0.58 px; 1 px needs 1.72 deg.
@@ -253,11 +253,12 @@ def test_verdict_table_and_motion_error_section_use_the_rows() -> None:
         "capsule_parallax_px_p25": 1.7,
         "capsule_points": 4000,
     }
-    text = "\n".join(motion_error_section({"motion": motion, "sweeps": sweeps}))
-    assert "rise only to 3.3 % median error at 10 %" in text
+    values = motion_values({"motion": motion, "sweeps": sweeps})
+    assert values is not None and values["error_at_10pct"] == "3.3 %"
     assert (
         "| per-frame rotation (FlowNav's `rotation_error`) | 0.90 | 0.13 / 0.52 | 0.25 | 2.7 % / 5.0 %, 90.0 % |"
-        in text
+        in values["readings_table"]
     )
-    assert "θ must be 1.72°" in text and "| 10 % | 5.0 % (+0.9 %) | 5.4 % |" in text
-    assert motion_error_section({"sweeps": sweeps}) == []
+    assert values["needed_deg"] == "1.72" and values["per_frame_below"] and values["attitude_above"]
+    assert "| 10 % | 5.0 % (+0.9 %) | 5.4 % |" in values["translation_table"]
+    assert motion_values({"sweeps": sweeps}) is None

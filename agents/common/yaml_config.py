@@ -1,28 +1,70 @@
-"""YAML configs mapped one-to-one onto typed dataclasses, validated on load.
+"""YAML configs mapped one-to-one onto typed dataclasses, validated on load by pydantic.
 
 A config file is a YAML mapping whose keys are the fields of a dataclass (nested dataclasses are nested
-mappings). Loading checks every key: an unknown key, a wrong type or a value outside the field's range raises
-:class:`ConfigError` naming the file and the dotted key. Ranges are declared on the field::
+mappings). Loading checks every key: an unknown key, a wrong type, a value outside the field's range or a
+missing required key raises :class:`ConfigError`, one line naming the file, the dotted key, the value and what
+was allowed. A field's range is declared once, on the field::
 
-    total_steps: int = field(default=100_000, metadata={"range": (1, None)})
+    total_steps: int = field_range(1, None, default=100_000)
 
-Environment keyword arguments (``env:`` mappings) are checked against :class:`flownav_env.FlowNavEnv`'s own
-validation, so the config surface of the env is its constructor, documented once.
+and a value whose rule another module owns (an env setting) is checked by that module's function::
+
+    brightness: float = checked_field(setting_check("brightness"), default=1.0)
+
+pydantic rather than cattrs: its strict mode already refuses what a YAML typo gives (``true`` for a count,
+``"5"`` for a number, ``.inf``), and it reports each error with the key's path and the value, which is all
+the one-line messages need; cattrs would leave the types and ranges to hooks written here. The schemas stay
+plain dataclasses, so callers keep ``dataclasses.asdict``, equality and direct construction.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
+import functools
 import types
 import typing
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Annotated, Any, Literal, TypeVar, cast
 
 import yaml
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, TypeAdapter, ValidationError, with_config
+from pydantic_core import ErrorDetails, PydanticCustomError
+from typing_extensions import NotRequired, TypedDict  # pydantic takes typing's TypedDict only from 3.12
 
 T = TypeVar("T")
+V = TypeVar("V")
+Bounds = tuple[float | None, float | None]
+Check = Callable[[str, Any], object]
+
+# A YAML typo should fail, not be coerced: no "5" for a number, no true for a count, no .inf or .nan; a YAML
+# integer is still a float field's value (stored as a float).
+_STRICT = ConfigDict(strict=True, allow_inf_nan=False)
+
+# What a value of each type must be, for pydantic's type errors.
+_EXPECTED = {
+    "bool_type": "true or false",
+    "int_type": "an integer",
+    "float_type": "a finite number",
+    "finite_number": "a finite number",
+    "string_type": "a string",
+    "list_type": "a list",
+    "dict_type": "a mapping",
+}
+
+# Each error as one line after "<source>: ". The fields: subject ("key 'ppo.gamma'", or "the top level"), key,
+# prefix (the key and a dot, for a key below it), where ("ppo" or "top level"), input (the bad value), msg
+# (pydantic's or this module's), expected (from _EXPECTED), choices (a Literal's) and the error's context.
+_TEMPLATES = {
+    "unknown_key": "unknown key '{prefix}{name}' (allowed at {where}: {allowed})",
+    "missing": "missing required key '{key}'",
+    "out_of_range": "{subject} {msg}, got {input!r}",
+    "setting": "{subject}: {msg}",
+    "value_error": "{error}",
+    "literal_error": "{subject} must be one of {choices}, got {input!r}",
+    **dict.fromkeys(_EXPECTED, "{subject} must be {expected}, got {input!r}"),
+}
+_OTHER = "{subject}: {msg}, got {input!r}"
 
 
 class ConfigError(ValueError):
@@ -42,7 +84,7 @@ def load_config(path: str | Path, schema: type[T]) -> T:
     Raises:
         FileNotFoundError: the file does not exist.
         ValueError: the path is a directory.
-        ConfigError: bad YAML, an unknown key, a wrong type or an out-of-range value.
+        ConfigError: bad YAML, an unknown key, a wrong type, an out-of-range value or a missing required key.
     """
     path = Path(path)
     if path.is_dir():
@@ -56,164 +98,140 @@ def load_config(path: str | Path, schema: type[T]) -> T:
     return from_mapping(data, schema, source=str(path))
 
 
-def from_mapping(data: Any, schema: type[T], source: str = "<config>", prefix: str = "") -> T:
-    """Build the dataclass ``schema`` from a mapping, validating every key (see :func:`load_config`)."""
-    where = prefix.rstrip(".") or "top level"
-    if not isinstance(data, Mapping):
-        raise ConfigError(f"{source}: {where} must be a mapping of keys to values, got {type(data).__name__}")
-    fields = {f.name: f for f in dataclasses.fields(schema) if f.init}
-    unknown = sorted(set(data) - set(fields))
-    if unknown:
-        raise ConfigError(
-            f"{source}: unknown key '{prefix}{unknown[0]}' (allowed at {where}: {', '.join(sorted(fields))})"
-        )
-    hints = typing.get_type_hints(schema)
-    values = {}
-    for name, value in data.items():
-        key = f"{prefix}{name}"
-        values[name] = _convert(value, hints[name], source, key)
-        _check_range(values[name], fields[name].metadata.get("range"), source, key)
-        _check_with(values[name], fields[name].metadata.get("check"), source, key)
-    missing = [
-        name
-        for name, f in fields.items()
-        if name not in values
-        and f.default is dataclasses.MISSING
-        and f.default_factory is dataclasses.MISSING
-    ]
-    if missing:
-        raise ConfigError(f"{source}: missing required key '{prefix}{missing[0]}'")
-    config = schema(**values)
-    validate = getattr(config, "validate", None)
-    if callable(validate):
-        try:
-            validate()
-        except ValueError as error:
-            raise ConfigError(f"{source}: {error}") from error
-    return config
-
-
-def _type_name(annotation: Any) -> str:
-    return getattr(annotation, "__name__", None) or str(annotation).replace("typing.", "")
-
-
-def _wrong(value: Any, expected: str, source: str, key: str) -> ConfigError:
-    return ConfigError(f"{source}: key '{key}' must be {expected}, got {value!r}")
-
-
-def _is_bool(value: Any) -> bool:
-    return isinstance(value, bool)
-
-
-def _is_integer(value: Any) -> bool:
-    # bool is a subclass of int, but ``true`` for a count is a mistake in the YAML.
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _is_finite_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _is_string(value: Any) -> bool:
-    return isinstance(value, str)
-
-
-def _unchanged(value: Any) -> Any:
-    return value
-
-
-# Each scalar type a schema may use: the test a value must pass, what the error says it must be, and how the
-# accepted value is stored (a YAML integer given for a float field becomes a float).
-_SCALARS: dict[Any, tuple[Callable[[Any], bool], str, Callable[[Any], Any]]] = {
-    bool: (_is_bool, "true or false", _unchanged),
-    int: (_is_integer, "an integer", _unchanged),
-    float: (_is_finite_number, "a finite number", float),
-    str: (_is_string, "a string", _unchanged),
-}
-
-
-def _convert(value: Any, annotation: Any, source: str, key: str) -> Any:
-    """``value`` checked against the type ``annotation`` and converted to it; ConfigError names ``key``."""
-    origin = typing.get_origin(annotation)
-    if annotation is Any:
-        return value
-    if origin in (typing.Union, types.UnionType):
-        return _convert_union(value, typing.get_args(annotation), source, key)
-    if origin is typing.Literal:
-        return _convert_literal(value, typing.get_args(annotation), source, key)
-    if dataclasses.is_dataclass(annotation):
-        return from_mapping(value, annotation, source, prefix=f"{key}.")
-    if annotation in _SCALARS:
-        accepts, expected, stored = _SCALARS[annotation]
-        if not accepts(value):
-            raise _wrong(value, expected, source, key)
-        return stored(value)
-    if origin in (list, tuple):
-        return _convert_sequence(value, origin, typing.get_args(annotation), source, key)
-    if origin is dict:
-        if not isinstance(value, Mapping):
-            raise _wrong(value, "a mapping", source, key)
-        return dict(value)
-    raise TypeError(f"config schema uses an unsupported type {annotation!r} for '{key}'")
-
-
-def _convert_union(value: Any, options: tuple[Any, ...], source: str, key: str) -> Any:
-    """The first option of a union that ``value`` fits, in the order the annotation lists them."""
-    if value is None and type(None) in options:
-        return None
-    for option in options:
-        if option is type(None):
-            continue
-        try:
-            return _convert(value, option, source, key)
-        except ConfigError:
-            pass
-    raise _wrong(value, " or ".join(_type_name(a) for a in options), source, key)
-
-
-def _convert_literal(value: Any, allowed: tuple[Any, ...], source: str, key: str) -> Any:
-    if value not in allowed:
-        raise _wrong(value, "one of " + ", ".join(repr(a) for a in allowed), source, key)
-    return value
-
-
-def _convert_sequence(
-    value: Any, origin: Any, args: tuple[Any, ...], source: str, key: str
-) -> list[Any] | tuple[Any, ...]:
-    if not isinstance(value, (list, tuple)):
-        raise _wrong(value, f"a list of {_type_name(args[0]) if args else 'values'}", source, key)
-    item_type = args[0] if args else Any
-    items = [_convert(item, item_type, source, f"{key}[{i}]") for i, item in enumerate(value)]
-    return tuple(items) if origin is tuple else items
-
-
-def _check_range(value: Any, bounds: tuple[float | None, float | None] | None, source: str, key: str) -> None:
-    if bounds is None or value is None:
-        return
-    low, high = bounds
-    items = value if isinstance(value, (list, tuple)) else [value]
-    for item in items:
-        if (low is not None and item < low) or (high is not None and item > high):
-            interval = f"[{'-inf' if low is None else low}, {'inf' if high is None else high}]"
-            raise ConfigError(f"{source}: key '{key}' must be in {interval}, got {value!r}")
-
-
-def _check_with(value: Any, check: Callable[[str, Any], Any] | None, source: str, key: str) -> None:
-    if check is None or value is None:
-        return
-    for item in value if isinstance(value, (list, tuple)) else [value]:
-        try:
-            check(key.rsplit(".", 1)[-1], item)
-        except ValueError as error:
-            raise ConfigError(f"{source}: key '{key}': {error}") from error
+def from_mapping(data: object, schema: type[T], source: str = "<config>") -> T:
+    """Build the dataclass ``schema`` from a mapping, validating every key (see :func:`load_config`); each
+    dataclass's ``validate()`` method, if it has one, runs last and its ValueError becomes a ConfigError."""
+    # Building the adapter takes milliseconds: the per-dataclass mappings under it are cached.
+    adapter: TypeAdapter[T] = TypeAdapter(_pydantic_type(schema))
+    try:
+        return adapter.validate_python(data)
+    except ValidationError as error:
+        raise ConfigError(f"{source}: {_message(error.errors()[0])}") from error
 
 
 def field_range(low: float | None = None, high: float | None = None, **kwargs: Any) -> Any:
-    """A dataclass field whose value (or each of its items) must lie in [low, high]."""
+    """A dataclass field whose value (or each of its items) must lie in [low, high]; None is unbounded."""
     return dataclasses.field(metadata={"range": (low, high)}, **kwargs)
 
 
-def checked_field(check: Callable[[str, Any], Any], **kwargs: Any) -> Any:
+def checked_field(check: Check, **kwargs: Any) -> Any:
     """A dataclass field whose value (or each of its items) must pass ``check(name, value)``, which raises
-    ValueError otherwise: for ranges owned elsewhere, such as a setting's rule in the env (``flownav_env.settings_check.setting_check``)."""
+    ValueError otherwise: for ranges owned elsewhere, such as a setting's rule in the env
+    (``flownav_env.settings_check.setting_check``)."""
     return dataclasses.field(metadata={"check": check}, **kwargs)
+
+
+def within(value: float, bounds: Bounds) -> bool:
+    """Whether ``value`` lies in the closed interval ``bounds`` (a None end is unbounded)."""
+    low, high = bounds
+    return (low is None or value >= low) and (high is None or value <= high)
+
+
+def interval(bounds: Bounds) -> str:
+    """``bounds`` as the messages write it: ``[1, 64]``, ``[0, inf]``."""
+    low, high = bounds
+    return f"[{'-inf' if low is None else low}, {'inf' if high is None else high}]"
+
+
+def _pydantic_type(hint: object) -> object:
+    """The annotation ``hint`` with each dataclass in it (``Case``, ``list[Case]``, ``Case | None``) replaced by
+    the mapping that validates it and builds it."""
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return _dataclass_mapping(hint)
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is None or origin is Literal or not args:
+        return hint
+    if origin is types.UnionType:
+        origin = typing.Union
+    return origin[tuple(_pydantic_type(arg) for arg in args)]
+
+
+@functools.cache
+def _dataclass_mapping(schema: type) -> object:
+    """A TypedDict of ``schema``'s fields (each with its checks), refusing keys it lacks, that validates into
+    an instance of ``schema``: absent keys take the dataclass's own defaults."""
+    hints = typing.get_type_hints(schema)
+    keys = {f.name: _key_type(hints[f.name], f) for f in dataclasses.fields(schema) if f.init}
+    # TypedDict's functional form, with keys known only here (the static checker wants a literal).
+    mapping = with_config(_STRICT)(cast(Any, TypedDict)(schema.__name__, keys))
+    return Annotated[
+        mapping,
+        BeforeValidator(functools.partial(_known_keys, sorted(keys))),
+        AfterValidator(_builder(schema)),
+    ]
+
+
+def _key_type(hint: object, field: dataclasses.Field[object]) -> object:
+    checks = []
+    if "range" in field.metadata:
+        checks.append(AfterValidator(functools.partial(_in_range, field.metadata["range"])))
+    if "check" in field.metadata:
+        checks.append(AfterValidator(functools.partial(_passes, field.metadata["check"], field.name)))
+    key_type = Annotated[(_pydantic_type(hint), *checks)] if checks else _pydantic_type(hint)
+    required = field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING
+    return key_type if required else NotRequired[key_type]
+
+
+def _builder(schema: type[T]) -> Callable[[dict[str, object]], T]:
+    def build(values: dict[str, object]) -> T:
+        config = schema(**values)
+        validate = getattr(config, "validate", None)
+        if callable(validate):
+            validate()  # its ValueError reaches the message whole (value_error)
+        return config
+
+    return build
+
+
+def _known_keys(allowed: list[str], data: object) -> object:
+    """``data`` unchanged; an unknown key in it is an error listing the allowed ones. (A non-mapping is left
+    to the TypedDict, which says it must be a mapping.)"""
+    if isinstance(data, dict):
+        unknown = sorted(str(key) for key in data if key not in allowed)
+        if unknown:
+            raise PydanticCustomError(
+                "unknown_key", "unknown key {name}", {"name": unknown[0], "allowed": ", ".join(allowed)}
+            )
+    return data
+
+
+def _items(value: V | list[V] | None) -> list[V]:
+    """The values a field's rule applies to: each item of a list (of levels, of [low, high]), else the value."""
+    if value is None:
+        return []
+    return cast(list[V], value) if isinstance(value, list) else [value]
+
+
+def _in_range(bounds: Bounds, value: float | list[float] | None) -> float | list[float] | None:
+    if not all(within(item, bounds) for item in _items(value)):
+        raise PydanticCustomError("out_of_range", "must be in {interval}", {"interval": interval(bounds)})
+    return value
+
+
+def _passes(check: Check, name: str, value: object) -> object:
+    for item in _items(value):
+        try:
+            check(name, item)
+        except ValueError as error:
+            raise PydanticCustomError("setting", "{error}", {"error": str(error)}) from error
+    return value
+
+
+def _message(error: ErrorDetails) -> str:
+    """pydantic's ``error`` as this module's one line (without the source): see _TEMPLATES."""
+    key = "".join(f"[{part}]" if isinstance(part, int) else f".{part}" for part in error["loc"]).lstrip(".")
+    context = error.get("ctx", {})
+    # pydantic writes a Literal's values "'a', 'b' or 'c'"; the messages list them "'a', 'b', 'c'".
+    choices = ", ".join(str(context.get("expected", "")).rsplit(" or ", 1))
+    fields = {
+        **context,
+        "key": key,
+        "subject": f"key '{key}'" if key else "the top level",
+        "prefix": f"{key}." if key else "",
+        "where": key or "top level",
+        "input": error["input"],
+        "msg": error["msg"],
+        "expected": _EXPECTED.get(error["type"], ""),
+        "choices": choices,
+    }
+    return _TEMPLATES.get(error["type"], _OTHER).format(**fields)

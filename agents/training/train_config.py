@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.seeds import MAX_RUN_SEED
-from agents.common.yaml_config import checked_field, field_range, from_mapping
+from agents.common.yaml_config import Bounds, checked_field, field_range, from_mapping, interval, within
 from flownav_env.privileged import PRIVILEGED_KEYS
 from flownav_env.settings_check import setting_check
 
@@ -110,6 +110,7 @@ class TrainConfig:
     ppo: PPOParams = field(default_factory=PPOParams)
 
     def validate(self) -> None:
+        """The rules between keys (each key's own range is on its field); ValueError names the keys."""
         if self.init_from:
             try:
                 self.init_from.format(seed=0)
@@ -117,22 +118,24 @@ class TrainConfig:
                 raise ValueError(
                     f"key 'init_from' may hold only the placeholder {{seed}}, got {self.init_from!r} ({error})"
                 ) from error
-        if self.imitation.teacher and (
-            self.init_from or self.frame_stack > 1 or self.ppo.lstm_hidden_size > 0
-        ):
-            raise ValueError(
-                f"key 'imitation.teacher' ({self.imitation.teacher!r}) starts a feed-forward policy from scratch: "
-                "it takes no 'init_from', 'frame_stack' above 1 or 'ppo.lstm_hidden_size' above 0"
-            )
-        if self.imitation.teacher and self.env.get("observe_layout"):
-            raise ValueError(
-                f"key 'env.observe_layout' would show the student of teacher {self.imitation.teacher!r} the "
-                f"privileged keys ({', '.join(PRIVILEGED_KEYS)}): remove it; a privileged teacher gets them alone"
-            )
+        if self.imitation.teacher:
+            self._check_teacher()
         if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
             raise ValueError(
                 f"keys 'frame_stack' ({self.frame_stack}) and 'ppo.lstm_hidden_size' ({self.ppo.lstm_hidden_size}) "
                 "are two kinds of memory: use one (frame_stack: 1 or lstm_hidden_size: 0)"
+            )
+
+    def _check_teacher(self) -> None:
+        if self.init_from or self.frame_stack > 1 or self.ppo.lstm_hidden_size > 0:
+            raise ValueError(
+                f"key 'imitation.teacher' ({self.imitation.teacher!r}) starts a feed-forward policy from scratch: "
+                "it takes no 'init_from', 'frame_stack' above 1 or 'ppo.lstm_hidden_size' above 0"
+            )
+        if self.env.get("observe_layout"):
+            raise ValueError(
+                f"key 'env.observe_layout' would show the student of teacher {self.imitation.teacher!r} the "
+                f"privileged keys ({', '.join(PRIVILEGED_KEYS)}): remove it; a privileged teacher gets them alone"
             )
 
 
@@ -151,7 +154,7 @@ def checked_config(config: TrainConfig, source: str) -> TrainConfig:
     return from_mapping(asdict(config), TrainConfig, source=source)
 
 
-def field_bounds(name: str) -> tuple[float | None, float | None]:
+def field_bounds(name: str) -> Bounds:
     """The [low, high] range declared on the TrainConfig field ``name``, for messages about overrides."""
     (match,) = [f for f in fields(TrainConfig) if f.name == name]
     return match.metadata["range"]
@@ -165,9 +168,9 @@ def override(config: TrainConfig, name: str, value: float | None, option: str) -
     """
     if value is None:
         return
-    low, high = field_bounds(name)
-    if (low is not None and value < low) or (high is not None and value > high):
-        raise ValueError(f"{option} must be in [{low}, {high}] (the config's {name} range), got {value}")
+    bounds = field_bounds(name)
+    if not within(value, bounds):
+        raise ValueError(f"{option} must be in {interval(bounds)} (the config's {name} range), got {value}")
     setattr(config, name, value)
 
 

@@ -21,9 +21,9 @@ import numpy as np
 from tqdm import tqdm
 
 from agents.common.seeds import VALIDATION_SEED_START
-from agents.common.tables import markdown_table, today
+from agents.common.tables import markdown_table
 from agents.studies.perf.flight import scripted_action
-from agents.studies.perf.report_kit import hardware_summary, saved_figure, table, write_report
+from agents.studies.perf.report_kit import RunFacts, saved_figure, table, write_report
 from estimator import CameraIntrinsics, FlowDepthEstimator
 from estimator.accuracy import evaluate_stream, relative_depth_error
 from flownav_env import FlowNavEnv
@@ -192,16 +192,7 @@ def run_depth_yield(
         f" --setting {shlex.quote(setting)}" for setting in settings
     )
     command += f" --flights {flights} --steps {steps} --out {out_dir}"
-    values = yield_report_values(
-        command,
-        time.perf_counter() - started,
-        icl,
-        summary,
-        bands,
-        sequence,
-        generated=today(),
-        hardware=hardware_summary(),
-    )
+    values = yield_report_values(icl, summary, bands, sequence, RunFacts.of_this_run(command, started))
     return [write_report(out_dir / "depth_yield.md", "depth_yield.md.j2", values), figure]
 
 
@@ -221,18 +212,14 @@ def _band_name(band: tuple[float, float]) -> str:
 
 
 def yield_report_values(
-    command: str,
-    seconds: float,
     icl: list[dict[str, Any]],
     summary: list[dict[str, Any]],
     bands: list[dict[str, Any]],
     sequence: Path,
-    *,
-    generated: str,
-    hardware: str,
+    run: RunFacts,
 ) -> dict[str, Any]:
-    """Every table of ``templates/depth_yield.md.j2``: :func:`scene_rows`' summary and bands, :func:`icl_rows`
-    (empty where not measured), the command, the seconds it took and the machine's facts."""
+    """Every table of ``templates/depth_yield.md.j2``: :func:`icl_rows` of ``sequence`` (empty where not
+    measured), :func:`scene_rows`' summary and bands, and the run's facts."""
     defaults = EnvSettings()
     summary_columns = {
         "variant": "{variant}",
@@ -267,10 +254,7 @@ def yield_report_values(
         "mean baseline (frames), last pair": "{mean_baseline_last:.2f}",
     }
     return {
-        "command": command,
-        "generated": generated,
-        "elapsed_min": f"{seconds / 60:.1f}",
-        "hardware": hardware,
+        "run": run,
         "env_fast_threshold": defaults.estimator_arguments()["fast_threshold"],
         "scene_size": f"{defaults.camera_width}×{defaults.camera_height}",
         "first_seed": f"{FLIGHT_SEED_START:,}",

@@ -13,10 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.common.jinja_reports import render
-from agents.common.machine import available_cores
-from agents.common.tables import markdown_table, today, write_csv
-from agents.evaluation.provenance import gl_renderer, is_software_renderer
+from agents.common.tables import markdown_table, write_csv
 from agents.studies.perf.env_speed import (
     DEFAULT_RESOLUTIONS,
     MAX_DEPTH_ERROR_PCT,
@@ -28,7 +25,7 @@ from agents.studies.perf.env_speed import (
     TARGET_REAL_TIME_FACTOR,
     measure_env,
 )
-from agents.studies.perf.report_kit import PACKAGE, hardware_summary, rounded, saved_figure, table
+from agents.studies.perf.report_kit import RunFacts, rounded, saved_figure, table, write_report
 from flownav_env.stage_timing import STAGES
 
 Row = dict[str, Any]
@@ -55,19 +52,19 @@ def run_env_benchmark(
     the arguments are :func:`measure_env`'s. Returns the written paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
-    rows = measure_env(resolutions, steps, repeats, seed, progress, fast_thresholds)
-    elapsed = time.perf_counter() - started
     command = (
         "flownav bench env --resolutions "
         + ",".join(f"{w}x{h}" for w, h in resolutions)
         + (" --fast-thresholds " + ",".join(map(str, fast_thresholds)) if fast_thresholds else "")
         + f" --steps {steps} --repeats {repeats} --seed {seed} --out {out_dir}"
     )
+    started = time.perf_counter()
+    rows = measure_env(resolutions, steps, repeats, seed, progress, fast_thresholds)
+    run = RunFacts.of_this_run(command, started)
     paths = [out_dir / f"env_performance.{ext}" for ext in ("md", "csv", "png")]
     write_csv(paths[1], rounded(rows))
     plot_env_performance(rows[1:], paths[2])
-    paths[0].write_text(env_report(rows, command, steps, repeats, elapsed))
+    write_report(paths[0], "env_performance.md.j2", env_report_values(rows, steps, repeats, run))
     return paths
 
 
@@ -101,49 +98,14 @@ def plot_env_performance(rows: list[Row], path: Path) -> None:
         points_axis.legend(handles + more_handles, names + more_names, fontsize=8, loc="center right")
 
 
-def env_report(rows: list[Row], command: str, steps: int, repeats: int, elapsed: float) -> str:
-    """``env_performance.md``: :func:`env_report_values` on this machine, filled into the template."""
-    renderer = gl_renderer()
-    values = env_report_values(
-        rows,
-        command,
-        steps,
-        repeats,
-        elapsed,
-        generated=today(),
-        hardware=hardware_summary(renderer),
-        software_renderer=is_software_renderer(renderer),
-        cores=available_cores(),
-    )
-    return render(PACKAGE, "env_performance.md.j2", values, every_value_used=True)
-
-
-def env_report_values(
-    rows: list[Row],
-    command: str,
-    steps: int,
-    repeats: int,
-    elapsed: float,
-    *,
-    generated: str,
-    hardware: str,
-    software_renderer: bool,
-    cores: int,
-) -> dict[str, str | bool]:
+def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) -> dict[str, Any]:
     """Every figure, table and verdict of ``templates/env_performance.md.j2``, from :func:`measure_env`'s rows
-    (the default config first), the command and settings that made them and the seconds they took, and the
-    machine's facts: the time stamp, its Markdown list (:func:`hardware_summary`), whether MuJoCo rendered on
-    the CPU and the cores the benchmark could use."""
+    (the default config first), its steps and repeats, and the run's facts."""
     default = rows[0]
     return {
-        "generated": generated,
-        "command": command,
-        "elapsed": f"{elapsed:.0f}",
+        "run": run,
         "steps": str(steps),
         "repeats": str(repeats),
-        "hardware": hardware,
-        "software_renderer": bool(software_renderer),
-        "cores": str(cores),
         "frame_rate": f"{default['frame_rate']:.0f}",
         "substeps": str(default["substeps"]),
         "depth_error_share": f"{100 * default['steps_with_depth_error']:.0f}",

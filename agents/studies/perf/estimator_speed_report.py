@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.jinja_reports import render
-from agents.common.tables import today, write_csv
+from agents.common.tables import write_csv
 from agents.studies.perf.estimator_speed import (
     DEFAULT_THRESHOLD,
     MAX_LEVEL,
@@ -20,7 +20,7 @@ from agents.studies.perf.estimator_speed import (
     run_estimator_table,
 )
 from agents.studies.perf.flight import record_flight
-from agents.studies.perf.report_kit import PACKAGE, hardware_summary, rounded, saved_figure, table
+from agents.studies.perf.report_kit import PACKAGE, RunFacts, rounded, saved_figure, table, write_report
 from estimator import CameraIntrinsics, FlowDepthEstimator
 
 Row = dict[str, Any]
@@ -75,26 +75,26 @@ def run_estimator_benchmark(
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
-    with record_flight(frames, width, height, layout, seed) as flight:
-        rows, depth_rows = run_estimator_table(flight, thresholds, repeats, loop_frames, progress)
-        description = flight.description
-    elapsed = time.perf_counter() - started
-
     command = (
         f"flownav bench estimator --frames {frames} --repeats {repeats} "
         f"--thresholds {','.join(map(str, thresholds))} --width {width} --height {height} "
         f"--layout {layout} --seed {seed} --loop-frames {loop_frames} --out {out_dir}"
     )
+    started = time.perf_counter()
+    with record_flight(frames, width, height, layout, seed) as flight:
+        rows, depth_rows = run_estimator_table(flight, thresholds, repeats, loop_frames, progress)
+        description = flight.description
+    run = RunFacts.of_this_run(command, started)
     stem = out_dir / "estimator_performance"
     paths = [stem.with_suffix(".md"), stem.with_suffix(".csv"), out_dir / f"{stem.name}_depth_stage.csv"]
     paths.append(stem.with_suffix(".png"))
     write_csv(paths[1], rounded(rows))
     write_csv(paths[2], rounded(depth_rows))
     plot_estimator_performance(rows, paths[3])
-    paths[0].write_text(
-        estimator_report(rows, depth_rows, description, command, repeats, loop_frames, elapsed)
+    values = estimator_report_values(
+        rows, depth_rows, description, repeats, loop_frames, estimator_defaults(), run
     )
+    write_report(paths[0], "estimator_performance.md.j2", values)
     return paths
 
 
@@ -139,73 +139,23 @@ def estimator_defaults() -> dict[str, Any]:
     return {name: getattr(defaults, name) for name in STATED_SETTINGS}
 
 
-def estimator_report(
-    rows: list[Row],
-    depth_rows: list[Row],
-    flight: dict[str, Any],
-    command: str,
-    repeats: int,
-    loop_frames: int,
-    elapsed: float,
-) -> str:
-    """``estimator_performance.md``: :func:`estimator_report_values` on this machine, filled into the template.
-
-    Args:
-        rows, depth_rows: :func:`run_estimator_table`'s rows (Table 3 and the depth stage).
-        flight: the flight's description (``Flight.description``).
-        command: the command line that made the rows.
-        repeats, loop_frames: the benchmark's settings.
-        elapsed: seconds the benchmark took.
-
-    Returns:
-        The Markdown report.
-    """
-    values = estimator_report_values(
-        rows,
-        depth_rows,
-        flight,
-        command,
-        repeats,
-        loop_frames,
-        elapsed,
-        defaults=estimator_defaults(),
-        generated=today(),
-        hardware=hardware_summary(),
-    )
-    return render(PACKAGE, "estimator_performance.md.j2", values, every_value_used=True)
-
-
 def estimator_report_values(
     rows: list[Row],
     depth_rows: list[Row],
     flight: Mapping[str, Any],
-    command: str,
     repeats: int,
     loop_frames: int,
-    elapsed: float,
-    *,
     defaults: Mapping[str, Any],
-    generated: str,
-    hardware: str,
-) -> dict[str, str | bool]:
-    """Every figure, table and verdict of the estimator report, computed from the measured rows.
-
-    Args:
-        rows, depth_rows, flight, command, repeats, loop_frames, elapsed: see :func:`estimator_report`.
-        defaults: the estimator's default settings (:func:`estimator_defaults`).
-        generated: the report's time stamp.
-        hardware: the machine's Markdown list (:func:`hardware_summary`).
-
-    Returns:
-        The values of ``templates/estimator_performance.md.j2``: text fields and section conditions.
-    """
+    run: RunFacts,
+) -> dict[str, Any]:
+    """Every figure, table and verdict of ``templates/estimator_performance.md.j2``, from
+    :func:`run_estimator_table`'s rows (Table 3 and the depth stage), the flight's description
+    (``Flight.description``), the benchmark's repeats and loop frames, the estimator's default settings
+    (:func:`estimator_defaults`) and the run's facts."""
     return {
-        "generated": generated,
-        "command": command,
-        "elapsed": f"{elapsed:.0f}",
+        "run": run,
         "repeats": str(repeats),
         "loop_frames": str(loop_frames),
-        "hardware": hardware,
         **_flight_values(flight),
         **_settings_values(defaults),
         "bare_win_size": str(WIN_SIZE),

@@ -15,9 +15,8 @@ import numpy as np
 
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
-from agents.common.machine import available_cores
 from agents.common.seeds import ABLATION_SEED_START
-from agents.common.tables import today, write_csv
+from agents.common.tables import write_csv
 from agents.common.yaml_config import load_config
 from agents.studies.benchmark_data import seed_failures
 from agents.studies.confirmation import ALLOWED_RISE
@@ -29,7 +28,7 @@ from agents.studies.perf.recipe_speed import (
     median_minutes,
     stage_work,
 )
-from agents.studies.perf.report_kit import PACKAGE, hardware_summary, saved_figure, table
+from agents.studies.perf.report_kit import PACKAGE, RunFacts, saved_figure, table
 from agents.training.train_config import TrainConfig
 
 # The validation quality a faster recipe must reach: the bar the lever search's winner met.
@@ -150,15 +149,7 @@ def run_recipe_benchmark(
         + " ".join(f"--recipe {r.name}={','.join(map(str, r.paths))}" for r in recipes)
         + f" --rollouts {rollouts} --repeats {repeats} --out {out_dir}"
     )
-    values = recipe_report_values(
-        rows,
-        command,
-        time.perf_counter() - started,
-        repeats,
-        generated=today(),
-        hardware=hardware_summary(),
-        cores=available_cores(),
-    )
+    values = recipe_report_values(rows, repeats, RunFacts.of_this_run(command, started))
     paths[0].write_text(render(PACKAGE, "training_performance.md.j2", values, every_value_used=True))
     return paths
 
@@ -187,19 +178,10 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
         axis.legend(loc="lower right", fontsize=8)
 
 
-def recipe_report_values(
-    rows: list[dict[str, Any]],
-    command: str,
-    elapsed: float,
-    repeats: int,
-    *,
-    generated: str,
-    hardware: str,
-    cores: int,
-) -> dict[str, Any]:
+def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts) -> dict[str, Any]:
     """Every figure, table and verdict of ``templates/training_performance.md.j2``, from the recipes' rows (the
-    reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the command, the seconds it took
-    and the number of blocks, and the machine's facts: time stamp, Markdown list and cores."""
+    reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the number of blocks and the
+    run's facts."""
     reference = rows[0]
     times = [
         row | {"ratio": f"{row['ratio_to_reference']:.2f} [{row['ratio_min']:.2f}–{row['ratio_max']:.2f}]"}
@@ -238,10 +220,7 @@ def recipe_report_values(
     }
     first, clean, conditions = ABLATION_SEED_START, ABLATION_LAYOUTS["clean"], ABLATION_LAYOUTS["conditions"]
     return {
-        "generated": generated,
-        "command": command,
-        "elapsed_min": f"{elapsed / 60:.1f}",
-        "hardware": hardware,
+        "run": run,
         "table": table(times, minutes),
         "repeats": str(repeats),
         "reference": reference["recipe"],
@@ -253,11 +232,10 @@ def recipe_report_values(
         "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
         "targets": [_target(row) for row in rows[1:]],
         "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
-        "cores": str(cores),
         "wide_cores": str(WIDE_CORES),
         "seeds_per_hour": "; ".join(f"`{row['recipe']}` {row['seeds_per_hour_here']:.2f}" for row in rows),
         "seeds_per_hour_wide": "; ".join(
-            f"`{row['recipe']}` {row['seeds_per_hour_here'] * WIDE_CORES / cores:.1f}" for row in rows
+            f"`{row['recipe']}` {row['seeds_per_hour_here'] * WIDE_CORES / run.cores:.1f}" for row in rows
         ),
     }
 

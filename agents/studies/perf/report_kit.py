@@ -12,16 +12,18 @@ import gc
 import math
 import os
 import platform
+import time
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from agents.common.jinja_reports import render
-from agents.common.machine import code_version, cpu_model
-from agents.common.tables import markdown_table
+from agents.common.machine import available_cores, code_version, cpu_model
+from agents.common.tables import markdown_table, today
 from agents.evaluation.provenance import gl_renderer, is_software_renderer
 
 if TYPE_CHECKING:
@@ -63,6 +65,41 @@ def hardware_summary(renderer: str | None = None) -> str:
     lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
     lines.append(f"- code: {code_version()}")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class RunFacts:
+    """What every speed report states about its run (``run`` in the templates): the command, when it was
+    written, how long it took, and the machine (its Markdown list, cores, whether MuJoCo rendered on the CPU)."""
+
+    command: str
+    elapsed_s: float
+    generated: str
+    hardware: str
+    cores: int
+    software_renderer: bool
+
+    @classmethod
+    def of_this_run(cls, command: str, started: float) -> RunFacts:
+        """The facts of a run begun at ``time.perf_counter()`` = ``started``, on this machine, now."""
+        renderer = gl_renderer()
+        elapsed = time.perf_counter() - started
+        return cls(
+            command,
+            elapsed,
+            today(),
+            hardware_summary(renderer),
+            available_cores(),
+            is_software_renderer(renderer),
+        )
+
+    @property
+    def elapsed(self) -> str:
+        return f"{self.elapsed_s:.0f}"
+
+    @property
+    def elapsed_min(self) -> str:
+        return f"{self.elapsed_s / 60:.1f}"
 
 
 def table(rows: Iterable[Mapping[str, Any]], columns: Mapping[str, str] | Sequence[tuple[str, str]]) -> str:

@@ -29,9 +29,8 @@ from typing import Any
 
 from tqdm import tqdm
 
-from agents.common.machine import available_cores
-from agents.common.tables import today, write_csv
-from agents.studies.perf.report_kit import hardware_summary, table, write_report
+from agents.common.tables import write_csv
+from agents.studies.perf.report_kit import RunFacts, table, write_report
 from agents.training.envs import build_envs, close_quietly
 from agents.training.ppo import new_model
 from agents.training.train_config import TrainConfig
@@ -186,15 +185,7 @@ def run_training_benchmark(
         + (f" --side-by-side {side_by_side}" if side_by_side else "")
         + f" --out {out_dir}"
     )
-    values = throughput_report_values(
-        rows,
-        config,
-        command,
-        time.perf_counter() - started,
-        generated=today(),
-        hardware=hardware_summary(),
-        cores=available_cores(),
-    )
+    values = throughput_report_values(rows, config, RunFacts.of_this_run(command, started))
     return [write_report(md_path, "training_throughput.md.j2", values), csv_path]
 
 
@@ -230,18 +221,10 @@ def _summary(config: TrainConfig, n_envs: int, runs: int, measured: list[dict[st
 
 
 def throughput_report_values(
-    rows: list[dict[str, Any]],
-    config: TrainConfig,
-    command: str,
-    elapsed: float,
-    *,
-    generated: str,
-    hardware: str,
-    cores: int,
+    rows: list[dict[str, Any]], config: TrainConfig, run: RunFacts
 ) -> dict[str, Any]:
     """Every figure and table of ``templates/training_throughput.md.j2``, from the settings' rows (the single
-    runs first, as the CSV has them), the config, the command and the seconds it took, and the machine's facts:
-    time stamp, Markdown list and cores."""
+    runs first, as the CSV has them), the config and the run's facts."""
     columns = {
         "n_envs": "{n_envs}",
         "runs at once": "{runs_side_by_side}",
@@ -266,9 +249,7 @@ def throughput_report_values(
         if reference is not None
     ]
     return {
-        "command": command,
-        "generated": generated,
-        "elapsed_min": f"{elapsed / 60:.1f}",
+        "run": run,
         "config": config.name,
         "env_id": config.env_id,
         "env": config.env or "(defaults)",
@@ -277,8 +258,6 @@ def throughput_report_values(
         "n_epochs": config.ppo.n_epochs,
         "net_arch": config.ppo.net_arch,
         "torch_threads": TORCH_THREADS,
-        "cores": cores,
-        "hardware": hardware,
         "table": table(rows, columns),
         "best_n_envs": best["n_envs"],
         "best_runs": best["runs_side_by_side"],

@@ -20,7 +20,8 @@ from agents.studies.thesis.experiment_configs import (
     ThreeCapsuleConfig,
     TranslationConfig,
 )
-from flownav_env.playback import path_from_poses, record_env_flight
+from flownav_env import FlowNavEnv
+from flownav_env.playback import CameraPath, path_from_poses, record_env_flight
 from flownav_env.rotations import camera_rotation, rotation_from_vector
 
 
@@ -42,7 +43,7 @@ def _vector3(name: str, values: list[float]) -> np.ndarray:
     return array
 
 
-def straight_path(config: StraightConfig) -> Any:
+def straight_path(config: StraightConfig) -> CameraPath:
     """Experiment 1's path: level camera looking along +x, moving ``distance_per_frame`` along +x per frame."""
 
     start = _vector3("start", config.start)
@@ -52,7 +53,7 @@ def straight_path(config: StraightConfig) -> Any:
     return path_from_poses(rotations, positions, 10.0, **scene_kwargs(config))
 
 
-def rotation_path(config: RotationConfig, case: RotationCase) -> Any:
+def rotation_path(config: RotationConfig, case: RotationCase) -> CameraPath:
     """Experiment 2's path for one case: a fixed camera centre turning by the case's rotation each frame."""
 
     position = _vector3("position", config.position)
@@ -64,7 +65,7 @@ def rotation_path(config: RotationConfig, case: RotationCase) -> Any:
     return path_from_poses(rotations, positions, 10.0, **scene_kwargs(config))
 
 
-def translation_path(config: TranslationConfig, scene: SceneConfig) -> tuple[Any, int]:
+def translation_path(config: TranslationConfig, scene: SceneConfig) -> tuple[CameraPath, int]:
     """Experiment 3's path: along the camera's x axis, then its y axis; returns (path, index of the turn)."""
 
     start = _vector3("start", config.start)
@@ -81,18 +82,9 @@ def translation_path(config: TranslationConfig, scene: SceneConfig) -> tuple[Any
     ), config.frames_x
 
 
-def random_6dof_path(config: Random6DofConfig) -> Any:
-    """Experiment 4's path: forward drift plus, per axis, a sum of three random sinusoids (human-like sway).
-
-    Raises:
-        ValueError: ``min_period_frames`` exceeds ``max_period_frames``.
-    """
-
-    if config.min_period_frames > config.max_period_frames:
-        raise ValueError(
-            f"min_period_frames ({config.min_period_frames}) must be <= max_period_frames "
-            f"({config.max_period_frames})"
-        )
+def random_6dof_path(config: Random6DofConfig) -> CameraPath:
+    """Experiment 4's path: forward drift plus, per axis, a sum of three random sinusoids (human-like sway);
+    the config's periods are checked on load (:meth:`Random6DofConfig.validate`)."""
     rng = np.random.default_rng(config.path_seed)
     frames = np.arange(config.frames)
 
@@ -117,10 +109,8 @@ def random_6dof_path(config: Random6DofConfig) -> Any:
     return path_from_poses(rotations, start + offsets, 30.0, **scene_kwargs(config))
 
 
-def record_three_capsule_flight(config: ThreeCapsuleConfig) -> Any:
+def record_three_capsule_flight(config: ThreeCapsuleConfig) -> CameraPath:
     """Experiment 5's base path: FlowNavEnv's ``three`` layout flown under a scripted sinusoidal policy."""
-    from flownav_env import FlowNavEnv
-
     record = config.record
     env = FlowNavEnv(
         layout="three",
@@ -131,7 +121,7 @@ def record_three_capsule_flight(config: ThreeCapsuleConfig) -> Any:
         texture_seed=config.texture_seed,
     )
 
-    def policy(_observation: Any, step: int) -> np.ndarray:
+    def policy(_observation: object, step: int) -> np.ndarray:
         phase = 2 * np.pi * step / record.period_steps
         return np.array(
             [

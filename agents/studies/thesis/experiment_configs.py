@@ -6,7 +6,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from agents.common.yaml_config import checked_field, field_range
+from agents.studies.thesis.attitude import unity_to_camera_deg
 from agents.training.train_config import env_setting_field
+from estimator import CameraIntrinsics, FlowDepthEstimator
 from flownav_env.playback import DISTANCE_PER_FRAME
 
 
@@ -53,8 +55,6 @@ class ExperimentConfig:
 
     def validate(self) -> None:
         """Check the estimator kwargs by building an estimator; raises ValueError naming the bad key."""
-        from estimator import CameraIntrinsics, FlowDepthEstimator
-
         if "method" in self.estimator:
             raise ValueError("key 'estimator.method' is not allowed: every experiment runs both methods")
         intrinsics = CameraIntrinsics.from_fov(self.camera.width, self.camera.height, self.camera.fov_deg)
@@ -109,8 +109,6 @@ class RotationConfig(ExperimentConfig):
 
     def validate(self) -> None:
         """As :meth:`ExperimentConfig.validate`, plus: a case quoting a thesis row flies that row's angles."""
-        from agents.studies.thesis.attitude import unity_to_camera_deg
-
         super().validate()
         for index, case in enumerate(self.cases):
             if case.thesis is None:

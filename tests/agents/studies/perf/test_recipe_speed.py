@@ -13,6 +13,7 @@ from agents.common.yaml_config import load_config
 from agents.policies.teachers import make_teacher
 from agents.studies.perf.recipe_speed import block_ratios, stage_minutes, stage_work
 from agents.studies.perf.recipe_speed_report import parse_recipe, recipe_report_values, run_recipe_benchmark
+from agents.studies.perf.report_kit import RunFacts
 from agents.training.train_config import TrainConfig
 
 EXPERIMENTS = Path(__file__).resolve().parents[4] / "configs" / "experiments"
@@ -121,9 +122,7 @@ def recipe_row(name: str, ratio: float, meets: bool | str, teacher_steps: int) -
 )
 def test_the_target_needs_both_a_third_of_the_time_and_the_quality(ratio, meets, verdict) -> None:
     rows = [recipe_row("old", 1.0, True, 0), recipe_row("new", ratio, meets, 10)]
-    values = recipe_report_values(
-        rows, "flownav bench recipe", 60.0, 3, generated="now", hardware="-", cores=2
-    )
+    values = recipe_report_values(rows, 3, RunFacts("flownav bench recipe", 60.0, "now", "-", 2, True))
     assert values["targets"] == [
         {
             "recipe": "new",

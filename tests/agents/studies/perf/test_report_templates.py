@@ -8,9 +8,11 @@ facts), with their three typed figures replaced by the values now derived from t
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import re
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +21,7 @@ import pytest
 
 from agents.common.jinja_reports import names_in, render, template_source, unused_values
 from agents.studies.perf import env_speed_report, estimator_speed_report, report_kit
+from agents.studies.perf.report_kit import RunFacts
 
 DATA = Path(__file__).with_name("data")
 GENERATED = "2026-12-02 14:25 UTC"
@@ -33,34 +36,38 @@ def env_case(name: str) -> dict[str, Any]:
     return json.loads((DATA / "env_report_inputs.json").read_text(encoding="utf-8"))[name]
 
 
-def render_estimator(case: dict[str, Any]) -> str:
-    values = estimator_speed_report.estimator_report_values(
+def facts(case: dict[str, Any]) -> RunFacts:
+    """The run's facts of a case, with the machine pinned."""
+    return RunFacts(
+        case["command"],
+        case["elapsed"],
+        GENERATED,
+        HARDWARE,
+        case.get("cores", 2),
+        case.get("software", True),
+    )
+
+
+def estimator_values(case: dict[str, Any]) -> dict[str, Any]:
+    return estimator_speed_report.estimator_report_values(
         case["rows"],
         case["depth_rows"],
         case["flight"],
-        case["command"],
         case["repeats"],
         case["loop_frames"],
-        case["elapsed"],
-        defaults=case["defaults"],
-        generated=GENERATED,
-        hardware=HARDWARE,
+        case["defaults"],
+        facts(case),
     )
-    return render(report_kit.PACKAGE, "estimator_performance.md.j2", values, every_value_used=True)
+
+
+def render_estimator(case: dict[str, Any]) -> str:
+    return render(
+        report_kit.PACKAGE, "estimator_performance.md.j2", estimator_values(case), every_value_used=True
+    )
 
 
 def render_env(case: dict[str, Any]) -> str:
-    values = env_speed_report.env_report_values(
-        case["rows"],
-        case["command"],
-        case["steps"],
-        case["repeats"],
-        case["elapsed"],
-        generated=GENERATED,
-        hardware=HARDWARE,
-        software_renderer=case["software"],
-        cores=case["cores"],
-    )
+    values = env_speed_report.env_report_values(case["rows"], case["steps"], case["repeats"], facts(case))
     return render(report_kit.PACKAGE, "env_performance.md.j2", values, every_value_used=True)
 
 
@@ -115,19 +122,29 @@ def test_env_claims_follow_the_data() -> None:
     assert "The smallest candidate meeting both is **96×72**" in report
 
 
-def test_the_full_writers_fill_their_templates_on_this_machine(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_writers_fill_their_templates_with_this_machine_and_estimator() -> None:
     # The real estimator defaults and machine facts, so a drift between a writer and its template shows here.
-    monkeypatch.setattr(env_speed_report, "gl_renderer", lambda: "llvmpipe (test)")
-    monkeypatch.setattr(env_speed_report, "hardware_summary", lambda renderer=None: HARDWARE)
-    monkeypatch.setattr(estimator_speed_report, "hardware_summary", lambda renderer=None: HARDWARE)
+    run = RunFacts.of_this_run("flownav bench", time.perf_counter())
+    assert run.hardware.startswith("- Python") and run.cores >= 1
     case = estimator_case("full")
-    report = estimator_speed_report.estimator_report(
-        case["rows"], case["depth_rows"], case["flight"], case["command"], 3, 10, 38.0
+    values = estimator_speed_report.estimator_report_values(
+        case["rows"],
+        case["depth_rows"],
+        case["flight"],
+        3,
+        10,
+        estimator_speed_report.estimator_defaults(),
+        run,
     )
+    report = render(report_kit.PACKAGE, "estimator_performance.md.j2", values, every_value_used=True)
     assert report.startswith("# Estimator performance") and "(method `" in report
     case = env_case("edge")
-    report = env_speed_report.env_report(case["rows"], case["command"], 3, 1, 7.0)
-    assert "with software OpenGL" in report
+    values = env_speed_report.env_report_values(
+        case["rows"], 3, 1, dataclasses.replace(run, software_renderer=True)
+    )
+    assert "with software OpenGL" in render(
+        report_kit.PACKAGE, "env_performance.md.j2", values, every_value_used=True
+    )
 
 
 # Labels the prose may name: thesis tables and figures, the unit of FPS, an operation count in a formula and
@@ -160,11 +177,7 @@ def test_an_edited_template_that_drifts_from_its_values_fails() -> None:
     text = template_source(report_kit.PACKAGE, "estimator_performance.md.j2")
     assert "agreement_pct" in names_in(text)
     edited = text.replace("{{ agreement_pct }}", "100.00")
-    case = copy.deepcopy(estimator_case("full"))
-    values = estimator_speed_report.estimator_report_values(
-        case["rows"], case["depth_rows"], case["flight"], case["command"], 3, 10, 1.0,
-        defaults=case["defaults"], generated=GENERATED, hardware=HARDWARE,
-    )  # fmt: skip
+    values = estimator_values(copy.deepcopy(estimator_case("full")))
     assert unused_values(edited, values) == ["agreement_pct"]
     drifted = {**values, "extra": "1"}
     with pytest.raises(

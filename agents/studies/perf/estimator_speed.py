@@ -30,6 +30,7 @@ from agents.studies.perf.depth_loops import DEPTH_FUNCTIONS
 from agents.studies.perf.flight import Flight
 from agents.studies.perf.report_kit import median, quiet_gc
 from estimator import DepthPoints, FlowDepthEstimator
+from estimator.accuracy import relative_depth_error
 
 # The estimator's LK settings (thesis values); the bare baseline uses the same.
 WIN_SIZE = 10
@@ -206,14 +207,15 @@ def _stream_row(
 
 
 def _depth_error(flight: Flight, kept: list[DepthPoints]) -> float:
-    errors = []
-    for index, points in enumerate(kept):
-        if points.num_valid == 0:
-            continue
-        truth = flight.true_depth(index, points.points[points.valid])
-        ok = np.isfinite(truth)
-        errors.append(np.abs(points.depth[points.valid][ok] - truth[ok]) / truth[ok])
-    return float(np.median(np.concatenate(errors))) if errors else math.nan
+    """The median relative error of every used depth against the ray-cast truth, over the kept frames."""
+    errors = [
+        relative_depth_error(
+            points.depth[points.valid], flight.true_depth(index, points.points[points.valid])
+        )
+        for index, points in enumerate(kept)
+        if points.num_valid
+    ]
+    return float(np.nanmedian(np.concatenate(errors))) if errors else math.nan
 
 
 def _time_depth_stage(

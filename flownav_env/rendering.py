@@ -66,6 +66,7 @@ def gl_renderer_name() -> str:
     """The OpenGL renderer MuJoCo draws with, as the driver names it (Mesa's ``llvmpipe``, a GPU, ...);
     ``unknown (...)`` where no context can be made, so a report never fails on it."""
     try:
+        # Inside the try: a machine whose GL library does not load gets "unknown (ImportError)" too.
         from OpenGL import GL
 
         _check_gl_usable()

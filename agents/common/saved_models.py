@@ -16,9 +16,12 @@ import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.common.folders import naming_file, replacing_atomically
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.base_class import BaseAlgorithm
 
 CHECKPOINT_NAME = re.compile(r"_(\d+)_steps$")
 REQUIRED_ENTRIES = ("data", "policy.pth")
@@ -47,6 +50,7 @@ def read_saved_model(path: Path) -> SavedModel:
         ValueError: not a zip (or cut short), no ``data``/``policy.pth`` entries (not an SB3 model), ``data``
             not JSON, or ``policy.pth`` not a weights-only state dict; the message names the file.
     """
+    # torch is heavy: imported only when a model is read, not by everything that imports this bottom layer.
     import torch
 
     path = Path(path)
@@ -98,7 +102,7 @@ def describe_error(error: BaseException) -> str:
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
-def load_unpickled(algorithm_class: Any, path: Path, label: str) -> Any:
+def load_unpickled(algorithm_class: type[BaseAlgorithm], path: Path, label: str) -> BaseAlgorithm:
     """``algorithm_class.load(path)`` on the CPU: SB3's own load, which unpickles the zip and so runs any code
     it names; only for a file the user said they trust (``--trust-pickle``).
 
@@ -115,7 +119,7 @@ def load_unpickled(algorithm_class: Any, path: Path, label: str) -> Any:
         ) from error
 
 
-def save_atomically(model: Any, path: Path) -> Path:
+def save_atomically(model: BaseAlgorithm, path: Path) -> Path:
     """``model.save(path)`` through :func:`agents.common.folders.replacing_atomically`, so an interrupted save
     never leaves a truncated ``path``; returns ``path``.
 
@@ -151,7 +155,7 @@ def latest_checkpoint(directory: Path) -> Path | None:
     return None
 
 
-def load_policy_weights(model: Any, path: Path) -> SavedModel:
+def load_policy_weights(model: BaseAlgorithm, path: Path) -> SavedModel:
     """Set ``model``'s policy weights to those saved in ``path`` (a curriculum's earlier stage); returns what
     was read. The optimiser and step count stay ``model``'s own.
 

@@ -6,9 +6,12 @@ Training, resuming and loading all ask here, so the choice is made in one place.
 from __future__ import annotations
 
 from dataclasses import asdict
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.training.train_config import PPOParams
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 # Fields of PPOParams that shape the policy network rather than the algorithm.
 _NETWORK_FIELDS = ("net_arch", "log_std_init", "lstm_hidden_size")
@@ -18,8 +21,9 @@ def is_recurrent(params: PPOParams) -> bool:
     return params.lstm_hidden_size > 0
 
 
-def algorithm_class(params: PPOParams) -> Any:
+def algorithm_class(params: PPOParams) -> type[OnPolicyAlgorithm]:
     """``stable_baselines3.PPO``, or ``sb3_contrib.RecurrentPPO`` for a recurrent policy."""
+    # stable-baselines3 (and torch with it) is heavy, sb3-contrib optional: imported only when a model is made.
     if is_recurrent(params):
         from sb3_contrib import RecurrentPPO
 

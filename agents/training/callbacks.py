@@ -13,9 +13,11 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import VecEnv
 
 from agents.common.folders import copy_atomically, naming_file, replacing_atomically, write_text_atomically
 from agents.common.saved_models import checkpoint_steps, read_saved_model, save_atomically
+from agents.training.curves import read_evaluations
 from agents.training.outputs import RunFiles
 
 
@@ -24,8 +26,14 @@ class AtomicCheckpointCallback(CheckpointCallback):
     crash mid-save never leaves a truncated newest checkpoint for ``--resume`` to trip on; ``on_save`` is
     called with the step count after each save (the record's update)."""
 
-    def __init__(self, *args: Any, on_save: Callable[[int], None] | None = None, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(
+        self,
+        save_freq: int,
+        save_path: str,
+        name_prefix: str = "rl_model",
+        on_save: Callable[[int], None] | None = None,
+    ) -> None:
+        super().__init__(save_freq, save_path, name_prefix=name_prefix)
         self.on_save = on_save
 
     def _on_step(self) -> bool:
@@ -64,7 +72,7 @@ def restore_best(
     if mean is None and steps in kept:
         mean = kept[steps]
     better = top is not None and (mean is None or (kept[top], -top) > (mean, -(steps or 0)))
-    if better and top != steps:
+    if top is not None and better and top != steps:
         checkpoint = checkpoint_at(files.checkpoints, top)
         if checkpoint is None:
             print(f"warning: the best evaluation, {kept[top]:.2f} at {top} steps, has no checkpoint left to be "
@@ -89,38 +97,6 @@ def write_evaluations(
         np.savez(temporary, timesteps=timesteps, results=results, ep_lengths=lengths)
 
 
-def _evaluations_problem(timesteps: np.ndarray, results: np.ndarray, lengths: np.ndarray) -> str | None:
-    """What is wrong with the arrays of an ``evaluations.npz``, or None when they fit together."""
-    if not all(np.issubdtype(array.dtype, np.number) for array in (timesteps, results, lengths)):
-        return "its arrays are not numbers"
-    if timesteps.ndim != 1 or results.ndim != 2 or results.shape[1] == 0:
-        return f"timesteps of shape {timesteps.shape} and results of shape {results.shape} are not one row per step"
-    if results.shape[0] != len(timesteps) or lengths.shape != results.shape:
-        return (
-            f"{len(timesteps)} timesteps, results of shape {results.shape} and ep_lengths of shape "
-            f"{lengths.shape} do not match"
-        )
-    return None
-
-
-def read_evaluations(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The steps, per-episode returns and episode lengths of an ``evaluations.npz`` (SB3's layout).
-
-    Raises:
-        ValueError: the file does not hold them: empty, cut short, not an archive, or arrays of other names,
-            types or shapes; the message says what is wrong.
-    """
-    try:
-        with np.load(path, allow_pickle=False) as saved:
-            arrays = tuple(np.asarray(saved[key]) for key in ("timesteps", "results", "ep_lengths"))
-    except Exception as error:  # numpy and zipfile raise many types for a damaged file; all mean unreadable
-        raise ValueError(f"{type(error).__name__}: {error}") from None
-    problem = _evaluations_problem(*arrays)
-    if problem is not None:
-        raise ValueError(problem)
-    return arrays
-
-
 class ResumableEvalCallback(EvalCallback):
     """SB3's EvalCallback over all sessions of a run, such that a failed or interrupted write loses no
     evaluation and changes no choice of the best model.
@@ -143,13 +119,24 @@ class ResumableEvalCallback(EvalCallback):
 
     def __init__(
         self,
-        eval_env: Any,
+        eval_env: VecEnv,
         files: RunFiles,
         resume_step: int | None,
         eval_seed: int | None = None,
-        **kwargs: Any,
+        n_eval_episodes: int = 5,
+        eval_freq: int = 10000,
+        deterministic: bool = True,
+        verbose: int = 1,
     ) -> None:
-        super().__init__(eval_env, log_path=None, best_model_save_path=None, **kwargs)
+        super().__init__(
+            eval_env,
+            n_eval_episodes=n_eval_episodes,
+            eval_freq=eval_freq,
+            log_path=None,
+            best_model_save_path=None,
+            deterministic=deterministic,
+            verbose=verbose,
+        )
         self.files = files
         self.eval_seed = eval_seed
         self.resume_step = resume_step
@@ -253,7 +240,7 @@ class ResumableEvalCallback(EvalCallback):
         """
         if self.eval_seed is not None:
             self.eval_env.seed(self.eval_seed)
-        returns, lengths = evaluate_policy(
+        episode_returns, episode_lengths = evaluate_policy(
             self.model,
             self.eval_env,
             n_eval_episodes=self.n_eval_episodes,
@@ -261,6 +248,8 @@ class ResumableEvalCallback(EvalCallback):
             return_episode_rewards=True,
             warn=self.warn,
         )
+        # With return_episode_rewards, one return and one length per episode.
+        returns, lengths = np.atleast_1d(episode_returns), np.atleast_1d(episode_lengths)
         self.evaluations_timesteps.append(int(self.num_timesteps))
         self.evaluations_results.append([float(r) for r in returns])
         self.evaluations_length.append([int(n) for n in lengths])

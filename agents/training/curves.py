@@ -1,5 +1,5 @@
 """Learning curves: held-out evaluation return against environment steps, one line per training run, or one
-panel per config with its training seeds."""
+panel per config with its training seeds; and reading the ``evaluations.npz`` they are drawn from."""
 
 from __future__ import annotations
 
@@ -16,14 +16,46 @@ def run_label(evaluations: Path) -> str:
     return stem.removesuffix("_evaluations") if stem != "evaluations" else evaluations.parent.name
 
 
+def _evaluations_problem(timesteps: np.ndarray, results: np.ndarray, lengths: np.ndarray) -> str | None:
+    """What is wrong with the arrays of an ``evaluations.npz``, or None when they fit together."""
+    if not all(np.issubdtype(array.dtype, np.number) for array in (timesteps, results, lengths)):
+        return "its arrays are not numbers"
+    if timesteps.ndim != 1 or results.ndim != 2 or results.shape[1] == 0:
+        return f"timesteps of shape {timesteps.shape} and results of shape {results.shape} are not one row per step"
+    if results.shape[0] != len(timesteps) or lengths.shape != results.shape:
+        return (
+            f"{len(timesteps)} timesteps, results of shape {results.shape} and ep_lengths of shape "
+            f"{lengths.shape} do not match"
+        )
+    return None
+
+
+def read_evaluations(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The steps, per-episode returns and episode lengths of an ``evaluations.npz`` (SB3's layout).
+
+    Raises:
+        ValueError: the file does not hold them: empty, cut short, not an archive, or arrays of other names,
+            types or shapes; the message says what is wrong.
+    """
+    try:
+        with np.load(path, allow_pickle=False) as saved:
+            timesteps, results, lengths = (
+                np.asarray(saved[key]) for key in ("timesteps", "results", "ep_lengths")
+            )
+    except Exception as error:  # numpy and zipfile raise many types for a damaged file; all mean unreadable
+        raise ValueError(f"{type(error).__name__}: {error}") from None
+    problem = _evaluations_problem(timesteps, results, lengths)
+    if problem is not None:
+        raise ValueError(problem)
+    return timesteps, results, lengths
+
+
 def load_curve(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """The steps and per-episode returns of an ``evaluations.npz``.
 
     Raises:
         ValueError: the file is damaged or not an evaluations file; one line naming it and what is wrong.
     """
-    from agents.training.callbacks import read_evaluations
-
     try:
         steps, returns, _ = read_evaluations(path)
     except ValueError as problem:
@@ -36,6 +68,7 @@ def plot_learning_curves(
 ) -> None:
     """One line per run (mean return over the evaluation episodes); a single run also gets its min–max band
     (with several, the overlapping bands hide the lines)."""
+    # matplotlib is heavy: imported only when a curve is drawn, not by training's imports.
     import matplotlib
 
     matplotlib.use("Agg")
@@ -66,6 +99,7 @@ def plot_grouped_learning_curves(
     """One panel per group (a config), sharing the return axis: a thin line per run (a training seed) and
     their mean, thick, over the evaluations every run reached. With a dozen runs or more in one axis the
     colours repeat and the lines cannot be told apart; panels keep each config's seeds together."""
+    # matplotlib is heavy: imported only when curves are drawn.
     import matplotlib
 
     matplotlib.use("Agg")

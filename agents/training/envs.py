@@ -12,15 +12,21 @@ from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from typing import Any
 
+import gymnasium as gym
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecEnvWrapper, VecFrameStack
+
 from agents.common.interrupts import ignore_stop_signals
 from agents.common.seeds import checkpoint_selection_seed, training_env_seed
+from agents.training.student_view import StudentView
 from agents.training.train_config import TrainConfig
-from flownav_env.limits import episode_step_limit
+from agents.training.wrappers import SensorRandomization
+from flownav_env.limits import episode_step_limit  # importing flownav_env registers its ids, in workers too
 
 
 def make_env_factory(
     config: TrainConfig, rank: int, teacher_settings: Mapping[str, Any] | None = None
-) -> Callable[[], Any]:
+) -> Callable[[], gym.Env]:
     """A picklable-by-closure factory for SubprocVecEnv workers (``rank`` is kept for callers that number
     their workers; the env's seed comes from the vector env). ``teacher_settings`` go on top of the config's
     ``env``: what a privileged teacher reads (:mod:`agents.training.student_view`).
@@ -35,16 +41,10 @@ def make_env_factory(
     slowest = {"forward_speed": min(ranges["forward_speed"])} if "forward_speed" in ranges else {}
     limit = episode_step_limit(env_id, {**config.env, **slowest}) if slowest else None
 
-    def factory():
-        import gymnasium as gym
-        from stable_baselines3.common.monitor import Monitor
-
-        import flownav_env  # noqa: F401  (registers the ids in the worker)
-        from agents.training.wrappers import SensorRandomization
-
+    def factory() -> gym.Env:
         # Training reads rewards, not the depth-error diagnostics: skip their per-step ray cast unless the
         # config asks (oracle observations get true depths regardless).
-        env = gym.make(env_id, **env_kwargs, **({"max_episode_steps": limit} if limit else {}))
+        env = gym.make(env_id, max_episode_steps=limit, **env_kwargs)
         if ranges:
             env = SensorRandomization(env, ranges)
         return Monitor(env)
@@ -59,10 +59,10 @@ class IgnoringInterrupts:
     Only for factories called in a worker process: called in the main process it would disable Ctrl-C there.
     """
 
-    def __init__(self, factory: Callable[[], Any]) -> None:
+    def __init__(self, factory: Callable[[], gym.Env]) -> None:
         self.factory = factory
 
-    def __call__(self) -> Any:
+    def __call__(self) -> gym.Env:
         ignore_stop_signals()
         return self.factory()
 
@@ -72,7 +72,7 @@ EVAL_WORKERS = 2
 
 def build_envs(
     config: TrainConfig, *, in_process: bool = False, teacher_settings: Mapping[str, Any] | None = None
-) -> tuple[Any, Any]:
+) -> tuple[VecEnv, VecEnv]:
     """The training vector env (``n_envs`` envs, seeded from ``config.seed``) and the evaluation vector env of
     the same class (seeded from the validation seeds): SB3's EvalCallback warns when the two classes differ.
 
@@ -86,11 +86,11 @@ def build_envs(
     both vector envs are wrapped in :class:`~agents.training.student_view.StudentView`, so the policy built on
     them never sees the teacher's keys.
     """
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
-
     factories = [make_env_factory(config, i, teacher_settings) for i in range(config.n_envs)]
     eval_count = EVAL_WORKERS if config.n_envs > 1 else 1
     eval_factories = [make_env_factory(config, i) for i in range(eval_count)]
+    envs: VecEnv
+    eval_env: VecEnv
     if config.n_envs > 1 and not in_process:
         envs = SubprocVecEnv([IgnoringInterrupts(f) for f in factories], start_method="forkserver")
         try:
@@ -108,17 +108,13 @@ def build_envs(
     envs.seed(training_env_seed(config.seed))
     eval_env.seed(checkpoint_selection_seed(config.seed))
     if teacher_settings:
-        from agents.training.student_view import StudentView
-
         envs, eval_env = StudentView(envs), StudentView(eval_env)
     if config.frame_stack > 1:
-        from stable_baselines3.common.vec_env import VecFrameStack
-
         envs, eval_env = VecFrameStack(envs, config.frame_stack), VecFrameStack(eval_env, config.frame_stack)
     return envs, eval_env
 
 
-def close_quietly(envs: Any) -> None:
+def close_quietly(envs: VecEnv) -> None:
     """Close a vector env whose workers may already be gone (killed, or interrupted by an older SB3): a
     broken pipe is reported in one line and the remaining workers are terminated, instead of raising and
     losing the run's outputs.
@@ -128,18 +124,21 @@ def close_quietly(envs: Any) -> None:
     matter once the env closes, so the flag is cleared first and each worker just gets its close message.
     """
     inner = envs
-    while hasattr(inner, "venv"):  # VecFrameStack and other wrappers around the workers
+    while isinstance(inner, VecEnvWrapper):  # VecFrameStack and other wrappers around the workers
         inner = inner.venv
-    if getattr(inner, "waiting", False):
-        inner.waiting = False
+    workers = inner if isinstance(inner, SubprocVecEnv) else None  # None: the envs run in this process
+    if workers is not None:
+        workers.waiting = False
     try:
         envs.close()
     except (EOFError, OSError) as error:  # OSError covers ConnectionResetError and BrokenPipeError
         print(f"warning: an env worker had already stopped ({type(error).__name__}); terminating the rest")
-        for process in getattr(inner, "processes", []):
+        if workers is None:
+            return
+        for process in workers.processes:
             if process.is_alive():
                 process.terminate()
             process.join(timeout=5)
-        for remote in getattr(inner, "remotes", []):
+        for remote in workers.remotes:
             remote.close()
-        inner.closed = True
+        workers.closed = True

@@ -19,12 +19,30 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+import torch
+from stable_baselines3.common.vec_env import VecEnv
 
-from agents.training.student_view import privileged_settings, teacher_view
+from agents.training.student_view import named_arrays, privileged_settings, teacher_view
 from agents.training.train_config import ImitationParams
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
+
+class Teacher(Protocol):
+    """What a teacher start needs of its teacher: stable-baselines3's ``predict`` over a batch of envs (any
+    FlowNav agent has it; the agents live above this layer)."""
+
+    def predict(
+        self,
+        observation: dict[str, np.ndarray],
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]: ...
 
 
 @dataclass
@@ -64,10 +82,12 @@ def discounted_returns(rewards: np.ndarray, dones: np.ndarray, gamma: float) -> 
     return returns
 
 
-def fly(envs: Any, teacher: Any, steps: int, gamma: float, student: Any | None = None) -> Flights:
+def fly(
+    envs: VecEnv, teacher: Teacher, steps: int, gamma: float, student: OnPolicyAlgorithm | None = None
+) -> Flights:
     """``steps`` steps of every env in ``envs`` (an SB3 VecEnv), acting as ``student`` does (deterministic) or,
     without one, as the teacher does; the teacher labels every state either way."""
-    observation = envs.reset()
+    observation = named_arrays(envs.reset())
     starting = np.ones(envs.num_envs, bool)
     teacher_state = None
     seen: dict[str, list[np.ndarray]] = {key: [] for key in observation}
@@ -80,7 +100,8 @@ def fly(envs: Any, teacher: Any, steps: int, gamma: float, student: Any | None =
         for key, value in observation.items():
             seen[key].append(np.array(value))
         labels.append(np.clip(np.asarray(labelled, np.float32), -1.0, 1.0))
-        observation, reward, done, _ = envs.step(np.asarray(acted, np.float32))
+        stepped, reward, done, _ = envs.step(np.asarray(acted, np.float32))
+        observation = named_arrays(stepped)
         rewards.append(reward)
         dones.append(done)
         starting = np.asarray(done, bool)
@@ -89,12 +110,12 @@ def fly(envs: Any, teacher: Any, steps: int, gamma: float, student: Any | None =
     return Flights(flat, np.concatenate(labels), returns.reshape(-1).astype(np.float32))
 
 
-def fit(model: Any, flights: Flights, params: ImitationParams, rng: np.random.Generator) -> dict[str, float]:
+def fit(
+    model: OnPolicyAlgorithm, flights: Flights, params: ImitationParams, rng: np.random.Generator
+) -> dict[str, float]:
     """Fit ``model``'s policy (an SB3 actor-critic) to ``flights``: its mean action to the teacher's (mean
     squared error), its value to the returns (scaled by their spread so neither loss swamps the other).
     Returns the last epoch's mean losses."""
-    import torch
-
     policy = model.policy
     optimizer = torch.optim.Adam(policy.parameters(), lr=params.learning_rate)
     scale = float(np.std(flights.returns)) or 1.0
@@ -108,7 +129,7 @@ def fit(model: Any, flights: Flights, params: ImitationParams, rng: np.random.Ge
             observation, _ = policy.obs_to_tensor({k: v[batch] for k, v in flights.observations.items()})
             distribution = policy.get_distribution(observation)
             target = torch.as_tensor(flights.teacher_actions[batch])
-            action_loss = torch.mean((distribution.distribution.mean - target) ** 2)
+            action_loss = torch.mean((distribution.mode() - target) ** 2)  # a Gaussian's mode: its mean
             values = policy.predict_values(observation).flatten()
             value_loss = torch.mean(((values - torch.as_tensor(flights.returns[batch])) / scale) ** 2)
             optimizer.zero_grad()
@@ -121,7 +142,12 @@ def fit(model: Any, flights: Flights, params: ImitationParams, rng: np.random.Ge
 
 
 def imitate(
-    model: Any, envs: Any, teacher: Any, params: ImitationParams, gamma: float, seed: int
+    model: OnPolicyAlgorithm,
+    envs: VecEnv,
+    teacher: Teacher,
+    params: ImitationParams,
+    gamma: float,
+    seed: int,
 ) -> dict[str, Any]:
     """DAgger: ``params.rounds`` rounds of ``params.steps_per_round`` steps per env on ``envs``, fitting
     ``model``'s policy after each (:func:`fly`, :func:`fit`). Returns a summary for the run's record: the

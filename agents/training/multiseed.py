@@ -16,22 +16,34 @@ stopped.
 
 from __future__ import annotations
 
+import multiprocessing
 import queue
 import re
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import yaml
 
 from agents.common.folders import write_text_atomically
+from agents.common.interrupts import ignore_ctrl_c, stop_signals_interrupt
 from agents.common.seeds import MAX_RUN_SEED
 from agents.training.outputs import RunFiles
 from agents.training.parking import discard, park, parked_files, restore
 from agents.training.run_record import interrupted_at
+from agents.training.shipping import ship_run
 from agents.training.train_config import TrainConfig
+
+if TYPE_CHECKING:
+    from multiprocessing.process import BaseProcess
+    from multiprocessing.queues import Queue
+
+    from agents.training.imitation import Teacher
+
+# What a seed trained side by side reports: its index, its policy path or None, its error or None.
+SeedOutcome = tuple[int, str | None, BaseException | None]
 
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
 # Most seeds trained at once by the local backend; each wants a core or more.
@@ -71,7 +83,7 @@ class SeedJob:
     parked_dir: Path | None = None
     command: str | None = None  # the command line that trains the seeds, for the record
     # Builds the agent a config's ``imitation.teacher`` names; a module-level function, so a job pickles.
-    make_teacher: Callable[[str], Any] | None = None
+    make_teacher: Callable[[str], Teacher] | None = None
 
     @property
     def files(self) -> RunFiles:
@@ -94,7 +106,7 @@ def seed_jobs(
     ship_to: Path | None,
     parked_dir: Path | None = None,
     command: str | None = None,
-    make_teacher: Callable[[str], Any] | None = None,
+    make_teacher: Callable[[str], Teacher] | None = None,
 ) -> list[SeedJob]:
     """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds; seeds parked
     in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty;
@@ -139,8 +151,8 @@ def train_seed(job: SeedJob, side_by_side: bool = False) -> Path:
 
     ``side_by_side`` is for a seed trained beside others on the same machine: its envs step in its own process
     and it reports progress in lines, not a bar."""
+    # ppo imports torch and stable-baselines3: only a process that trains a seed loads them.
     from agents.training.ppo import train
-    from agents.training.shipping import ship_run
 
     if job.parked is not None and not finished(job) and restore(job.parked, job.files):
         print(f"seed {job.config.seed}: restored from {job.parked.run_dir} (parked), resuming")
@@ -237,11 +249,9 @@ def _died(job: SeedJob, exit_code: int | None) -> str:
     )
 
 
-def _seed_process(index: int, job: SeedJob, results: Any) -> None:
+def _seed_process(index: int, job: SeedJob, results: Queue[SeedOutcome]) -> None:
     """One seed trained side by side, in its own process: its outcome goes to ``results`` as ``(index, policy
     path or None, error or None)``."""
-    from agents.common.interrupts import ignore_ctrl_c
-
     ignore_ctrl_c()
     try:
         results.put((index, str(train_seed(job, side_by_side=True)), None))
@@ -258,8 +268,6 @@ def _train_side_by_side(jobs: list[SeedJob], parallel: int) -> list[Path]:
     stop signal here is passed on once, as SIGTERM, to every running seed, which saves; no further seed starts.
     The first error of a seed is raised once the running ones have ended.
     """
-    from agents.common.interrupts import stop_signals_interrupt
-
     seeds = _SeedProcesses(jobs, parallel)
     try:
         with stop_signals_interrupt():
@@ -286,12 +294,10 @@ class _SeedProcesses:
     outcome of each that ended."""
 
     def __init__(self, jobs: list[SeedJob], parallel: int) -> None:
-        import multiprocessing
-
         self.jobs, self.parallel = jobs, parallel
         self.context = multiprocessing.get_context("forkserver")
-        self.results = self.context.Queue()
-        self.running: dict[int, Any] = {}
+        self.results: Queue[SeedOutcome] = self.context.Queue()
+        self.running: dict[int, BaseProcess] = {}
         self.outcomes: dict[int, tuple[str | None, BaseException | None]] = {}
         self.waiting = list(range(len(jobs)))
         self.stopping = False
@@ -340,11 +346,12 @@ class _SeedProcesses:
             raise (failures or errors)[0]
         if self.waiting:
             raise KeyboardInterrupt("stopped before every seed had started; run the same command to resume")
-        return [Path(self.outcomes[index][0]) for index in range(len(self.jobs))]
+        policies = [self.outcomes[index][0] for index in range(len(self.jobs))]
+        return [Path(policy) for policy in policies if policy is not None]  # every seed without error has one
 
 
 def _ray_train(jobs: list[SeedJob], address: str | None) -> Iterator[Path]:
-    try:
+    try:  # Ray is optional (the 'ray' extra): imported only for this backend
         import ray
     except ImportError as error:
         raise ValueError("backend 'ray' needs Ray: pip install 'flownav[ray]'") from error

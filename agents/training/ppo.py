@@ -19,6 +19,11 @@ from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
+import torch
+from stable_baselines3.common.callbacks import CallbackList
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+from stable_baselines3.common.vec_env import VecEnv
+
 from agents.common.folders import (
     check_writable_folder,
     copy_atomically,
@@ -30,8 +35,15 @@ from agents.common.machine import available_cores, code_version, cpu_model
 from agents.common.saved_models import latest_checkpoint, load_policy_weights, save_atomically
 from agents.common.seeds import checkpoint_selection_seed
 from agents.training.algorithms import algorithm_class, algorithm_kwargs, network_kwargs, policy_alias
+from agents.training.callbacks import (
+    AtomicCheckpointCallback,
+    ProgressLines,
+    ResumableEvalCallback,
+    WallClockBudget,
+)
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
+from agents.training.imitation import Teacher, imitate
 from agents.training.outputs import RunFiles
 from agents.training.run_record import FAILED, FINISHED, INTERRUPTED, SessionRecord
 from agents.training.shipping import ship_run
@@ -47,7 +59,7 @@ def plot_learning_curve(evaluations: Path, output: Path, title: str) -> None:
         plot_learning_curves({"mean return (held-out seeds)": evaluations}, temporary, title)
 
 
-def select_policy(model: Any, files: RunFiles) -> str:
+def select_policy(model: OnPolicyAlgorithm, files: RunFiles) -> str:
     """Write the run's policy: the model with the best mean return on the held-out training-eval seeds over
     all sessions (kept as ``best/best_model.zip``), else the last one; returns which, for the record.
 
@@ -63,7 +75,7 @@ def select_policy(model: Any, files: RunFiles) -> str:
     return f"last: {model.num_timesteps} steps"
 
 
-def new_model(config: TrainConfig, envs: Any, tensorboard_log: str | None = None) -> Any:
+def new_model(config: TrainConfig, envs: VecEnv, tensorboard_log: str | None = None) -> OnPolicyAlgorithm:
     """A fresh model of ``config`` on ``envs``: PPO with a ``MultiInputPolicy``, or RecurrentPPO with a
     ``MultiInputLstmPolicy`` when ``ppo.lstm_hidden_size`` > 0 (:mod:`agents.training.algorithms`)."""
     return algorithm_class(config.ppo)(
@@ -78,7 +90,9 @@ def new_model(config: TrainConfig, envs: Any, tensorboard_log: str | None = None
     )
 
 
-def _build_model(config: TrainConfig, envs: Any, files: RunFiles, resume: bool) -> tuple[Any, int | None]:
+def _build_model(
+    config: TrainConfig, envs: VecEnv, files: RunFiles, resume: bool
+) -> tuple[OnPolicyAlgorithm, int | None]:
     """PPO resumed from the newest readable checkpoint, or a fresh one; the resumed step count or None.
 
     Raises:
@@ -152,7 +166,7 @@ def train(
     in_process_envs: bool = False,
     progress_bar: bool = True,
     command: str | None = None,
-    make_teacher: Callable[[str], Any] | None = None,
+    make_teacher: Callable[[str], Teacher] | None = None,
 ) -> Path:
     """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
     training seeds); returns the run's policy path.
@@ -175,8 +189,6 @@ def train(
         OSError: a write failed while training (full disk, file-size limit); it names the file, the
             checkpoints written before stay, and the env workers are closed.
     """
-    import torch
-
     config = checked_config(config, source=str(config_path))
     files = files or RunFiles.of(runs_dir, config.name)
     for folder in (files.run_dir, ship_to):
@@ -234,11 +246,11 @@ def train(
 
 
 def _teacher_start(
-    model: Any,
-    envs: Any,
+    model: OnPolicyAlgorithm,
+    envs: VecEnv,
     config: TrainConfig,
     record: SessionRecord,
-    teacher: Any,
+    teacher: Teacher | None,
 ) -> None:
     """DAgger against ``teacher`` (the config's, built by ``make_teacher``) on the training envs, before PPO;
     its summary goes into the session's record (env steps, minutes, losses per round).
@@ -246,8 +258,6 @@ def _teacher_start(
     Raises:
         ValueError: no ``make_teacher`` was given to build the teacher the config names.
     """
-    from agents.training.imitation import imitate
-
     if teacher is None:
         raise ValueError(
             f"config {config.name!r} names the teacher {config.imitation.teacher!r}, but no make_teacher was "
@@ -274,23 +284,14 @@ def _teacher_start(
 
 def _callbacks(
     config: TrainConfig,
-    eval_env: Any,
+    eval_env: VecEnv,
     files: RunFiles,
     resume_step: int | None,
     record: SessionRecord,
     progress_bar: bool,
-) -> Any:
+) -> CallbackList:
     """Checkpoints (each updating the record), the held-out evaluation, the wall-clock budget and, without a
     progress bar, progress lines."""
-    from stable_baselines3.common.callbacks import CallbackList
-
-    from agents.training.callbacks import (
-        AtomicCheckpointCallback,
-        ProgressLines,
-        ResumableEvalCallback,
-        WallClockBudget,
-    )
-
     per_env = max(1, config.n_envs)
     callbacks = [
         AtomicCheckpointCallback(
@@ -317,11 +318,11 @@ def _callbacks(
 
 
 def _learn(
-    model: Any,
+    model: OnPolicyAlgorithm,
     config: TrainConfig,
     files: RunFiles,
     record: SessionRecord,
-    callbacks: Any,
+    callbacks: CallbackList,
     resume_step: int | None,
     progress_bar: bool,
 ) -> str:
@@ -363,5 +364,5 @@ def _learn(
     return FINISHED
 
 
-def _save_checkpoint(model: Any, config: TrainConfig, files: RunFiles) -> None:
+def _save_checkpoint(model: OnPolicyAlgorithm, config: TrainConfig, files: RunFiles) -> None:
     save_atomically(model, files.checkpoints / f"{config.name}_{model.num_timesteps}_steps.zip")

@@ -14,8 +14,20 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 from flownav_env.privileged import PRIVILEGED_KEYS
+
+
+def named_arrays(observation: VecEnvObs) -> dict[str, np.ndarray]:
+    """``observation`` of a vector env, checked to be what every FlowNav env observes: named arrays (a dict).
+
+    Raises:
+        ValueError: another kind of observation (one array, a tuple).
+    """
+    if not isinstance(observation, dict):
+        raise ValueError(f"a FlowNav env observes named arrays (a dict), got {type(observation).__name__}")
+    return observation
 
 
 class StudentView(VecEnvWrapper):
@@ -34,14 +46,14 @@ class StudentView(VecEnvWrapper):
         super().__init__(venv, observation_space=student)
         self.full_observation: dict[str, np.ndarray] = {}
 
-    def _student(self, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        self.full_observation = observation
-        return {k: v for k, v in observation.items() if k not in PRIVILEGED_KEYS}
+    def _student(self, observation: VecEnvObs) -> dict[str, np.ndarray]:
+        self.full_observation = named_arrays(observation)
+        return {k: v for k, v in self.full_observation.items() if k not in PRIVILEGED_KEYS}
 
     def reset(self) -> dict[str, np.ndarray]:
         return self._student(self.venv.reset())
 
-    def step_wait(self) -> Any:
+    def step_wait(self) -> VecEnvStepReturn:
         observation, rewards, dones, infos = self.venv.step_wait()
         # The terminal observation SB3 keeps for bootstrapping is the student's too.
         for info in infos:
@@ -52,14 +64,14 @@ class StudentView(VecEnvWrapper):
         return self._student(observation), rewards, dones, infos
 
 
-def teacher_view(envs: Any, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def teacher_view(envs: VecEnv, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """What the teacher reads in the state whose student observation is ``observation``: the full observation
     when ``envs`` is a :class:`StudentView` that holds one, else ``observation`` itself."""
     full = getattr(envs, "full_observation", None)
     return full if isinstance(envs, StudentView) and full else observation
 
 
-def privileged_settings(teacher: Any) -> dict[str, Any]:
+def privileged_settings(teacher: object) -> dict[str, Any]:
     """The env settings a teacher reads that its student must not see (``{"observe_layout": True}`` for the
     planner), as the teacher declares them in ``privileged_settings``; empty for a teacher that reads only the
     student's observation.

@@ -8,6 +8,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from flownav_env.env import FlowNavEnv
 from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS
 from flownav_env.settings_check import check_setting
 
@@ -23,11 +24,18 @@ class SensorRandomization(gym.Wrapper):
     first ``reset(seed=...)``), and set through ``FlowNavEnv.set_course``. Both setters check the ranges.
 
     Raises:
-        ValueError: a name that is neither, or an end outside the setting's range.
+        ValueError: ``env`` is not a FlowNavEnv (or a wrapper of one), a name that is neither, or an end outside
+            the setting's range.
     """
 
     def __init__(self, env: gym.Env, ranges: Mapping[str, Sequence[float]]) -> None:
         super().__init__(env)
+        base = env.unwrapped
+        if not isinstance(base, FlowNavEnv):
+            raise ValueError(
+                f"SensorRandomization wraps a FlowNavEnv (or a wrapper of one), got {type(base).__name__}"
+            )
+        self.flownav = base
         allowed = SENSOR_FIELDS + COURSE_FIELDS
         unknown = set(ranges) - set(allowed)
         if unknown:
@@ -44,15 +52,13 @@ class SensorRandomization(gym.Wrapper):
         if self.course_ranges:
             if seed is not None or self._course_rng is None:
                 self._course_rng = np.random.default_rng(seed)
-            course = {
-                name: float(self._course_rng.uniform(*bounds)) for name, bounds in self.course_ranges.items()
-            }
-            self.env.unwrapped.set_course(**course)
+            rng = self._course_rng
+            course = {name: float(rng.uniform(low, high)) for name, (low, high) in self.course_ranges.items()}
+            self.flownav.set_course(**course)
         observation, info = self.env.reset(seed=seed, options=options)
-        base = self.env.unwrapped
-        rng = np.random.default_rng(int(base.np_random.integers(2**63)))
+        rng = np.random.default_rng(int(self.flownav.np_random.integers(2**63)))
         drawn = {name: float(rng.uniform(low, high)) for name, (low, high) in self.ranges.items()}
-        base.set_sensor(**drawn)
+        self.flownav.set_sensor(**drawn)
         if self.course_ranges:
             drawn = {**drawn, **course}
         info = {**info, **{f"sensor_{name}": value for name, value in drawn.items()}}

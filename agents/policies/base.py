@@ -1,10 +1,13 @@
-"""What every agent is: something with stable-baselines3's ``predict``, and the names the benchmark knows."""
+"""What every agent is: something with stable-baselines3's ``predict`` (:class:`Agent`, declared in the bottom
+layer for training's teachers too), the base of agents that wrap another, and the names the benchmark knows."""
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
+
+from agents.common.agent import Agent  # the agents' one interface, named from here above the bottom layer
 
 REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
 # ppo_flow_course_approach_curriculum_slow: the lever search's winner, trained from configs/experiments/ (its name lists
@@ -80,20 +83,6 @@ def seeded_agent_name(agent: str, train_seed: int) -> str:
 def is_learned(name: str) -> bool:
     """Whether ``name`` (with or without a training seed) is a learned agent."""
     return split_agent_name(name)[0] in LEARNED_AGENTS
-
-
-class Agent(Protocol):
-    """What the evaluation needs of an agent: stable-baselines3's ``predict``. ``state`` is whatever the agent
-    keeps between calls (an LSTM's state, a frame stack; None for a memoryless agent): opaque to its caller,
-    who passes back what the last call returned."""
-
-    def predict(
-        self,
-        observation: dict[str, np.ndarray],
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]: ...
 
 
 class AgentWrapper:

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 from stable_baselines3.common.vec_env import VecEnv
 
+from agents.common.agent import Agent
 from agents.training.student_view import named_arrays, privileged_settings, teacher_view
 from agents.training.train_config import ImitationParams
 
@@ -32,17 +33,8 @@ if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 
-class Teacher(Protocol):
-    """What a teacher start needs of its teacher: stable-baselines3's ``predict`` over a batch of envs (any
-    FlowNav agent has it; the agents live above this layer)."""
-
-    def predict(
-        self,
-        observation: dict[str, np.ndarray],
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]: ...
+# What a teacher start needs of its teacher: any agent's ``predict``, over a batch of envs.
+Teacher = Agent
 
 
 @dataclass

@@ -14,13 +14,7 @@ class _Recording:
     def __init__(self) -> None:
         self.calls: list[tuple[Any, ...]] = []
 
-    def predict(
-        self,
-        observation: dict[str, np.ndarray],
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
         self.calls.append((observation, state, episode_start, deterministic))
         return np.zeros(3), "memory"
 

@@ -25,6 +25,7 @@ from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of, suite_task, with_tier
+from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import seed_interval
 from agents.evaluation.provenance import machine_summary
@@ -390,6 +391,7 @@ def run_suite(
         generated=today(),
         readings=reading_values(out / SENSOR_READING_DIR),
         bounds=suite_bounds(failures, bests, seeds),
+        gains=learning_gains(failures, rankings),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

@@ -15,11 +15,13 @@ from typing import Any
 import numpy as np
 
 from agents.common.jinja_reports import render
+from agents.evaluation.learning_gain import LearningGain
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
 from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import is_learned, trained_on
+from agents.policies.trained_tiers import agent_tiers
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
 
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
@@ -61,7 +63,12 @@ def rank_suite(
 
 
 def _trained_on(agent: str) -> str:
+    """The tiers a learned agent trained on (all of them for one policy across the tiers), else what it trained
+    on in the training config's words; a dash for an agent that did not learn."""
     try:
+        tiers = agent_tiers(agent)
+        if tiers:
+            return "every tier (one policy)" if tiers == TIER_NAMES else ", ".join(tiers)
         return trained_on(agent) or "—"
     except (ValueError, OSError):  # an included outside agent: nothing of its training is known here
         return "—"
@@ -132,6 +139,7 @@ def suite_values(
     generated: str,
     readings: Sequence[Mapping[str, Any]] = (),
     bounds: Mapping[str, Mapping[str, Any]] | None = None,
+    gains: Sequence[LearningGain] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -168,6 +176,8 @@ def suite_values(
         "suite_noise_m": translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),
         "suite_reading": VELOCITY_READINGS[SUITE_READING][0],
         "reading_dir": SENSOR_READING_DIR,
+        "gains": list(gains),
+        "trained_on": {gain.learned: _trained_on(gain.learned) for gain in gains},
     }
 
 

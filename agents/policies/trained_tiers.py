@@ -14,6 +14,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from agents.common.yaml_config import load_config
+from agents.policies.base import is_learned
+from agents.policies.learned import policy_file
 from agents.training.train_config import TrainConfig
 from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
@@ -83,3 +85,12 @@ def config_tiers(config_path: str | Path) -> tuple[str, ...]:
         return ()
     env = {**registered[config.env_id], **dict(config.env)}
     return tiers_covered(env, dataclasses.asdict(config.randomize))
+
+
+def agent_tiers(name: str) -> tuple[str, ...]:
+    """The tiers the shipped learned agent ``name`` trained on, from the training config beside its policy; none
+    for an agent that did not learn or whose policy has no config beside it."""
+    if not is_learned(name):
+        return ()
+    config_path = policy_file(name).with_suffix(".yaml")
+    return config_tiers(config_path) if config_path.is_file() else ()

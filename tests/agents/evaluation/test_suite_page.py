@@ -57,6 +57,7 @@ def test_references_and_provisional_agents_are_listed_apart_and_never_best() -> 
 
 def test_the_page_renders_every_branch() -> None:
     with_missing = suite_page(_values(["bee on noisy"]))
+    assert "No learned agent is ranked on `hard`" in with_missing
     for section in ("## Top groups", "Provisional, not ranked", "References, privileged", "## Not yet flown"):
         assert section in with_missing
     assert "`bee on noisy`" in with_missing and "top group `bee_ttc`" in with_missing
@@ -109,14 +110,39 @@ def test_a_real_layout_is_checked_from_the_envs_privileged_keys() -> None:
     assert layout_is_feasible("hard", PLANNER_TUNING_SEED_START) is True  # the planner flies it without a miss
 
 
-def test_each_row_says_what_its_agent_trained_on() -> None:
-    from agents.policies import trained_on
-
+def test_each_row_says_which_tiers_its_agent_trained_on() -> None:
     (hard,) = _values([])["tiers"]
     rows = {row["agent"]: row for row in [*hard["ranked"], *hard["provisional"], *hard["references"]]}
     assert rows["bee_ttc"]["trained_on"] == "—"
-    assert rows["ppo_flow"]["trained_on"] == trained_on("ppo_flow") and trained_on("ppo_flow").startswith("FlowNav-v0")
-    assert "drawn per episode" in trained_on("ppo_flow_course_approach_curriculum_slow")
+    assert rows["ppo_flow"]["trained_on"] == "clean"  # FlowNav-v0 with its defaults
+
+
+def test_the_page_sets_the_best_learned_agent_against_the_best_rule() -> None:
+    from agents.evaluation.learning_gain import learning_gain
+
+    rng = np.random.default_rng(3)
+    matrices = {
+        "bee_ttc": (rng.random((1, 120)) < 0.4).astype(float),
+        "ppo_flow": (rng.random((10, 120)) < 0.1).astype(float),
+    }
+    table = [_row(agent, "hard", matrix) for agent, matrix in matrices.items()]
+    rankings = rank_suite(table, {"hard": matrices})
+    gain = learning_gain("hard", matrices, rankings["hard"])
+    assert gain is not None
+    text = suite_page(
+        suite_values(
+            table,
+            rankings,
+            command="flownav suite --report-only",
+            layouts=suite_seeds(120),
+            machine="a test machine",
+            missing=[],
+            generated="today",
+            gains=[gain],
+        )
+    )
+    assert "| `hard` | `ppo_flow` | clean |" in text
+    assert "learning beats the rule" in text
 
 
 def test_a_tier_flown_only_by_references_has_no_ranking() -> None:

@@ -1,13 +1,15 @@
-"""The committed data ``benchmark.md`` and the README's results are written from, read and summarised once.
+"""The committed data ``benchmark.md``, ``flow_gap.md`` and the generated blocks of the README and the thesis
+discussion are written from, read and summarised once, and what the study chose (``configs/studies.yaml``).
 
 Everything comes from files under ``results/``: the leaderboard's and the sweep's episodes, the training seeds'
 rates, the ablations on validation layouts, the diagnostic flights on true depths, the shipped policies' training
-records and configs, and the thesis replication's measured motion. Nothing is flown.
+records and configs, the suite's top groups and the thesis replication's measured motion. Nothing is flown.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import re
 from collections.abc import Mapping, Sequence
@@ -18,6 +20,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.common.locations import REPO_ROOT
+from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import improvements, summarise_runs
 from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.evaluation.paired import Comparison, compare
@@ -25,23 +29,57 @@ from agents.evaluation.records import read_records
 from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite import suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
-from agents.policies.base import AGENT_NAMES, LEARNED_AGENTS, split_agent_name
-from agents.studies.error_analysis import cell_quality, fit_dose_response, is_flow_agent, tolerance_table
+from agents.policies.base import (
+    AGENT_NAMES,
+    LEARNED_AGENTS,
+    PRIVILEGED_AGENTS,
+    REACTIVE_AGENTS,
+    split_agent_name,
+)
+from agents.studies.error_analysis import cell_quality, fit_every_flow_agent, is_flow_agent, tolerance_table
 
+CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
-SUITE_EPISODES = "suite_episodes.csv"
 INPUTS = {
     "leaderboard_episodes.csv": "flownav leaderboard --out results",
     "training_seeds.csv": "flownav leaderboard --out results",
     "sweep_episodes.csv": "flownav sweep --config configs/sweep.yaml --out results",
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
     "thesis/three_capsule.json": "flownav replicate --out results/thesis",
-    SUITE_EPISODES: "flownav suite --out results",
+    "suite_episodes.csv": "flownav suite --out results",
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
-ABLATION_DIR = "ablation"
 ABLATION_CONDITIONS = {"clean": "", "density": "density_0.18", "speed": "speed_1.5"}
-REFERENCE_DIR = "reference"
+
+
+@dataclass(frozen=True)
+class BenchmarkChoices:
+    """What the benchmark study chose (``configs/studies.yaml`` says what each is)."""
+
+    winner: str
+    max_failure: float
+    oracle_factor: float
+    max_rise: float
+    robustness_speed: float
+    robustness_density: float
+    budget_minutes: float
+    material: float
+    thesis_max_relative: float
+    centring_rules: list[str]
+    speeds: list[float]
+    descriptions: dict[str, str]
+    factors: dict[str, list[str]]
+
+    @property
+    def truth_recipe(self) -> str:
+        """The winner's recipe, both stages and the same budget, on the true depths at the same tracked points."""
+        return f"{self.winner}_oracle"
+
+
+@functools.cache
+def choices(path: Path = CHOICES_PATH) -> BenchmarkChoices:
+    """The study's choices, read once."""
+    return load_config(path, BenchmarkChoices)
 
 
 @dataclass(frozen=True)
@@ -66,7 +104,7 @@ class Training:
     init_config: dict[str, Any] | None = None
 
 
-@dataclass
+@dataclass(frozen=True)
 class BenchmarkData:
     """The summaries every report section draws on (see :func:`load_benchmark_data`)."""
 
@@ -94,6 +132,18 @@ class BenchmarkData:
     # Per suite tier: its best ranked agent, that agent's failure and the tier's top group (suite.md's ranking).
     suite_top: list[dict[str, Any]] = field(default_factory=list)
 
+    def best_agents(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """The leaderboard rows of the reactive agent (straight aside) and the learned flow agent with the lowest
+        clean failure rate; a privileged agent (it reads what the sensor does not give) is a reference, never
+        among them."""
+        reactive = [r for r in self.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
+        learned = [
+            r
+            for r in self.leaderboard
+            if r["agent"] in LEARNED_AGENTS and is_flow_agent(r) and r["agent"] not in PRIVILEGED_AGENTS
+        ]
+        return min(reactive, key=lambda r: r["failure_rate"]), min(learned, key=lambda r: r["failure_rate"])
+
     def row(self, agent: str) -> dict[str, Any]:
         """The leaderboard row of ``agent`` (a base name)."""
         return next(r for r in self.leaderboard if r["agent"] == agent)
@@ -107,22 +157,19 @@ class BenchmarkData:
         """P(``learned`` > ``reactive``) with its interval."""
         return next(g for g in self.gains if g["learned"] == learned and g["reactive"] == reactive)
 
+    def sweep_name(self, agent: str) -> str:
+        """The sweep's name for a base agent name: itself, or its pooled ``<agent>@all``."""
+        return agent if any(key[0] == agent for key in self.cells) else f"{agent}@all"
+
     def cell(self, agent: str, factor: str, level: float) -> Rate:
         """The sweep cell of ``agent`` (base name or pooled) at ``factor`` = ``level``."""
-        return self.cells[(sweep_name(agent, self.cells), factor, float(level))]
+        return self.cells[(self.sweep_name(agent), factor, float(level))]
 
-    def tolerance_row(self, agent: str, factor: str, side: str) -> dict[str, Any] | None:
-        name = sweep_name(agent, self.cells)
-        return next(
-            (r for r in self.tolerance if r["agent"] == name and r["factor"] == factor and r["side"] == side),
-            None,
-        )
-
-
-def sweep_name(agent: str, cells: Mapping[tuple[str, str, float], Any]) -> str:
-    """The sweep's name for a base agent name: itself, or its pooled ``<agent>@all``."""
-    names = {key[0] for key in cells}
-    return agent if agent in names else f"{agent}@all"
+    def tolerance_row(self, agent: str, factor: str, side: str = "above") -> dict[str, Any] | None:
+        """The tolerance row of ``agent`` (base name or pooled) for ``factor`` on ``side``; None if not flown."""
+        name = self.sweep_name(agent)
+        wanted = (name, factor, side)
+        return next((r for r in self.tolerance if (r["agent"], r["factor"], r["side"]) == wanted), None)
 
 
 def require(path: Path) -> Path:
@@ -135,21 +182,27 @@ def require(path: Path) -> Path:
 
 
 def _rate(rows: Sequence[Mapping[str, Any]]) -> Rate:
-    failures = sum(not bool(r["success"]) for r in rows)
+    """Failure over ``rows``: Wilson for one run, over runs and layouts for pooled ones."""
     low, high = failure_interval(rows)
-    return Rate(failures / len(rows), low, high, len(rows))
+    return Rate(sum(not bool(r["success"]) for r in rows) / len(rows), low, high, len(rows))
+
+
+def _rates_per_agent(rows: Sequence[Mapping[str, Any]]) -> dict[str, Rate]:
+    return {
+        agent: _rate([r for r in rows if r["agent"] == agent]) for agent in sorted({r["agent"] for r in rows})
+    }
 
 
 def _leaderboard(results: Path) -> dict[str, Any]:
     rows = read_records(require(results / "leaderboard_episodes.csv"))
     runs: dict[str, list[str]] = {}
+    versions: dict[str, set[str]] = {}
     for name in sorted({r["agent"] for r in rows}):
         runs.setdefault(split_agent_name(name)[0], []).append(name)
-    runs = {agent: runs[agent] for agent in AGENT_NAMES if agent in runs}
-    layouts = sorted({int(r["seed"]) for r in rows})
-    versions: dict[str, set[str]] = {}
     for r in rows:
         versions.setdefault(split_agent_name(r["agent"])[0], set()).add(str(r["code_version"]))
+    runs = {agent: runs[agent] for agent in AGENT_NAMES if agent in runs}
+    layouts = sorted({int(r["seed"]) for r in rows})
     return {
         "leaderboard": summarise_runs(rows, runs, layouts),
         "gains": improvements(rows, runs, layouts),
@@ -183,13 +236,7 @@ def _sweep(results: Path) -> dict[str, Any]:
     cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
-    quality = cell_quality(rows)
-    fits, errors = {}, {}
-    for agent in sorted({r["agent"] for r in rows if is_flow_agent(r)}):
-        try:
-            fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent], quality)
-        except ValueError as reason:
-            errors[agent] = str(reason)
+    fits, errors = fit_every_flow_agent(rows, cell_quality(rows))
     baseline = pool_every_seed(read_records(results / "leaderboard_episodes.csv"))
     return {
         "sweep_rows": rows,
@@ -202,49 +249,46 @@ def _sweep(results: Path) -> dict[str, Any]:
     }
 
 
-def _run_outcomes(files: Sequence[Path]) -> np.ndarray:
-    """Success per (run, layout) of ablation runs that flew the same layouts, one CSV per run."""
-    flown = [{int(r["seed"]): bool(r["success"]) for r in read_records(file)} for file in files]
-    layouts = sorted(set().union(*flown))
-    for file, runs in zip(files, flown, strict=True):
-        if set(runs) != set(layouts):
-            raise ValueError(f"{file}: its run has not flown the same layouts as the others in its folder")
-    return np.array([[runs[seed] for seed in layouts] for runs in flown], float)
+def seed_failures(folder: Path) -> np.ndarray | None:
+    """Failures (seeds, layouts) of one ablation config's runs, one ``seed_<k>.csv`` each, layouts in seed order;
+    None where none has flown or a seed has not flown the same layouts as the others."""
+    files = sorted(folder.glob("seed_*.csv"))
+    flown = [{int(r["seed"]): not bool(r["success"]) for r in read_records(file)} for file in files]
+    if not flown or any(set(runs) != set(flown[0]) for runs in flown):
+        return None
+    return np.array([[runs[seed] for seed in sorted(flown[0])] for runs in flown], float)
+
+
+def _config_rate(folder: Path) -> Rate:
+    """Failure of a config's ablation runs: over runs and layouts (as ``flownav ablation``), Wilson for one run.
+
+    Raises:
+        ValueError: runs that flew different layouts.
+    """
+    failures = seed_failures(folder)
+    if failures is None:
+        raise ValueError(f"{folder}: its runs have not all flown the same layouts")
+    successes = 1.0 - failures
+    if len(successes) > 1:
+        low, high = runs_and_layouts_interval(successes)
+    else:
+        low, high = wilson_interval(int(successes.sum()), successes.size)
+    return Rate(float(1 - successes.mean()), 1 - high, 1 - low, failures.size, len(failures))
 
 
 def _validation(results: Path) -> dict[str, dict[str, Rate]]:
-    """Failure rates on validation layouts per ablation condition: each config over its seeds (two-level
-    bootstrap, as ``flownav ablation``), each reactive reference agent (Wilson)."""
+    """Failure rates on validation layouts per ablation condition: each config over its seeds, each reactive
+    reference agent."""
     rates: dict[str, dict[str, Rate]] = {}
     for condition, folder in ABLATION_CONDITIONS.items():
-        base = results / ABLATION_DIR / folder
+        base = results / "ablation" / folder
         if not base.is_dir():
             raise FileNotFoundError(f"benchmark input not found: {base} (written by `flownav ablation`)")
-        found: dict[str, Rate] = {}
-        for config in sorted(p for p in base.iterdir() if p.is_dir() and any(p.glob("seed_*.csv"))):
-            outcomes = _run_outcomes(sorted(config.glob("seed_*.csv")))
-            if len(outcomes) > 1:
-                low, high = runs_and_layouts_interval(outcomes)
-            else:
-                low, high = wilson_interval(int(outcomes.sum()), outcomes.size)
-            found[config.name] = Rate(1 - outcomes.mean(), 1 - high, 1 - low, outcomes.size, len(outcomes))
-        for file in sorted((base / REFERENCE_DIR).glob("*.csv")):
-            rows = read_records(file)
-            failures = sum(not bool(r["success"]) for r in rows)
-            low, high = wilson_interval(failures, len(rows))
-            found[file.stem] = Rate(failures / len(rows), low, high, len(rows))
+        configs = sorted(p for p in base.iterdir() if p.is_dir() and any(p.glob("seed_*.csv")))
+        found = {config.name: _config_rate(config) for config in configs}
+        for file in sorted((base / "reference").glob("*.csv")):
+            found[file.stem] = _rate(read_records(file))
         rates[condition] = found
-    return rates
-
-
-def _oracle_reactive(results: Path) -> dict[str, Rate]:
-    rows = read_records(require(results / "diagnostics/reactive_oracle_episodes.csv"))
-    rates = {}
-    for agent in sorted({r["agent"] for r in rows}):
-        mine = [r for r in rows if r["agent"] == agent]
-        failures = sum(not bool(r["success"]) for r in mine)
-        low, high = wilson_interval(failures, len(mine))
-        rates[agent] = Rate(failures / len(mine), low, high, len(mine))
     return rates
 
 
@@ -266,56 +310,51 @@ def _training(results: Path, agents: Sequence[str]) -> dict[str, Training]:
         init = None
         if config.get("init_from"):
             source = Path(str(config["init_from"]).format(seed=0))
-            init_yaml = results / "policies" / source.parent.name / f"{source.stem}.yaml"
-            init = yaml.safe_load(require(init_yaml).read_text())
+            init = yaml.safe_load(
+                require(results / "policies" / source.parent.name / f"{source.stem}.yaml").read_text()
+            )
         found[agent] = Training(minutes, sorted(cores), config, init)
     return found
 
 
-def _fingerprint(results: Path) -> tuple[Any, ...]:
-    """Name, size and modification time of every input file, so a cached summary is used only while none
-    changed."""
-    patterns = [*INPUTS, f"{ABLATION_DIR}/**/*.csv", "policies/*/seed_*.json", "policies/*/seed_*.yaml"]
+def _fingerprint(results: Path) -> tuple[tuple[str, int, int], ...]:
+    """Name, size and modification time of every input file: a summary is reused only while none changed."""
+    patterns = [*INPUTS, "ablation/**/*.csv", "policies/*/seed_*.json", "policies/*/seed_*.yaml"]
     files = sorted({file for pattern in patterns for file in results.glob(pattern) if file.is_file()})
     return tuple((str(file), file.stat().st_size, file.stat().st_mtime_ns) for file in files)
 
 
-_CACHE: dict[tuple[str, tuple[Any, ...]], BenchmarkData] = {}
-
-
 def load_benchmark_data(results_dir: Path) -> BenchmarkData:
-    """Read and summarise every input of the benchmark report under ``results_dir`` (cached while the files are
-    unchanged, since the probabilities of improvement take minutes).
-
-    Args:
-        results_dir: a folder with the layout of ``results/``.
-
-    Returns:
-        The summaries.
+    """Read and summarise every input under ``results_dir``, a folder with the layout of ``results/``.
 
     Raises:
         FileNotFoundError: a missing input, named in one line.
         ValueError: runs of an ablation that flew different layouts.
     """
-    results = Path(results_dir)
+    results = Path(results_dir).resolve()
     for name in INPUTS:
         require(results / name)
-    key = (str(results.resolve()), _fingerprint(results))
-    if key not in _CACHE:
-        leaderboard = _leaderboard(results)
-        learned = [r["agent"] for r in leaderboard["leaderboard"] if r["agent"] in LEARNED_AGENTS]
-        _CACHE.clear()
-        _CACHE[key] = BenchmarkData(
-            **leaderboard,
-            seed_rows=_seed_rows(results),
-            **_sweep(results),
-            validation=_validation(results),
-            oracle_reactive=_oracle_reactive(results),
-            training=_training(results, learned),
-            thesis_motion=json.loads((results / "thesis/three_capsule.json").read_text())["motion"],
-            suite_top=suite_top_groups(results),
-        )
-    return _CACHE[key]
+    return _summarise(results, _fingerprint(results))
+
+
+# One summary kept: the probabilities of improvement take a while, and every report of one regeneration reads
+# the same files; the fingerprint in the key makes a changed file read anew.
+@functools.lru_cache(maxsize=1)
+def _summarise(results: Path, fingerprint: tuple[tuple[str, int, int], ...]) -> BenchmarkData:
+    del fingerprint  # part of the cache key only
+    leaderboard = _leaderboard(results)
+    learned = [r["agent"] for r in leaderboard["leaderboard"] if r["agent"] in LEARNED_AGENTS]
+    oracle = read_records(require(results / "diagnostics/reactive_oracle_episodes.csv"))
+    return BenchmarkData(
+        **leaderboard,
+        seed_rows=_seed_rows(results),
+        **_sweep(results),
+        validation=_validation(results),
+        oracle_reactive=_rates_per_agent(oracle),
+        training=_training(results, learned),
+        thesis_motion=json.loads((results / "thesis/three_capsule.json").read_text())["motion"],
+        suite_top=suite_top_groups(results),
+    )
 
 
 def commit_of(code_version: str) -> str:

@@ -1,112 +1,322 @@
-"""``benchmark.md``, the README's results and the thesis discussion's closed-loop paragraph, written from the
+"""``benchmark.md``, the README's results block and the thesis discussion's closed-loop paragraph, written from the
 committed data alone (nothing is flown).
 
-The prose is in Jinja2 templates in ``templates/`` (``benchmark.md.j2``, ``readme_results.md.j2``,
-``thesis_closed_loop.md.j2``, rendered by :mod:`agents.common.jinja_reports`); every number
-and every claim in it is computed by :mod:`agents.studies.benchmark_values`, :mod:`~agents.studies.benchmark_sweep`
-and :mod:`~agents.studies.benchmark_findings` from :func:`~agents.studies.benchmark_data.load_benchmark_data`.
-The README and the thesis discussion are hand-written files with one generated block each, between two marker
-lines; only that block is rewritten.
-
-Nothing is written into ``results/`` unless it is the output folder asked for.
+:func:`report_values` computes one dictionary of numbers, tables, comparisons and lists of names from
+:func:`~agents.studies.benchmark_data.load_benchmark_data`; the templates in ``templates/`` (``benchmark.md.j2``,
+``readme_results.md.j2``, ``thesis_closed_loop.md.j2``, their phrases in ``wording.j2``) word it, each verdict
+from a value (a paired comparison, a list of the agents a claim holds for). The README and the thesis discussion
+are hand-written files with one generated block each, between two marker lines; only that block is rewritten.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from agents.common.folders import check_writable_folder
-from agents.common.jinja_reports import render, template_names
-from agents.common.tables import today
-from agents.studies.benchmark_blocks import readme_values, thesis_values
-from agents.studies.benchmark_claims import agents_broken_by, every_or_all_but
-from agents.studies.benchmark_data import BenchmarkData, load_benchmark_data
-from agents.studies.benchmark_findings import (
-    dose_values,
-    scale_values,
-    task_values,
-    thesis_model_values,
-    winner_values,
-)
-from agents.studies.benchmark_sweep import breaking_values
-from agents.studies.benchmark_values import (
-    Values,
-    leaderboard_values,
-    reactive_gap_values,
-    setup_values,
-    validation_values,
-)
-from agents.studies.flow_gap_targets import flow_gap_target_values
+from agents.common.jinja_reports import environment, rate, render
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.common.tables import markdown_table, today
+from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
+from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
+from agents.studies.benchmark_sweep import display_name, level_text, sweep_values
+from agents.studies.error_analysis import is_flow_agent
+from flownav_env.settings import EnvSettings
 
-# The templates, in this package's templates/ folder.
 PACKAGE = "agents.studies"
-BENCHMARK_TEMPLATE = "benchmark.md.j2"
-README_TEMPLATE = "readme_results.md.j2"
-THESIS_TEMPLATE = "thesis_closed_loop.md.j2"
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
-# The claim helpers, re-exported: the report's own vocabulary.
-__all__ = [
-    "agents_broken_by",
-    "every_or_all_but",
-    "replace_block",
-    "report_values",
-    "write_benchmark",
-    "write_readme_results",
-    "write_thesis_closed_loop",
-]
+Values = dict[str, Any]
 
 
-def template_fields(template: str) -> frozenset[str]:
-    """Every value this package's template ``template`` names."""
-    return template_names(PACKAGE, template)
+def join_words(words: Iterable[str], last: str = "and") -> str:
+    """``a``; ``a and b``; ``a, b and c`` (``last`` may be "or")."""
+    words = list(words)
+    return f"{', '.join(words[:-1])} {last} {words[-1]}" if len(words) > 1 else "".join(words)
+
+
+def span(values: Iterable[float], digits: int = 0) -> str:
+    """``36–59``: the smallest and largest value, or one where they print alike."""
+    values = list(values)
+    low, high = f"{min(values):,.{digits}f}", f"{max(values):,.{digits}f}"
+    return low if low == high else f"{low}–{high}"
+
+
+# The filters the templates word values with, beside agents.common.jinja_reports's.
+FILTERS = {
+    "display": display_name,
+    "names": join_words,
+    "span": span,
+    "level": level_text,
+    "count": lambda value: f"{value:,.0f}",
+}
+
+
+def render_report(template: str, values: Mapping[str, Any]) -> str:
+    """This package's ``template`` rendered with ``values`` and :data:`FILTERS`."""
+    environment(PACKAGE).filters.update(FILTERS)
+    return render(PACKAGE, template, values)
+
+
+def _interval(point: float, low: float, high: float) -> str:
+    return f"{point:.2f} [{low:.2f}, {high:.2f}]"
+
+
+def agent_table(data: BenchmarkData, readme: bool = False) -> str:
+    """The leading table (the README's shorter one with ``readme``), the best reactive and learned agent bold."""
+    bold = {row["agent"] for row in data.best_agents()}
+    described = choices().descriptions
+    rows = []
+    for r in data.leaderboard:
+        what = described.get(r["agent"], r["agent"])
+        label = f"{what} (`{r['agent']}`)" if readme else f"`{r['agent']}` ({what})"
+        failure = _interval(r["failure_rate"], r["failure_low"], r["failure_high"])
+        if r["agent"] in bold:
+            label = f"**{label}**" if readme else label.replace(f"`{r['agent']}`", f"**`{r['agent']}`**", 1)
+            failure = f"**{failure}**"
+        shares = [rate(r[key]) for key in ("collision_rate", "out_of_bounds_rate")]
+        if readme:
+            runs = "–" if r["agent"] in REACTIVE_AGENTS else str(r["runs"])
+            rows.append([label, runs, failure, *shares, rate(r["success_rate"])])
+        else:
+            iqm = (
+                "–"
+                if r["runs"] == 1
+                else _interval(r["iqm_failure"], r["iqm_failure_low"], r["iqm_failure_high"])
+            )
+            success = _interval(r["success_rate"], r["success_low"], r["success_high"])
+            rows.append([label, r["runs"], failure, success, *shares, iqm])
+    if readme:
+        header = [
+            "agent",
+            "training runs",
+            "failure rate [95 % CI]",
+            "collision",
+            "out of bounds",
+            "success rate",
+        ]
+    else:
+        header = ["agent", "runs", "failure rate [95 % CI]", "success rate [95 % CI]", "collision"]
+        header += ["out of bounds", "IQM failure [95 % CI]"]
+    return markdown_table(header, rows)
+
+
+def _improvement_table(data: BenchmarkData) -> str:
+    """The probability that each learned agent fails less than each reactive one (straight aside)."""
+    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
+    reactive = [
+        r["agent"] for r in data.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"
+    ]
+    rows = [
+        [
+            f"`{x}`",
+            *(_interval(*(data.gain(x, y)[k] for k in ("probability", "low", "high"))) for y in reactive),
+        ]
+        for x in learned
+    ]
+    return markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], rows)
+
+
+def leaderboard_values(data: BenchmarkData) -> Values:
+    """The leading table, its provenance, the training seeds' spread, and the comparisons of two agents (each a
+    paired test, :meth:`BenchmarkData.compare`) the reports word."""
+    c = choices()
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for agent, versions in data.code_versions.items():
+        groups.setdefault(tuple(commit_of(v) for v in versions), []).append(f"`{agent}`")
+    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
+    seeds = {agent: [r for r in data.seed_rows if r["agent"] == agent] for agent in learned}
+    best_reactive, best_learned = data.best_agents()
+    rows = {r["agent"]: r for r in data.leaderboard}
+    flown = {a: a in rows for a in ("ppo_robust", c.truth_recipe)}
+    comparisons = [
+        ("best", best_learned["agent"], best_reactive["agent"]),
+        ("flow_vs_ttc", "ppo_flow", "bee_ttc"),
+        ("winner_vs_ttc", c.winner, "bee_ttc"),
+        ("flow_vs_oracle", "ppo_flow", "ppo_oracle"),
+        ("flow_vs_bee", "ppo_flow", "bee"),
+        ("flow_vs_vfh", "ppo_flow", "vfh"),
+        ("flow_vs_robust_rule", "ppo_flow", "bee_robust"),
+        ("robust_vs_flow", "ppo_robust", "ppo_flow"),
+        ("winner_vs_truth", c.winner, c.truth_recipe),
+    ]
+    flow, ttc, winner = (rows[a]["failure_rate"] for a in ("ppo_flow", "bee_ttc", c.winner))
+    return {
+        "c": c,
+        "rows": rows,
+        "layouts": data.layouts,
+        "leaderboard_episodes": data.leaderboard_episodes,
+        "leaderboard_complete": all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard),
+        "leaderboard_code": [(join_words(commits), join_words(agents)) for commits, agents in groups.items()],
+        "leaderboard_table": agent_table(data),
+        "readme_table": agent_table(data, readme=True),
+        "block": data.block,
+        "seed_ranges": [
+            (a, [r["failure_rate"] for r in s], max(s, key=lambda r: r["failure_rate"]))
+            for a, s in seeds.items()
+        ],
+        "improvement_table": _improvement_table(data),
+        "best_learned": best_learned["agent"],
+        "best_reactive": best_reactive["agent"],
+        "truth_recipe_flown": flown[c.truth_recipe],
+        **{name: data.compare(a, b) for name, a, b in comparisons if a in rows and b in rows},
+        "winner_closes": (flow - winner) / (flow - ttc),
+        "oracle_reactive": data.oracle_reactive,
+        "suite_top": data.suite_top,
+    }
+
+
+def validation_values(data: BenchmarkData) -> Values:
+    """The flow-gap levers and the reactive references on validation layouts: clean, at the robustness density
+    and speed, each with its difference from clean and whether both rises stay within the limit."""
+    c = choices()
+    clean, density, speed = (data.validation[k] for k in ("clean", "density", "speed"))
+    names = [n for n in clean if n in density and n in speed]
+    names = [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
+    within = [n for n in names if max(density[n].rate, speed[n].rate) - clean[n].rate <= c.max_rise]
+    rows = []
+    for name in names:
+        reactive = name in REACTIVE_AGENTS
+        rows.append(
+            [
+                f"`{name}` (reactive)" if reactive else f"`{name}`",
+                "–" if reactive else str(clean[name].runs),
+                _interval(clean[name].rate, clean[name].low, clean[name].high),
+                *(
+                    f"{_interval(r.rate, r.low, r.high)} ({r.rate - clean[name].rate:+.2f})"
+                    for r in (density[name], speed[name])
+                ),
+                "yes" if name in within else "no",
+            ]
+        )
+    header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {c.robustness_density:g} (Δ)"]
+    header += [f"{c.robustness_speed:g} m/s (Δ)", f"within +{c.max_rise:.2f} at both"]
+    per_run = {k: {r.episodes // r.runs for r in data.validation[k].values()} for k in data.validation}
+    stage1, stage2 = data.training[c.winner].init_config or {}, data.training[c.winner].config
+    return {
+        "validation_table": markdown_table(header, rows),
+        "validation_within": [f"`{n}`" for n in within],
+        "validation_clean_layouts": sorted(per_run["clean"]),
+        "validation_condition_layouts": sorted(per_run["density"] | per_run["speed"]),
+        "validation_ok": {n: n in within for n in names},
+        "stage2_steps": stage2["total_timesteps"],
+        "stage2_lr": _learning_rate(stage2["ppo"]["learning_rate"]),
+        "stage1_lr": _learning_rate(stage1.get("ppo", {}).get("learning_rate", float("nan"))),
+    }
+
+
+def _learning_rate(value: float) -> str:
+    mantissa, exponent = f"{value:.0e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def target_values(data: BenchmarkData) -> Values:
+    """The flow-gap targets on test layouts: who meets the first target's failure limit, each sweep agent's rise
+    at the robustness speed and density over its clean failure, and the winner's training time."""
+    c = choices()
+    rise = {}
+    for row in data.leaderboard:
+        try:
+            cells = [data.cell(row["agent"], "forward_speed", c.robustness_speed)]
+            cells.append(data.cell(row["agent"], "obstacle_density", c.robustness_density))
+        except KeyError:
+            continue
+        rise[row["agent"]] = [cell.rate - row["failure_rate"] for cell in cells]
+    limit = min(c.max_failure, c.oracle_factor * data.row("ppo_oracle")["failure_rate"])
+    others = ("straight", "ppo_oracle")
+    first = [
+        r
+        for r in data.leaderboard
+        if is_flow_agent(r) and r["agent"] not in others and r["failure_rate"] <= limit
+    ]
+    robust = [a for a, rises in rise.items() if max(rises) <= c.max_rise]
+    minutes = data.training[c.winner].minutes
+    return {
+        "first_target_met": [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first],
+        "rise": rise,
+        "rise_members": [display_name(a) for a in rise],
+        "robust_agents": [display_name(a) for a in robust],
+        "winner_minutes": span(minutes),
+        "winner_cores": "/".join(map(str, data.training[c.winner].cores)),
+        "winner_in_time": max(minutes) <= c.budget_minutes,
+        "targets_met": data.row(c.winner) in first
+        and c.winner in robust
+        and max(minutes) <= c.budget_minutes,
+        "test_ok": {a: max(rises) <= c.max_rise for a, rises in rise.items()},
+    }
+
+
+def setup_values(data: BenchmarkData) -> Values:
+    """The task's and training's settings: the env's defaults, the seed ranges, the shipped policies' configs."""
+    c = choices()
+    learned = [a for a in data.training if a != c.winner]
+    seeds = {
+        a: [int(r["train_seed"]) for r in data.seed_rows if r["agent"] == a] for a in [*learned, c.winner]
+    }
+    return {
+        "env": {f.name: f.default for f in dataclasses.fields(EnvSettings)},
+        "seed_starts": (VALIDATION_SEED_START, TEST_SEED_START, ABLATION_SEED_START),
+        "ppo": data.training["ppo_flow"].config,
+        "ppo_minutes": span([m for a in learned for m in data.training[a].minutes]),
+        "ppo_cores": "/".join(map(str, sorted({n for a in learned for n in data.training[a].cores}))),
+        "stage1": data.training[c.winner].init_config or {},
+        "stage2": data.training[c.winner].config,
+        "train_seeds": {a: _seed_list(s) for a, s in seeds.items()},
+        "randomized": [
+            _randomized(data.training[c.winner].init_config or {}),
+            _randomized(data.training[c.winner].config),
+        ],
+    }
+
+
+def _randomized(config: Mapping[str, Any]) -> str:
+    """What a training config draws per episode: ``speeds 0.5–2 m/s, densities 0.06–0.18``."""
+    units = {
+        "forward_speed": ("speeds", " m/s"),
+        "obstacle_density": ("densities", ""),
+        "brightness": ("brightness", ""),
+    }
+    parts = []
+    for key, (low, high) in (config.get("randomize") or {}).items():
+        noun, unit = units.get(key, (key, ""))
+        parts.append(f"{noun} {low:g}–{high:g}{unit}")
+    return join_words(parts)
+
+
+def _seed_list(seeds: Sequence[int]) -> str:
+    """``0-4`` for consecutive seeds, else ``0,2,3``."""
+    ordered = sorted(seeds)
+    if len(ordered) > 1 and ordered == list(range(ordered[0], ordered[-1] + 1)):
+        return f"{ordered[0]}-{ordered[-1]}"
+    return ",".join(map(str, ordered))
 
 
 def report_values(data: BenchmarkData) -> Values:
     """Every value of the three templates, computed from ``data`` (each template takes the ones it names)."""
-    values: Values = {}
-    for part in (
-        leaderboard_values,
-        reactive_gap_values,
-        validation_values,
-        flow_gap_target_values,
-        setup_values,
-        breaking_values,
-        winner_values,
-        thesis_model_values,
-        scale_values,
-        task_values,
-        dose_values,
-        readme_values,
-        thesis_values,
-    ):
-        values.update(part(data))
+    values = {
+        **leaderboard_values(data),
+        **validation_values(data),
+        **target_values(data),
+        **setup_values(data),
+        **sweep_values(data),
+    }
+    shared = set(values["validation_ok"]) & set(values["test_ok"])
+    values["validation_agrees"] = all(values["validation_ok"][a] == values["test_ok"][a] for a in shared)
     return values
 
 
-def _render(template: str, values: Values) -> str:
-    # The three templates share one set of values, each naming the ones it words.
-    return render(PACKAGE, template, values)
-
-
 def write_benchmark(results_dir: Path, out: Path, command: str) -> list[str]:
-    """Write ``out/benchmark.md`` from the committed data under ``results_dir``.
-
-    Args:
-        results_dir: a folder with the layout of ``results/`` (its episodes, ablations, policies' records).
-        out: the output folder (created); nothing else is written.
-        command: the command line the report names on its "Generated" line.
-
-    Returns:
-        The report's lines.
+    """Write ``out/benchmark.md`` from the committed data under ``results_dir`` (a folder with the layout of
+    ``results/``); returns its lines.
 
     Raises:
         FileNotFoundError: a missing input, named in one line.
         ValueError: an unwritable ``out``, or data the report cannot be worded from.
     """
     data = load_benchmark_data(Path(results_dir))
-    values = {**report_values(data), "generated": today(), "command": command}
-    text = _render(BENCHMARK_TEMPLATE, values)
+    text = render_report("benchmark.md.j2", {**report_values(data), "generated": today(), "command": command})
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -133,32 +343,34 @@ def replace_block(text: str, markers: tuple[str, str], block: str, name: str = "
 
 
 def write_readme_results(results_dir: Path, readme: Path) -> str:
-    """The README's text with its results block (between :data:`README_MARKERS`) written from the data under
-    ``results_dir``; the file is rewritten only where the block changed, and nothing outside the markers.
-
-    Returns:
-        The README's new text.
-
-    Raises:
-        FileNotFoundError: a missing input or README.
-        ValueError: the README's markers missing or repeated.
-    """
-    return _rewrite_block(results_dir, Path(readme), README_TEMPLATE, README_MARKERS)
+    """The README's results block (between :data:`README_MARKERS`) rewritten from the data under ``results_dir``
+    (see :func:`write_block`)."""
+    return write_block(results_dir, readme, readme=True)
 
 
 def write_thesis_closed_loop(results_dir: Path, text_file: Path) -> str:
-    """Like :func:`write_readme_results` for the thesis discussion's closed-loop paragraph (between
-    :data:`THESIS_MARKERS`), in ``results/thesis/DISCUSSION.md`` or the ``README.md`` built from it."""
-    return _rewrite_block(results_dir, Path(text_file), THESIS_TEMPLATE, THESIS_MARKERS)
+    """The thesis discussion's closed-loop paragraph (between :data:`THESIS_MARKERS`) rewritten from the data under
+    ``results_dir``, in ``results/thesis/DISCUSSION.md`` or the ``README.md`` built from it (see
+    :func:`write_block`)."""
+    return write_block(results_dir, text_file)
 
 
-def _rewrite_block(results_dir: Path, text_file: Path, template: str, markers: tuple[str, str]) -> str:
-    """``text_file`` with the block between ``markers`` rendered from ``template`` and the data; written back
-    only where it changed."""
+def write_block(results_dir: Path, text_file: Path, readme: bool = False) -> str:
+    """``text_file`` with its generated block rewritten from the data under ``results_dir``: the README's
+    results (``readme``) or the thesis discussion's closed-loop paragraph; written back only where it changed.
+
+    Raises:
+        FileNotFoundError: a missing input or file.
+        ValueError: the file's markers missing or repeated.
+    """
+    text_file = Path(text_file)
     if not text_file.is_file():
         raise FileNotFoundError(f"file not found: {text_file}")
+    template, markers = (
+        ("readme_results.md.j2", README_MARKERS) if readme else ("thesis_closed_loop.md.j2", THESIS_MARKERS)
+    )
     text = text_file.read_text()
-    block = _render(template, report_values(load_benchmark_data(Path(results_dir))))
+    block = render_report(template, report_values(load_benchmark_data(Path(results_dir))))
     new = replace_block(text, markers, block, str(text_file))
     if new != text:
         text_file.write_text(new)

@@ -1,246 +1,311 @@
-"""The values of the benchmark's sweep sections: where each factor breaks the agents, what the sweep says, and
-whether depth quality explains the failures. Every claim ("breaks every agent", "never the robust rules") is
-computed here from the tolerance table and the sweep's cells."""
+"""The values of the benchmark's sweep sections: its size and provenance, where each factor breaks the agents,
+what the findings compare (the winner against ``ppo_flow``, the thesis's error model, scale and direct depth
+errors, speed, darkness) and the dose-response fits. Each claim is a list of the agents it holds for; the
+template words it."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
+from agents.common.jinja_reports import rate
 from agents.common.tables import markdown_table
 from agents.policies.base import base_agent_name
-from agents.studies.benchmark_claims import (
-    WINNER,
-    agents_broken_by,
-    display_name,
-    every_or_all_but,
-    join_words,
-    level_text,
-    rate,
-    rate_range,
-)
-from agents.studies.benchmark_data import BenchmarkData, commit_of
-from agents.studies.benchmark_values import VSEP, Values, best_agents, count
-from agents.studies.error_analysis import neutral_level
+from agents.studies.benchmark_data import BenchmarkData, Rate, choices, commit_of
+from agents.studies.error_analysis import P_VALUE_FLOOR, format_p, neutral_level, unbroken_kind
 from agents.studies.error_analysis_report import best_learned_flow_agent
-from flownav_env.settings_check import setting_range
 
-# Per factor: its label in the breaking table, the unit its levels print with, and what it is.
-FACTORS = {
-    "rotation_error": (
-        "rotation error (per-frame, relative: the thesis's model)",
-        "",
-        "noise on the told rotation, a share of the frame's own rotation",
-    ),
-    "translation_error": ("translation error (same, translation)", "", ""),
-    "rotation_noise_deg": (
-        "rotation noise floor",
-        "°",
-        "a gyro's noise, present when the drone does not turn",
-    ),
-    "translation_noise_m": ("translation noise floor", "m", ""),
-    "rotation_bias": ("rotation bias (mis-calibration)", "", "a constant scale error per episode"),
-    "translation_bias": ("translation bias", "", ""),
-    "rotation_drift": ("rotation drift", "", "a random walk of the bias"),
-    "translation_drift": ("translation drift", "", ""),
-    "depth_noise": ("depth noise (direct, log-normal σ)", "", "in the estimator's own units"),
-    "depth_outliers": ("depth outliers (direct, share)", "", ""),
-    "depth_dropout": ("depth dropout (direct, share)", "", ""),
-    "attitude_jitter_deg": ("attitude jitter", "°", "the thesis's camera instability"),
-    "forward_speed": ("forward speed", "m/s", "the thesis's distance per frame"),
-    "obstacle_density": ("obstacle density", "", "capsules per m²"),
-    "brightness": ("brightness", "", "1 = daylight"),
-}
+FLOW = "ppo_flow@all"
+SIGNIFICANT = 0.05
 DIRECT_DEPTH = ("depth_noise", "depth_outliers", "depth_dropout")
 TOLD_ROTATION = ("rotation_error", "rotation_bias", "rotation_drift", "rotation_noise_deg")
-# A difference of failure rates the report calls material: the robustness limit of the flow-gap targets.
-MATERIAL = 0.10
-# The largest relative per-frame error the thesis tested.
-THESIS_MAX_RELATIVE = 0.10
-CENTRING_RULES = ("bee_robust", "bee_ttc")
-SPEEDS = (1.5, 2.0)
+DOSE_TERMS = ("log_depth_error", "valid_points_per_100", "outlier_share")
 
 
-def _unit(factor: str) -> str:
-    return FACTORS.get(factor, (factor, "", ""))[1]
+Values = dict[str, Any]
+
+
+def display_name(agent: str) -> str:
+    """How the reports name an agent: its base name in backticks, the lever search's winner "the winner"."""
+    base = base_agent_name(agent)
+    return "the winner" if base == choices().winner else f"`{base}`"
+
+
+def level_text(level: float | None, unit: str = "") -> str:
+    """A factor level with its unit (``0.5°``, ``1.5 m/s``), or "no level flown" for None."""
+    if level is None:
+        return "no level flown"
+    return f"{level:g}{unit}" if unit.startswith("°") or not unit else f"{level:g} {unit}"
 
 
 def sweep_agents(data: BenchmarkData) -> list[str]:
-    """The sweep's agents in the leaderboard's order (pooled names)."""
-    names = {key[0] for key in data.cells}
-    ordered = [r["agent"] for r in data.leaderboard]
-    return sorted(
-        names, key=lambda n: ordered.index(base_agent_name(n)) if base_agent_name(n) in ordered else 99
-    )
+    """The sweep's agents (pooled names) in the leaderboard's order."""
+    order = [r["agent"] for r in data.leaderboard]
+    rank = {
+        name: order.index(base_agent_name(name)) if base_agent_name(name) in order else 99
+        for name in {k[0] for k in data.cells}
+    }
+    return sorted(rank, key=rank.__getitem__)
 
 
-def sweep_table(data: BenchmarkData) -> list[dict[str, Any]]:
-    """The tolerance rows in the leaderboard's agent order, so every list of names reads the same way."""
+def broken_agents(data: BenchmarkData, factor: str, level: float) -> tuple[list[str], list[str]]:
+    """The agents that flew ``factor`` at ``level``, in the sweep's order, split into those it has broken by then
+    (their first breaking level, scanning outward from the neutral level, lies at or before it) and the rest.
+
+    Raises:
+        ValueError: no agent flew ``factor`` at ``level``.
+    """
     order = sweep_agents(data)
-    return sorted(data.tolerance, key=lambda r: order.index(r["agent"]))
+    rows = [r for r in data.tolerance if r["factor"] == factor and level in r["levels"]]
+    if not rows:
+        raise ValueError(f"no agent in the sweep flew {factor} at {level:g}")
+    split: tuple[list[str], list[str]] = ([], [])
+    for row in sorted(rows, key=lambda r: order.index(r["agent"])):
+        levels, first = list(row["levels"]), row["breaking_level"]
+        split[first is None or levels.index(first) > levels.index(level)].append(row["agent"])
+    return split
 
 
-def breaks_sentence(data: BenchmarkData, factor: str, level: float) -> str:
-    """ "breaks every agent (0.62–0.91)"; "breaks `a` and `b` (0.22–0.50) but not `c` (0.31)": the claim with the
-    failure rates at ``level`` of the agents on each side of it."""
-    table = sweep_table(data)
-    broken, unbroken = agents_broken_by(table, factor, level)
-    members = [display_name(a) for a in broken + unbroken]
-    order = [display_name(a) for a in sweep_agents(data) if display_name(a) in members]
-    phrase = every_or_all_but(order, [display_name(a) for a in broken])
+def broken_by(data: BenchmarkData, factor: str, level: float) -> dict[str, Any]:
+    """:func:`broken_agents` as the template words it: display names with their failure at ``level``."""
+    named = [
+        [{"name": display_name(a), "rate": data.cells[(a, factor, float(level))].rate} for a in side]
+        for side in broken_agents(data, factor, level)
+    ]
+    return {"level": level, "broken": named[0], "unbroken": named[1]}
 
-    def rates(agents: Sequence[str]) -> str:
-        return rate_range([data.cells[(a, factor, float(level))].rate for a in agents])
 
-    if not unbroken or not broken:
-        return f"breaks {phrase} ({rates(broken + unbroken)})"
-    if phrase.startswith("all "):
-        rest = "; ".join(f"{display_name(a)} {rates([a])}" for a in unbroken)
-        return f"breaks {phrase} ({rates(broken)}; {rest})"
-    head, tail = phrase.split(" but not ")
-    return f"breaks {head} ({rates(broken)}) but not {tail} ({rates(unbroken)})"
+def _levels(data: BenchmarkData, factor: str) -> list[float]:
+    return sorted({key[2] for key in data.cells if key[1] == factor})
+
+
+def _breaking(data: BenchmarkData, agent: str, factor: str, side: str = "above") -> float | None:
+    row = data.tolerance_row(agent, factor, side)
+    return None if row is None else row["breaking_level"]
+
+
+def _later(first: float | None, second: float | None) -> bool:
+    """Whether breaking at ``first`` comes later (farther out, or never) than at ``second``."""
+    return second is not None and (first is None or first > second)
 
 
 def _break_cell(data: BenchmarkData, agent: str, factor: str) -> str:
+    unit = choices().factors.get(factor, [factor, "", ""])[1]
     parts = []
-    for side in ("above", "below"):
-        row = data.tolerance_row(agent, factor, side)
-        if row is None:
-            continue
+    for row in filter(None, (data.tolerance_row(agent, factor, side) for side in ("above", "below"))):
         if row["breaking_level"] is None:
-            parts.append(
-                f"— ({rate(row['worst_failure'])} at {level_text(row['worst_level'], _unit(factor))})"
-            )
+            parts.append(f"— ({rate(row['worst_failure'])} at {level_text(row['worst_level'], unit)})")
         else:
-            parts.append(
-                f"{level_text(row['breaking_level'], _unit(factor))} ({rate(row['breaking_failure'])})"
-            )
+            parts.append(f"{level_text(row['breaking_level'], unit)} ({rate(row['breaking_failure'])})")
     return "; ".join(parts)
 
 
-def _unbroken_kind(row: dict[str, Any]) -> str:
-    """Why no level flown breaks an agent: "end" (flown to the setting's range end), "easier" (no level fails
-    more than clean) or "short" (more levels are needed)."""
-    allowed = setting_range(row["factor"])
-    end = allowed.high if row["side"] == "above" else allowed.low
-    if math.isclose(row["levels"][-1], end):
-        return "end"
-    return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
+def _breaking_table(data: BenchmarkData, columns: Sequence[str]) -> str:
+    """Where each factor breaks each agent of ``columns``, with what the factor is."""
+    factors = choices().factors
+    speed, frame_rate = neutral_level("forward_speed"), neutral_level("frame_rate")
+    flown = {key[1] for key in data.cells} - {"clean"}
+    rows = []
+    for factor in sorted(flown, key=lambda f: list(factors).index(f) if f in factors else 99):
+        label, _, what = factors.get(factor, [factor, "", ""])
+        if factor == "forward_speed":
+            what += f" ({speed / frame_rate:g} m at {speed:g} m/s)"
+        rows.append([label, *(_break_cell(data, a, factor) for a in columns), what])
+    return markdown_table(["factor", *(f"{display_name(a)} breaks at" for a in columns), "what it is"], rows)
 
 
-def _unbroken_headline(data: BenchmarkData, subjects: Sequence[str]) -> str:
-    """Which factors fail to break the subjects (``ppo_flow`` and the winner), and why."""
-    names = join_words([display_name(a) for a in subjects])
+def _unbroken(data: BenchmarkData, subjects: Sequence[str]) -> tuple[list[dict[str, Any]], bool]:
+    """The factors (and sides) that no level flown breaks the subjects at, each with why and the worst rates, and
+    whether each of them cannot (flown to the setting's end, or it only makes the task easier)."""
     missed: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for row in sweep_table(data):
+    order = sweep_agents(data)
+    for row in sorted(data.tolerance, key=lambda r: order.index(r["agent"])):
         if row["agent"] in subjects and row["breaking_level"] is None:
             missed.setdefault((row["factor"], row["side"]), []).append(row)
-    if not missed:
-        return f"**Every factor breaks {names} on every side flown.**"
-    kinds = {_unbroken_kind(r) for rows in missed.values() for r in rows}
-    head = "except where it cannot" if kinds <= {"end", "easier"} else "except"
-    clauses = []
-    for (factor, side), rows in missed.items():
-        who = join_words([display_name(r["agent"]) for r in rows], "or")
-        worst = " and ".join(rate(r["worst_failure"]) for r in rows)
-        where = f"`{factor}` {side} {neutral_level(factor):g}"
-        kind = _unbroken_kind(rows[0])
-        if kind == "end":
-            end = level_text(rows[0]["levels"][-1], _unit(factor))
-            clauses.append(f"{where} does not break {who} up to the setting's end ({end}; worst {worst})")
-        elif kind == "easier":
-            clauses.append(
-                f"{where} only makes the task easier for {join_words([display_name(r['agent']) for r in rows])} (worst {worst})"
-            )
-        else:
-            clauses.append(
-                f"{where} does not break {who} up to {rows[0]['levels'][-1]:g} (worst {worst}): more levels are needed"
-            )
-    return f"**Every factor breaks {names} within its physical range, {head}:** {join_words(clauses)}."
+    clauses = [
+        {
+            "where": f"`{factor}` {side} {neutral_level(factor):g}",
+            "who": [display_name(r["agent"]) for r in rows],
+            "worst": [r["worst_failure"] for r in rows],
+            "kind": unbroken_kind(rows[0]),
+            "last": level_text(rows[0]["levels"][-1], choices().factors.get(factor, [factor, "", ""])[1]),
+            "farthest": f"{rows[0]['levels'][-1]:g}",
+        }
+        for (factor, side), rows in missed.items()
+    ]
+    kinds = {unbroken_kind(r) for rows in missed.values() for r in rows}
+    return clauses, kinds <= {"end", "easier"}
 
 
-def breaking_values(data: BenchmarkData) -> Values:
-    """The sweep's size, provenance, clean references and the breaking-point table."""
-    table = sweep_table(data)
-    agents = sweep_agents(data)
-    factors = sorted(
-        {key[1] for key in data.cells} - {"clean"},
-        key=lambda f: list(FACTORS).index(f) if f in FACTORS else 99,
-    )
-    best_reactive, _ = best_agents(data)
-    learned_best = best_learned_flow_agent(table) or f"{WINNER}@all"
-    learned = [a for a in agents if "@" in a]
-    return {
-        **_sweep_size_values(data, factors, agents),
-        "sweep_learned": join_words(
-            [f"{display_name(a)} ({data.sweep_seeds[base_agent_name(a)]} seeds)" for a in learned]
-        ),
-        "sweep_code": _sweep_code(data, agents),
-        **_clean_values(data, table),
-        "unbroken_headline": _unbroken_headline(data, ["ppo_flow@all", learned_best]),
-        "breaking_table": _breaking_table(
-            data, factors, ["ppo_flow@all", learned_best, best_reactive["agent"]]
-        ),
-    }
-
-
-def _sweep_size_values(data: BenchmarkData, factors: Sequence[str], agents: Sequence[str]) -> Values:
-    """How many episodes, cells, factors, levels, agents and layouts the sweep has."""
-    per_cell = sorted({c.episodes for key, c in data.cells.items()})
-    layouts = sorted({int(r["seed"]) for r in data.sweep_rows})
-    return {
-        "sweep_episodes": count(len(data.sweep_rows)),
-        "sweep_cells_layouts": (
-            f"every agent in every cell on {per_cell[0]} test layouts"
-            if len(per_cell) == 1
-            else f"cells on {per_cell[0]}{VSEP}{per_cell[-1]} test layouts"
-        ),
-        "sweep_cell_count": str(len({key[1:] for key in data.cells})),
-        "sweep_factor_count": str(len(factors)),
-        "sweep_level_count": str(len({key[1:] for key in data.cells if key[1] != "clean"})),
-        "sweep_agent_count": str(len(agents)),
-        "sweep_layouts_per_cell": "/".join(map(str, per_cell)),
-        "sweep_layouts": f"{layouts[0]:,}{VSEP}{layouts[-1]:,}",
-    }
-
-
-def _sweep_code(data: BenchmarkData, agents: Sequence[str]) -> str:
-    """The commits the sweep's episodes were flown at, each with the agents it flew when not all of them."""
-    versions = []
+def _code_versions(data: BenchmarkData, agents: Sequence[str]) -> list[dict[str, Any]]:
+    """The commits the sweep's episodes were flown at, each with the agents it flew (``only``) where they are at
+    most half of them, or those it did not (``all_but``) where it flew more."""
+    found = []
     for version, n, which in data.sweep_code_versions:
-        note = ""
-        if len(which) < len(agents):
-            named = [display_name(a) for a in which]
-            note = f" (only {join_words(named)})" if len(which) <= len(agents) / 2 else ""
-            left = [display_name(a) for a in agents if base_agent_name(a) not in which]
-            note = note or f" (all but {join_words(left)})"
-        versions.append(f"{count(n)} at {commit_of(version)}{note}")
-    return "; ".join(versions)
+        left = [display_name(a) for a in agents if base_agent_name(a) not in which]
+        few = len(which) <= len(agents) / 2 and bool(left)
+        only = [display_name(a) for a in which] if few else []
+        found.append(
+            {"episodes": n, "commit": commit_of(version), "only": only, "all_but": [] if few else left}
+        )
+    return found
 
 
-def _clean_values(data: BenchmarkData, table: Sequence[dict[str, Any]]) -> Values:
-    """Each sweep agent's clean failure, on the leading table's layouts and in the sweep's own clean cell,
-    best first."""
-    clean = {r["agent"]: r["clean_failure"] for r in table}
+def _pairs(data: BenchmarkData) -> list[tuple[str, float, Rate, Rate]]:
+    """Every sweep cell off the clean course that both the winner and ``ppo_flow`` (pooled) flew."""
+    winner = f"{choices().winner}@all"
+    return [
+        (key[1], key[2], data.cells[(winner, *key[1:])], data.cells[key])
+        for key in sorted(data.cells)
+        if key[0] == FLOW and key[1] != "clean" and (winner, *key[1:]) in data.cells
+    ]
+
+
+def finding_values(data: BenchmarkData) -> Values:
+    """The winner against ``ppo_flow`` in the sweep, the thesis's error model against a noise floor, scale and
+    direct depth errors, speed and darkness: the levels each finding quotes and who breaks there."""
+    c = choices()
+    pairs = _pairs(data)
+    depth = [(w.rate - p.rate, f, x, w, p) for f, x, w, p in pairs if f in DIRECT_DEPTH]
+    worse = [
+        {"factor": f, "level": x, "mine": w, "theirs": p, "clear": w.low > p.high}
+        for f, x, w, p in pairs
+        if w.rate - p.rate >= c.material
+    ]
+    task = {
+        name: {f: _breaking(data, agent, f) for f in ("forward_speed", "obstacle_density")}
+        for name, agent in (("flow", FLOW), ("winner", f"{c.winner}@all"))
+    }
+    rows = {
+        f: [r for r in data.tolerance if r["factor"] == f] for f in ("rotation_error", "translation_error")
+    }
+    levels = {factor: _levels(data, factor) for factor in {key[1] for key in data.cells}}
+    floors, noise, outliers = (levels[f] for f in ("rotation_noise_deg", "depth_noise", "depth_outliers"))
+    dark = [x for x in levels["brightness"] if x < neutral_level("brightness")][-1]
+    quoted = {
+        "floor_low": ("rotation_noise_deg", floors[0]),
+        "floor_high": ("rotation_noise_deg", floors[-1]),
+        "tb_low": ("translation_bias", levels["translation_bias"][0]),
+        "tb_high": ("translation_bias", levels["translation_bias"][-1]),
+        "td_low": ("translation_drift", levels["translation_drift"][0]),
+        "td_high": ("translation_drift", levels["translation_drift"][-1]),
+        "dn": ("depth_noise", _breaking(data, FLOW, "depth_noise") or noise[-1]),
+        "outlier": ("depth_outliers", _breaking(data, FLOW, "depth_outliers") or outliers[-1]),
+        "slow": ("forward_speed", levels["forward_speed"][0]),
+        "dark": ("brightness", dark),
+    }
+    rules = set(c.centring_rules)
+    broken_by_bias = broken_agents(data, *quoted["tb_low"])[0]
+    floor = broken_agents(data, *quoted["floor_low"])
+    bias = data.tolerance_row(c.winner, "rotation_bias")
+    if bias is None:
+        raise ValueError("the sweep has no rotation bias above its neutral level for the winner")
     return {
-        "clean_list": ", ".join(f"{display_name(a)} {rate(clean[a])}" for a in sorted(clean, key=clean.get)),
-        "sweep_clean_list": ", ".join(
-            f"{display_name(a)} {rate(data.cells[(a, 'clean', 0.0)].rate)}"
-            for a in sorted(clean, key=clean.get)
+        "task_breaks": task,
+        "winner_holds_task": all(_later(task["winner"][f], task["flow"][f]) for f in task["flow"]),
+        "depth_worst": max(depth, key=lambda d: d[0]),
+        "depth_best": min(depth, key=lambda d: d[0]),
+        "worse": worse,
+        "rotation_only": bool(worse) and all(w["factor"] in TOLD_ROTATION for w in worse),
+        "cell_episodes": next(iter(data.cells.values())).episodes,
+        "rotation_first": min(
+            (r["breaking_level"] for r in rows["rotation_error"] if r["breaking_level"] is not None),
+            default=None,
         ),
+        "relative_first": min(
+            (r["breaking_level"] for rs in rows.values() for r in rs if r["breaking_level"] is not None),
+            default=None,
+        ),
+        "flow_relative": [_breaking(data, FLOW, f) for f in rows],
+        "floor_harsher": len(floor[0]) >= len(floor[1]),
+        "turn_median": data.thesis_motion["rotation_deg_median"],
+        **{name: broken_by(data, factor, level) for name, (factor, level) in quoted.items()},
+        "scale_spares_rules": FLOW in broken_by_bias and not rules & set(broken_by_bias),
+        "rules_hold_noise": not rules & set(broken_agents(data, "depth_noise", noise[-1])[0]),
+        "noise_max": noise[-1],
+        "rb_level": max(bias["levels"]) if bias["breaking_level"] is None else bias["breaking_level"],
+        "thesis_rows": {
+            "flow_rotation": data.tolerance_row(FLOW, "rotation_error"),
+            "ttc_rotation": data.tolerance_row("bee_ttc", "rotation_error"),
+            "flow_bias": [data.tolerance_row(FLOW, "rotation_bias", side) for side in ("above", "below")],
+        },
     }
 
 
-def _breaking_table(data: BenchmarkData, factors: Sequence[str], columns: Sequence[str]) -> str:
-    """Where each factor breaks each agent of ``columns``, with what the factor is."""
-    speed, frame_rate = neutral_level("forward_speed"), neutral_level("frame_rate")
-    metres_per_frame = speed / frame_rate
-    rows = []
-    for factor in factors:
-        label, _, what = FACTORS.get(factor, (factor, "", ""))
-        if factor == "forward_speed":
-            what += f" ({metres_per_frame:g} m at {speed:g} m/s)"
-        rows.append([label, *(_break_cell(data, a, factor) for a in columns), what])
-    header = ["factor", *(f"{display_name(a)} breaks at" for a in columns), "what it is"]
-    return markdown_table(header, rows)
+def sweep_values(data: BenchmarkData) -> Values:
+    """The sweep's size, provenance, clean references, breaking table, findings and dose-response fits."""
+    agents = sweep_agents(data)
+    clean = {r["agent"]: r["clean_failure"] for r in data.tolerance}
+    subjects = [FLOW, best_learned_flow_agent(data.tolerance) or f"{choices().winner}@all"]
+    unbroken, cannot = _unbroken(data, subjects)
+    return {
+        "sweep_episodes": len(data.sweep_rows),
+        "per_cell": sorted({cell.episodes for cell in data.cells.values()}),
+        "sweep_layouts": sorted({int(r["seed"]) for r in data.sweep_rows}),
+        "sweep_cell_count": len({key[1:] for key in data.cells}),
+        "sweep_factor_count": len({key[1] for key in data.cells} - {"clean"}),
+        "sweep_level_count": len({key[1:] for key in data.cells if key[1] != "clean"}),
+        "sweep_agent_count": len(agents),
+        "sweep_learned": [
+            f"{display_name(a)} ({data.sweep_seeds[base_agent_name(a)]} seeds)" for a in agents if "@" in a
+        ],
+        "sweep_code": _code_versions(data, agents),
+        "clean_list": [
+            (display_name(a), clean[a], data.cells[(a, "clean", 0.0)].rate)
+            for a in sorted(clean, key=clean.__getitem__)
+        ],
+        "subjects": [display_name(a) for a in subjects],
+        "unbroken": unbroken,
+        "unbroken_cannot": cannot,
+        "breaking_table": _breaking_table(data, [*subjects, data.best_agents()[0]["agent"]]),
+        "cell": data.cell,
+        **finding_values(data),
+        **dose_values(data, agents),
+    }
+
+
+def _term(fit: dict[str, Any], name: str) -> str:
+    return (
+        "–"
+        if name not in fit["params"]
+        else f"{fit['params'][name]:+.2f} (p {format_p(fit['pvalues'][name])})"
+    )
+
+
+def dose_values(data: BenchmarkData, agents: Sequence[str]) -> Values:
+    """The dose-response fits per agent, and which agents each depth measure significantly moves."""
+    fits = {a: data.fits[a] for a in agents if a in data.fits}
+    rows = [
+        [
+            display_name(a),
+            str(fit["episodes"]),
+            *(_term(fit, t) for t in DOSE_TERMS),
+            f"{fit['wald_statistic']:.1f} on {fit['wald_df']} df (p {format_p(fit['wald_pvalue'])})",
+        ]
+        for a, fit in fits.items()
+    ]
+    header = [
+        "agent",
+        "episodes",
+        "per e-fold of depth error",
+        "per 100 valid depths",
+        "per unit outlier share",
+    ]
+    table = markdown_table([*header, "sensor factors beyond quality (Wald)"], rows)
+
+    def moved(term: str, sign: float) -> list[str]:
+        return [
+            display_name(a)
+            for a, fit in fits.items()
+            if term in fit["params"] and fit["params"][term] * sign > 0 and fit["pvalues"][term] < SIGNIFICANT
+        ]
+
+    return {
+        "p_floor": P_VALUE_FLOOR,
+        "dose_table": table,
+        "fit_errors": {display_name(a): e for a, e in data.fit_errors.items()},
+        "fitted": [display_name(a) for a in fits],
+        "moved": {t: moved(t, sign) for t, sign in zip(DOSE_TERMS, (1.0, -1.0, 1.0), strict=True)},
+        "factors_add": [display_name(a) for a, fit in fits.items() if fit["wald_pvalue"] < SIGNIFICANT],
+        "wald_p_max": format_p(max(fit["wald_pvalue"] for fit in fits.values())),
+    }

@@ -16,22 +16,25 @@ from typing import Any
 
 import numpy as np
 
+from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
+from agents.common.tables import markdown_table, today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
 from agents.evaluation.over_seeds import success_outcomes
 from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
+from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import seeded_agent_name, trained_seeds
-from agents.studies.benchmark_claims import WINNER, WINNER_ON_TRUE_DEPTHS
+from agents.studies.benchmark_data import choices, seed_failures
 
-PICK = WINNER
+PICK = choices().winner
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.
 COMPARED = ("ppo_flow_course_approach", "ppo_flow")
 # The pick's recipe, both stages and the same budget, trained on the true depths at the same tracked points
 # (the true-depth comparison): the pick minus it is what optical flow costs this learned policy. Flown once its seeds are shipped.
-TRUE_DEPTH_RECIPE = WINNER_ON_TRUE_DEPTHS
+TRUE_DEPTH_RECIPE = choices().truth_recipe
 CONDITIONS: dict[str, dict[str, float]] = {
     "clean": {},
     "density 0.18": {"obstacle_density": 0.18},
@@ -42,7 +45,6 @@ CONFIRMATION_LAYOUTS = 200
 ALLOWED_RISE = 0.10
 # Any learned name loads the policy file it is given; runs of different agents live in different CSVs.
 RUN_LABEL = "ppo_flow"
-BOOTSTRAP_REPS = 2000
 
 
 def agent_runs(agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, Path]:
@@ -99,23 +101,6 @@ def flown_agents(policies_dir: Path = POLICIES_DIR) -> tuple[str, ...]:
     return (PICK, *COMPARED, *shipped_truth)
 
 
-def _resampled_means(matrix: np.ndarray, layout_draws: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Mean failure of ``matrix`` (runs, layouts) in each replicate: runs resampled here, layouts as drawn."""
-    runs = matrix.shape[0]
-    chosen = rng.integers(runs, size=(len(layout_draws), runs, 1))
-    return matrix[chosen, layout_draws[:, None, :]].mean(axis=(1, 2))
-
-
-def failure_interval_over_runs_and_layouts(
-    matrix: np.ndarray, seed: int = 0, reps: int = BOOTSTRAP_REPS
-) -> tuple[float, float]:
-    """95 % interval of the mean failure of ``matrix`` (runs, layouts), resampling runs and layouts."""
-    rng = np.random.default_rng(seed)
-    layout_draws = rng.integers(matrix.shape[1], size=(reps, matrix.shape[1]))
-    low, high = np.percentile(_resampled_means(matrix, layout_draws, rng), [2.5, 97.5])
-    return float(low), float(high)
-
-
 def paired_difference(first: np.ndarray, second: np.ndarray) -> tuple[float, float, float]:
     """Failure of ``first`` minus ``second`` (both runs × the same layouts) with its 95 % interval, from the
     paired test (:func:`agents.evaluation.paired.compare`: layouts drawn once for both, each one's training
@@ -138,8 +123,6 @@ def run_confirmation(
     Raises:
         ValueError: a bad layout or worker count, or an unwritable ``out``.
     """
-    from agents.common.folders import check_writable_folder
-
     if layouts < 1:
         raise ValueError(f"--layouts must be >= 1, got {layouts}")
     if workers < 1:
@@ -158,7 +141,7 @@ def run_confirmation(
     rates, differences, rises = [], [], []
     for condition, found in matrices.items():
         for agent, matrix in found.items():
-            low, high = failure_interval_over_runs_and_layouts(matrix)
+            low, high = runs_and_layouts_interval(matrix)
             rates.append(
                 {
                     "condition": condition,
@@ -199,9 +182,10 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
     """What the lever search was, read from its committed episodes: the configurations flown under the two
     robustness conditions, the validation layouts they flew, and the pick minus its first stage there, paired by layout
     (:func:`paired_difference`), per condition."""
-    tried, layouts = [], set()
-    for condition in sorted(Path(ablation_dir).glob("*_*/")):
-        configs = (p for p in condition.iterdir() if p.is_dir() and p.name != "reference")
+    tried: list[str] = []
+    layouts: set[int] = set()
+    for searched in sorted(Path(ablation_dir).glob("*_*/")):
+        configs = (p for p in searched.iterdir() if p.is_dir() and p.name != "reference")
         for config in sorted(p for p in configs if p.name not in FLOWN_AFTER_THE_SEARCH):
             for csv_path in config.glob("seed_*.csv"):
                 layouts.update(int(row["seed"]) for row in read_records(csv_path))
@@ -209,8 +193,8 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
                 tried.append(config.name)
     differences = []
     for condition, folder in SEARCH_FOLDERS.items():
-        pick = seed_failure_matrix(Path(ablation_dir) / folder / PICK)
-        first_stage = seed_failure_matrix(Path(ablation_dir) / folder / COMPARED[0])
+        pick = seed_failures(Path(ablation_dir) / folder / PICK)
+        first_stage = seed_failures(Path(ablation_dir) / folder / COMPARED[0])
         if pick is None or first_stage is None or pick.shape[1] != first_stage.shape[1]:
             continue
         value, low, high = paired_difference(pick, first_stage)
@@ -218,20 +202,6 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
             {"condition": condition, "other": COMPARED[0], "difference": value, "low": low, "high": high}
         )
     return {"configs": tried, "layouts": sorted(layouts), "differences": differences}
-
-
-def seed_failure_matrix(folder: Path) -> np.ndarray | None:
-    """Failures (seeds, layouts) of one config's ``seed_<k>.csv`` files, layouts in seed order; None when a
-    seed has not flown the same layouts as the others."""
-    matrices = []
-    for csv_path in sorted(folder.glob("seed_*.csv")):
-        rows = sorted(read_records(csv_path), key=lambda row: int(row["seed"]))
-        matrices.append(
-            ([int(row["seed"]) for row in rows], [0.0 if row["success"] else 1.0 for row in rows])
-        )
-    if not matrices or any(seeds != matrices[0][0] for seeds, _ in matrices):
-        return None
-    return np.array([failures for _, failures in matrices])
 
 
 def flow_costs(result: Mapping[str, Any]) -> list[dict[str, Any]]:
@@ -250,8 +220,6 @@ def _reading(difference: Mapping[str, float]) -> str:
 def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: str) -> list[str]:
     """``confirmation.md``: the search as it happened, then the pick against what it is compared with on
     fresh layouts, each sentence worded from the numbers."""
-    from agents.common.tables import markdown_table, today
-
     layouts = result["layouts"]
     first, last = (search["layouts"][0], search["layouts"][-1]) if search["layouts"] else (0, 0)
     lines = [

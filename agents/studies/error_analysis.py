@@ -28,10 +28,12 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from agents.evaluation.statistics import failure_interval
 from agents.policies.base import base_agent_name
 from flownav_env.settings import EnvSettings
+from flownav_env.settings_check import setting_range
 
 # What the thesis concluded for each factor it varied (../shared/thesis-figures.md), for the tolerance table.
 THESIS_VERDICTS = {
@@ -56,7 +58,8 @@ P_VALUE_FLOOR = 1e-6
 
 def neutral_level(factor: str) -> float:
     """The level at which ``factor`` does nothing: its env default (1 for brightness, the default speed...)."""
-    defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
+    fields = dataclasses.fields(EnvSettings)
+    defaults = {item.name: item.default for item in fields if isinstance(item.default, int | float)}
     if factor not in defaults:
         raise ValueError(f"{factor!r} is not an env setting, so it has no neutral level")
     return float(defaults[factor])
@@ -190,6 +193,20 @@ def _doubles(rate: float, clean: float, clean_high: float) -> bool:
     return 2.0 * clean <= 1.0 and rate >= 2.0 * clean and rate > clean_high
 
 
+def unbroken_kind(row: Mapping[str, Any]) -> str:
+    """Why no level flown breaks a tolerance row's agent: "end" (flown to the end of the setting's range),
+    "easier" (no level fails more than clean: the direction makes the task easier) or "short" (the levels stop
+    short of the range's end: more are needed)."""
+    try:
+        allowed = setting_range(row["factor"])
+    except ValueError:
+        allowed = None
+    end = None if allowed is None else allowed.high if row["side"] == "above" else allowed.low
+    if end is not None and math.isclose(row["levels"][-1], end):
+        return "end"
+    return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
+
+
 # Agents that never read the depth histogram: their failures cannot respond to depth quality.
 BLIND_AGENTS = ("straight",)
 
@@ -278,6 +295,7 @@ def _converged_logit(
     """A fitted statsmodels Logit, or ValueError where its estimate is not one: a fit that did not converge,
     whose Hessian cannot be inverted, or whose outcomes the terms separate (perfectly or nearly), where the
     coefficients run off to infinity and statsmodels only warns."""
+    # statsmodels takes seconds to import: only the dose-response fits load it.
     import statsmodels.api as sm
     from statsmodels.tools.sm_exceptions import (
         ConvergenceWarning,
@@ -321,6 +339,7 @@ def fit_dose_response(
         ValueError: fewer than 20 usable episodes, failures that are all equal, or a feature without spread
             (nothing to fit).
     """
+    # statsmodels takes seconds to import: only the dose-response fits load it.
     import statsmodels.api as sm
 
     features, failures, used = dose_features(rows, quality)
@@ -361,10 +380,22 @@ def fit_dose_response(
     }
 
 
+def fit_every_flow_agent(
+    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
+    """:func:`fit_dose_response` for each flow agent of ``rows``: the fits, and why an agent has none."""
+    fits, errors = {}, {}
+    for agent in sorted({r["agent"] for r in rows if is_flow_agent(r)}):
+        try:
+            fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent], quality)
+        except ValueError as reason:
+            errors[agent] = str(reason)
+    return fits, errors
+
+
 def _wald(model: Any, first: int, count: int) -> tuple[float, int, float]:
     """Wald test that the ``count`` coefficients from index ``first`` are all zero, with the model's own
     (cluster-robust) covariance; (statistic, degrees of freedom, p)."""
-    from scipy import stats
 
     params = np.asarray(model.params)[first : first + count]
     covariance = np.asarray(model.cov_params())[first : first + count, first : first + count]

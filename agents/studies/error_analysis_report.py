@@ -20,10 +20,11 @@ from agents.studies.error_analysis import (
     cell_quality,
     dose_curve,
     dose_features,
-    fit_dose_response,
+    fit_every_flow_agent,
     format_p,
     is_flow_agent,
     tolerance_table,
+    unbroken_kind,
 )
 from agents.studies.weaving import turning_and_rotation_error
 from flownav_env.settings_check import setting_range
@@ -105,27 +106,16 @@ def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
 
 
 def unbroken_reason(row: Mapping[str, Any]) -> str:
-    """Why a factor's levels flown did not break an agent: the factor's range ends there, the direction makes
-    the task easier, or the levels simply stop short (then more levels are needed)."""
-    farthest = row["levels"][-1]
-    try:
+    """Why a factor's levels flown did not break an agent (:func:`~agents.studies.error_analysis.unbroken_kind`)."""
+    worst = f"worst {row['worst_failure']:.2f} at {row['worst_level']:g}"
+    kind = unbroken_kind(row)
+    if kind == "end":
         allowed = setting_range(row["factor"])
-    except ValueError:
-        allowed = None
-    end = None if allowed is None else (allowed.high if row["side"] == "above" else allowed.low)
-    if end is not None and math.isclose(farthest, end):
-        return (
-            f"flown to the end of the setting's range {allowed.interval}: nothing within it breaks the agent "
-            f"(worst {row['worst_failure']:.2f} at {row['worst_level']:g})"
-        )
-    if row["worst_failure"] <= row["clean_failure"]:
-        return (
-            f"this direction makes the task easier: no level fails more than clean (worst "
-            f"{row['worst_failure']:.2f} at {row['worst_level']:g})"
-        )
+        return f"flown to the end of the setting's range {allowed.interval}: nothing within it breaks the agent ({worst})"
+    if kind == "easier":
+        return f"this direction makes the task easier: no level fails more than clean ({worst})"
     return (
-        f"not broken up to {farthest:g} (worst {row['worst_failure']:.2f} at {row['worst_level']:g}), short of "
-        "the range's end: more levels are needed"
+        f"not broken up to {row['levels'][-1]:g} ({worst}), short of the range's end: more levels are needed"
     )
 
 
@@ -248,6 +238,7 @@ def plot_dose_response(
     """A panel per flow agent: each sensor cell's observed failure rate against its depth error (dots; open
     where the cell's quality came from all its episodes), and the fitted probability against depth error alone,
     at the agent's median valid points per frame (and outlier share), with its 95 % band."""
+    # matplotlib takes a second to import: only the writers that draw a figure load it.
     import matplotlib
 
     matplotlib.use("Agg")
@@ -307,15 +298,8 @@ def write_error_analysis(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    flow_agents = sorted({r["agent"] for r in rows if is_flow_agent(r)})
     quality = cell_quality(rows)
-    fits: dict[str, Mapping[str, Any]] = {}
-    skipped = []
-    for agent in flow_agents:
-        try:
-            fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent], quality)
-        except ValueError as reason:
-            skipped.append(f"- `{agent}`: no fit ({reason}).")
+    fits, errors = fit_every_flow_agent(rows, quality)
     table = tolerance_table(rows, baseline)
     lines = [
         "# How estimation errors cause failures",
@@ -362,6 +346,6 @@ def write_error_analysis(
     if fits:
         plot_dose_response(rows, fits, quality, out / "dose_response.png")
         lines += [*regression_lines(fits), "", "![dose-response](dose_response.png)"]
-    lines += skipped
+    lines += [f"- `{agent}`: no fit ({reason})." for agent, reason in errors.items()]
     (out / "error_analysis.md").write_text("\n".join(lines) + "\n")
     return lines

@@ -11,6 +11,7 @@ Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
 
 def plot_gap(panels: Mapping[str, Sequence[tuple[str, Cell | None, Cell | None]]], path: Path) -> None:
     """A panel per recipe: flow's and truth's failure side by side where each was flown, 95 % intervals."""
+    # matplotlib takes a second to import: only the writers that draw a figure load it.
     import matplotlib
 
     matplotlib.use("Agg")
@@ -25,13 +26,15 @@ def plot_gap(panels: Mapping[str, Sequence[tuple[str, Cell | None, Cell | None]]
         squeeze=False,
     )
     for ax, (title, bars) in zip(axes[0], panels.items(), strict=True):
-        for offset, (index, colour, name) in (
-            (-0.2, (1, "tab:blue", "flow")),
-            (0.2, (2, "tab:orange", "true depths")),
+        for offset, (flow, colour, name) in (
+            (-0.2, (True, "tab:blue", "flow")),
+            (0.2, (False, "tab:orange", "true depths")),
         ):
-            xs, ys, errors = [], [], [[], []]
-            for x, bar in enumerate(bars):
-                cell = bar[index]
+            xs: list[float] = []
+            ys: list[float] = []
+            errors: list[list[float]] = [[], []]
+            for x, (_, flow_cell, truth_cell) in enumerate(bars):
+                cell = flow_cell if flow else truth_cell
                 if cell is not None:
                     xs.append(x + offset)
                     ys.append(cell[0])

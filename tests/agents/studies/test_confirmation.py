@@ -11,7 +11,6 @@ from agents.studies.confirmation import (
     PICK,
     TRUE_DEPTH_RECIPE,
     confirmation_tasks,
-    failure_interval_over_runs_and_layouts,
     flow_costs,
     flown_agents,
     paired_difference,
@@ -103,11 +102,3 @@ def test_flow_costs_are_the_pick_against_its_true_depth_recipe() -> None:
         "differences": [{"condition": "clean", "other": "ppo_flow", "difference": -0.05}, against_truth]
     }
     assert flow_costs(result) == [against_truth]
-
-
-def test_a_failure_interval_resamples_runs_and_layouts() -> None:
-    rng = np.random.default_rng(1)
-    matrix = (rng.random((5, 200)) < 0.1).astype(float)
-    low, high = failure_interval_over_runs_and_layouts(matrix)
-    assert low < matrix.mean() < high and high - low < 0.1
-    assert failure_interval_over_runs_and_layouts(np.zeros((3, 50))) == (0.0, 0.0)

@@ -12,9 +12,10 @@ from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
 from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 from agents.studies.flow_gap_report import (
-    confirmation_gap,
+    confirmation_rows,
     gap,
     gap_row,
+    gap_table,
     leaderboard_matrix,
     selection_values,
     suite_matrices,
@@ -127,16 +128,18 @@ def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path
         ]
         _write_episodes(flights / f"{agent}.csv", episodes)
     result = run_confirmation(flights, layouts=40, report_only=True, policies_dir=policies)
-    flown, table, sentence = confirmation_gap(result, tmp_path, policies)
-    assert flown and table.count("truth fails less than flow") == 3
-    assert sentence.startswith("clean: +0.2") and "density 0.18" in sentence and "speed 1.5 m/s" in sentence
+    rows = confirmation_rows(result, tmp_path, policies)
+    assert [where for where, *_ in rows] == ["clean", "density 0.18", "speed 1.5 m/s"]
+    assert gap_table(PICK, TRUE_DEPTH_RECIPE, rows, "condition").count("truth fails less than flow") == 3
+    assert gap(*rows[0][1:]).difference == pytest.approx(0.25 - 0.025)
 
     (flights / f"{TRUE_DEPTH_RECIPE}.csv").unlink()
     result = run_confirmation(flights, layouts=40, report_only=True, policies_dir=policies)
-    assert confirmation_gap(result, tmp_path, policies) == (False, "", "")
+    assert confirmation_rows(result, tmp_path, policies) == []
+    assert gap_table(PICK, TRUE_DEPTH_RECIPE, [], "condition") == ""
 
 
-def test_the_selection_is_worded_from_the_confirmation() -> None:
+def test_the_selection_keeps_the_picks_rises_and_each_stages_differences() -> None:
     result = {
         "layouts": 200,
         "differences": [
@@ -145,19 +148,16 @@ def test_the_selection_is_worded_from_the_confirmation() -> None:
         ],
         "rises": [
             {"condition": "density 0.18", "agent": PICK, "rise": 0.07, "low": 0.02, "high": 0.11},
-            {"condition": "speed 1.5 m/s", "agent": PICK, "rise": 0.12, "low": 0.05, "high": 0.2},
             {"condition": "speed 1.5 m/s", "agent": "ppo_flow", "rise": 0.01, "low": -0.02, "high": 0.04},
         ],
     }
-    values = selection_values(result, {"configs": ["a", "b", "c"], "layouts": [900_000, 900_049]})
-    assert values["pick_standing"] == (
-        "stays within +0.10 of its clean rate by point estimate only at density 0.18; it misses that limit at "
-        "speed 1.5 m/s"
-    )
-    assert values["first_stage_verdict"] == "shows no difference under any condition"
-    assert values["second_stage_shown"] is False
-    assert values["plain_verdict"] == "fails less under every condition"
-    assert values["search_count"] == "3" and values["search_layouts"] == "2 (900,000–900,049)"
+    search = {"configs": ["a", "b", "c"], "layouts": [900_000, 900_049]}
+    values = selection_values(result, search)
+    assert values["pick_rises"] == result["rises"][:1] and values["search"] == search
+    assert {k: [d["difference"] for d in found] for k, found in values["stages"].items()} == {
+        COMPARED[0]: [-0.01],
+        COMPARED[1]: [-0.06],
+    }
 
 
 def test_the_figure_draws_each_recipe_where_it_flew(tmp_path: Path) -> None:

@@ -5,7 +5,7 @@
    ``TIER_CALIBRATION_SEED_START``. The pick is the candidate whose best agent's failure rate lies in
    :data:`TARGET_FAILURE` and nearest its middle (ties: the slower, then the sparser course).
 2. **Every tier but clean as registered** (``flownav_env.tiers``, with the frozen hard course) is flown by every
-   agent on the same layouts, to show the best agent of each and whether the agents' intervals separate.
+   agent on the same layouts, to show the best agent of each and how many pairs of agents a paired test tells apart.
 
 The realistic sensor is not calibrated: its magnitudes are datasheet values (:mod:`flownav_env.tiers`).
 A learned agent flies its shipped training seeds in turn over the layouts (one run), which is enough to rank.
@@ -13,12 +13,18 @@ A learned agent flies its shipped training seeds in turn over the layouts (one r
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from agents.common.seeds import TIER_CALIBRATION_SEED_START
+import numpy as np
+
+from agents.common.folders import check_writable_folder
+from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
+from agents.common.tables import markdown_table, today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
+from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import wilson_interval
@@ -159,16 +165,21 @@ def _settings_by_factor(rows: Sequence[Mapping[str, Any]]) -> dict[str, str]:
     return {row["factor"]: row["env_kwargs"] for row in rows}
 
 
-def separated_pairs(rows: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
-    """(pairs of agents whose 95 % intervals do not overlap, all pairs) among ``rows`` of one factor."""
-    apart = total = 0
-    for i, first in enumerate(rows):
-        for second in rows[i + 1 :]:
-            total += 1
-            apart += (
-                first["failure_high"] < second["failure_low"] or second["failure_high"] < first["failure_low"]
-            )
-    return apart, total
+def separated_pairs(episodes: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
+    """(pairs of agents a paired test tells apart, all pairs) among the ``episodes`` of one factor: each pair
+    compared on the layouts both flew, paired by layout (:func:`agents.evaluation.paired.compare`), apart where
+    the 95 % interval of the difference excludes zero."""
+    failures: dict[str, dict[int, float]] = {}
+    for row in episodes:
+        failures.setdefault(base_agent_name(row["agent"]), {})[int(row["seed"])] = float(not row["success"])
+    names = list(failures)
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1 :]]
+    apart = 0
+    for a, b in pairs:
+        shared = sorted(set(failures[a]) & set(failures[b]))
+        matrices = [np.array([[failures[name][seed] for seed in shared]]) for name in (a, b)]
+        apart += compare(a, matrices[0], b, matrices[1]).fails_less is not None
+    return apart, len(pairs)
 
 
 def run_calibration(
@@ -181,8 +192,6 @@ def run_calibration(
 ) -> dict[str, Any]:
     """Fly ``stages`` (none if ``report_only``) into ``out`` and return what the report needs from every
     stage flown so far: the table, the chosen course, whether it is the frozen one, each tier's best agent."""
-    from agents.common.folders import check_writable_folder
-
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -197,7 +206,8 @@ def run_calibration(
     for name in CALIBRATED_TIERS:
         mine = sorted((r for r in table if r["factor"] == tier_label(name)), key=lambda r: r["failure_rate"])
         if mine:
-            tiers[name] = {"rows": mine, "best": mine[0], "separated": separated_pairs(mine)}
+            flown = [r for r in rows if r["factor"] == tier_label(name)]
+            tiers[name] = {"rows": mine, "best": mine[0], "separated": separated_pairs(flown)}
     pilot = out / PILOT_CSV
     return {
         "pilot": failure_table(read_records(pilot)) if pilot.is_file() else [],
@@ -213,8 +223,6 @@ def run_calibration(
 
 def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
     """``calibration.md``: the search as it happened, the pick and how it compares with the frozen tiers."""
-    from agents.common.tables import markdown_table, today
-
     low, high = TARGET_FAILURE
     layouts = result["layouts"]
     first = TIER_CALIBRATION_SEED_START
@@ -274,7 +282,7 @@ def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
             f"### `{name}` (`{spec.env_id}`): {spec.why}",
             "",
             f"Settings: {settings}. Best agent: `{found['best']['agent']}`, failing {_rate(found['best'])}; "
-            f"{apart} of {pairs} agent pairs have 95 % intervals apart. "
+            f"{apart} of {pairs} agent pairs are told apart by a paired test (layouts paired). "
             + (
                 f"It leaves room to improve (the best agent fails at least {HEADROOM_FAILURE:.2f})."
                 if found["best"]["failure_rate"] >= HEADROOM_FAILURE
@@ -293,11 +301,6 @@ def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
 
 def _pilot_lines(result: Mapping[str, Any]) -> list[str]:
     """The sensor versions tried before freezing, as flown, so the selection is on record."""
-    import json
-
-    from agents.common.seeds import SENSOR_PILOT_SEED_START
-    from agents.common.tables import markdown_table
-
     lines = [
         "Its magnitudes come from datasheets and papers (cited in `flownav_env/tiers.py`), not from this "
         "calibration. It was still chosen in steps, each version flown by `bee_ttc` and `bee_robust` on the "

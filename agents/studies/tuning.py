@@ -19,7 +19,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from agents.common.folders import check_writable_folder
+from agents.evaluation.paired import compare
 from agents.evaluation.records import start_new_file
 from agents.studies.tuning_study import (
     MIN_FINAL_EPISODES,
@@ -105,9 +108,16 @@ def tune(
     if overwrite and (moved := start_new_file(csv_path)) is not None:
         print(f"--overwrite: moved {csv_path} to {moved}")
     env_kwargs = dict(env_kwargs or {})
-    flight = {"env_id": env_id, "env_kwargs": env_kwargs, "workers": workers}
-    search = run_search(agent, budget, csv_path, sampler_seed=sampler_seed, **flight)
-    finals = run_final(agent, budget, search, csv_path, **flight)
+    search = run_search(
+        agent,
+        budget,
+        csv_path,
+        env_id=env_id,
+        env_kwargs=env_kwargs,
+        workers=workers,
+        sampler_seed=sampler_seed,
+    )
+    finals = run_final(agent, budget, search, csv_path, env_id=env_id, env_kwargs=env_kwargs, workers=workers)
     result = TuningResult(agent, search, finals)
     lines = report_lines(result, budget, command_line(agent, budget, env_id, out), env_kwargs, sampler_seed)
     (out / "tuning.md").write_text("\n".join(lines) + "\n")
@@ -125,21 +135,22 @@ def _failure(summary: Mapping[str, Any]) -> str:
 
 
 def verdict(result: TuningResult) -> str:
-    """Whether the winner is clearly better than the defaults: their failure intervals apart, or not."""
-    winner, defaults = result.winner.summary, result.defaults.summary
-    if result.winner.number == 0:
+    """Whether the winner fails less than the defaults on the final layouts both flew, by the paired test
+    (:func:`agents.evaluation.paired.compare`)."""
+    winner = result.winner
+    if winner.number == 0:
         return (
             "The defaults (trial 0) won the final stage: no trial beat them on the fresh layouts; keep them."
         )
-    if winner["failure_ci_high"] < defaults["failure_ci_low"]:
-        return (
-            f"The winner (trial {result.winner.number}) is clearly better than the defaults: its failure "
-            f"rate's 95 % CI {_failure(winner)} lies below theirs, {_failure(defaults)}."
-        )
+    found = compare("winner", np.array([winner.failures]), "defaults", np.array([result.defaults.failures]))
+    paired = (
+        f"paired by layout, winner − defaults = {found.difference:+.3f} [{found.low:+.3f}, {found.high:+.3f}]"
+    )
+    if found.fails_less == "winner":
+        return f"The winner (trial {winner.number}) fails less than the defaults on the same final layouts ({paired})."
     return (
-        f"The winner (trial {result.winner.number}) is not clearly better than the defaults: the 95 % CIs "
-        f"of their failure rates overlap ({_failure(winner)} against {_failure(defaults)}), so its margin "
-        "may be luck of the layouts."
+        f"The winner (trial {winner.number}) is not shown to fail less than the defaults ({paired}), so its "
+        "margin may be luck of the layouts."
     )
 
 
@@ -221,6 +232,7 @@ def report_lines(
 def plot_tuning_curve(result: TuningResult, path: Path) -> None:
     """The search's failure rate per trial with the best so far (how much more searching could still give),
     beside the finalists' final failure rates with their intervals (how much of that survives fresh layouts)."""
+    # matplotlib takes a second to import: only the writers that draw a figure load it.
     import matplotlib
 
     matplotlib.use("Agg")

@@ -109,6 +109,8 @@ class TrialResult:
     number: int
     params: dict[str, float]
     summary: dict[str, Any]
+    # Failure (1) or not per layout, in seed order: what two finalists on the same layouts are paired by.
+    failures: tuple[float, ...] = ()
 
     def rank(self) -> tuple[float, float, int]:
         """Fewer failures first, then fewer collisions, then the earlier trial (the defaults win a tie)."""
@@ -124,12 +126,14 @@ def check_agent(agent: str) -> None:
 def default_params(agent: str) -> dict[str, float]:
     """The agent's current dataclass defaults for the searched parameters: trial 0, the baseline to beat."""
     check_agent(agent)
-    defaults = {item.name: item.default for item in dataclasses.fields(AGENT_CLASSES[agent])}
+    fields = dataclasses.fields(AGENT_CLASSES[agent])
+    defaults = {item.name: item.default for item in fields if isinstance(item.default, int | float)}
     return {name: defaults[name] for name in SEARCH_SPACES[agent]}
 
 
 def distributions(agent: str) -> dict[str, Any]:
     """The agent's search space as optuna distributions (integers where the field's default is one)."""
+    # optuna is slow to import and only the search needs it.
     from optuna.distributions import FloatDistribution, IntDistribution
 
     defaults = default_params(agent)
@@ -188,6 +192,7 @@ def run_search(
 ) -> list[TrialResult]:
     """The search stage: ``budget.trials`` TPE trials in order, each flown (or read back) before the next is
     asked for, so a re-run replays the same study; returns every trial with its search-stage summary."""
+    # optuna is slow to import and only the search needs it.
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)  # one line per trial would bury the progress bars
@@ -231,5 +236,17 @@ def run_final(
     }
     all_tasks = [task for trial in chosen for task in tasks[trial.number]]
     execute(all_tasks, csv_path, workers=workers, description=f"{agent} final {len(chosen)} finalists")
-    finals = [TrialResult(t.number, t.params, stage_summary(tasks[t.number], csv_path)) for t in chosen]
+    flown = {
+        (float(r["level"]), int(r["seed"])): float(not r["success"])
+        for r in rows_of(all_tasks, read_records(csv_path))
+    }
+    finals = [
+        TrialResult(
+            t.number,
+            t.params,
+            stage_summary(tasks[t.number], csv_path),
+            tuple(flown[(float(t.number), seed)] for seed in seeds),
+        )
+        for t in chosen
+    ]
     return sorted(finals, key=TrialResult.rank)

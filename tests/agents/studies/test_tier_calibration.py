@@ -25,3 +25,14 @@ def test_a_course_label_names_its_settings_in_a_fixed_order() -> None:
     assert course_label({"obstacle_density": 0.18, "forward_speed": 2.0}) == (
         "forward_speed=2.0,obstacle_density=0.18"
     )
+
+
+def test_agents_are_told_apart_by_a_paired_test_on_the_layouts_both_flew() -> None:
+    from agents.studies.tier_calibration import separated_pairs
+
+    def flown(agent: str, failed: int) -> list[dict]:
+        return [{"agent": agent, "seed": seed, "success": seed >= failed} for seed in range(100)]
+
+    # bee_ttc fails 30 more layouts than bee_robust; vfh fails two more than bee_ttc: too few to tell apart.
+    episodes = flown("bee_robust", 10) + flown("bee_ttc", 40) + flown("vfh", 42)
+    assert separated_pairs(episodes) == (2, 3)

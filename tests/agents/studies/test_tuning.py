@@ -184,14 +184,18 @@ def _trial(number: int, failures: int, episodes: int = 150) -> TrialResult:
         {**base, "level": number, "collision": i < failures, "success": i >= failures}
         for i in range(episodes)
     ]
-    return TrialResult(number, {"yaw_gain": 0.1 * number}, summarise(rows)[0])
+    failures = tuple(float(i < failures) for i in range(episodes))
+    return TrialResult(number, {"yaw_gain": 0.1 * number}, summarise(rows)[0], failures)
 
 
-def test_the_verdict_says_whether_the_intervals_are_apart() -> None:
+def test_the_verdict_is_the_paired_test_on_the_final_layouts() -> None:
     clear = TuningResult("bee", [], [_trial(3, 30), _trial(0, 90)])
-    assert verdict(clear).startswith("The winner (trial 3) is clearly better than the defaults")
-    close = TuningResult("bee", [], [_trial(3, 80), _trial(0, 90)])
-    assert verdict(close).startswith("The winner (trial 3) is not clearly better than the defaults")
+    assert verdict(clear).startswith(
+        "The winner (trial 3) fails less than the defaults on the same final layouts"
+    )
+    close = TuningResult("bee", [], [_trial(3, 88), _trial(0, 90)])
+    assert verdict(close).startswith("The winner (trial 3) is not shown to fail less than the defaults")
+    assert "paired by layout, winner − defaults = -0.013 [" in verdict(close)
     assert verdict(TuningResult("bee", [], [_trial(0, 80), _trial(3, 90)])).startswith("The defaults")
 
 

@@ -105,7 +105,9 @@ def compare_configs(
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     flights = _Flights(out, episodes, env, workers, report_only)
-    rows, missing, curves = [], [], {}
+    rows: list[list[Any]] = []
+    missing: list[str] = []
+    curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
         config = load_config(Path(config_path), TrainConfig)
         row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)

@@ -17,13 +17,16 @@ import gymnasium as gym
 
 import flownav_env  # noqa: F401  (registers the tier ids)
 from agents.common.seeds import STUDENT_CHECK_SEED_START
+from agents.common.yaml_config import load_config
 from agents.evaluation.episode import run_episode
+from agents.policies.base import Agent
 from agents.policies.learned import agent_env_kwargs, load_agent
 from agents.policies.loading import load_policy_file
+from agents.training.train_config import TrainConfig
 from flownav_env.tiers import TIER_NAMES, check_agent_settings, tier
 
 
-def fly_tier(label: str, agent: object, env_kwargs: dict, tier_name: str, layouts: int) -> dict:
+def fly_tier(label: str, agent: Agent, env_kwargs: dict, tier_name: str, layouts: int) -> dict:
     """``layouts`` episodes of ``agent`` on ``tier_name`` from the student-check seeds; its failure rate."""
     check_agent_settings(label, env_kwargs, tier_name)
     env = gym.make(tier(tier_name).env_id, **env_kwargs)
@@ -70,8 +73,6 @@ def main() -> None:
 
 
 def _policy_env(policy: Path) -> dict:
-    from agents.common.yaml_config import load_config
-    from agents.training.train_config import TrainConfig
 
     return load_config(policy.with_suffix(".yaml"), TrainConfig).env
 

@@ -14,7 +14,18 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+from agents.common.folders import write_text_atomically
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
+from agents.evaluation.leaderboard import run_leaderboard
+from agents.evaluation.records import read_records
+from agents.evaluation.suite import run_suite, suite_agents
+from agents.evaluation.sweep import pool_every_seed, run_sweep
+from agents.policies import HISTORY_AGENTS
+from agents.studies import confirmation, tier_calibration
+from agents.studies.ablation import compare_configs
+from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
+from agents.studies.error_analysis_report import write_error_analysis
+from agents.studies.flow_gap_report import write_flow_gap
 
 
 @dataclass(frozen=True)
@@ -59,14 +70,11 @@ def _repository_as_cwd() -> Iterator[None]:
 
 
 def _leaderboard(report: Report, folder: Path) -> None:
-    from agents.evaluation.leaderboard import run_leaderboard
-    from agents.policies import HISTORY_AGENTS
 
     run_leaderboard(HISTORY_AGENTS, folder, report_only=True, command=report.command)
 
 
 def _sweep(report: Report, folder: Path, *, config: str) -> None:
-    from agents.evaluation.sweep import run_sweep
 
     # `flownav sweep` leaves --report-only out of the command it prints; the report's "Rebuilt with" line says it.
     with _repository_as_cwd():
@@ -77,9 +85,6 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
 
 def _error_analysis(report: Report, folder: Path) -> None:
     # The same calls as agents/cli/error_analysis.py with its default --baseline (the leaderboard's episodes).
-    from agents.evaluation.records import read_records
-    from agents.evaluation.sweep import pool_every_seed
-    from agents.studies.error_analysis_report import write_error_analysis
 
     rows = pool_every_seed(read_records(RESULTS_DIR / "sweep_episodes.csv"))
     baseline = pool_every_seed(read_records(RESULTS_DIR / "leaderboard_episodes.csv"))
@@ -94,7 +99,6 @@ def _ablation(
     episodes: int,
     env: Mapping[str, Any],
 ) -> None:
-    from agents.studies.ablation import compare_configs
 
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.
@@ -114,32 +118,30 @@ def _ablation(
 
 def _calibration(report: Report, folder: Path) -> None:
     # The same calls as agents/cli/calibrate_tiers.py, which writes calibration.md itself.
-    from agents.common.folders import write_text_atomically
-    from agents.studies.tier_calibration import report_lines, run_calibration
 
-    result = run_calibration(folder, report_only=True)
-    write_text_atomically(folder / "calibration.md", "\n".join(report_lines(result, report.command)) + "\n")
+    result = tier_calibration.run_calibration(folder, report_only=True)
+    write_text_atomically(
+        folder / "calibration.md", "\n".join(tier_calibration.report_lines(result, report.command)) + "\n"
+    )
 
 
 def _confirmation(report: Report, folder: Path) -> None:
     # The same calls as agents/cli/confirm.py: the fresh flights staged in the folder, the search's from results/.
-    from agents.common.folders import write_text_atomically
-    from agents.studies.confirmation import report_lines, run_confirmation, search_record
 
-    result = run_confirmation(folder, report_only=True)
-    lines = report_lines(result, search_record(RESULTS_DIR / "ablation"), report.command)
+    result = confirmation.run_confirmation(folder, report_only=True)
+    lines = confirmation.report_lines(
+        result, confirmation.search_record(RESULTS_DIR / "ablation"), report.command
+    )
     write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
 
 
 def _benchmark(report: Report, folder: Path) -> None:
-    from agents.studies.benchmark_report import write_benchmark
 
     write_benchmark(folder, folder, report.command)
 
 
 def _thesis_block(report: Report, folder: Path) -> None:
     # Only the closed-loop paragraph between its markers is written from data; flownav replicate owns the rest.
-    from agents.studies.benchmark_report import write_thesis_closed_loop
 
     root = folder
     for _ in Path(report.path).parent.parts:  # the folder with the layout of results/ that holds the data
@@ -165,13 +167,11 @@ BENCHMARK_INPUTS = (
 
 
 def _flow_gap(report: Report, folder: Path) -> None:
-    from agents.studies.flow_gap_report import write_flow_gap
 
     write_flow_gap(folder, folder, report.command)
 
 
 def _suite(report: Report, folder: Path) -> None:
-    from agents.evaluation.suite import run_suite, suite_agents
 
     run_suite(suite_agents(), folder, report_only=True, command=report.command)
 

@@ -30,6 +30,7 @@ import numpy as np
 
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import REPO_ROOT
+from agents.common.tables import markdown_table
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import rows_of
 from agents.evaluation.records import read_records
@@ -202,7 +203,6 @@ def robustness(
 
 def summary_lines(summary: Sequence[Mapping[str, Any]]) -> list[str]:
     """The summary as a Markdown table, a row per curve."""
-    from agents.common.tables import markdown_table
 
     def level(value: float | None) -> str:
         return "—" if value is None else f"{value:g}"

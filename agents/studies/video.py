@@ -5,9 +5,14 @@ declared dependency; gymnasium's ``RecordVideo`` is not used, since it needs mov
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
+import gymnasium as gym
+import imageio.v2 as imageio
 import numpy as np
+from imageio.core.format import Format
 
+import flownav_env  # noqa: F401  (registers the env ids)
 from agents.policies import agent_env_kwargs, load_agent
 
 
@@ -36,11 +41,6 @@ def record_episode(
         ValueError: ``max_steps`` < 1, a bad policy file, or an env lacking an observation key the agent reads.
         FileNotFoundError: a missing policy file.
     """
-    import gymnasium as gym
-    import imageio.v2 as imageio
-
-    import flownav_env  # noqa: F401
-
     if max_steps < 1:
         raise ValueError(f"max_steps must be >= 1, got {max_steps}")
     agent = load_agent(agent_name, policy, trust_pickle=trust_pickle)
@@ -51,10 +51,13 @@ def record_episode(
         # The first action before the writer opens: an agent that cannot fly this env leaves no empty mp4.
         action, state = agent.predict(observation, episode_start=np.ones(1, bool), deterministic=True)
         out.parent.mkdir(parents=True, exist_ok=True)
-        with imageio.get_writer(out, fps=fps, codec="libx264", quality=7, macro_block_size=16) as writer:
+        with imageio.get_writer(out, fps=fps, codec="libx264", quality=7, macro_block_size=16) as opened:
+            writer = cast(
+                Format.Writer, opened
+            )  # imageio's v2 stubs type it as a base that lacks append_data
             for step in range(1, max_steps + 1):
                 observation, _, terminated, truncated, info = env.step(action)
-                writer.append_data(env.render())
+                writer.append_data(np.asarray(env.render()))
                 if terminated or truncated or step == max_steps:
                     break
                 # The state carries a recurrent or frame-stacked policy's memory from step to step.

@@ -161,7 +161,7 @@ def test_the_selection_keeps_the_picks_rises_and_each_stages_differences() -> No
 
 
 def test_the_figure_draws_each_recipe_where_it_flew(tmp_path: Path) -> None:
-    from agents.studies.flow_gap_figure import plot_gap
+    from agents.studies.flow_gap_report import plot_gap
 
     panels = {
         "plain": [("test, clean", (0.08, 0.06, 0.12), (0.10, 0.05, 0.15))],

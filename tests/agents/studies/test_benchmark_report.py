@@ -267,18 +267,22 @@ def test_generated_blocks_are_committed_idempotent_and_local(tmp_path: Path, sou
     assert _outside(first, markers) == _outside(stale, markers)
 
 
-def _variants(value: Any) -> list[Any]:
-    """``value`` as it is and as each other branch it can steer would need it."""
+# The lists a template words differently when empty.
+BRANCHING_LISTS = ("worse", "first_target_met", "validation_within", "pick_rises", "unbroken", "factors_add")
+
+
+def _variants(name: str, value: Any) -> list[Any]:
+    """``value`` as each other branch it steers would need it."""
     if isinstance(value, Comparison):
         return [
             dataclasses.replace(value, low=low, high=high)
             for low, high in ((-0.2, -0.1), (0.1, 0.2), (-0.1, 0.1))
         ]
     if isinstance(value, bool):
-        return [value, not value]
-    if isinstance(value, list | str) and value:
-        return [value, value[:0]]
-    return [value]
+        return [not value]
+    if name.endswith("table") or name in BRANCHING_LISTS:
+        return [value[:0]]
+    return []
 
 
 @pytest.mark.slow
@@ -289,11 +293,9 @@ def test_every_template_renders_every_branch_from_the_committed_values(template:
     values = {**flow_gap_values(RESULTS_DIR), "generated": "today", "command": "test"}
     texts = {render_report(template, values)}
     for name, value in values.items():
-        if name.endswith("table"):
-            continue
-        for variant in _variants(value)[1:]:
+        for variant in _variants(name, value):
             texts.add(render_report(template, {**values, name: variant}))
-    assert len(texts) > 3 and all(
+    assert len(texts) > 1 and all(
         "{{" not in text and "{%" not in text and "overlap" not in text for text in texts
     )
 

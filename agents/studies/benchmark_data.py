@@ -26,7 +26,7 @@ from agents.evaluation.leaderboard import improvements, summarise_runs
 from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
-from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
+from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite import suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
@@ -36,7 +36,13 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.error_analysis import cell_quality, fit_every_flow_agent, is_flow_agent, tolerance_table
+from agents.studies.error_analysis import (
+    cell_quality,
+    failure,
+    fit_every_flow_agent,
+    is_flow_agent,
+    tolerance_table,
+)
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
@@ -183,8 +189,7 @@ def require(path: Path) -> Path:
 
 def _rate(rows: Sequence[Mapping[str, Any]]) -> Rate:
     """Failure over ``rows``: Wilson for one run, over runs and layouts for pooled ones."""
-    low, high = failure_interval(rows)
-    return Rate(sum(not bool(r["success"]) for r in rows) / len(rows), low, high, len(rows))
+    return Rate(*failure(rows))
 
 
 def _rates_per_agent(rows: Sequence[Mapping[str, Any]]) -> dict[str, Rate]:

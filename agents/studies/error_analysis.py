@@ -65,7 +65,7 @@ def neutral_level(factor: str) -> float:
     return float(defaults[factor])
 
 
-def _failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
+def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
     """Failure rate, its 95 % interval (over training runs too where the rows pool several:
     :func:`~agents.evaluation.statistics.failure_interval`) and the episodes."""
     n = len(rows)
@@ -101,7 +101,7 @@ def tolerance_table(
     for agent in sorted({key[0] for key in cells}):
         if agent not in clean_rows:
             continue
-        clean, clean_low, clean_high, clean_episodes = _failure(clean_rows[agent][0])
+        clean, clean_low, clean_high, clean_episodes = failure(clean_rows[agent][0])
         clean_fields = {
             "clean_failure": clean,
             "clean_low": clean_low,
@@ -164,7 +164,7 @@ def _scan_outward(
     tolerated, doubled, broke, breaking = neutral, None, False, None
     rates = []
     for level, members in zip(levels, cell_rows, strict=True):
-        rate, low, high, n = _failure(members)
+        rate, low, high, n = failure(members)
         rates.append((level, rate, low, high, n))
         if breaking is None and low > clean_high:
             breaking = (level, rate)

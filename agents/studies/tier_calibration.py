@@ -27,10 +27,10 @@ from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
 from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import wilson_interval
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
+from agents.studies.error_analysis import failure
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
 
 CANDIDATE_COURSES = tuple(
@@ -111,19 +111,19 @@ def calibration_tasks(
 
 
 def failure_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Failure rate with its Wilson 95 % interval per (factor, agent)."""
-    groups: dict[tuple[str, str], list[bool]] = {}
+    """Failure rate with its 95 % interval (Wilson: each agent is one run here) per (factor, agent)."""
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for row in rows:
-        groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(not row["success"])
+        groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
     table = []
-    for (factor, agent), failures in groups.items():
-        low, high = wilson_interval(sum(failures), len(failures))
+    for (factor, agent), members in groups.items():
+        rate, low, high, episodes = failure(members)
         table.append(
             {
                 "factor": factor,
                 "agent": agent,
-                "episodes": len(failures),
-                "failure_rate": sum(failures) / len(failures),
+                "episodes": episodes,
+                "failure_rate": rate,
                 "failure_low": low,
                 "failure_high": high,
             }

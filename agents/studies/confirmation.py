@@ -19,7 +19,7 @@ import numpy as np
 from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
-from agents.common.tables import markdown_table, today
+from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
 from agents.evaluation.over_seeds import success_outcomes
 from agents.evaluation.paired import compare
@@ -28,6 +28,7 @@ from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import seeded_agent_name, trained_seeds
 from agents.studies.benchmark_data import choices, seed_failures
+from agents.studies.benchmark_report import render_report
 
 PICK = choices().winner
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.
@@ -41,8 +42,6 @@ CONDITIONS: dict[str, dict[str, float]] = {
     "speed 1.5 m/s": {"forward_speed": 1.5},
 }
 CONFIRMATION_LAYOUTS = 200
-# The robustness condition: under each harder course, failure at most this much above the agent's own clean rate.
-ALLOWED_RISE = 0.10
 # Any learned name loads the policy file it is given; runs of different agents live in different CSVs.
 RUN_LABEL = "ppo_flow"
 
@@ -210,110 +209,9 @@ def flow_costs(result: Mapping[str, Any]) -> list[dict[str, Any]]:
     return [d for d in result["differences"] if d["other"] == TRUE_DEPTH_RECIPE]
 
 
-def _reading(difference: Mapping[str, float]) -> str:
-    """How a difference of failure rates with its interval reads."""
-    if difference["high"] < 0:
-        return "fails less"
-    return "fails more" if difference["low"] > 0 else "no difference shown"
-
-
 def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: str) -> list[str]:
-    """``confirmation.md``: the search as it happened, then the pick against what it is compared with on
-    fresh layouts, each sentence worded from the numbers."""
-    layouts = result["layouts"]
-    first, last = (search["layouts"][0], search["layouts"][-1]) if search["layouts"] else (0, 0)
-    lines = [
-        "# Confirming the lever search's pick on fresh validation layouts",
-        "",
-        f"Generated {today()} by `{command}`.",
-        "",
-        "## The search as it happened",
-        "",
-        f"The lever search flew {len(search['configs'])} PPO configurations under two robustness conditions (obstacle density "
-        f"0.18, forward speed 1.5 m/s), one after another, on the same {len(search['layouts'])} validation "
-        f"layouts ({first:,}–{last:,}; `results/ablation/`): {', '.join(f'`{c}`' for c in search['configs'])}. "
-        "It stopped at the first whose point estimates rose at most +0.10 over clean under both, "
-        f"`{PICK}`. A pick made that way is the best of many on those layouts, so its margin there is "
-        "optimistic; it is checked here on layouts the search never saw.",
-        "",
-        f"On the search's own layouts, the pick minus its first stage `{COMPARED[0]}` (the same runs with one "
-        "more, gentler stage; paired by layout, training seeds resampled):",
-        "",
-        markdown_table(
-            ["condition", "difference [95 % CI]", "reading"],
-            [
-                [d["condition"], f"{d['difference']:+.3f} [{d['low']:+.3f}, {d['high']:+.3f}]", _reading(d)]
-                for d in search.get("differences", [])
-            ],
-        ),
-        "",
-        "## The pick on fresh layouts",
-        "",
-        f"{layouts} validation layouts from {CONFIRMATION_SEED_START:,} (`CONFIRMATION_SEED_START`), every "
-        "shipped training seed of each agent on every layout. Intervals: 95 %, bootstrap over training seeds "
-        "(each agent's apart) and layouts (shared, so comparisons are paired by layout).",
-        "",
-    ]
-    if not result["rates"]:
-        return [
-            *lines,
-            "Not flown yet: `flownav confirm --out results/confirmation` flies it (resumable).",
-            "",
-        ]
-    lines += [
-        markdown_table(
-            ["condition", "agent", "seeds", "failure [95 % CI]"],
-            [
-                [
-                    r["condition"],
-                    f"`{r['agent']}`",
-                    r["runs"],
-                    f"{r['failure']:.3f} [{r['low']:.3f}, {r['high']:.3f}]",
-                ]
-                for r in result["rates"]
-            ],
-        ),
-        "",
-        f"### `{PICK}` minus each other agent (negative: the pick fails less)",
-        "",
-    ]
-    rows = []
-    for d in result["differences"]:
-        verdict = _reading(d)
-        rows.append(
-            [
-                d["condition"],
-                f"`{d['other']}`",
-                f"{d['difference']:+.3f} [{d['low']:+.3f}, {d['high']:+.3f}]",
-                verdict,
-            ]
-        )
-    lines += [markdown_table(["condition", "against", "difference [95 % CI]", "reading"], rows), ""]
-    if not flow_costs(result):
-        lines += [
-            f"The pick's recipe on true depths, `{TRUE_DEPTH_RECIPE}`, has no shipped training seeds yet, so its "
-            "row is missing: once trained (`results/flow_gap.md` gives the commands), the same command flies it.",
-            "",
-        ]
-    lines += [
-        f"### Rise over the agent's own clean rate (the robustness condition: at most +{ALLOWED_RISE:.2f})",
-        "",
-    ]
-    rows = []
-    for r in result["rises"]:
-        if r["high"] <= ALLOWED_RISE:
-            verdict = "met, interval included"
-        elif r["rise"] <= ALLOWED_RISE:
-            verdict = "met by point estimate only"
-        else:
-            verdict = "not met"
-        rows.append(
-            [
-                r["condition"],
-                f"`{r['agent']}`",
-                f"{r['rise']:+.3f} [{r['low']:+.3f}, {r['high']:+.3f}]",
-                verdict,
-            ]
-        )
-    lines += [markdown_table(["condition", "agent", "rise [95 % CI]", "robustness condition"], rows), ""]
-    return lines
+    """``confirmation.md`` (its prose is ``templates/confirmation.md.j2``): the search as it happened, then the
+    pick against what it is compared with on fresh layouts."""
+    values = {"result": result, "search": search, "c": choices(), "first_stage": COMPARED[0]}
+    values |= {"seed_start": CONFIRMATION_SEED_START, "generated": today(), "command": command}
+    return render_report("confirmation.md.j2", values).split("\n")[:-1]

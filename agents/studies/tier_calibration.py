@@ -22,7 +22,7 @@ import numpy as np
 
 from agents.common.folders import check_writable_folder
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
-from agents.common.tables import markdown_table, today
+from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
 from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
@@ -30,6 +30,7 @@ from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
+from agents.studies.benchmark_report import render_report
 from agents.studies.error_analysis import failure
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
 
@@ -222,117 +223,32 @@ def run_calibration(
 
 
 def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
-    """``calibration.md``: the search as it happened, the pick and how it compares with the frozen tiers."""
-    low, high = TARGET_FAILURE
-    layouts = result["layouts"]
-    first = TIER_CALIBRATION_SEED_START
-    lines = [
-        "# How the suite's tiers were chosen",
-        "",
-        f"Generated {today()} by `{command}` from `{EPISODES_CSV}` in this folder. Validation layouts "
-        f"{first:,}–{first + layouts - 1:,} only (`agents/common/seeds.py`); the suite's frozen test layouts "
-        "were not flown before the tiers were frozen, and nothing here looked at them.",
-        "",
-        "## 1. The hard course",
-        "",
-        f"{len(CANDIDATE_COURSES)} candidate courses (forward speed × obstacle density), each flown by "
-        f"{', '.join(f'`{a}`' for a in COURSE_AGENTS)} on the same {layouts} layouts (a learned agent's shipped "
-        f"training seeds in turn). Rule, fixed before flying: the candidate whose best agent fails in "
-        f"[{low:.2f}, {high:.2f}], nearest {(low + high) / 2:.2f}.",
-        "",
-    ]
-    rows = []
-    for course in CANDIDATE_COURSES:
-        label = course_label(course)
-        best = result["best_per_course"].get(label)
-        cells = {r["agent"]: r for r in result["table"] if r["factor"] == label}
-        rows.append(
-            [
-                f"{course['forward_speed']:g}",
-                f"{course['obstacle_density']:g}",
-                *(_rate(cells.get(agent)) for agent in COURSE_AGENTS),
-                f"`{best['agent']}`" if best else "not flown",
-            ]
-        )
-    header = ["speed (m/s)", "density (1/m²)", *(f"`{a}`" for a in COURSE_AGENTS), "best"]
-    lines += [markdown_table(header, rows), ""]
+    """``calibration.md`` (its prose is ``templates/calibration.md.j2``): the search as it happened, the pick and
+    how it compares with the frozen tiers."""
+    cells: dict[str, dict[str, dict[str, Any]]] = {}
+    pilot_cells: dict[str, dict[str, dict[str, Any]]] = {}
+    for found, rows in ((cells, result["table"]), (pilot_cells, result["pilot"])):
+        for row in rows:
+            found.setdefault(row["factor"], {})[row["agent"]] = row
     chosen = result["chosen"]
-    if chosen is None:
-        lines.append(f"No candidate's best agent fails in [{low:.2f}, {high:.2f}]: no pick.")
-    else:
-        best = result["best_per_course"][course_label(chosen)]
-        lines.append(
-            f"Pick: {chosen['forward_speed']:g} m/s at {chosen['obstacle_density']:g} capsules/m², where the best "
-            f"agent, `{best['agent']}`, fails {_rate(best)}. "
-            + (
-                "It is the hard course frozen in `flownav_env/tiers.py` (`HARD_COURSE`)."
-                if result["frozen_matches"]
-                else f"**It is not the frozen `HARD_COURSE` ({course_label(HARD_COURSE)})**: the tiers must be "
-                "re-frozen under a new suite version."
-            )
-        )
-    lines += ["", "## 2. The realistic sensor", ""]
-    lines += _pilot_lines(result)
-    lines += ["", "## 3. Every tier as frozen, on the same validation layouts", ""]
-    for name, found in result["tiers"].items():
-        spec = tier(name)
-        apart, pairs = found["separated"]
-        settings = ", ".join(f"`{k}={v}`" for k, v in spec.settings.items()) or "the defaults"
-        lines += [
-            f"### `{name}` (`{spec.env_id}`): {spec.why}",
-            "",
-            f"Settings: {settings}. Best agent: `{found['best']['agent']}`, failing {_rate(found['best'])}; "
-            f"{apart} of {pairs} agent pairs are told apart by a paired test (layouts paired). "
-            + (
-                f"It leaves room to improve (the best agent fails at least {HEADROOM_FAILURE:.2f})."
-                if found["best"]["failure_rate"] >= HEADROOM_FAILURE
-                else f"**Its best agent fails less than {HEADROOM_FAILURE:.2f}**: on these layouts the tier leaves "
-                "less headroom than the suite asks of a tier; its sensor is not tuned to reach it (section 2)."
-            ),
-            "",
-            markdown_table(
-                ["agent", "episodes", "failure [95 % CI]"],
-                [[f"`{r['agent']}`", r["episodes"], _rate(r)] for r in found["rows"]],
-            ),
-            "",
-        ]
-    return lines
-
-
-def _pilot_lines(result: Mapping[str, Any]) -> list[str]:
-    """The sensor versions tried before freezing, as flown, so the selection is on record."""
-    lines = [
-        "Its magnitudes come from datasheets and papers (cited in `flownav_env/tiers.py`), not from this "
-        "calibration. It was still chosen in steps, each version flown by `bee_ttc` and `bee_robust` on the "
-        f"validation layouts from {SENSOR_PILOT_SEED_START:,} (`{PILOT_CSV}`), and this is every version "
-        "tried, in order:",
-        "",
-    ]
-    versions = list(result["pilot_settings"])  # in the order they were first flown
-    rows = []
-    for factor in versions:
-        settings = json.loads(result["pilot_settings"][factor])
-        cells = {r["agent"]: r for r in result["pilot"] if r["factor"] == factor}
-        rows.append(
-            [
-                ", ".join(f"`{k}={v}`" for k, v in sorted(settings.items())),
-                *(_rate(cells.get(agent)) for agent in ("bee_ttc", "bee_robust")),
-                max(r["episodes"] for r in cells.values()),
-            ]
-        )
-    if rows:
-        lines += [markdown_table(["settings", "`bee_ttc`", "`bee_robust`", "layouts"], rows), ""]
-    lines.append(
-        "The first version read the GNSS velocity accuracy (0.05 m/s) as a standard deviation and had no clock "
-        "offset; the datasheet states it as a 50 % bound, which is σ = 0.074 m/s for a normal error, and an "
-        "uncalibrated camera-IMU offset is a real error the sweep lacked. The frozen tier is the last version. "
-        'Both changes came after seeing that the first left no headroom: read the tier as "a drone with '
-        'these parts", not as a typical one.'
-    )
-    return lines
-
-
-def _rate(row: Mapping[str, Any] | None) -> str:
-    if row is None:
-        return "–"
-    return f"{row['failure_rate']:.2f} [{row['failure_low']:.2f}, {row['failure_high']:.2f}]"
+    values = {
+        **result,
+        "generated": today(),
+        "command": command,
+        "episodes_csv": EPISODES_CSV,
+        "first": TIER_CALIBRATION_SEED_START,
+        "courses": [(course_label(course), course) for course in CANDIDATE_COURSES],
+        "course_agents": COURSE_AGENTS,
+        "target": TARGET_FAILURE,
+        "cells": cells,
+        "chosen_label": "" if chosen is None else course_label(chosen),
+        "hard_course": course_label(HARD_COURSE),
+        "pilot_start": SENSOR_PILOT_SEED_START,
+        "pilot_csv": PILOT_CSV,
+        "pilot_cells": pilot_cells,
+        # in the order they were first flown
+        "pilot_settings": {factor: json.loads(text) for factor, text in result["pilot_settings"].items()},
+        "specs": {name: tier(name) for name in result["tiers"]},
+        "headroom": HEADROOM_FAILURE,
+    }
+    return render_report("calibration.md.j2", values).split("\n")[:-1]

@@ -36,3 +36,12 @@ def test_agents_are_told_apart_by_a_paired_test_on_the_layouts_both_flew() -> No
     # bee_ttc fails 30 more layouts than bee_robust; vfh fails two more than bee_ttc: too few to tell apart.
     episodes = flown("bee_robust", 10) + flown("bee_ttc", 40) + flown("vfh", 42)
     assert separated_pairs(episodes) == (2, 3)
+
+
+def test_the_report_says_when_no_course_is_picked_and_nothing_was_piloted() -> None:
+    from agents.studies.tier_calibration import report_lines
+
+    empty = {"layouts": 100, "table": [], "pilot": [], "pilot_settings": {}, "chosen": None}
+    text = "\n".join(report_lines({**empty, "best_per_course": {}, "frozen_matches": False, "tiers": {}}, "x"))
+    assert "No candidate's best agent fails in [0.20, 0.50]: no pick." in text
+    assert "| 1.5 | 0.12 | – | – | – | not flown |" in text and "{{" not in text

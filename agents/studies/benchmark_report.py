@@ -22,7 +22,7 @@ from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
 from agents.studies.benchmark_sweep import display_name, level_text, sweep_values
-from agents.studies.error_analysis import is_flow_agent
+from agents.studies.error_analysis import format_p, is_flow_agent
 from flownav_env.settings import EnvSettings
 
 PACKAGE = "agents.studies"
@@ -51,6 +51,7 @@ FILTERS = {
     "span": span,
     "level": level_text,
     "count": lambda value: f"{value:,.0f}",
+    "p": format_p,
 }
 
 

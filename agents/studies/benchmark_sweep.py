@@ -12,8 +12,13 @@ from agents.common.jinja_reports import rate
 from agents.common.tables import markdown_table
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, commit_of
-from agents.studies.error_analysis import P_VALUE_FLOOR, format_p, neutral_level, unbroken_kind
-from agents.studies.error_analysis_report import best_learned_flow_agent
+from agents.studies.error_analysis import (
+    P_VALUE_FLOOR,
+    best_learned_flow_agent,
+    format_p,
+    neutral_level,
+    unbroken_kind,
+)
 
 FLOW = "ppo_flow@all"
 SIGNIFICANT = 0.05

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import stats
 
 from agents.evaluation.statistics import failure_interval
-from agents.policies.base import base_agent_name
+from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
 
@@ -220,6 +220,16 @@ def is_flow_agent(row: Mapping[str, Any]) -> bool:
     if settings:
         return json.loads(settings).get("obs_source", "flow") == "flow"
     return "oracle" not in str(row["agent"])
+
+
+def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
+    """The learned agent on flow depths with the lowest clean failure rate among a tolerance table's."""
+    clean = {
+        r["agent"]: r["clean_failure"]
+        for r in table
+        if base_agent_name(r["agent"]) in LEARNED_AGENTS and is_flow_agent({"agent": r["agent"]})
+    }
+    return min(clean, key=lambda agent: (clean[agent], agent)) if clean else None
 
 
 def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], dict[str, Any]]:

@@ -11,98 +11,22 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder
-from agents.common.tables import markdown_table, today
-from agents.policies.base import LEARNED_AGENTS, base_agent_name
+from agents.common.tables import today
+from agents.studies.benchmark_report import render_report
 from agents.studies.error_analysis import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
     TASK_FACTORS,
+    best_learned_flow_agent,
     cell_quality,
     dose_curve,
     dose_features,
     fit_every_flow_agent,
-    format_p,
-    is_flow_agent,
     tolerance_table,
     unbroken_kind,
 )
 from agents.studies.weaving import turning_and_rotation_error
 from flownav_env.settings_check import setting_range
-
-
-def _level(value: float | None) -> str:
-    return "—" if value is None else f"{value:g}"
-
-
-def tolerance_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
-    rows = [
-        [
-            r["agent"],
-            r["factor"],
-            r["side"],
-            f"{r['clean_failure']:.2f} [{r['clean_low']:.2f}, {r['clean_high']:.2f}]",
-            ", ".join(f"{x:g}" for x in r["levels"]),
-            _level(r["tolerated_level"]),
-            _level(r["doubling_level"]),
-            f"{r['worst_failure']:.2f} at {r['worst_level']:g}" + (" (breaks)" if r["breaks"] else ""),
-            r["thesis"],
-        ]
-        for r in table
-    ]
-    return [
-        markdown_table(
-            [
-                "agent",
-                "factor",
-                "side",
-                "clean failure [95 % CI]",
-                "levels flown",
-                "tolerated up to",
-                "doubles at",
-                "worst failure",
-                "thesis",
-            ],
-            rows,
-        )
-    ]
-
-
-def breaking_point_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
-    """A factor × agent matrix: the first level at which each agent breaks, with its failure rate there, or
-    '—' and its worst failure rate where none of the levels flown breaks it."""
-    agents = sorted({r["agent"] for r in table})
-    by_key = {(r["factor"], r["side"], r["agent"]): r for r in table}
-    keys = sorted({(r["factor"], r["side"]) for r in table})
-
-    def cell(row: Mapping[str, Any] | None) -> str:
-        if row is None:
-            return ""
-        if row["breaking_level"] is None:
-            return f"— ({row['worst_failure']:.2f} at {row['worst_level']:g})"
-        delta = row["breaking_failure"] - row["clean_failure"]
-        return f"**{row['breaking_level']:g}** ({row['breaking_failure']:.2f}, {delta:+.2f})"
-
-    clean = {
-        r["agent"]: f"{r['clean_failure']:.2f} [{r['clean_low']:.2f}, {r['clean_high']:.2f}], "
-        f"{r['clean_episodes']} episodes" + (" (sweep)" if "sweep" in r["clean_source"] else "")
-        for r in table
-    }
-    rows = [["clean failure", "", *(clean[agent] for agent in agents)]]
-    rows += [
-        [factor, side, *(cell(by_key.get((factor, side, agent))) for agent in agents)]
-        for factor, side in keys
-    ]
-    return [markdown_table(["factor", "side", *agents], rows)]
-
-
-def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
-    """The learned agent on flow depths with the lowest clean failure rate (the sweep's agents only)."""
-    clean = {
-        r["agent"]: r["clean_failure"]
-        for r in table
-        if base_agent_name(r["agent"]) in LEARNED_AGENTS and is_flow_agent({"agent": r["agent"]})
-    }
-    return min(clean, key=lambda agent: (clean[agent], agent)) if clean else None
 
 
 def unbroken_reason(row: Mapping[str, Any]) -> str:
@@ -117,116 +41,6 @@ def unbroken_reason(row: Mapping[str, Any]) -> str:
     return (
         f"not broken up to {row['levels'][-1]:g} ({worst}), short of the range's end: more levels are needed"
     )
-
-
-def unbroken_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The factors (and sides) that do not break the best learned flow agent, each with why."""
-    agent = best_learned_flow_agent(table)
-    if agent is None:
-        return []
-    rows = [r for r in table if r["agent"] == agent and r["breaking_level"] is None]
-    lines = [
-        f"### What does not break `{agent}`, the best learned flow agent, and why",
-        "",
-        f"Its clean failure: {next(r for r in table if r['agent'] == agent)['clean_failure']:.2f}.",
-        "",
-    ]
-    if not rows:
-        return [*lines, "Every factor flown breaks it on both sides flown.", ""]
-    lines += [f"- `{r['factor']}` ({r['side']}): {unbroken_reason(r)}." for r in rows]
-    return [*lines, ""]
-
-
-def turning_lines(table: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The weaving of each agent beside its median depth error at each relative rotation error level."""
-    if not table:
-        return []
-    levels = sorted({level for row in table for level in row["depth_error"]})
-    rows = [
-        [
-            row["agent"],
-            f"{100 * row['weaving']:.1f} %",
-            *(
-                "" if level not in row["depth_error"] else f"{row['depth_error'][level]:.2f}"
-                for level in levels
-            ),
-        ]
-        for row in table
-    ]
-    header = [
-        "agent",
-        "weaving, clean (path / progress − 1)",
-        *(f"depth error at {level:g}" for level in levels),
-    ]
-    return [
-        "## Relative rotation error and how much each agent turns",
-        "",
-        "`rotation_error` scales the told rotation of each frame, so its harm grows with how much the agent "
-        "turns. Weaving: the median over clean episodes of path length over forward progress, minus 1; depth "
-        "error: the median over episodes of each episode's median relative depth error (0: clean).",
-        "",
-        markdown_table(header, rows),
-        "",
-    ]
-
-
-def regression_lines(fits: Mapping[str, Mapping[str, Any]]) -> list[str]:
-    rows = []
-    for agent, fit in fits.items():
-        for name in ("const", *fit["features"]):
-            low, high = fit["conf_int"][name]
-            rows.append(
-                [
-                    agent,
-                    fit["episodes"],
-                    fit["layouts"],
-                    name,
-                    f"{fit['params'][name]:+.3f}",
-                    f"{fit['bse'][name]:.3f}",
-                    f"[{low:+.3f}, {high:+.3f}]",
-                    format_p(fit["pvalues"][name]),
-                ]
-            )
-    tests = [
-        [agent, f"{fit['wald_statistic']:.1f}", fit["wald_df"], format_p(fit["wald_pvalue"])]
-        for agent, fit in fits.items()
-    ]
-    return [
-        markdown_table(
-            [
-                "agent",
-                "episodes",
-                "layouts (clusters)",
-                "term",
-                "coefficient",
-                "SE (by layout)",
-                "95 % CI",
-                "p",
-            ],
-            rows,
-        ),
-        "",
-        "Do the sensor factors act only through depth quality? Cluster-robust Wald test of adding one indicator "
-        "per sensor factor to the model above (a small p: they change failures beyond what the measured depth "
-        "quality explains):",
-        "",
-        markdown_table(["agent", "Wald statistic", "df", "p"], tests),
-    ]
-
-
-def quality_lines(quality: Mapping[tuple[str, float], Mapping[str, Any]]) -> list[str]:
-    """How each cell's depth quality was measured: on how many full-course flights, or on all its episodes."""
-    short = sorted(f"`{f}={level:g}`" for (f, level), q in quality.items() if not q["full_course"])
-    lines = [
-        f"Each cell's depth quality comes from the flow agents' successful episodes in it ({len(quality) - len(short)} "
-        f"of {len(quality)} cells)"
-    ]
-    if short:
-        lines[0] += (
-            f"; where fewer than {MIN_FULL_COURSE} succeeded it comes from all its episodes, shorter on "
-            f"average: {', '.join(short)}"
-        )
-    return [lines[0] + "."]
 
 
 def plot_dose_response(
@@ -290,6 +104,40 @@ def plot_dose_response(
     plt.close(figure)
 
 
+def report_values(
+    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+) -> dict[str, Any]:
+    """Every value of ``templates/error_analysis.md.j2`` from a sweep's episodes (``rows``) and the clean table's
+    (``baseline``), the fits among them."""
+    quality = cell_quality(rows)
+    fits, errors = fit_every_flow_agent(rows, quality)
+    table = tolerance_table(rows, baseline)
+    keys: dict[tuple[str, str], dict[str, Any]] = {}
+    for row in table:
+        keys.setdefault((row["factor"], row["side"]), {})[row["agent"]] = row
+    best = best_learned_flow_agent(table)
+    unbroken = [r for r in table if r["agent"] == best and r["breaking_level"] is None]
+    turning = turning_and_rotation_error(rows)
+    return {
+        "episodes": len(rows),
+        "table": table,
+        "agents": sorted({r["agent"] for r in table}),
+        "first_rows": {r["agent"]: r for r in reversed(table)},
+        "keys": [{"factor": f, "side": side, "rows": keys[(f, side)]} for f, side in sorted(keys)],
+        "best": best,
+        "unbroken": [{**r, "reason": unbroken_reason(r)} for r in unbroken],
+        "turning": turning,
+        "turning_levels": sorted({level for row in turning for level in row["depth_error"]}),
+        "quality": quality,
+        "short": sorted(f"`{f}={level:g}`" for (f, level), q in quality.items() if not q["full_course"]),
+        "min_full_course": MIN_FULL_COURSE,
+        "p_floor": P_VALUE_FLOOR,
+        "task_factors": TASK_FACTORS,
+        "fits": fits,
+        "errors": errors,
+    }
+
+
 def write_error_analysis(
     rows: Sequence[Mapping[str, Any]], out: Path, command: str, baseline: Sequence[Mapping[str, Any]] = ()
 ) -> list[str]:
@@ -298,54 +146,9 @@ def write_error_analysis(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    quality = cell_quality(rows)
-    fits, errors = fit_every_flow_agent(rows, quality)
-    table = tolerance_table(rows, baseline)
-    lines = [
-        "# How estimation errors cause failures",
-        "",
-        f"Generated {today()} by `{command}` from {len(rows)} episodes.",
-        "",
-        "## Where each factor breaks each agent",
-        "",
-        "The first level, scanning outward from the neutral one, whose failure rate's 95 % interval lies "
-        "wholly above the clean one, with its failure rate and the difference from clean; '—' where no level "
-        "flown does, with the worst failure rate and its level. Clean is the agent's 300-layout clean table "
-        "(`leaderboard_episodes.csv`, pooled over training seeds), or the sweep's 100-layout clean cell where "
-        "it has none ('sweep'). Intervals: over training runs and layouts for a learned agent (a two-level "
-        "bootstrap), Wilson over layouts for a reactive one.",
-        "",
-        *breaking_point_lines(table),
-        "",
-        *unbroken_lines(table),
-        "## Tolerance per agent and factor",
-        "",
-        "Scanning each factor outward from its neutral level: the largest level whose failure rate stays inside "
-        "the clean cell's Wilson 95 % interval, the first level whose failure rate is at least twice the clean "
-        "one and above its interval ('—': none, or twice the clean rate exceeds 1), and the worst level "
-        "('breaks': its interval lies above the clean one).",
-        "",
-        *tolerance_lines(table),
-        "",
-        *turning_lines(turning_and_rotation_error(rows)),
-        "## Dose-response: failure against measured depth quality",
-        "",
-        "Logistic regression per flow agent over the sensor factors' cells and the clean one: "
-        "logit P(failure) = b0 + b1 · ln(median relative depth error) + b2 · (valid depths per frame / 100) "
-        "+ b3 · (share of depths off by more than half), the last term where the episodes recorded it. The "
-        "covariates are the episode's cell's, measured on full-course flights, because an episode's own means "
-        "depend on its length and a failed episode is short. Standard errors are clustered by layout: the "
-        f"episodes of one layout share its difficulty. p-values below {P_VALUE_FLOOR:g} print as "
-        f"'< {P_VALUE_FLOOR:g}'. Task factors ({', '.join(f'`{f}`' for f in TASK_FACTORS)}) change the task "
-        "itself, so they are left out: that they matter beyond depth quality is true by construction. Oracle "
-        "agents are left out too (they do not see the estimate).",
-        "",
-        *quality_lines(quality),
-        "",
-    ]
-    if fits:
-        plot_dose_response(rows, fits, quality, out / "dose_response.png")
-        lines += [*regression_lines(fits), "", "![dose-response](dose_response.png)"]
-    lines += [f"- `{agent}`: no fit ({reason})." for agent, reason in errors.items()]
-    (out / "error_analysis.md").write_text("\n".join(lines) + "\n")
-    return lines
+    values = report_values(rows, baseline)
+    if values["fits"]:
+        plot_dose_response(rows, values["fits"], values["quality"], out / "dose_response.png")
+    text = render_report("error_analysis.md.j2", {**values, "generated": today(), "command": command})
+    (out / "error_analysis.md").write_text(text)
+    return text.split("\n")[:-1]

@@ -12,6 +12,7 @@ import pytest
 
 from agents.cli import main
 from agents.studies.error_analysis import (
+    best_learned_flow_agent,
     cell_quality,
     fit_dose_response,
     format_p,
@@ -19,12 +20,7 @@ from agents.studies.error_analysis import (
     neutral_level,
     tolerance_table,
 )
-from agents.studies.error_analysis_report import (
-    best_learned_flow_agent,
-    unbroken_lines,
-    unbroken_reason,
-    write_error_analysis,
-)
+from agents.studies.error_analysis_report import report_values, unbroken_reason, write_error_analysis
 from agents.studies.weaving import turning_and_rotation_error
 
 
@@ -329,6 +325,9 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
     assert reasons[("brightness", "above")].startswith("flown to the end of the setting's range [0.0, 4.0]")
     assert reasons[("obstacle_density", "below")].startswith("this direction makes the task easier")
     assert reasons[("depth_noise", "above")].endswith("short of the range's end: more levels are needed")
-    text = "\n".join(unbroken_lines(table))
-    assert "### What does not break `ppo_flow@all`" in text
-    assert "`forward_speed`" not in text  # it breaks, so it is not listed
+    values = report_values(rows)
+    assert values["best"] == "ppo_flow@all"
+    # forward_speed breaks it, so it is not listed
+    assert {(r["factor"], r["side"]) for r in values["unbroken"]} == set(reasons) - {
+        ("forward_speed", "above")
+    }

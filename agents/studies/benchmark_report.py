@@ -11,54 +11,24 @@ are hand-written files with one generated block each, between two marker lines; 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from agents.common.folders import check_writable_folder
-from agents.common.jinja_reports import environment, rate, render
+from agents.common.jinja_reports import rate
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
-from agents.studies.benchmark_sweep import display_name, level_text, sweep_values
-from agents.studies.error_analysis import format_p, is_flow_agent
+from agents.studies.benchmark_sweep import sweep_values
+from agents.studies.error_analysis import is_flow_agent
+from agents.studies.wording import display_name, join_words, render_report, span
 from flownav_env.settings import EnvSettings
 
-PACKAGE = "agents.studies"
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
 Values = dict[str, Any]
-
-
-def join_words(words: Iterable[str], last: str = "and") -> str:
-    """``a``; ``a and b``; ``a, b and c`` (``last`` may be "or")."""
-    words = list(words)
-    return f"{', '.join(words[:-1])} {last} {words[-1]}" if len(words) > 1 else "".join(words)
-
-
-def span(values: Iterable[float], digits: int = 0) -> str:
-    """``36–59``: the smallest and largest value, or one where they print alike."""
-    values = list(values)
-    low, high = f"{min(values):,.{digits}f}", f"{max(values):,.{digits}f}"
-    return low if low == high else f"{low}–{high}"
-
-
-# The filters the templates word values with, beside agents.common.jinja_reports's.
-FILTERS = {
-    "display": display_name,
-    "names": join_words,
-    "span": span,
-    "level": level_text,
-    "count": lambda value: f"{value:,.0f}",
-    "p": format_p,
-}
-
-
-def render_report(template: str, values: Mapping[str, Any]) -> str:
-    """This package's ``template`` rendered with ``values`` and :data:`FILTERS`."""
-    environment(PACKAGE).filters.update(FILTERS)
-    return render(PACKAGE, template, values)
 
 
 def _interval(point: float, low: float, high: float) -> str:

@@ -19,6 +19,7 @@ from agents.studies.error_analysis import (
     neutral_level,
     unbroken_kind,
 )
+from agents.studies.wording import display_name, level_text
 
 FLOW = "ppo_flow@all"
 SIGNIFICANT = 0.05
@@ -28,19 +29,6 @@ DOSE_TERMS = ("log_depth_error", "valid_points_per_100", "outlier_share")
 
 
 Values = dict[str, Any]
-
-
-def display_name(agent: str) -> str:
-    """How the reports name an agent: its base name in backticks, the lever search's winner "the winner"."""
-    base = base_agent_name(agent)
-    return "the winner" if base == choices().winner else f"`{base}`"
-
-
-def level_text(level: float | None, unit: str = "") -> str:
-    """A factor level with its unit (``0.5°``, ``1.5 m/s``), or "no level flown" for None."""
-    if level is None:
-        return "no level flown"
-    return f"{level:g}{unit}" if unit.startswith("°") or not unit else f"{level:g} {unit}"
 
 
 def sweep_agents(data: BenchmarkData) -> list[str]:

@@ -28,7 +28,7 @@ from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import seeded_agent_name, trained_seeds
 from agents.studies.benchmark_data import choices, seed_failures
-from agents.studies.benchmark_report import render_report
+from agents.studies.wording import render_report
 
 PICK = choices().winner
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.

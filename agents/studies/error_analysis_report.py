@@ -12,7 +12,6 @@ import numpy as np
 
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
-from agents.studies.benchmark_report import render_report
 from agents.studies.error_analysis import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
@@ -26,6 +25,7 @@ from agents.studies.error_analysis import (
     unbroken_kind,
 )
 from agents.studies.weaving import turning_and_rotation_error
+from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 
 

@@ -29,7 +29,7 @@ from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.evaluation.suite import EPISODES_CSV
 from agents.policies import shipped_seed_runs
 from agents.studies.benchmark_data import BenchmarkData, Rate, load_benchmark_data
-from agents.studies.benchmark_report import render_report, report_values
+from agents.studies.benchmark_report import report_values
 from agents.studies.confirmation import (
     COMPARED,
     CONFIRMATION_LAYOUTS,
@@ -41,6 +41,7 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
+from agents.studies.wording import render_report
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 # The plain recipe: PPO on the estimator's depths and on the true depths, all else the same.

@@ -48,7 +48,7 @@ class Report:
     name: str = ""
     command: str = ""
     inputs: tuple[str, ...] = ()
-    write: Callable[[Report, Path], None] | None = None
+    write: Callable[[Report, Path], object] | None = None
     staged: bool = True
     reason: str = ""
 
@@ -69,13 +69,7 @@ def _repository_as_cwd() -> Iterator[None]:
         os.chdir(before)
 
 
-def _leaderboard(report: Report, folder: Path) -> None:
-
-    run_leaderboard(HISTORY_AGENTS, folder, report_only=True, command=report.command)
-
-
 def _sweep(report: Report, folder: Path, *, config: str) -> None:
-
     # `flownav sweep` leaves --report-only out of the command it prints; the report's "Rebuilt with" line says it.
     with _repository_as_cwd():
         run_sweep(
@@ -99,7 +93,6 @@ def _ablation(
     episodes: int,
     env: Mapping[str, Any],
 ) -> None:
-
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.
     with tempfile.TemporaryDirectory(prefix="flownav-no-runs-") as no_runs:
@@ -135,11 +128,6 @@ def _confirmation(report: Report, folder: Path) -> None:
     write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
 
 
-def _benchmark(report: Report, folder: Path) -> None:
-
-    write_benchmark(folder, folder, report.command)
-
-
 def _thesis_block(report: Report, folder: Path) -> None:
     # Only the closed-loop paragraph between its markers is written from data; flownav replicate owns the rest.
 
@@ -164,16 +152,6 @@ BENCHMARK_INPUTS = (
     "policies/*/seed_*.json",
     "policies/*/seed_*.yaml",
 )
-
-
-def _flow_gap(report: Report, folder: Path) -> None:
-
-    write_flow_gap(folder, folder, report.command)
-
-
-def _suite(report: Report, folder: Path) -> None:
-
-    run_suite(suite_agents(), folder, report_only=True, command=report.command)
 
 
 ABLATION_SEEDS = range(5)
@@ -222,7 +200,9 @@ REPORTS: tuple[Report, ...] = (
         name="leaderboard",
         command="flownav leaderboard --out results --report-only",
         inputs=("leaderboard_episodes.csv",),
-        write=_leaderboard,
+        write=lambda report, folder: run_leaderboard(
+            HISTORY_AGENTS, folder, report_only=True, command=report.command
+        ),
     ),
     Report(
         "sweep.md",
@@ -254,7 +234,7 @@ REPORTS: tuple[Report, ...] = (
         name="benchmark",
         command="flownav reports --out results --only benchmark",
         inputs=BENCHMARK_INPUTS,
-        write=_benchmark,
+        write=lambda report, folder: write_benchmark(folder, folder, report.command),
     ),
     *(
         Report(
@@ -280,14 +260,16 @@ REPORTS: tuple[Report, ...] = (
         name="suite",
         command="flownav suite --out results --report-only",
         inputs=("suite_episodes.csv", "sensor_reading/*.csv"),
-        write=_suite,
+        write=lambda report, folder: run_suite(
+            suite_agents(), folder, report_only=True, command=report.command
+        ),
     ),
     Report(
         "flow_gap.md",
         name="flow-gap",
         command="flownav reports --out results --only flow-gap",
         inputs=(*BENCHMARK_INPUTS, "confirmation/*.csv"),
-        write=_flow_gap,
+        write=lambda report, folder: write_flow_gap(folder, folder, report.command),
     ),
     Report(
         "ablation/lever_lab_notes.md",

@@ -30,8 +30,8 @@ from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
-from agents.studies.benchmark_report import render_report
 from agents.studies.error_analysis import failure
+from agents.studies.wording import render_report
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
 
 CANDIDATE_COURSES = tuple(

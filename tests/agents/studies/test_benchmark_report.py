@@ -19,11 +19,8 @@ from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.evaluation.paired import Comparison
 from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices
 from agents.studies.benchmark_report import (
-    FILTERS,
-    PACKAGE,
     README_MARKERS,
     THESIS_MARKERS,
-    render_report,
     replace_block,
     report_values,
     write_benchmark,
@@ -31,6 +28,7 @@ from agents.studies.benchmark_report import (
     write_thesis_closed_loop,
 )
 from agents.studies.benchmark_sweep import broken_agents
+from agents.studies.wording import FILTERS, PACKAGE, render_report
 
 WINNER = choices().winner
 TEMPLATES = ("benchmark.md.j2", "readme_results.md.j2", "thesis_closed_loop.md.j2", "flow_gap.md.j2")

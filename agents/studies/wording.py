@@ -1,0 +1,56 @@
+"""How the studies' reports are rendered: their Jinja2 templates in ``templates/`` (the shared phrases in
+``wording.j2``) with the filters that turn a value into words, beside :mod:`agents.common.jinja_reports`'s."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from agents.common.jinja_reports import environment, render
+from agents.policies.base import base_agent_name
+from agents.studies.benchmark_data import choices
+from agents.studies.error_analysis import format_p
+
+PACKAGE = "agents.studies"
+
+
+def display_name(agent: str) -> str:
+    """How the reports name an agent: its base name in backticks, the lever search's winner "the winner"."""
+    base = base_agent_name(agent)
+    return "the winner" if base == choices().winner else f"`{base}`"
+
+
+def join_words(words: Iterable[str], last: str = "and") -> str:
+    """``a``; ``a and b``; ``a, b and c`` (``last`` may be "or")."""
+    words = list(words)
+    return f"{', '.join(words[:-1])} {last} {words[-1]}" if len(words) > 1 else "".join(words)
+
+
+def span(values: Iterable[float], digits: int = 0) -> str:
+    """``36–59``: the smallest and largest value, or one where they print alike."""
+    values = list(values)
+    low, high = f"{min(values):,.{digits}f}", f"{max(values):,.{digits}f}"
+    return low if low == high else f"{low}–{high}"
+
+
+def level_text(level: float | None, unit: str = "") -> str:
+    """A factor level with its unit (``0.5°``, ``1.5 m/s``), or "no level flown" for None."""
+    if level is None:
+        return "no level flown"
+    return f"{level:g}{unit}" if unit.startswith("°") or not unit else f"{level:g} {unit}"
+
+
+FILTERS = {
+    "display": display_name,
+    "names": join_words,
+    "span": span,
+    "level": level_text,
+    "count": lambda value: f"{value:,.0f}",
+    "p": format_p,
+}
+
+
+def render_report(template: str, values: Mapping[str, Any]) -> str:
+    """This package's ``template`` rendered with ``values`` and :data:`FILTERS`."""
+    environment(PACKAGE).filters.update(FILTERS)
+    return render(PACKAGE, template, values)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder
-from agents.evaluation.paired import compare
+from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import start_new_file
 from agents.studies.tuning_study import (
     MIN_FINAL_EPISODES,
@@ -35,6 +35,7 @@ from agents.studies.tuning_study import (
     run_final,
     run_search,
 )
+from agents.studies.wording import render_report
 
 
 @dataclass(frozen=True)
@@ -119,114 +120,42 @@ def tune(
     )
     finals = run_final(agent, budget, search, csv_path, env_id=env_id, env_kwargs=env_kwargs, workers=workers)
     result = TuningResult(agent, search, finals)
-    lines = report_lines(result, budget, command_line(agent, budget, env_id, out), env_kwargs, sampler_seed)
-    (out / "tuning.md").write_text("\n".join(lines) + "\n")
+    text = report_text(result, budget, command_line(agent, budget, env_id, out), env_kwargs, sampler_seed)
+    (out / "tuning.md").write_text(text)
     (out / "best.json").write_text(json.dumps(result.winner.params, indent=2) + "\n")
     plot_tuning_curve(result, out / "tuning_curve.png")
-    return dataclasses.replace(result, lines=lines)
+    return dataclasses.replace(result, lines=text.split("\n")[:-1])
 
 
-def _interval(summary: Mapping[str, Any], rate: str, low: str, high: str) -> str:
-    return f"{summary[rate]:.2f} [{summary[low]:.2f}, {summary[high]:.2f}]"
+def comparison(result: TuningResult) -> Comparison | None:
+    """The winner against the defaults on the final layouts both flew, paired by layout
+    (:func:`agents.evaluation.paired.compare`); None where the defaults won."""
+    if result.winner.number == 0:
+        return None
+    winner, defaults = (np.array([trial.failures]) for trial in (result.winner, result.defaults))
+    return compare("winner", winner, "defaults", defaults)
 
 
-def _failure(summary: Mapping[str, Any]) -> str:
-    return _interval(summary, "failure_rate", "failure_ci_low", "failure_ci_high")
-
-
-def verdict(result: TuningResult) -> str:
-    """Whether the winner fails less than the defaults on the final layouts both flew, by the paired test
-    (:func:`agents.evaluation.paired.compare`)."""
-    winner = result.winner
-    if winner.number == 0:
-        return (
-            "The defaults (trial 0) won the final stage: no trial beat them on the fresh layouts; keep them."
-        )
-    found = compare("winner", np.array([winner.failures]), "defaults", np.array([result.defaults.failures]))
-    paired = (
-        f"paired by layout, winner − defaults = {found.difference:+.3f} [{found.low:+.3f}, {found.high:+.3f}]"
-    )
-    if found.fails_less == "winner":
-        return f"The winner (trial {winner.number}) fails less than the defaults on the same final layouts ({paired})."
-    return (
-        f"The winner (trial {winner.number}) is not shown to fail less than the defaults ({paired}), so its "
-        "margin may be luck of the layouts."
-    )
-
-
-def report_lines(
-    result: TuningResult,
-    budget: Budget,
-    command: str,
-    env_kwargs: Mapping[str, Any],
-    sampler_seed: int,
-) -> list[str]:
-    """``tuning.md``: enough to rerun the study and to judge its winner."""
-    space = SEARCH_SPACES[result.agent]
-    defaults = default_params(result.agent)
+def report_text(
+    result: TuningResult, budget: Budget, command: str, env_kwargs: Mapping[str, Any], sampler_seed: int
+) -> str:
+    """``tuning.md`` (its prose is ``templates/tuning.md.j2``): enough to rerun the study and to judge its winner."""
     search_seeds, final_seeds = budget.layout_seeds()
-    episodes = len(result.search) * len(search_seeds) + len(result.finals) * len(final_seeds)
-    names = list(space)
-    lines = [
-        f"# Tuning {result.agent} on training seeds",
-        "",
-        f"Command: `{command}`" + (f" (API call with env_kwargs `{dict(env_kwargs)}`)" if env_kwargs else ""),
-        "",
-        "## Search space",
-        "",
-        "| parameter | low | high | scale | default |",
-        "|---|---|---|---|---|",
-        *(
-            f"| {name} | {low:g} | {high:g} | {'log' if log else 'linear'} | {defaults[name]:g} |"
-            for name, (low, high, log) in space.items()
-        ),
-        "",
-        "## Budget",
-        "",
-        f"- Search: optuna TPE (seed {sampler_seed}), {len(result.search)} trials, trial 0 the defaults; each "
-        f"trial flies the same {len(search_seeds)} training layouts (seeds {search_seeds.start}-"
-        f"{search_seeds.stop - 1}); objective: failure rate, ties broken by collision rate.",
-        f"- Final: the best {budget.finalists} trials, and the defaults if not among them ({len(result.finals)} "
-        "finalists), each "
-        f"fly the same {len(final_seeds)} fresh training layouts (seeds {final_seeds.start}-"
-        f"{final_seeds.stop - 1}); the winner is the lowest failure rate there.",
-        f"- Episodes: {episodes}.",
-        "",
-        "## Finalists (final layouts)",
-        "",
-        "| trial | search failure | failure [95 % CI] | success [95 % CI] | collision [95 % CI] | "
-        "out of bounds | " + " | ".join(names) + " |",
-        "|---|---|---|---|---|---|" + "---|" * len(names),
-    ]
-    search_rate = {trial.number: trial.summary["failure_rate"] for trial in result.search}
-    for trial in result.finals:
-        s = trial.summary
-        label = f"{trial.number}" + (" (defaults)" if trial.number == 0 else "")
-        lines.append(
-            f"| {label} | {search_rate[trial.number]:.2f} | {_failure(s)} | "
-            f"{_interval(s, 'success_rate', 'success_ci_low', 'success_ci_high')} | "
-            f"{_interval(s, 'collision_rate', 'ci_low', 'ci_high')} | {s['out_of_bounds'] / s['episodes']:.2f} | "
-            + " | ".join(f"{trial.params[name]:.4g}" for name in names)
-            + " |"
-        )
-    lines += [
-        "",
-        f"Winner: trial {result.winner.number}, `{json.dumps(result.winner.params)}` (in `best.json`).",
-        "",
-        verdict(result),
-        "",
-        "## Search trials",
-        "",
-        "| trial | failure | collision | " + " | ".join(names) + " |",
-        "|---|---|---|" + "---|" * len(names),
-        *(
-            f"| {t.number} | {t.summary['failure_rate']:.2f} | {t.summary['collision_rate']:.2f} | "
-            + " | ".join(f"{t.params[name]:.4g}" for name in names)
-            + " |"
-            for t in result.search
-        ),
-    ]
-    return lines
+    values = {
+        "r": result,
+        "budget": budget,
+        "command": command,
+        "env_kwargs": dict(env_kwargs),
+        "sampler_seed": sampler_seed,
+        "space": SEARCH_SPACES[result.agent],
+        "defaults": default_params(result.agent),
+        "search_seeds": search_seeds,
+        "final_seeds": final_seeds,
+        "search_rate": {trial.number: trial.summary["failure_rate"] for trial in result.search},
+        "winner_params": json.dumps(result.winner.params),
+        "comparison": comparison(result),
+    }
+    return render_report("tuning.md.j2", values)
 
 
 def plot_tuning_curve(result: TuningResult, path: Path) -> None:

@@ -17,7 +17,7 @@ from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json
 from agents.evaluation.records import episode_key, read_records
 from agents.evaluation.runner import EpisodesInterrupted
-from agents.studies.tuning import TuningResult, tune, verdict
+from agents.studies.tuning import TuningResult, comparison, report_text, tune
 from agents.studies.tuning_study import (
     SEARCH_SPACES,
     TUNABLE_AGENTS,
@@ -185,18 +185,28 @@ def _trial(number: int, failures: int, episodes: int = 150) -> TrialResult:
         for i in range(episodes)
     ]
     failures = tuple(float(i < failures) for i in range(episodes))
-    return TrialResult(number, {"yaw_gain": 0.1 * number}, summarise(rows)[0], failures)
+    return TrialResult(number, dict.fromkeys(SEARCH_SPACES["bee"], 0.1 * number), summarise(rows)[0], failures)
 
 
 def test_the_verdict_is_the_paired_test_on_the_final_layouts() -> None:
-    clear = TuningResult("bee", [], [_trial(3, 30), _trial(0, 90)])
+    def verdict(result: TuningResult) -> str:
+        text = report_text(result, Budget(), "flownav tune", {}, 0)
+        return text.split("(in `best.json`).\n\n")[1].split("\n")[0]
+
+    finals = [_trial(3, 30), _trial(0, 90)]
+    clear = TuningResult("bee", finals, finals)
+    found = comparison(clear)
+    assert found is not None and found.difference == pytest.approx(-60 / 150) and found.fails_less == "winner"
     assert verdict(clear).startswith(
         "The winner (trial 3) fails less than the defaults on the same final layouts"
     )
-    close = TuningResult("bee", [], [_trial(3, 88), _trial(0, 90)])
+    finals = [_trial(3, 88), _trial(0, 90)]
+    close = TuningResult("bee", finals, finals)
     assert verdict(close).startswith("The winner (trial 3) is not shown to fail less than the defaults")
     assert "paired by layout, winner − defaults = -0.013 [" in verdict(close)
-    assert verdict(TuningResult("bee", [], [_trial(0, 80), _trial(3, 90)])).startswith("The defaults")
+    finals = [_trial(0, 80), _trial(3, 90)]
+    defaults_won = TuningResult("bee", finals, finals)
+    assert comparison(defaults_won) is None and verdict(defaults_won).startswith("The defaults")
 
 
 def test_a_real_study_writes_every_output(tmp_path: Path) -> None:

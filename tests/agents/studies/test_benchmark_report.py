@@ -17,7 +17,7 @@ import pytest
 from agents.common.jinja_reports import environment
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.evaluation.paired import Comparison
-from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices
+from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices, load_benchmark_data
 from agents.studies.benchmark_report import (
     README_MARKERS,
     THESIS_MARKERS,
@@ -28,6 +28,7 @@ from agents.studies.benchmark_report import (
     write_thesis_closed_loop,
 )
 from agents.studies.benchmark_sweep import broken_agents
+from agents.studies.flow_gap_report import flow_gap_values
 from agents.studies.wording import FILTERS, PACKAGE, render_report
 
 WINNER = choices().winner
@@ -286,8 +287,6 @@ def _variants(name: str, value: Any) -> list[Any]:
 @pytest.mark.slow
 @pytest.mark.parametrize("template", TEMPLATES)
 def test_every_template_renders_every_branch_from_the_committed_values(template: str) -> None:
-    from agents.studies.flow_gap_report import flow_gap_values
-
     values = {**flow_gap_values(RESULTS_DIR), "generated": "today", "command": "test"}
     texts = {render_report(template, values)}
     for name, value in values.items():
@@ -300,8 +299,6 @@ def test_every_template_renders_every_branch_from_the_committed_values(template:
 
 @pytest.mark.slow
 def test_the_committed_comparisons_are_paired_tests_on_the_leading_tables_layouts() -> None:
-    from agents.studies.benchmark_data import load_benchmark_data
-
     data = load_benchmark_data(RESULTS_DIR)
     assert data.failures[WINNER].shape == (5, len(data.layouts))
     found = data.compare(WINNER, "bee_ttc")

@@ -10,6 +10,7 @@ import pytest
 
 from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
 from agents.evaluation.csv_file import LEGACY_FIELDS
+from agents.evaluation.paired import compare
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 from agents.studies.flow_gap_report import (
     confirmation_rows,
@@ -17,6 +18,7 @@ from agents.studies.flow_gap_report import (
     gap_row,
     gap_table,
     leaderboard_matrix,
+    plot_gap,
     selection_values,
     suite_matrices,
 )
@@ -53,8 +55,6 @@ def _ship(policies: Path, agent: str, seeds: int) -> None:
 def test_a_gap_is_the_paired_test_and_read_from_its_interval(
     extra_flow: int, extra_truth: int, reading: str
 ) -> None:
-    from agents.evaluation.paired import compare
-
     rng = np.random.default_rng(0)
     shared = (rng.random((5, 200)) < 0.05).astype(float)
     flow, truth = shared.copy(), shared.copy()
@@ -161,8 +161,6 @@ def test_the_selection_keeps_the_picks_rises_and_each_stages_differences() -> No
 
 
 def test_the_figure_draws_each_recipe_where_it_flew(tmp_path: Path) -> None:
-    from agents.studies.flow_gap_report import plot_gap
-
     panels = {
         "plain": [("test, clean", (0.08, 0.06, 0.12), (0.10, 0.05, 0.15))],
         "pick": [("clean", (0.03, 0.02, 0.05), None), ("hard", (0.4, 0.3, 0.5), None)],

@@ -6,7 +6,14 @@ from agents.common.locations import RESULTS_DIR
 from agents.evaluation.records import read_records
 from agents.policies import AGENT_NAMES
 from agents.policies.base import base_agent_name
-from agents.studies.tier_calibration import COURSE_AGENTS, EPISODES_CSV, TIER_AGENTS, course_label
+from agents.studies.tier_calibration import (
+    COURSE_AGENTS,
+    EPISODES_CSV,
+    TIER_AGENTS,
+    course_label,
+    report_lines,
+    separated_pairs,
+)
 
 CALIBRATION = RESULTS_DIR / "suite_calibration" / EPISODES_CSV
 
@@ -28,8 +35,6 @@ def test_a_course_label_names_its_settings_in_a_fixed_order() -> None:
 
 
 def test_agents_are_told_apart_by_a_paired_test_on_the_layouts_both_flew() -> None:
-    from agents.studies.tier_calibration import separated_pairs
-
     def flown(agent: str, failed: int) -> list[dict]:
         return [{"agent": agent, "seed": seed, "success": seed >= failed} for seed in range(100)]
 
@@ -39,9 +44,9 @@ def test_agents_are_told_apart_by_a_paired_test_on_the_layouts_both_flew() -> No
 
 
 def test_the_report_says_when_no_course_is_picked_and_nothing_was_piloted() -> None:
-    from agents.studies.tier_calibration import report_lines
-
     empty = {"layouts": 100, "table": [], "pilot": [], "pilot_settings": {}, "chosen": None}
-    text = "\n".join(report_lines({**empty, "best_per_course": {}, "frozen_matches": False, "tiers": {}}, "x"))
+    text = "\n".join(
+        report_lines({**empty, "best_per_course": {}, "frozen_matches": False, "tiers": {}}, "x")
+    )
     assert "No candidate's best agent fails in [0.20, 0.50]: no pick." in text
     assert "| 1.5 | 0.12 | – | – | – | not flown |" in text and "{{" not in text

@@ -42,6 +42,8 @@ CONDITIONS: dict[str, dict[str, float]] = {
     "speed 1.5 m/s": {"forward_speed": 1.5},
 }
 CONFIRMATION_LAYOUTS = 200
+# The robustness condition: under each harder course, failure at most this much above the agent's own clean rate.
+ALLOWED_RISE = choices().max_rise
 # Any learned name loads the policy file it is given; runs of different agents live in different CSVs.
 RUN_LABEL = "ppo_flow"
 

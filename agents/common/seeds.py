@@ -16,7 +16,7 @@ Sub-ranges with one use each:
 | sensor pilot (validation) | ``SENSOR_PILOT_SEED_START ..`` | trying versions of the realistic sensor before freezing it |
 | sensor reading (validation) | ``SENSOR_READING_SEED_START ..`` | the noisy tier at other readings of its specifications |
 | planner tuning (validation) | ``PLANNER_TUNING_SEED_START ..`` | tuning the privileged ``planner`` and measuring its failure per tier |
-| student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier |
+| student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or

@@ -32,6 +32,7 @@ from tqdm import tqdm
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fit, fly
 from agents.training.ppo import new_model
+from agents.training.student_view import privileged_settings
 from agents.training.train_config import TrainConfig
 
 # Makes the teacher agent a training config names (agents.policies.teachers.make_teacher).
@@ -80,7 +81,13 @@ def measure_stage(
 
     torch.set_num_threads(1)
     started = time.perf_counter()
-    envs, eval_env = build_envs(config)
+    teacher = None
+    if config.imitation.teacher:
+        if make_teacher is None:
+            raise ValueError(f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher")
+        teacher = make_teacher(config.imitation.teacher)
+    # A privileged teacher's opt-in (the planner's observe_layout) reaches the training envs, as in training.
+    envs, eval_env = build_envs(config, teacher_settings=privileged_settings(teacher))
     try:
         model = new_model(config, envs)
         rollout = config.ppo.n_steps * config.n_envs
@@ -92,12 +99,7 @@ def measure_stage(
         begun = time.perf_counter()
         evaluate_policy(model, eval_env, n_eval_episodes=config.eval_episodes, deterministic=True)
         measured["evaluation_s_per_episode"] = (time.perf_counter() - begun) / config.eval_episodes
-        if config.imitation.teacher:
-            if make_teacher is None:
-                raise ValueError(
-                    f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher"
-                )
-            teacher = make_teacher(config.imitation.teacher)
+        if teacher is not None:
             begun = time.perf_counter()
             flights = fly(envs, teacher, teacher_steps, config.ppo.gamma, student=model)
             measured["teacher_s_per_step"] = (time.perf_counter() - begun) / len(flights)

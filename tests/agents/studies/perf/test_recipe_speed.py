@@ -11,7 +11,7 @@ from helpers import SMALL, tiny_train_config
 from agents.common.jinja_reports import render
 from agents.common.yaml_config import load_config
 from agents.policies.teachers import make_teacher
-from agents.studies.perf.recipe_speed import block_ratios, stage_minutes, stage_work
+from agents.studies.perf.recipe_speed import block_ratios, measure_stage, stage_minutes, stage_work
 from agents.studies.perf.recipe_speed_report import parse_recipe, recipe_report_values, run_recipe_benchmark
 from agents.studies.perf.report_kit import RunFacts
 from agents.training.train_config import TrainConfig
@@ -75,6 +75,18 @@ def test_two_tiny_recipes_are_timed_side_by_side_into_the_report(tmp_path: Path)
     assert "| old | 128 | 0 |" in text and "| tiny_new | 64 | 32 |" in text
     assert "1.00 [1.00–1.00]" in text and "not flown" in text
     assert all(path.is_file() for path in paths)
+
+
+def test_a_privileged_teacher_is_timed_on_envs_that_give_it_the_layout(tmp_path: Path) -> None:
+    # The planner reads the layout: the stage's training envs carry its opt-in, as training builds them.
+    config, _ = tiny_train_config(
+        tmp_path,
+        total=64,
+        name="tiny_student",
+        imitation={"teacher": "planner", "rounds": 1, "steps_per_round": 8, "epochs": 1},
+    )
+    measured = measure_stage(config, 1, make_teacher, teacher_steps=8)
+    assert measured["teacher_s_per_step"] > 0.0 and measured["fit_s_per_state_epoch"] > 0.0
 
 
 def test_a_recipe_without_a_config_is_refused() -> None:

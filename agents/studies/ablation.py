@@ -20,9 +20,10 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder
+from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
-from agents.common.tables import markdown_table, today
+from agents.common.tables import today
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import (
     EpisodeTask,
@@ -105,7 +106,7 @@ def compare_configs(
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     flights = _Flights(out, episodes, env, workers, report_only)
-    rows: list[list[Any]] = []
+    rows: list[dict[str, Any]] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
@@ -117,14 +118,17 @@ def compare_configs(
         row = _fly_reference(agent, flights, missing)
         if row is not None:
             rows.append(row)
-    lines = _report(rows, missing, seeds, episodes, command, env)
     if curves:
         plot_grouped_learning_curves(
             curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
         )
-        lines += ["", "![learning curves](ablation_curves.png)"]
-    (out / "ablation.md").write_text("\n".join(lines) + "\n")
-    return lines
+    text = render(
+        "agents.studies",
+        "ablation.md.j2",
+        ablation_values(rows, missing, seeds, episodes, command, env, bool(curves)),
+    )
+    (out / "ablation.md").write_text(text)
+    return text.splitlines()
 
 
 @dataclass(frozen=True)
@@ -147,7 +151,7 @@ def _fly_config(
     flights: _Flights,
     missing: list[str],
     curves: dict[str, dict[str, Path]],
-) -> list[Any] | None:
+) -> dict[str, Any] | None:
     """Fly each finished seed of a config; its report row (None when no seed has every episode). Seeds not
     trained or not fully flown are added to ``missing``, each seed's evaluations file to ``curves``."""
     name = config.name
@@ -184,7 +188,7 @@ def _evaluations_file(files: RunFiles) -> Path | None:
     return evaluations if evaluations.is_file() else None
 
 
-def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> list[Any] | None:
+def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> dict[str, Any] | None:
     """Fly a reactive reference agent; its report row, or None (and a line in ``missing``) while short of
     episodes."""
     tasks = ablation_tasks(None, flights.episodes, flights.env, agent=agent)
@@ -215,24 +219,24 @@ def seed_files(
     return run if run_finished else None
 
 
-def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> list[Any]:
+def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> dict[str, Any]:
+    """A config's row: failure over runs × layouts (two-level bootstrap interval from two seeds on), its
+    outcome rates and each seed's failure."""
     success = float(outcomes.mean())
-    if len(outcomes) > 1:
-        low, high = runs_and_layouts_interval(outcomes)
-        interval = f"[{1 - high:.2f}, {1 - low:.2f}]"
-    else:
-        interval = "(one seed)"
+    low, high = runs_and_layouts_interval(outcomes) if len(outcomes) > 1 else (None, None)
     total = outcomes.size
-    return [
-        name,
-        len(outcomes),
-        total,
-        f"{1 - success:.2f} {interval}",
-        f"{success:.2f}",
-        f"{counts['collision'] / total:.2f}",
-        f"{counts['out_of_bounds'] / total:.2f}",
-        ", ".join(f"{seed}: {rate:.2f}" for seed, rate in per_seed),
-    ]
+    return {
+        "config": name,
+        "seeds": len(outcomes),
+        "episodes": total,
+        "failure": 1 - success,
+        "failure_low": None if high is None else 1 - high,
+        "failure_high": None if low is None else 1 - low,
+        "success": success,
+        "collision": counts["collision"] / total,
+        "out_of_bounds": counts["out_of_bounds"] / total,
+        "per_seed": per_seed,
+    }
 
 
 def _fly(
@@ -245,49 +249,43 @@ def _fly(
     return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
 
 
-def _reference_row(agent: str, flown: list[dict[str, Any]]) -> list[Any]:
+def _reference_row(agent: str, flown: list[dict[str, Any]]) -> dict[str, Any]:
+    """A reactive reference agent's row: one run, a Wilson interval over its layouts."""
     total = len(flown)
     failures = sum(not bool(row["success"]) for row in flown)
     low, high = wilson_interval(failures, total)
-    return [
-        f"{agent} (reactive, reference)",
-        "-",
-        total,
-        f"{failures / total:.2f} [{low:.2f}, {high:.2f}]",
-        f"{1 - failures / total:.2f}",
-        f"{sum(bool(row['collision']) for row in flown) / total:.2f}",
-        f"{sum(bool(row['out_of_bounds']) for row in flown) / total:.2f}",
-        "-",
-    ]
+    return {
+        "config": f"{agent} (reactive, reference)",
+        "seeds": None,
+        "episodes": total,
+        "failure": failures / total,
+        "failure_low": low,
+        "failure_high": high,
+        "success": 1 - failures / total,
+        "collision": sum(bool(row["collision"]) for row in flown) / total,
+        "out_of_bounds": sum(bool(row["out_of_bounds"]) for row in flown) / total,
+        "per_seed": None,
+    }
 
 
-def _report(
-    rows: list, missing: list[str], seeds: Sequence[int], episodes: int, command: str, env: dict[str, Any]
-) -> list[str]:
-    condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
-    lines = [
-        "# Ablations on validation layouts",
-        "",
-        f"Generated {today()} by `{command}`. Every run flies validation layouts {ABLATION_SEED_START:,}–"
-        f"{ABLATION_SEED_START + episodes - 1:,} ({condition}), never a test layout; seeds asked: "
-        f"{', '.join(map(str, seeds))}. Failure rate: mean over runs × layouts, 95 % interval from a "
-        "two-level bootstrap (runs, and layouts once for all runs, since they flew the same layouts); a reactive reference row's is Wilson's over its "
-        "layouts.",
-        "",
-        markdown_table(
-            [
-                "config",
-                "seeds",
-                "episodes",
-                "failure rate [95 % CI]",
-                "success",
-                "collision",
-                "out of bounds",
-                "failure per seed",
-            ],
-            rows,
-        ),
-    ]
-    if missing:
-        lines += ["", "Not flown (not trained, or cut short): " + "; ".join(missing) + "."]
-    return lines
+def ablation_values(
+    rows: list[dict[str, Any]],
+    missing: list[str],
+    seeds: Sequence[int],
+    episodes: int,
+    command: str,
+    env: dict[str, Any],
+    curves: bool,
+) -> dict[str, Any]:
+    """Every value ``ablation.md`` words (``templates/ablation.md.j2``)."""
+    return {
+        "generated": today(),
+        "command": command,
+        "first_layout": ABLATION_SEED_START,
+        "last_layout": ABLATION_SEED_START + episodes - 1,
+        "condition": ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors",
+        "seeds": list(seeds),
+        "rows": rows,
+        "missing": missing,
+        "curves": curves,
+    }

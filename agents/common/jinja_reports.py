@@ -15,6 +15,7 @@ from typing import Any
 
 import jinja2
 import jinja2.meta
+import jinja2.nodes
 
 
 def rate(value: float) -> str:
@@ -82,8 +83,20 @@ def render(package: str, template: str, values: Mapping[str, Any], *, every_valu
 
 
 def names_in(source: str) -> frozenset[str]:
-    """Every value a template's text names (in a field, a condition or a filter's argument)."""
-    return frozenset(jinja2.meta.find_undeclared_variables(jinja2.Environment().parse(source)))
+    """Every value a template's text names (in a field, a condition or a filter's argument), whichever filters
+    it applies: a package's own (:data:`FILTERS`, or those its renderer adds) need not be known here."""
+    scratch = jinja2.Environment()
+    tree = scratch.parse(source)
+    # Finding the names walks the template as compiling it does, and that fails on a filter the environment
+    # lacks; what a filter does cannot change which names the text uses, so each unknown one stands in as a no-op.
+    for node in tree.find_all(jinja2.nodes.Filter):
+        scratch.filters.setdefault(node.name, _stand_in)
+    return frozenset(jinja2.meta.find_undeclared_variables(tree))
+
+
+def _stand_in(value: object, *args: object, **kwargs: object) -> object:
+    """A filter that is never called: it lets :func:`names_in` walk a template that applies an unknown one."""
+    return value
 
 
 def template_source(package: str, template: str) -> str:

@@ -90,29 +90,48 @@ def _improvement_table(data: BenchmarkData) -> str:
     return markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], rows)
 
 
+def _code_groups(data: BenchmarkData) -> list[tuple[str, str]]:
+    """The commits the leaderboard was flown at, each with the agents flown there: ``(commits, agents)``."""
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for agent, versions in data.code_versions.items():
+        groups.setdefault(tuple(commit_of(v) for v in versions), []).append(f"`{agent}`")
+    return [(join_words(commits), join_words(agents)) for commits, agents in groups.items()]
+
+
+def _seed_ranges(data: BenchmarkData) -> list[tuple[str, list[float], dict[str, Any]]]:
+    """Each learned agent's training seeds: their failure rates and the worst seed's row."""
+    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
+    seeds = {agent: [r for r in data.seed_rows if r["agent"] == agent] for agent in learned}
+    return [
+        (a, [r["failure_rate"] for r in s], max(s, key=lambda r: r["failure_rate"])) for a, s in seeds.items()
+    ]
+
+
+def _comparisons(data: BenchmarkData, best: tuple[str, str]) -> Values:
+    """The paired comparisons the reports word, by name: ``best`` (the best learned agent against the best
+    reactive one) and fixed pairs; a pair with an agent missing from the leaderboard is left out."""
+    c = choices()
+    pairs = {
+        "best": best,
+        "flow_vs_ttc": ("ppo_flow", "bee_ttc"),
+        "winner_vs_ttc": (c.winner, "bee_ttc"),
+        "flow_vs_oracle": ("ppo_flow", "ppo_oracle"),
+        "flow_vs_bee": ("ppo_flow", "bee"),
+        "flow_vs_vfh": ("ppo_flow", "vfh"),
+        "flow_vs_robust_rule": ("ppo_flow", "bee_robust"),
+        "robust_vs_flow": ("ppo_robust", "ppo_flow"),
+        "winner_vs_truth": (c.winner, c.truth_recipe),
+    }
+    flown = {r["agent"] for r in data.leaderboard}
+    return {name: data.compare(a, b) for name, (a, b) in pairs.items() if {a, b} <= flown}
+
+
 def leaderboard_values(data: BenchmarkData) -> Values:
     """The leading table, its provenance, the training seeds' spread, and the comparisons of two agents (each a
     paired test, :meth:`BenchmarkData.compare`) the reports word."""
     c = choices()
-    groups: dict[tuple[str, ...], list[str]] = {}
-    for agent, versions in data.code_versions.items():
-        groups.setdefault(tuple(commit_of(v) for v in versions), []).append(f"`{agent}`")
-    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
-    seeds = {agent: [r for r in data.seed_rows if r["agent"] == agent] for agent in learned}
     best_reactive, best_learned = data.best_agents()
     rows = {r["agent"]: r for r in data.leaderboard}
-    flown = {a: a in rows for a in ("ppo_robust", c.truth_recipe)}
-    comparisons = [
-        ("best", best_learned["agent"], best_reactive["agent"]),
-        ("flow_vs_ttc", "ppo_flow", "bee_ttc"),
-        ("winner_vs_ttc", c.winner, "bee_ttc"),
-        ("flow_vs_oracle", "ppo_flow", "ppo_oracle"),
-        ("flow_vs_bee", "ppo_flow", "bee"),
-        ("flow_vs_vfh", "ppo_flow", "vfh"),
-        ("flow_vs_robust_rule", "ppo_flow", "bee_robust"),
-        ("robust_vs_flow", "ppo_robust", "ppo_flow"),
-        ("winner_vs_truth", c.winner, c.truth_recipe),
-    ]
     flow, ttc, winner = (rows[a]["failure_rate"] for a in ("ppo_flow", "bee_ttc", c.winner))
     return {
         "c": c,
@@ -120,23 +139,48 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         "layouts": data.layouts,
         "leaderboard_episodes": data.leaderboard_episodes,
         "leaderboard_complete": all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard),
-        "leaderboard_code": [(join_words(commits), join_words(agents)) for commits, agents in groups.items()],
+        "leaderboard_code": _code_groups(data),
         "leaderboard_table": agent_table(data),
         "readme_table": agent_table(data, readme=True),
         "block": data.block,
-        "seed_ranges": [
-            (a, [r["failure_rate"] for r in s], max(s, key=lambda r: r["failure_rate"]))
-            for a, s in seeds.items()
-        ],
+        "seed_ranges": _seed_ranges(data),
         "improvement_table": _improvement_table(data),
         "best_learned": best_learned["agent"],
         "best_reactive": best_reactive["agent"],
-        "truth_recipe_flown": flown[c.truth_recipe],
-        **{name: data.compare(a, b) for name, a, b in comparisons if a in rows and b in rows},
+        "truth_recipe_flown": c.truth_recipe in rows,
+        **_comparisons(data, (best_learned["agent"], best_reactive["agent"])),
         "winner_closes": (flow - winner) / (flow - ttc),
         "oracle_reactive": data.oracle_reactive,
         "suite_top": data.suite_top,
     }
+
+
+def _validation_order(data: BenchmarkData) -> list[str]:
+    """The agents flown clean and in both validation conditions, learned ones first, then the reactive ones."""
+    clean, density, speed = (data.validation[k] for k in ("clean", "density", "speed"))
+    names = [n for n in clean if n in density and n in speed]
+    return [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
+
+
+def _validation_row(data: BenchmarkData, name: str, within: bool) -> list[str]:
+    """One agent's validation row: its clean failure, each condition's with its rise, whether both stay within."""
+    clean = data.validation["clean"][name]
+    reactive = name in REACTIVE_AGENTS
+    return [
+        f"`{name}` (reactive)" if reactive else f"`{name}`",
+        "–" if reactive else str(clean.runs),
+        _interval(clean.rate, clean.low, clean.high),
+        *(
+            f"{_interval(r.rate, r.low, r.high)} ({r.rate - clean.rate:+.2f})"
+            for r in (data.validation["density"][name], data.validation["speed"][name])
+        ),
+        "yes" if within else "no",
+    ]
+
+
+def _layouts_per_run(data: BenchmarkData) -> dict[str, set[int]]:
+    """Each validation condition's layouts per training run (one value where every agent flew alike)."""
+    return {k: {r.episodes // r.runs for r in data.validation[k].values()} for k in data.validation}
 
 
 def validation_values(data: BenchmarkData) -> Values:
@@ -144,27 +188,12 @@ def validation_values(data: BenchmarkData) -> Values:
     and speed, each with its difference from clean and whether both rises stay within the limit."""
     c = choices()
     clean, density, speed = (data.validation[k] for k in ("clean", "density", "speed"))
-    names = [n for n in clean if n in density and n in speed]
-    names = [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
+    names = _validation_order(data)
     within = [n for n in names if max(density[n].rate, speed[n].rate) - clean[n].rate <= c.max_rise]
-    rows = []
-    for name in names:
-        reactive = name in REACTIVE_AGENTS
-        rows.append(
-            [
-                f"`{name}` (reactive)" if reactive else f"`{name}`",
-                "–" if reactive else str(clean[name].runs),
-                _interval(clean[name].rate, clean[name].low, clean[name].high),
-                *(
-                    f"{_interval(r.rate, r.low, r.high)} ({r.rate - clean[name].rate:+.2f})"
-                    for r in (density[name], speed[name])
-                ),
-                "yes" if name in within else "no",
-            ]
-        )
+    rows = [_validation_row(data, name, name in within) for name in names]
     header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {c.robustness_density:g} (Δ)"]
     header += [f"{c.robustness_speed:g} m/s (Δ)", f"within +{c.max_rise:.2f} at both"]
-    per_run = {k: {r.episodes // r.runs for r in data.validation[k].values()} for k in data.validation}
+    per_run = _layouts_per_run(data)
     stage1, stage2 = data.training[c.winner].init_config or {}, data.training[c.winner].config
     return {
         "validation_table": markdown_table(header, rows),
@@ -183,9 +212,9 @@ def _learning_rate(value: float) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-def target_values(data: BenchmarkData) -> Values:
-    """The flow-gap targets on test layouts: who meets the first target's failure limit, each sweep agent's rise
-    at the robustness speed and density over its clean failure, and the winner's training time."""
+def _test_rises(data: BenchmarkData) -> dict[str, list[float]]:
+    """Each agent's failure rise over its clean test failure at the robustness speed, then density; an agent the
+    sweep did not fly at both is left out."""
     c = choices()
     rise = {}
     for row in data.leaderboard:
@@ -195,15 +224,31 @@ def target_values(data: BenchmarkData) -> Values:
         except KeyError:
             continue
         rise[row["agent"]] = [cell.rate - row["failure_rate"] for cell in cells]
+    return rise
+
+
+def _first_target_met(data: BenchmarkData) -> list[dict[str, Any]]:
+    """The flow agents (neither ``straight`` nor the oracle) within the first target's failure limit."""
+    c = choices()
     limit = min(c.max_failure, c.oracle_factor * data.row("ppo_oracle")["failure_rate"])
     others = ("straight", "ppo_oracle")
-    first = [
+    return [
         r
         for r in data.leaderboard
         if is_flow_agent(r) and r["agent"] not in others and r["failure_rate"] <= limit
     ]
-    robust = [a for a, rises in rise.items() if max(rises) <= c.max_rise]
+
+
+def target_values(data: BenchmarkData) -> Values:
+    """The flow-gap targets on test layouts: who meets the first target's failure limit, each sweep agent's rise
+    at the robustness speed and density over its clean failure, and the winner's training time."""
+    c = choices()
+    rise = _test_rises(data)
+    first = _first_target_met(data)
+    test_ok = {a: max(rises) <= c.max_rise for a, rises in rise.items()}
+    robust = [a for a, ok in test_ok.items() if ok]
     minutes = data.training[c.winner].minutes
+    in_time = max(minutes) <= c.budget_minutes
     return {
         "first_target_met": [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first],
         "rise": rise,
@@ -211,11 +256,9 @@ def target_values(data: BenchmarkData) -> Values:
         "robust_agents": [display_name(a) for a in robust],
         "winner_minutes": span(minutes),
         "winner_cores": "/".join(map(str, data.training[c.winner].cores)),
-        "winner_in_time": max(minutes) <= c.budget_minutes,
-        "targets_met": data.row(c.winner) in first
-        and c.winner in robust
-        and max(minutes) <= c.budget_minutes,
-        "test_ok": {a: max(rises) <= c.max_rise for a, rises in rise.items()},
+        "winner_in_time": in_time,
+        "targets_met": data.row(c.winner) in first and c.winner in robust and in_time,
+        "test_ok": test_ok,
     }
 
 

@@ -154,9 +154,9 @@ def _pairs(data: BenchmarkData) -> list[tuple[str, float, Rate, Rate]]:
     ]
 
 
-def finding_values(data: BenchmarkData) -> Values:
-    """The winner against ``ppo_flow`` in the sweep, the thesis's error model against a noise floor, scale and
-    direct depth errors, speed and darkness: the levels each finding quotes and who breaks there."""
+def _winner_findings(data: BenchmarkData) -> Values:
+    """The winner against ``ppo_flow`` over the sweep: where the task's speed and density break each, the direct
+    depth errors it handles worst and best, and the cells where it fails materially more."""
     c = choices()
     pairs = _pairs(data)
     depth = [(w.rate - p.rate, f, x, w, p) for f, x, w, p in pairs if f in DIRECT_DEPTH]
@@ -169,13 +169,42 @@ def finding_values(data: BenchmarkData) -> Values:
         name: {f: _breaking(data, agent, f) for f in ("forward_speed", "obstacle_density")}
         for name, agent in (("flow", FLOW), ("winner", f"{c.winner}@all"))
     }
+    return {
+        "task_breaks": task,
+        "winner_holds_task": all(_later(task["winner"][f], task["flow"][f]) for f in task["flow"]),
+        "depth_worst": max(depth, key=lambda d: d[0]),
+        "depth_best": min(depth, key=lambda d: d[0]),
+        "worse": worse,
+        "rotation_only": bool(worse) and all(w["factor"] in TOLD_ROTATION for w in worse),
+    }
+
+
+def _first_breaking(rows: Sequence[dict[str, Any]]) -> float | None:
+    """The lowest breaking level among tolerance ``rows``; None where none of them breaks."""
+    return min((r["breaking_level"] for r in rows if r["breaking_level"] is not None), default=None)
+
+
+def _relative_findings(data: BenchmarkData) -> Values:
+    """Where the thesis's error model (a rotation or translation error relative to the motion) first breaks any
+    agent, and ``ppo_flow``."""
     rows = {
         f: [r for r in data.tolerance if r["factor"] == f] for f in ("rotation_error", "translation_error")
     }
+    return {
+        "rotation_first": _first_breaking(rows["rotation_error"]),
+        "relative_first": _first_breaking([r for rs in rows.values() for r in rs]),
+        "flow_relative": [_breaking(data, FLOW, f) for f in rows],
+    }
+
+
+def _quoted_levels(data: BenchmarkData) -> dict[str, tuple[str, float]]:
+    """The (factor, level) each finding quotes, by name: the ends of the noise floor and of the translation bias
+    and drift, where ``ppo_flow`` breaks on depth noise and outliers (the farthest level where it never does),
+    the slowest speed and the darkest level flown."""
     levels = {factor: _levels(data, factor) for factor in {key[1] for key in data.cells}}
     floors, noise, outliers = (levels[f] for f in ("rotation_noise_deg", "depth_noise", "depth_outliers"))
     dark = [x for x in levels["brightness"] if x < neutral_level("brightness")][-1]
-    quoted = {
+    return {
         "floor_low": ("rotation_noise_deg", floors[0]),
         "floor_high": ("rotation_noise_deg", floors[-1]),
         "tb_low": ("translation_bias", levels["translation_bias"][0]),
@@ -187,36 +216,45 @@ def finding_values(data: BenchmarkData) -> Values:
         "slow": ("forward_speed", levels["forward_speed"][0]),
         "dark": ("brightness", dark),
     }
+
+
+def _rule_findings(data: BenchmarkData, quoted: dict[str, tuple[str, float]]) -> Values:
+    """What scale, noise and bias errors break: whether the noise floor breaks most agents at its lowest level,
+    whether a scale error spares the centring rules that break ``ppo_flow``, whether the rules hold at the most
+    depth noise flown, and the rotation bias the winner breaks at (the farthest flown where it never does).
+
+    Raises:
+        ValueError: the sweep has no rotation bias above its neutral level for the winner.
+    """
+    c = choices()
     rules = set(c.centring_rules)
     broken_by_bias = broken_agents(data, *quoted["tb_low"])[0]
     floor = broken_agents(data, *quoted["floor_low"])
     bias = data.tolerance_row(c.winner, "rotation_bias")
     if bias is None:
         raise ValueError("the sweep has no rotation bias above its neutral level for the winner")
+    noise_max = _levels(data, "depth_noise")[-1]
     return {
-        "task_breaks": task,
-        "winner_holds_task": all(_later(task["winner"][f], task["flow"][f]) for f in task["flow"]),
-        "depth_worst": max(depth, key=lambda d: d[0]),
-        "depth_best": min(depth, key=lambda d: d[0]),
-        "worse": worse,
-        "rotation_only": bool(worse) and all(w["factor"] in TOLD_ROTATION for w in worse),
-        "cell_episodes": next(iter(data.cells.values())).episodes,
-        "rotation_first": min(
-            (r["breaking_level"] for r in rows["rotation_error"] if r["breaking_level"] is not None),
-            default=None,
-        ),
-        "relative_first": min(
-            (r["breaking_level"] for rs in rows.values() for r in rs if r["breaking_level"] is not None),
-            default=None,
-        ),
-        "flow_relative": [_breaking(data, FLOW, f) for f in rows],
         "floor_harsher": len(floor[0]) >= len(floor[1]),
+        "scale_spares_rules": FLOW in broken_by_bias and not rules & set(broken_by_bias),
+        "rules_hold_noise": not rules & set(broken_agents(data, "depth_noise", noise_max)[0]),
+        "noise_max": noise_max,
+        "rb_level": max(bias["levels"]) if bias["breaking_level"] is None else bias["breaking_level"],
+    }
+
+
+def finding_values(data: BenchmarkData) -> Values:
+    """The winner against ``ppo_flow`` in the sweep, the thesis's error model against a noise floor, scale and
+    direct depth errors, speed and darkness: the levels each finding quotes and who breaks there."""
+    quoted = _quoted_levels(data)
+    rules = _rule_findings(data, quoted)
+    return {
+        **_winner_findings(data),
+        "cell_episodes": next(iter(data.cells.values())).episodes,
+        **_relative_findings(data),
         "turn_median": data.thesis_motion["rotation_deg_median"],
         **{name: broken_by(data, factor, level) for name, (factor, level) in quoted.items()},
-        "scale_spares_rules": FLOW in broken_by_bias and not rules & set(broken_by_bias),
-        "rules_hold_noise": not rules & set(broken_agents(data, "depth_noise", noise[-1])[0]),
-        "noise_max": noise[-1],
-        "rb_level": max(bias["levels"]) if bias["breaking_level"] is None else bias["breaking_level"],
+        **rules,
         "thesis_rows": {
             "flow_rotation": data.tolerance_row(FLOW, "rotation_error"),
             "ttc_rotation": data.tolerance_row("bee_ttc", "rotation_error"),

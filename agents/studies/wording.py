@@ -50,7 +50,12 @@ FILTERS = {
 }
 
 
+# The package's one environment (agents.common.jinja_reports keeps one per package) gets these filters here,
+# once, as this module is imported: every render of the package's templates through it words values alike.
+environment(PACKAGE).filters.update(FILTERS)
+
+
 def render_report(template: str, values: Mapping[str, Any]) -> str:
-    """This package's ``template`` rendered with ``values`` and :data:`FILTERS`."""
-    environment(PACKAGE).filters.update(FILTERS)
+    """This package's ``template`` rendered with ``values``, its filters those of :data:`FILTERS` and
+    :mod:`agents.common.jinja_reports`'s."""
     return render(PACKAGE, template, values)

@@ -169,37 +169,56 @@ def _span(values: list[float], digits: int = 2) -> str:
     return f"{low:.{digits}f}" if same else f"{low:.{digits}f}–{high:.{digits}f}"
 
 
+def _axes_turned(row: Row) -> int:
+    """How many axes the thesis's case turns about."""
+    return sum(abs(a) > 0 for a in row["thesis"]["unity_deg"])
+
+
+def _point_count_gaps(quoted: list[Row]) -> list[str]:
+    """The cases where one program keeps less than half the other's points per pair, each as the reading words
+    it: ``test 3: 120 against 310``."""
+    gaps = []
+    for r in quoted:
+        ours, theirs = r["tracked"] / max(r["frame_pairs"], 1), r["thesis"]["points"]
+        if theirs < 0.5 * ours or ours < 0.5 * theirs:
+            gaps.append(f"test {r['thesis']['test']}: {theirs} against {ours:.0f}")
+    return gaps
+
+
+def _mean_spans(cases: list[Row], name: str) -> dict[str, str]:
+    """The thesis's and FlowNav's mean errors over ``cases`` as spans: ``<name>_thesis`` and ``<name>_ours``."""
+    return {
+        f"{name}_thesis": _span([r["thesis"]["mean_px"] for r in cases]),
+        f"{name}_ours": _span([r["matrix_mean_px"] for r in cases]),
+    }
+
+
+def _worst_case(quoted: list[Row]) -> dict[str, str]:
+    """The thesis's case with the largest mean error, that error in pixels and as a rotation error in degrees."""
+    worst = max(quoted, key=lambda r: r["thesis"]["mean_px"])
+    return {
+        "worst_test": str(worst["thesis"]["test"]),
+        "worst_px": f"{worst['thesis']['mean_px']:g}",
+        "worst_deg": f"{math.degrees(worst['thesis']['mean_px'] / THESIS_FOCAL_PX):.1f}",
+    }
+
+
 def table2_reading(rows: list[Row]) -> dict[str, str] | None:
     """The figures of the README's reading of Table 2: single- and two-axis cases, thesis and FlowNav, and the
     worst thesis case as a rotation error; None where no case quotes the thesis."""
     quoted = [r for r in rows if r.get("thesis")]
     if not quoted:
         return None
-
-    def axes(r: Row) -> int:
-        return sum(abs(a) > 0 for a in r["thesis"]["unity_deg"])
-
-    single = [r for r in quoted if axes(r) == 1]
-    double = [r for r in quoted if axes(r) >= 2]
-    worst = max(quoted, key=lambda r: r["thesis"]["mean_px"])
-    # Cases where one program keeps less than half the other's points per pair.
-    odd = []
-    for r in quoted:
-        ours, theirs = r["tracked"] / max(r["frame_pairs"], 1), r["thesis"]["points"]
-        if theirs < 0.5 * ours or ours < 0.5 * theirs:
-            odd.append(f"test {r['thesis']['test']}: {theirs} against {ours:.0f}")
+    single = [r for r in quoted if _axes_turned(r) == 1]
+    double = [r for r in quoted if _axes_turned(r) >= 2]
     return {
-        "single_thesis": _span([r["thesis"]["mean_px"] for r in single]),
-        "single_ours": _span([r["matrix_mean_px"] for r in single]),
+        **_mean_spans(single, "single"),
         "double_tests": ", ".join(str(r["thesis"]["test"]) for r in double),
-        "double_thesis": _span([r["thesis"]["mean_px"] for r in double]),
-        "double_ours": _span([r["matrix_mean_px"] for r in double]),
+        **_mean_spans(double, "double"),
         "double_ours_inliers": _span([r["matrix_mean_inliers_px"] for r in double]),
         "order_shift": f"{max((r.get('euler_order_shift_px', 0.0) for r in double), default=0.0):.2f}",
-        "worst_test": str(worst["thesis"]["test"]),
-        "worst_px": f"{worst['thesis']['mean_px']:g}",
-        "worst_deg": f"{math.degrees(worst['thesis']['mean_px'] / THESIS_FOCAL_PX):.1f}",
-        "count_outliers": "; ".join(odd),
+        **_worst_case(quoted),
+        "count_outliers": "; ".join(_point_count_gaps(quoted)),
     }
 
 

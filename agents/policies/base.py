@@ -29,8 +29,8 @@ SUITE_ONLY_AGENTS = ("ppo_flow_planner_student",)
 # Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
 PLANNERS = ("planner",)
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
-# The agents of the clean tier's history table and the demo: every agent but the planners, which are flown only
-# on the suite, as each tier's bound, and the suite-only learned agents.
+# The agents of the clean tier's history table: every agent but the planners, which are flown only on the suite,
+# as each tier's bound, and the suite-only learned agents. (The demo flies every rule and every shipped policy.)
 HISTORY_AGENTS = REACTIVE_AGENTS + tuple(agent for agent in LEARNED_AGENTS if agent not in SUITE_ONLY_AGENTS)
 # The agents that read what a tier's sensor does not give (true depths at the tracked points; the capsule layout
 # and the true state). Each is a reference of what perfect sensing allows: listed apart in every table, never

@@ -36,13 +36,8 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.error_analysis import (
-    cell_quality,
-    failure,
-    fit_every_flow_agent,
-    is_flow_agent,
-    tolerance_table,
-)
+from agents.studies.dose_response import cell_quality, fit_every_flow_agent
+from agents.studies.error_analysis import failure, is_flow_agent, tolerance_table
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).

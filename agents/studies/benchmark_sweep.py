@@ -12,13 +12,8 @@ from agents.common.jinja_reports import rate
 from agents.common.tables import markdown_table
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, commit_of
-from agents.studies.error_analysis import (
-    P_VALUE_FLOOR,
-    best_learned_flow_agent,
-    format_p,
-    neutral_level,
-    unbroken_kind,
-)
+from agents.studies.dose_response import P_VALUE_FLOOR, format_p
+from agents.studies.error_analysis import best_learned_flow_agent, neutral_level, unbroken_kind
 from agents.studies.wording import display_name, level_text
 
 FLOW = "ppo_flow@all"

@@ -12,15 +12,17 @@ import numpy as np
 
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
-from agents.studies.error_analysis import (
+from agents.studies.dose_response import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
-    TASK_FACTORS,
-    best_learned_flow_agent,
     cell_quality,
     dose_curve,
     dose_features,
     fit_every_flow_agent,
+)
+from agents.studies.error_analysis import (
+    TASK_FACTORS,
+    best_learned_flow_agent,
     tolerance_table,
     unbroken_kind,
 )

@@ -9,7 +9,7 @@ from typing import Any
 from agents.common.jinja_reports import environment, render
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import choices
-from agents.studies.error_analysis import format_p
+from agents.studies.dose_response import format_p
 
 PACKAGE = "agents.studies"
 

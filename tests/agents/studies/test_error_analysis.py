@@ -11,11 +11,9 @@ import numpy as np
 import pytest
 
 from agents.cli import main
+from agents.studies.dose_response import cell_quality, fit_dose_response, format_p
 from agents.studies.error_analysis import (
     best_learned_flow_agent,
-    cell_quality,
-    fit_dose_response,
-    format_p,
     is_flow_agent,
     neutral_level,
     tolerance_table,

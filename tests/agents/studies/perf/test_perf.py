@@ -168,9 +168,10 @@ def test_training_benchmark_times_each_worker_count_and_runs_side_by_side(tmp_pa
     assert [r["env_workers"] for r in rows] == ["in process", "one subprocess per env", "in process"]
     assert [int(r["rollout_steps"]) for r in rows] == [32, 64, 64]
     assert all(float(r["steps_per_s_median"]) > 0 and float(r["collect_ms_per_step"]) > 0 for r in rows)
-    # The machine's rate of two runs is the sum of theirs: at least the slower run's twice.
+    # The machine's rate of two runs is the sum of theirs: at least the slower run's twice. Both are
+    # rounded to 0.1 step/s, so after rounding the doubled one may be up to 0.15 above.
     side = rows[2]
-    assert float(side["steps_per_s_median"]) >= 2 * float(side["per_run_steps_per_s_median"]) - 1e-6
+    assert float(side["steps_per_s_median"]) >= 2 * float(side["per_run_steps_per_s_median"]) - 0.15 - 1e-6
     text = md.read_text()
     assert "flownav bench train" in text and "--side-by-side 2" in text
     assert "2 runs side by side train" in text

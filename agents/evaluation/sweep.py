@@ -92,6 +92,9 @@ class SweepConfig:
     workers: int = field_range(1, 256, default=2)
     backend: Literal["local", "ray"] = "local"
     policy_dir: str = "results/policies"
+    # A <learned>@all flies its first this many shipped training seeds (0: every one), so that seeds shipped
+    # after the sweep was flown leave its layout-to-seed rotation, and so its episodes, as they were.
+    training_seeds: int = field_range(0, 1_000, default=0)
 
     def validate(self) -> None:
         for agent in self.agents:
@@ -132,11 +135,13 @@ class SweepConfig:
 
 def seed_rotation(config: SweepConfig, agent: str) -> list[str]:
     """The runs that fly an agent's episodes: the agent itself, or for ``<learned>@all`` each of its shipped
-    training seeds in turn (``ppo_flow@0``, ``ppo_flow@1``, ...); empty when it has none."""
+    training seeds in turn (``ppo_flow@0``, ``ppo_flow@1``, ...), the first ``training_seeds`` of them when
+    that is set; empty when it has none."""
     if not agent.endswith(ALL_SEEDS):
         return [agent]
     base = agent[: -len(ALL_SEEDS)]
-    return shipped_seed_runs(base, config.policy_folder())
+    runs = shipped_seed_runs(base, config.policy_folder())
+    return runs[: config.training_seeds] if config.training_seeds else runs
 
 
 def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, Any]]:

@@ -13,7 +13,7 @@ from agents.common.yaml_config import ConfigError, load_config
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import summarise
-from agents.evaluation.sweep import SweepConfig, build_tasks, pool_every_seed, pool_seeds
+from agents.evaluation.sweep import SweepConfig, build_tasks, pool_every_seed, pool_seeds, seed_rotation
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 
@@ -238,6 +238,27 @@ def test_all_seeds_of_a_learned_agent_share_each_cells_layouts_in_turn(tmp_path:
     assert {t.policy for t in tasks if t.agent == "ppo_flow@4"} == {str(policies / "ppo_flow" / "seed_4.zip")}
     rows = [{"agent": t.agent, "seed": t.seed} for t in tasks]
     assert {r["agent"] for r in pool_seeds(rows, config.agents)} == {"bee", "ppo_flow@all"}
+
+
+def test_training_seeds_keeps_a_flown_sweeps_rotation_when_more_seeds_are_shipped(tmp_path: Path) -> None:
+    policies = tmp_path / "policies"
+    (policies / "ppo_flow").mkdir(parents=True)
+    for seed in range(4):
+        (policies / "ppo_flow" / f"seed_{seed}.zip").write_bytes(b"")
+    config = load_config(
+        write_sweep_config(
+            tmp_path, agents=["ppo_flow@all"], policy_dir=str(policies), episodes=5, training_seeds=2
+        ),
+        SweepConfig,
+    )
+    assert seed_rotation(config, "ppo_flow@all") == ["ppo_flow@0", "ppo_flow@1"]
+    clean = [t.agent for t in build_tasks(config, config.agents) if t.factor == "clean"]
+    assert clean == ["ppo_flow@0", "ppo_flow@1"] * 2 + ["ppo_flow@0"]
+
+
+def test_a_negative_training_seed_count_is_refused_naming_the_range(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="training_seeds.*-1"):
+        load_config(write_sweep_config(tmp_path, training_seeds=-1), SweepConfig)
 
 
 def test_episodes_read_without_their_config_pool_every_training_seed() -> None:

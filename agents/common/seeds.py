@@ -19,6 +19,11 @@ Sub-ranges with one use each:
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
+Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy trained for a suite tier learns on the training range and is
+judged on the tier's validation range, both flown with the tier's course and sensor. Every tier has the same
+ranges, as every tier of the suite flies the same test layouts: a seed fixes the field, and the tier its speed,
+density and sensor, so the layouts of one tier's training are the same fields as another's and never a test one.
+
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
 used to pick anything.
 """
@@ -53,6 +58,12 @@ STUDENT_CHECK_SEED_START = 960_000
 # The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
 SUITE_SEED_START = 2_000_000
 SUITE_LAYOUTS = 300
+
+
+# Per suite tier: the layouts a policy for that tier trains on, and those that decide anything about it
+# (agents.policies.trained_tiers.tier_seed_split names the tier); the same two ranges for every tier.
+TIER_TRAINING_SEEDS = range(0, VALIDATION_SEED_START)
+TIER_VALIDATION_SEEDS = range(STUDENT_CHECK_SEED_START, TEST_SEED_START)
 
 
 def suite_seeds(layouts: int = SUITE_LAYOUTS) -> range:

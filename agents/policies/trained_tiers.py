@@ -13,6 +13,7 @@ import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from agents.common.seeds import TIER_TRAINING_SEEDS, TIER_VALIDATION_SEEDS
 from agents.common.yaml_config import load_config
 from agents.policies.base import is_learned
 from agents.policies.learned import policy_file
@@ -25,6 +26,26 @@ from flownav_env.tiers import (
     tier,
     tier_value,
 )
+
+@dataclasses.dataclass(frozen=True)
+class TierSeedSplit:
+    """The layouts a policy for one suite tier trains on, and those that decide anything about it."""
+
+    tier: str
+    training: range
+    validation: range
+
+
+def tier_seed_split(name: str) -> TierSeedSplit:
+    """The training and validation layouts of a suite tier (``agents.common.seeds``), disjoint from every test
+    layout; a policy across tiers draws from the same two ranges on each tier.
+
+    Raises:
+        ValueError: ``name`` is not a suite tier.
+    """
+    tier(name)  # one line naming the tiers for an unknown one
+    return TierSeedSplit(name, TIER_TRAINING_SEEDS, TIER_VALIDATION_SEEDS)
+
 
 # Settings that change what an agent is shown, not the task it flies.
 _SHOWN_SETTINGS = frozenset(AGENT_OBSERVATION_SETTINGS) | frozenset(PRIVILEGED_SETTING_VALUES)

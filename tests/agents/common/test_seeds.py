@@ -1,0 +1,39 @@
+"""The seed ranges: disjoint, and each tier's training split apart from every test layout."""
+
+from __future__ import annotations
+
+import pytest
+
+from agents.common.seeds import (
+    ABLATION_SEED_START,
+    PLANNER_TUNING_SEED_START,
+    STUDENT_CHECK_SEED_START,
+    SUITE_SEED_START,
+    TEST_SEED_START,
+    VALIDATION_SEED_START,
+    suite_seeds,
+)
+from agents.policies.trained_tiers import tier_seed_split
+from flownav_env.tiers import TIER_NAMES
+
+
+@pytest.mark.parametrize("tier", TIER_NAMES)
+def test_each_tier_trains_and_validates_apart_from_the_test_layouts(tier: str) -> None:
+    split = tier_seed_split(tier)
+    assert split.tier == tier
+    assert split.training.start == 0 and split.training.stop == VALIDATION_SEED_START
+    assert VALIDATION_SEED_START <= split.validation.start and split.validation.stop <= TEST_SEED_START
+    assert not set(range(split.training.start, split.training.stop)) & set(split.validation)
+    assert split.validation.stop <= SUITE_SEED_START and max(split.training) < min(suite_seeds())
+
+
+def test_a_tiers_validation_layouts_are_none_the_other_decisions_used() -> None:
+    validation = tier_seed_split("hard").validation
+    for other in (ABLATION_SEED_START, PLANNER_TUNING_SEED_START):
+        assert other not in validation
+    assert validation.start == STUDENT_CHECK_SEED_START
+
+
+def test_an_unknown_tier_is_refused_naming_the_tiers() -> None:
+    with pytest.raises(ValueError, match=r"tier must be one of clean, hard, noisy, hard_noisy, got 'easy'"):
+        tier_seed_split("easy")

@@ -27,6 +27,7 @@ from flownav_env.tiers import (
     tier_value,
 )
 
+
 @dataclasses.dataclass(frozen=True)
 class TierSeedSplit:
     """The layouts a policy for one suite tier trains on, and those that decide anything about it."""
@@ -62,13 +63,17 @@ def _flown(value: object, fixed: object, bounds: Sequence[float] | None) -> bool
         slack = _RELATIVE_TOLERANCE * max(abs(low), abs(high), 1e-12)
         return isinstance(value, (int, float)) and low - slack <= float(value) <= high + slack
     if isinstance(value, float) or isinstance(fixed, float):
-        return isinstance(value, (int, float)) and isinstance(fixed, (int, float)) and math.isclose(
-            float(value), float(fixed), rel_tol=_RELATIVE_TOLERANCE, abs_tol=1e-12
+        return (
+            isinstance(value, (int, float))
+            and isinstance(fixed, (int, float))
+            and math.isclose(float(value), float(fixed), rel_tol=_RELATIVE_TOLERANCE, abs_tol=1e-12)
         )
     return value == fixed
 
 
-def tiers_covered(env: Mapping[str, object], randomize: Mapping[str, Sequence[float] | None]) -> tuple[str, ...]:
+def tiers_covered(
+    env: Mapping[str, object], randomize: Mapping[str, Sequence[float] | None]
+) -> tuple[str, ...]:
     """The tiers (suite order) whose every task setting a training run with fixed settings ``env`` and per-episode
     ranges ``randomize`` flew. Settings that only shape the observation are not compared.
 
@@ -78,7 +83,9 @@ def tiers_covered(env: Mapping[str, object], randomize: Mapping[str, Sequence[fl
     known = {item.name for item in dataclasses.fields(EnvSettings)}
     unknown = sorted((set(env) | {key for key, bounds in randomize.items() if bounds}) - known)
     if unknown:
-        raise ValueError(f"not FlowNav env settings: {', '.join(unknown)}; settings are {', '.join(sorted(known))}")
+        raise ValueError(
+            f"not FlowNav env settings: {', '.join(unknown)}; settings are {', '.join(sorted(known))}"
+        )
     defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
     compared = sorted(
         ({key for key, bounds in randomize.items() if bounds} | set(env) | _tier_settings()) - _SHOWN_SETTINGS

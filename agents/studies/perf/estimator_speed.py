@@ -22,8 +22,8 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from agents.studies.perf.flight import Flight
-from agents.studies.perf.report_kit import median, quiet_gc
+from agents.studies.perf.flight import Flight, fast_lk
+from agents.studies.perf.report_kit import interval, median, quiet_gc
 from estimator import DepthPoints, FlowDepthEstimator
 from estimator.accuracy import relative_depth_error
 
@@ -92,14 +92,9 @@ def _stream_pass(
             result = results[name]
             if name == "bare":
                 start = time.perf_counter()
-                keypoints = detector.detect(previous)
-                if keypoints:
-                    points = np.asarray(cv2.KeyPoint.convert(keypoints)).reshape(-1, 1, 2)
-                    cv2.calcOpticalFlowPyrLK(
-                        previous, current, points, None, winSize=(WIN_SIZE, WIN_SIZE), maxLevel=MAX_LEVEL
-                    )
+                corners = fast_lk(detector, previous, current, WIN_SIZE, MAX_LEVEL)
                 result.seconds.append(time.perf_counter() - start)
-                result.corners.append(len(keypoints))
+                result.corners.append(corners)
                 continue
             start = time.perf_counter()
             depth_points = estimators[name].update(current, rotation, translation)
@@ -182,12 +177,11 @@ def _stream_row(
     for name in ESTIMATOR_CONFIGS:
         # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
         # the frames of a pass, then the median and range over the passes.
-        ratios = [median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
         if name != "fb_on":
             row[f"ms_total_{name}"] = 1e3 * median([median(run[name].seconds) for run in runs])
-        row[f"ratio_{name}"] = median(ratios)
-        row[f"ratio_{name}_min"] = min(ratios)
-        row[f"ratio_{name}_max"] = max(ratios)
+        row |= interval(
+            f"ratio_{name}", [median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
+        )
     row["depth_error_median_pct"] = 100 * _depth_error(flight, kept)
     return row
 

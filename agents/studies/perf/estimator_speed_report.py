@@ -61,19 +61,9 @@ def run_estimator_benchmark(
     out_dir: str | Path = "results",
     progress: bool = True,
 ) -> list[Path]:
-    """Record the flight, run :func:`run_estimator_table` and write the Markdown report, CSV and plot.
-
-    Args:
-        frames: frame pairs of the flight.
-        thresholds: FAST thresholds to sweep.
-        repeats: timed passes per configuration.
-        width, height: camera resolution (thesis: 640×480).
-        layout, seed: the flight's scene.
-        out_dir: output folder (created).
-        progress: show progress bars.
-
-    Returns:
-        Paths of ``estimator_performance.md``, ``.csv`` and ``.png``.
+    """Record the flight (``frames`` pairs at ``width``×``height`` in ``layout``, ``seed``), run
+    :func:`run_estimator_table` on it and write ``estimator_performance.md``, ``.csv`` and ``.png`` to ``out_dir``
+    (created). Returns their paths.
 
     Raises:
         ValueError: bad counts, or the flight ends before ``frames`` pairs.
@@ -163,14 +153,8 @@ def estimator_report_values(
 
 
 def _flight_values(flight: Mapping[str, Any]) -> dict[str, str]:
-    return {
-        "layout": str(flight["layout"]),
-        "seed": str(flight["seed"]),
-        "frames": str(flight["frames"]),
-        "width": str(flight["width"]),
-        "height": str(flight["height"]),
+    return {key: str(value) for key, value in flight.items()} | {
         "fov_deg": f"{flight['fov_deg']:.0f}",
-        "forward_speed": str(flight["forward_speed"]),
         "frame_rate": f"{flight['frame_rate']:.0f}",
         "metres_per_frame": f"{flight['forward_speed'] / flight['frame_rate']:.2f}",
     }

@@ -9,7 +9,7 @@ import yaml
 from flownav_env.settings_check import ENV_ARGUMENTS, unknown_setting_message
 
 # Every command that flies episodes in local processes starts from this many unless told (--workers): two, as
-# the machines FlowNav is developed and benchmarked on have two cores (results/training_throughput.md).
+# the machines FlowNav is developed and benchmarked on have two cores (`nproc` in results/training_performance.md).
 DEFAULT_WORKERS = 2
 
 

@@ -2,12 +2,12 @@
 scratch folder; ``--out results`` replaces the committed report.
 
 ``flownav bench estimator``: thesis Table 3 on a rendered 640×480 flight (points and ms per stage against the
-FAST threshold, against bare OpenCV FAST + LK and a per-point Python depth loop).
+FAST threshold, against bare OpenCV FAST + LK).
 
 ``flownav bench env``: steps per second of FlowNav-v0 per camera resolution against a bare MuJoCo physics +
 render loop of the same scene, with the per-stage breakdown of a step.
 
-``flownav bench train``: PPO training steps per second against the number of env workers.
+``flownav bench recipe``: minutes per training seed of whole recipes, measured side by side.
 
 ``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights, and
 multi-frame depth (``baseline_frames``) on ICL-NUIM.
@@ -22,18 +22,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.common.locations import CONFIGS_DIR
-from agents.common.yaml_config import load_config
-from agents.training.train_config import TrainConfig
-
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
 if __doc__:  # None under python -OO
     __doc__ = __doc__.replace("{scratch_out}", SCRATCH_OUT.as_posix())
 
 HELP = (
-    "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution) and "
-    "`bench train` (training steps/s per n_envs), `bench recipe` (minutes per training seed of whole recipes)"
+    "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution), "
+    "`bench recipe` (minutes per training seed of whole recipes) and `bench yield` (valid depths per setting)"
 )
 
 
@@ -59,12 +55,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     estimator.add_argument("--height", type=int, default=480, help="camera height in px (default 480)")
     estimator.add_argument("--layout", default="three", help="env layout of the flight (default three)")
     estimator.add_argument("--seed", type=int, default=0, help="env seed of the flight (default 0)")
-    estimator.add_argument(
-        "--loop-frames",
-        type=int,
-        default=10,
-        help="frame pairs on which the per-point depth loops are timed (default 10; they are slow)",
-    )
     _add_output_options(estimator)
 
     env = targets.add_parser(
@@ -86,30 +76,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
     _add_output_options(env)
-
-    train = targets.add_parser("train", help="PPO training steps/s against the number of env workers")
-    train.add_argument(
-        "--config",
-        type=Path,
-        default=CONFIGS_DIR / "ppo_flow.yaml",
-        help="training config whose PPO and env settings are timed (default configs/ppo_flow.yaml)",
-    )
-    train.add_argument(
-        "--n-envs",
-        type=_int_list,
-        default=(1, 2, 3, 4),
-        help="comma-separated worker counts (default 1,2,3,4)",
-    )
-    train.add_argument("--rollouts", type=int, default=2, help="timed rollouts per run (default 2)")
-    train.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
-    train.add_argument(
-        "--side-by-side",
-        type=int,
-        default=0,
-        help="also time this many runs of the config's n_envs at once, each stepping its own envs, as "
-        "flownav train --seeds --parallel trains them (default 0: off)",
-    )
-    _add_output_options(train)
 
     recipe = targets.add_parser(
         "recipe", help="minutes per training seed of whole recipes (all their stages), side by side"
@@ -176,7 +142,6 @@ def run(args: argparse.Namespace) -> int:
             height=args.height,
             layout=args.layout,
             seed=args.seed,
-            loop_frames=args.loop_frames,
             out_dir=args.out,
             progress=not args.no_progress,
         )
@@ -207,20 +172,6 @@ def run(args: argparse.Namespace) -> int:
             make_teacher=make_teacher,
             ablation_dir=args.ablation_dir,
             progress=not args.no_progress,
-        )
-    elif args.target == "train":
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.studies.perf.training_speed import run_training_benchmark
-
-        paths = run_training_benchmark(
-            load_config(args.config, TrainConfig),
-            args.config,
-            args.n_envs,
-            args.rollouts,
-            args.repeats,
-            args.out,
-            progress=not args.no_progress,
-            side_by_side=args.side_by_side,
         )
     else:
         # Imported on use: `flownav --help` imports every subcommand module and must stay quick.

@@ -70,8 +70,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=1,
         help="with --seeds and the local backend: train this many seeds at a time, each in one process that "
-        "steps its own envs (same rollouts; on a small machine more steps per second than one at a time: "
-        "results/training_throughput.md measures how many more). Default 1",
+        "steps its own envs (same rollouts; on a small machine more steps per second than one at a time). "
+        "Default 1",
     )
     parser.add_argument(
         "--park",

@@ -79,8 +79,8 @@ def build_envs(
     By default the envs run in forkserver subprocesses (a forked EGL context hangs) that ignore Ctrl-C, with
     ``EVAL_WORKERS`` evaluation envs; with one env, both run in this process (one evaluation env).
     ``in_process=True`` steps the same envs, with the same seeds, in this process (``DummyVecEnv``): for
-    several training seeds side by side, one process per core, where a lock-stepped worker per env loses a
-    third of the cores to waiting (``results/training_throughput.md``). Both give the same rollouts.
+    several training seeds side by side, one process per core, where a lock-stepped worker per env loses
+    cores to waiting. Both give the same rollouts.
 
     ``teacher_settings`` (a privileged teacher's ``observe_layout``) are given to the training envs only, and
     both vector envs are wrapped in :class:`~agents.training.student_view.StudentView`, so the policy built on

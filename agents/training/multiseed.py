@@ -6,9 +6,8 @@ Seed k is the config with ``seed: k``: PPO's seed and the start of its env worke
 
 The seeds are independent jobs. The local backend trains them in turn in this process (each with its own env
 workers), or ``parallel`` at a time, each in a process of its own that steps its envs itself: on a small
-machine that keeps every core stepping an env instead of idling in lock-step (``flownav bench train``
-measures both); the Ray backend submits each as a task asking for ``n_envs`` CPUs, so a cluster trains them side
-by side.
+machine that keeps every core stepping an env instead of idling in lock-step; the Ray backend submits each as
+a task asking for ``n_envs`` CPUs, so a cluster trains them side by side.
 Every job resumes: a seed whose record shows its full budget is skipped, one with checkpoints continues from the
 newest, and one without starts fresh. Re-running the same command after an interruption picks up where it
 stopped.

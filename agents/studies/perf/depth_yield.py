@@ -206,9 +206,16 @@ def _setting_value(text: str) -> Any:
         return float(text)
 
 
-def _band_name(band: tuple[float, float]) -> str:
-    low, high = band
-    return f"≥ {low:g} m" if math.isinf(high) else f"{low:g}–{high:g} m"
+def _by_band(bands: list[dict[str, Any]]) -> tuple[list[str], dict[str, list[dict[str, Any]]]]:
+    """The true-depth bands' names, and each variant's rows in band order."""
+    names = [
+        f"≥ {low:g} m" if math.isinf(high) else f"{low:g}–{high:g} m"
+        for low, high in dict.fromkeys(row["band"] for row in bands)
+    ]
+    variants: dict[str, list[dict[str, Any]]] = {}
+    for row in bands:
+        variants.setdefault(row["variant"], []).append(row)
+    return names, variants
 
 
 def yield_report_values(
@@ -231,18 +238,11 @@ def yield_report_values(
         "p90 error": "{p90_rel_error:.1%}",
         "estimator ms (median)": "{estimator_ms:.2f}",
     }
+    band_names, variants = _by_band(bands)
     by_band = [
-        [
-            name,
-            *(
-                f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}"
-                for row in bands
-                if row["variant"] == name
-            ),
-        ]
-        for name in dict.fromkeys(row["variant"] for row in bands)
+        [name, *(f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}" for row in rows)]
+        for name, rows in variants.items()
     ]
-    band_names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
     icl_columns = {
         "streamed every": "{step}",
         "k": "{baseline_frames}",
@@ -268,13 +268,11 @@ def yield_report_values(
 
 
 def _plot(bands: list[dict[str, Any]], path: Path) -> None:
-    names = [_band_name(band) for band in dict.fromkeys(row["band"] for row in bands)]
-    variants = list(dict.fromkeys(row["variant"] for row in bands))
+    names, variants = _by_band(bands)
     width, x = 0.8 / len(variants), np.arange(len(names))
     with saved_figure(path, (12, 4.5)) as figure:
         count_axis, error_axis = figure.subplots(1, 2)
-        for index, name in enumerate(variants):
-            rows = [row for row in bands if row["variant"] == name]
+        for index, (name, rows) in enumerate(variants.items()):
             offset = x + (index - (len(variants) - 1) / 2) * width
             count_axis.bar(offset, [row["valid_per_frame"] for row in rows], width, label=name)
             error_axis.bar(offset, [100 * row["median_rel_error"] for row in rows], width, label=name)

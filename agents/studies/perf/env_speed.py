@@ -24,8 +24,8 @@ import mujoco
 import numpy as np
 from tqdm import tqdm
 
-from agents.studies.perf.flight import scripted_action
-from agents.studies.perf.report_kit import median, quiet_gc
+from agents.studies.perf.flight import fast_lk, scripted_action
+from agents.studies.perf.report_kit import interval, median, quiet_gc
 from flownav_env.rendering import CameraRenderer
 from flownav_env.stage_timing import STAGES, StageTimes
 
@@ -119,15 +119,13 @@ def _floor_block(subject: _Subject, steps: int) -> float:
     """
     estimator = subject.inner.estimator
     detector = cv2.FastFeatureDetector.create(estimator.fast_threshold, True)
-    window = (estimator.win_size, estimator.win_size)
     previous: list[np.ndarray] = []
 
     def track(frame: np.ndarray) -> None:
         gray = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
-        if previous and (keypoints := detector.detect(previous[0])):
-            points = np.asarray(cv2.KeyPoint.convert(keypoints))[: estimator.max_points].reshape(-1, 1, 2)
-            cv2.calcOpticalFlowPyrLK(
-                previous[0], gray, points, None, winSize=window, maxLevel=estimator.max_level
+        if previous:
+            fast_lk(
+                detector, previous[0], gray, estimator.win_size, estimator.max_level, estimator.max_points
             )
         previous[:] = [gray]
 
@@ -253,8 +251,7 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
         ("ratio_floor_bare", "ratio_floor", "floor", "bare"),
         ("ratio_env_floor", "ratio_env_floor", "env", "floor"),
     ):
-        ratios = [a / b for a, b in zip(sides[top], sides[bottom], strict=True)]
-        row |= {name: median(ratios), f"{prefix}_min": min(ratios), f"{prefix}_max": max(ratios)}
+        row |= interval(name, [a / b for a, b in zip(sides[top], sides[bottom], strict=True)], prefix)
     row |= {
         "ms_floor": 1e3 * median(subject.floor_blocks),
         "ms_bare": 1e3 * bare_step,

@@ -2,13 +2,9 @@
 
 A scripted flight through the capsule scene is rendered once at 640×480 with the true relative motion of every
 frame pair. On those frames, for each FAST threshold, the streaming estimator (``FlowDepthEstimator.update``)
-is timed per stage and counted (corners found, depths used), beside two baselines run in the same process and
-alternated with it:
-
-* bare OpenCV: ``FastFeatureDetector.detect`` on the previous frame + one ``calcOpticalFlowPyrLK`` call into the
-  next (same window, pyramid levels and stopping criteria), i.e. the least any FAST + LK pipeline must do;
-* the depth stage as a per-point Python loop (two versions: plain Python floats, and numpy small vectors per
-  point) against the vectorised :func:`estimator.geometry.solve_depth` + :func:`valid_depth_mask`.
+is timed per stage and counted (corners found, depths used), beside bare OpenCV run in the same process and
+alternated with it: ``FastFeatureDetector.detect`` on the previous frame + one ``calcOpticalFlowPyrLK`` call into
+the next (same window, pyramid levels and stopping criteria), i.e. the least any FAST + LK pipeline must do.
 
 The estimator runs uncapped (``max_points=None``) so that, as in the thesis, the point count follows the
 threshold, and so that the bare baseline tracks exactly the same corners (equal point counts).
@@ -26,9 +22,8 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from agents.studies.perf.depth_loops import DEPTH_FUNCTIONS
-from agents.studies.perf.flight import Flight
-from agents.studies.perf.report_kit import median, quiet_gc
+from agents.studies.perf.flight import Flight, fast_lk
+from agents.studies.perf.report_kit import interval, median, quiet_gc
 from estimator import DepthPoints, FlowDepthEstimator
 from estimator.accuracy import relative_depth_error
 
@@ -47,7 +42,6 @@ ESTIMATOR_CONFIGS: dict[str, dict[str, Any]] = {
 # The throughput target: the streaming estimator with its forward-backward check at most 1.3x bare FAST + LK.
 TARGET_RATIO_BARE = 1.3
 DEFAULT_THRESHOLD = 20  # FlowDepthEstimator's default fast_threshold
-TARGET_DEPTH_SPEEDUP = 50.0
 
 
 # --- timing -----------------------------------------------------------------------------------------------------
@@ -98,14 +92,9 @@ def _stream_pass(
             result = results[name]
             if name == "bare":
                 start = time.perf_counter()
-                keypoints = detector.detect(previous)
-                if keypoints:
-                    points = np.asarray(cv2.KeyPoint.convert(keypoints)).reshape(-1, 1, 2)
-                    cv2.calcOpticalFlowPyrLK(
-                        previous, current, points, None, winSize=(WIN_SIZE, WIN_SIZE), maxLevel=MAX_LEVEL
-                    )
+                corners = fast_lk(detector, previous, current, WIN_SIZE, MAX_LEVEL)
                 result.seconds.append(time.perf_counter() - start)
-                result.corners.append(len(keypoints))
+                result.corners.append(corners)
                 continue
             start = time.perf_counter()
             depth_points = estimators[name].update(current, rotation, translation)
@@ -123,30 +112,26 @@ def run_estimator_table(
     flight: Flight,
     thresholds: Sequence[int],
     repeats: int,
-    loop_frames: int,
     progress: bool = True,
-) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Time the streaming estimator, bare FAST + LK and the depth-stage variants on a flight.
+) -> list[dict[str, Any]]:
+    """Time the streaming estimator and bare FAST + LK on a flight.
 
     Args:
         flight: from :func:`record_flight`.
         thresholds: FAST thresholds to sweep.
         repeats: timed passes per threshold (configurations interleaved frame by frame inside a pass,
             thresholds visited forward and backward on alternate passes).
-        loop_frames: frame pairs on which the depth loops are timed (the first ones of the flight).
         progress: show tqdm progress bars.
 
     Returns:
-        ``(rows, depth_rows)``: one dict per threshold for the Table 3 stream timings, and one per threshold
-        for the depth-stage comparison.
+        One dict per threshold: the Table 3 stream timings.
 
     Raises:
-        ValueError: ``repeats`` or ``loop_frames`` < 1, or an empty ``thresholds``.
+        ValueError: ``repeats`` < 1, or an empty ``thresholds``.
     """
-    if repeats < 1 or loop_frames < 1 or not thresholds:
+    if repeats < 1 or not thresholds:
         raise ValueError(
-            f"need repeats >= 1, loop_frames >= 1 and at least one threshold, got repeats={repeats}, "
-            f"loop_frames={loop_frames}, thresholds={list(thresholds)}"
+            f"need repeats >= 1 and at least one threshold, got repeats={repeats}, thresholds={list(thresholds)}"
         )
     names = ["bare", *ESTIMATOR_CONFIGS]
     passes: dict[int, list[dict[str, _Pass]]] = {threshold: [] for threshold in thresholds}
@@ -168,11 +153,7 @@ def run_estimator_table(
             bar.update()
     bar.close()
 
-    rows = [_stream_row(threshold, passes[threshold], flight, kept[threshold]) for threshold in thresholds]
-
-    defaults = FlowDepthEstimator(flight.intrinsics)
-    depth_rows = _time_depth_stage(flight, thresholds, kept, repeats, loop_frames, defaults, progress)
-    return rows, depth_rows
+    return [_stream_row(threshold, passes[threshold], flight, kept[threshold]) for threshold in thresholds]
 
 
 def _stream_row(
@@ -196,12 +177,11 @@ def _stream_row(
     for name in ESTIMATOR_CONFIGS:
         # Ratio frame by frame (each estimator call against the bare call next to it in time), median over
         # the frames of a pass, then the median and range over the passes.
-        ratios = [median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
         if name != "fb_on":
             row[f"ms_total_{name}"] = 1e3 * median([median(run[name].seconds) for run in runs])
-        row[f"ratio_{name}"] = median(ratios)
-        row[f"ratio_{name}_min"] = min(ratios)
-        row[f"ratio_{name}_max"] = max(ratios)
+        row |= interval(
+            f"ratio_{name}", [median(np.divide(run[name].seconds, run["bare"].seconds)) for run in runs]
+        )
     row["depth_error_median_pct"] = 100 * _depth_error(flight, kept)
     return row
 
@@ -216,111 +196,3 @@ def _depth_error(flight: Flight, kept: list[DepthPoints]) -> float:
         if points.num_valid
     ]
     return float(np.nanmedian(np.concatenate(errors))) if errors else math.nan
-
-
-def _time_depth_stage(
-    flight: Flight,
-    thresholds: Sequence[int],
-    kept: dict[int, list[DepthPoints]],
-    repeats: int,
-    loop_frames: int,
-    defaults: FlowDepthEstimator,
-    progress: bool,
-) -> list[dict[str, Any]]:
-    limits = (defaults.min_parallax_px, defaults.max_epipolar_error_px)
-    rows = []
-    bar = tqdm(total=len(thresholds), desc="depth stage", disable=not progress)
-    for threshold in thresholds:
-        frames = kept[threshold][:loop_frames]
-        per_function: dict[str, list[float]] = {name: [] for name in DEPTH_FUNCTIONS}
-        points_per_frame = []
-        max_depth_difference = 0.0
-        mask_agreement = []
-        for index, points in enumerate(frames):
-            if points.num_points == 0:
-                continue
-            arguments = (
-                points.points,
-                points.next_points,
-                flight.rotations[index],
-                flight.translations[index],
-                flight.intrinsics,
-                *limits,
-            )
-            seconds, outputs = _time_depth_functions(arguments, repeats)
-            for name in DEPTH_FUNCTIONS:
-                per_function[name].append(median(seconds[name]))
-            points_per_frame.append(points.num_points)
-            difference, agreement = _loops_against_kernel(outputs)
-            max_depth_difference = max(max_depth_difference, difference)
-            mask_agreement += agreement
-        bar.update()
-        rows.append(
-            _depth_stage_row(threshold, per_function, points_per_frame, max_depth_difference, mask_agreement)
-        )
-    bar.close()
-    return rows
-
-
-def _time_depth_functions(
-    arguments: tuple[Any, ...], repeats: int
-) -> tuple[dict[str, list[float]], dict[str, Any]]:
-    """Each depth function's seconds on one frame's points over ``repeats`` calls (the order rotated each
-    repeat, so no function always runs with warm caches), and its output."""
-    seconds: dict[str, list[float]] = {name: [] for name in DEPTH_FUNCTIONS}
-    outputs = {}
-    with quiet_gc():
-        for repeat in range(repeats):
-            names = list(DEPTH_FUNCTIONS)
-            shift = repeat % len(names)
-            for name in names[shift:] + names[:shift]:
-                start = time.perf_counter()
-                outputs[name] = DEPTH_FUNCTIONS[name](*arguments)
-                seconds[name].append(time.perf_counter() - start)
-    return seconds, outputs
-
-
-def _loops_against_kernel(outputs: dict[str, Any]) -> tuple[float, list[float]]:
-    """The loops' largest relative depth difference from the vectorised kernel, and each loop's share of
-    points whose validity agrees with it."""
-    # The loops must compute what the kernel computes, or the speed-up means nothing.
-    reference_depth, reference_valid = outputs["vectorised"]
-    max_depth_difference = 0.0
-    mask_agreement = []
-    for name in ("loop_floats", "loop_numpy"):
-        depth, valid = outputs[name]
-        both = np.isfinite(depth) & np.isfinite(reference_depth)
-        if both.any():
-            relative = np.abs(depth[both] - reference_depth[both]) / np.abs(reference_depth[both])
-            max_depth_difference = max(max_depth_difference, float(relative.max()))
-        mask_agreement.append(float(np.mean(valid == reference_valid)))
-    return max_depth_difference, mask_agreement
-
-
-def _depth_stage_row(
-    threshold: int,
-    per_function: dict[str, list[float]],
-    points_per_frame: list[int],
-    max_depth_difference: float,
-    mask_agreement: list[float],
-) -> dict[str, Any]:
-    """One threshold's depth-stage row: per frame and per point times, and the loops' speed-ups and agreement."""
-    total = {name: float(np.sum(values)) for name, values in per_function.items()}
-    vectorised = total["vectorised"]
-    count = float(np.sum(points_per_frame)) if points_per_frame else math.nan
-    frames = max(1, len(points_per_frame))
-    return {
-        "fast_threshold": threshold,
-        "frames": len(points_per_frame),
-        "points_per_frame": count / frames,
-        "ms_vectorised": 1e3 * vectorised / frames,
-        "ms_loop_floats": 1e3 * total["loop_floats"] / frames,
-        "ms_loop_numpy": 1e3 * total["loop_numpy"] / frames,
-        "us_per_point_vectorised": 1e6 * vectorised / count,
-        "us_per_point_loop_floats": 1e6 * total["loop_floats"] / count,
-        "us_per_point_loop_numpy": 1e6 * total["loop_numpy"] / count,
-        "speedup_vs_loop_floats": total["loop_floats"] / vectorised if vectorised else math.nan,
-        "speedup_vs_loop_numpy": total["loop_numpy"] / vectorised if vectorised else math.nan,
-        "max_relative_depth_difference": max_depth_difference,
-        "valid_mask_agreement": min(mask_agreement) if mask_agreement else math.nan,
-    }

@@ -3,9 +3,8 @@ The prose is ``templates/estimator_performance.md.j2``; :func:`estimator_report_
 
 from __future__ import annotations
 
-import statistics
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -13,14 +12,22 @@ from agents.common.jinja_reports import render
 from agents.common.tables import write_csv
 from agents.studies.perf.estimator_speed import (
     DEFAULT_THRESHOLD,
+    ESTIMATOR_CONFIGS,
     MAX_LEVEL,
-    TARGET_DEPTH_SPEEDUP,
     TARGET_RATIO_BARE,
     WIN_SIZE,
     run_estimator_table,
 )
 from agents.studies.perf.flight import record_flight
-from agents.studies.perf.report_kit import PACKAGE, RunFacts, rounded, saved_figure, table, write_report
+from agents.studies.perf.report_kit import (
+    PACKAGE,
+    RunFacts,
+    median,
+    rounded,
+    saved_figure,
+    table,
+    write_report,
+)
 from estimator import CameraIntrinsics, FlowDepthEstimator
 
 Row = dict[str, Any]
@@ -51,24 +58,12 @@ def run_estimator_benchmark(
     height: int = 480,
     layout: str = "three",
     seed: int = 0,
-    loop_frames: int = 10,
     out_dir: str | Path = "results",
     progress: bool = True,
 ) -> list[Path]:
-    """Record the flight, run :func:`run_estimator_table` and write the Markdown report, CSV and plot.
-
-    Args:
-        frames: frame pairs of the flight.
-        thresholds: FAST thresholds to sweep.
-        repeats: timed passes per configuration.
-        width, height: camera resolution (thesis: 640×480).
-        layout, seed: the flight's scene.
-        loop_frames: frame pairs for the depth-loop comparison.
-        out_dir: output folder (created).
-        progress: show progress bars.
-
-    Returns:
-        Paths of ``estimator_performance.md``, ``.csv``, ``_depth_stage.csv`` and ``.png``.
+    """Record the flight (``frames`` pairs at ``width``×``height`` in ``layout``, ``seed``), run
+    :func:`run_estimator_table` on it and write ``estimator_performance.md``, ``.csv`` and ``.png`` to ``out_dir``
+    (created). Returns their paths.
 
     Raises:
         ValueError: bad counts, or the flight ends before ``frames`` pairs.
@@ -78,22 +73,17 @@ def run_estimator_benchmark(
     command = (
         f"flownav bench estimator --frames {frames} --repeats {repeats} "
         f"--thresholds {','.join(map(str, thresholds))} --width {width} --height {height} "
-        f"--layout {layout} --seed {seed} --loop-frames {loop_frames} --out {out_dir}"
+        f"--layout {layout} --seed {seed} --out {out_dir}"
     )
     started = time.perf_counter()
     with record_flight(frames, width, height, layout, seed) as flight:
-        rows, depth_rows = run_estimator_table(flight, thresholds, repeats, loop_frames, progress)
+        rows = run_estimator_table(flight, thresholds, repeats, progress)
         description = flight.description
     run = RunFacts.of_this_run(command, started)
-    stem = out_dir / "estimator_performance"
-    paths = [stem.with_suffix(".md"), stem.with_suffix(".csv"), out_dir / f"{stem.name}_depth_stage.csv"]
-    paths.append(stem.with_suffix(".png"))
+    paths = [out_dir / f"estimator_performance.{ext}" for ext in ("md", "csv", "png")]
     write_csv(paths[1], rounded(rows))
-    write_csv(paths[2], rounded(depth_rows))
-    plot_estimator_performance(rows, paths[3])
-    values = estimator_report_values(
-        rows, depth_rows, description, repeats, loop_frames, estimator_defaults(), run
-    )
+    plot_estimator_performance(rows, paths[2])
+    values = estimator_report_values(rows, description, repeats, estimator_defaults(), run)
     write_report(paths[0], "estimator_performance.md.j2", values)
     return paths
 
@@ -141,45 +131,30 @@ def estimator_defaults() -> dict[str, Any]:
 
 def estimator_report_values(
     rows: list[Row],
-    depth_rows: list[Row],
     flight: Mapping[str, Any],
     repeats: int,
-    loop_frames: int,
     defaults: Mapping[str, Any],
     run: RunFacts,
 ) -> dict[str, Any]:
     """Every figure, table and verdict of ``templates/estimator_performance.md.j2``, from
-    :func:`run_estimator_table`'s rows (Table 3 and the depth stage), the flight's description
-    (``Flight.description``), the benchmark's repeats and loop frames, the estimator's default settings
-    (:func:`estimator_defaults`) and the run's facts."""
+    :func:`run_estimator_table`'s rows (Table 3), the flight's description (``Flight.description``), the
+    benchmark's repeats, the estimator's default settings (:func:`estimator_defaults`) and the run's facts."""
     return {
         "run": run,
         "repeats": str(repeats),
-        "loop_frames": str(loop_frames),
         **_flight_values(flight),
         **_settings_values(defaults),
         "bare_win_size": str(WIN_SIZE),
         "bare_max_level": str(MAX_LEVEL),
         "equal_counts": str(all(row["equal_counts"] for row in rows)),
         "stage_table": _stage_table(rows),
-        "depth_table": _depth_table(depth_rows),
-        "max_difference": f"{max(row['max_relative_depth_difference'] for row in depth_rows):.1e}",
-        "agreement_pct": f"{100 * min(row['valid_mask_agreement'] for row in depth_rows):.2f}",
-        **_working_range_values(rows),
-        **_target_values(rows, depth_rows),
-        **_speedup_growth_values(depth_rows),
+        **_target_values(rows),
     }
 
 
 def _flight_values(flight: Mapping[str, Any]) -> dict[str, str]:
-    return {
-        "layout": str(flight["layout"]),
-        "seed": str(flight["seed"]),
-        "frames": str(flight["frames"]),
-        "width": str(flight["width"]),
-        "height": str(flight["height"]),
+    return {key: str(value) for key, value in flight.items()} | {
         "fov_deg": f"{flight['fov_deg']:.0f}",
-        "forward_speed": str(flight["forward_speed"]),
         "frame_rate": f"{flight['frame_rate']:.0f}",
         "metres_per_frame": f"{flight['forward_speed'] / flight['frame_rate']:.2f}",
     }
@@ -219,109 +194,56 @@ def _stage_table(rows: list[Row]) -> str:
     return table(cells, columns)
 
 
-def _depth_table(depth_rows: list[Row]) -> str:
-    """The depth stage against the two per-point loops, per FAST threshold."""
-    times = ("vectorised", "loop_floats", "loop_numpy")
-    cells = [row | {f"{key}_ms": _ms(row[f"ms_{key}"]) for key in times} for row in depth_rows]
-    columns = [
-        ("FAST thr.", "{fast_threshold}"),
-        ("points/frame", "{points_per_frame:.0f}"),
-        ("vectorised ms", "{vectorised_ms}"),
-        ("loop (floats) ms", "{loop_floats_ms}"),
-        ("speed-up", "{speedup_vs_loop_floats:.1f}×"),
-        ("loop (numpy/pt) ms", "{loop_numpy_ms}"),
-        ("speed-up", "{speedup_vs_loop_numpy:.1f}×"),
-        (
-            "µs/pt vec / floats / numpy",
-            "{us_per_point_vectorised:.3f} / {us_per_point_loop_floats:.2f} / {us_per_point_loop_numpy:.1f}",
-        ),
-    ]
-    return table(cells, columns)
-
-
-def _working(table: list[Row], count_key: str) -> list[Row]:
-    """The rows in the working range of point counts, or all rows where none reaches it."""
-    return [row for row in table if row[count_key] >= WORKING_POINTS] or table
-
-
-def _working_range_values(rows: list[Row]) -> dict[str, str | bool]:
-    """The default threshold's point count and the thresholds the verdicts' ranges run over."""
-    default_row = next((row for row in rows if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
+def _target_values(rows: list[Row]) -> dict[str, str | bool]:
+    """The verdicts against the bare-baseline target: at the default threshold, and over the rows in the working
+    range of point counts (all rows where none reaches it), where fixed per-call costs no longer dominate."""
+    default = next((row for row in rows if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
     working = [row for row in rows if row["points_found"] >= WORKING_POINTS]
     values: dict[str, str | bool] = {
         "default_threshold": str(DEFAULT_THRESHOLD),
-        "default_swept": default_row is not None,
+        "default_swept": default is not None,
         "working_points": str(WORKING_POINTS),
         "any_working": bool(working),
+        "target_ratio": f"{TARGET_RATIO_BARE:.1f}",
+        "flow_full_vs_lk": f"{_flow_full_vs_lk(working or rows):.1f}",
     }
-    if default_row is not None:
-        values["default_points"] = f"{default_row['points_found']:.0f}"
+    if default is not None:
+        values["default_points"] = f"{default['points_found']:.0f}"
     if working:
         values["working_thresholds"] = ", ".join(str(row["fast_threshold"]) for row in working)
+    for name in ESTIMATOR_CONFIGS:
+        values[f"verdict_{name}"] = _verdict(working or rows, default, f"ratio_{name}")
     return values
 
 
-def _verdict(table: list[Row], count_key: str, key: str, ok: Callable[[float], bool]) -> str:
-    """One target's verdict (``templates/target_verdict.md.j2``): at the default threshold, and over the working
-    range of point counts, where fixed per-call costs no longer dominate."""
-    values = [row[key] for row in _working(table, count_key)]
-    at_default = next((row[key] for row in table if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
+def _verdict(working: list[Row], default: Row | None, key: str) -> str:
+    """One configuration's verdict (``templates/target_verdict.md.j2``): its ratio at the default threshold and
+    its range over the working rows."""
+    ratios = [row[key] for row in working]
     fields: dict[str, str | bool] = {
-        "swept": at_default is not None,
-        "low": f"{min(values):.2f}",
-        "high": f"{max(values):.2f}",
-        "met_rows": str(sum(bool(ok(value)) for value in values)),
-        "rows": str(len(values)),
+        "swept": default is not None,
+        "low": f"{min(ratios):.2f}",
+        "high": f"{max(ratios):.2f}",
+        "met_rows": str(sum(bool(ratio <= TARGET_RATIO_BARE) for ratio in ratios)),
+        "rows": str(len(ratios)),
     }
-    if at_default is not None:
-        fields.update(at_default=f"{at_default:.2f}", met=bool(ok(at_default)))
+    if default is not None:
+        fields.update(at_default=f"{default[key]:.2f}", met=bool(default[key] <= TARGET_RATIO_BARE))
     # The verdict sits inside a line of the report: the template file's final newline is not part of it.
     return render(PACKAGE, "target_verdict.md.j2", fields, every_value_used=True).removesuffix("\n")
 
 
-def _target_values(rows: list[Row], depth_rows: list[Row]) -> dict[str, str]:
-    def fast(value: float) -> bool:
-        return value <= TARGET_RATIO_BARE
-
-    def faster(value: float) -> bool:
-        return value >= TARGET_DEPTH_SPEEDUP
-
-    return {
-        "target_ratio": f"{TARGET_RATIO_BARE:.1f}",
-        "verdict_fb_on": _verdict(rows, "points_found", "ratio_fb_on", fast),
-        "verdict_fb_off": _verdict(rows, "points_found", "ratio_fb_off", fast),
-        "verdict_fb_full": _verdict(rows, "points_found", "ratio_fb_full", fast),
-        "flow_full_vs_lk": f"{_flow_full_vs_lk(rows):.1f}",
-        "target_speedup": f"{TARGET_DEPTH_SPEEDUP:.0f}",
-        "verdict_loop_numpy": _verdict(depth_rows, "points_per_frame", "speedup_vs_loop_numpy", faster),
-        "verdict_loop_floats": _verdict(depth_rows, "points_per_frame", "speedup_vs_loop_floats", faster),
-    }
-
-
-def _flow_full_vs_lk(rows: list[Row]) -> float:
-    """The flow stage with the full backward search (the estimator before the throughput work) over the bare baseline's
-    LK, median over the working range.
+def _flow_full_vs_lk(working: list[Row]) -> float:
+    """The flow stage with the full backward search over the bare baseline's LK, median over the working rows.
 
     Neither is timed alone: the full search's flow stage is the FB-on flow stage plus what the full search
     added to the frame, and the baseline's LK is its frame less FAST (the same detector call as the
     estimator's FAST stage).
     """
-    ratios = [
-        (row["ms_flow"] + row["ms_total_fb_full"] - row["ms_total"])
-        / max(row["ms_bare_fast_lk"] - row["ms_fast"], 1e-9)
-        for row in _working(rows, "points_found")
-    ]
-    return statistics.median(ratios)
-
-
-def _speedup_growth_values(depth_rows: list[Row]) -> dict[str, str | bool]:
-    """Whether the depth stage's speed-up grows with the point count, and its fixed cost where it does: its
-    time at the fewest points, where the per-point work is negligible."""
-    fewest = min(depth_rows, key=lambda row: row["points_per_frame"])
-    most = max(depth_rows, key=lambda row: row["points_per_frame"])
-    grows = all(most[key] > fewest[key] for key in ("speedup_vs_loop_floats", "speedup_vs_loop_numpy"))
-    values: dict[str, str | bool] = {"speedup_grows": bool(grows)}
-    if grows:
-        values["fixed_ms"] = f"{fewest['ms_vectorised']:.2f}"
-        values["fewest_points"] = f"{fewest['points_per_frame']:.0f}"
-    return values
+    return median(
+        [
+            (row["ms_flow"] + row["ms_total_fb_full"] - row["ms_total"])
+            / max(row["ms_bare_fast_lk"] - row["ms_fast"], 1e-9)
+            for row in working
+        ]
+    )

@@ -1,5 +1,5 @@
 """A scripted flight rendered by FlowNav, with the true motion of every frame pair: what both speed benchmarks
-time the estimator and the env on."""
+time the estimator and the env on; and the bare FAST + LK work both time them against."""
 
 from __future__ import annotations
 
@@ -51,6 +51,25 @@ def scripted_action(step: int) -> np.ndarray:
             0.4 * math.cos(2 * math.pi * step / 30),
         ]
     )
+
+
+def fast_lk(
+    detector: cv2.FastFeatureDetector,
+    previous: np.ndarray,
+    current: np.ndarray,
+    win_size: int,
+    max_level: int,
+    max_points: int | None = None,
+) -> int:
+    """The least any FAST + LK pipeline does on a frame pair: FAST corners on ``previous`` (the first
+    ``max_points``) tracked into ``current`` by one pyramidal LK call. Returns the number of corners found."""
+    keypoints = detector.detect(previous)
+    if keypoints:
+        points = np.asarray(cv2.KeyPoint.convert(keypoints))[:max_points].reshape(-1, 1, 2)
+        cv2.calcOpticalFlowPyrLK(
+            previous, current, points, None, winSize=(win_size, win_size), maxLevel=max_level
+        )
+    return len(keypoints)
 
 
 @contextmanager

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import statistics
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -29,6 +28,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from agents.studies.perf.report_kit import median
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fit, fly
 from agents.training.ppo import new_model
@@ -37,6 +37,8 @@ from agents.training.train_config import TrainConfig
 
 # Makes the teacher agent a training config names (agents.policies.teachers.make_teacher).
 TeacherFactory = Callable[[str], Any]
+# The kinds of work a seed does, each timed on its own.
+KINDS = ("startup", "ppo", "evaluation", "teacher")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,7 +86,9 @@ def measure_stage(
     teacher = None
     if config.imitation.teacher:
         if make_teacher is None:
-            raise ValueError(f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher")
+            raise ValueError(
+                f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher"
+            )
         teacher = make_teacher(config.imitation.teacher)
     # A privileged teacher's opt-in (the planner's observe_layout) reaches the training envs, as in training.
     envs, eval_env = build_envs(config, teacher_settings=privileged_settings(teacher))
@@ -147,7 +151,7 @@ def measure_recipes(
     blocks = [(repeat, recipe) for repeat in range(repeats) for recipe in recipes]
     for _, recipe in tqdm(blocks, desc="bench recipe", unit="recipe", disable=not progress):
         stages = []
-        minutes = dict.fromkeys(("startup", "ppo", "evaluation", "teacher"), 0.0)
+        minutes = dict.fromkeys(KINDS, 0.0)
         for config in recipe.stages:
             work, measured = stage_work(config), measure_stage(config, rollouts, make_teacher)
             stages.append({"work": work, "measured": measured})
@@ -169,6 +173,5 @@ def block_ratios(results: dict[str, list[dict[str, Any]]], reference: str) -> di
 
 def median_minutes(entries: list[dict[str, Any]]) -> dict[str, float]:
     """The medians over repeats of a recipe's minutes per seed, by kind of work and in total."""
-    kinds = list(entries[0]["minutes"])
-    medians = {kind: statistics.median(e["minutes"][kind] for e in entries) for kind in kinds}
-    return {**medians, "total": statistics.median(e["total"] for e in entries)}
+    medians = {kind: median([e["minutes"][kind] for e in entries]) for kind in KINDS}
+    return {**medians, "total": median([e["total"] for e in entries])}

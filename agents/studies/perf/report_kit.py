@@ -14,7 +14,7 @@ import os
 import platform
 import time
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -50,27 +50,18 @@ def median(values: Sequence[float] | np.ndarray) -> float:
     return float(np.median(values)) if len(values) else math.nan
 
 
-def hardware_summary(renderer: str | None = None) -> str:
-    """CPU model, core count, load and GL renderer facts for the report header (one Markdown list).
-    ``renderer``: :func:`agents.evaluation.provenance.gl_renderer`'s answer where the caller already asked."""
-    lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
-    lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
-    try:
-        load = ", ".join(f"{value:.2f}" for value in os.getloadavg())
-        lines.append(f"- load average (1, 5, 15 min) at the end of the run: {load}")
-    except OSError:
-        pass
-    renderer = renderer if renderer is not None else gl_renderer()
-    kind = "software rasterisation on the CPU" if is_software_renderer(renderer) else "hardware rendering"
-    lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
-    lines.append(f"- code: {code_version()}")
-    return "\n".join(lines)
+def interval(name: str, values: Sequence[float], prefix: str = "") -> dict[str, float]:
+    """``name``: the median of ``values`` (a ratio block by block or pass by pass); ``<prefix>_min`` and
+    ``<prefix>_max`` (``prefix`` defaults to ``name``): their range."""
+    prefix = prefix or name
+    return {name: median(values), f"{prefix}_min": min(values), f"{prefix}_max": max(values)}
 
 
 @dataclass(frozen=True)
 class RunFacts:
     """What every speed report states about its run (``run`` in the templates): the command, when it was
-    written, how long it took, and the machine (its Markdown list, cores, whether MuJoCo rendered on the CPU)."""
+    written, how long it took, and the machine (a Markdown list of CPU, load, GL renderer and code version; its
+    cores; whether MuJoCo rendered on the CPU)."""
 
     command: str
     elapsed_s: float
@@ -84,13 +75,16 @@ class RunFacts:
         """The facts of a run begun at ``time.perf_counter()`` = ``started``, on this machine, now."""
         renderer = gl_renderer()
         elapsed = time.perf_counter() - started
+        kind = "software rasterisation on the CPU" if is_software_renderer(renderer) else "hardware rendering"
+        lines = [f"- Python {platform.python_version()} on {platform.system()} {platform.release()}"]
+        lines.append(f"- CPU: {cpu_model()}; `nproc` = {os.cpu_count()}")
+        with suppress(OSError):  # no load average on this platform
+            load = ", ".join(f"{value:.2f}" for value in os.getloadavg())
+            lines.append(f"- load average (1, 5, 15 min) at the end of the run: {load}")
+        lines.append(f"- `MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}`; OpenGL renderer: {renderer} ({kind})")
+        lines.append(f"- code: {code_version()}")
         return cls(
-            command,
-            elapsed,
-            today(),
-            hardware_summary(renderer),
-            available_cores(),
-            is_software_renderer(renderer),
+            command, elapsed, today(), "\n".join(lines), available_cores(), is_software_renderer(renderer)
         )
 
     @property

@@ -5,15 +5,12 @@ from __future__ import annotations
 import csv
 import math
 
-import numpy as np
 import pytest
 
 from agents.cli import build_parser
 from agents.common import tables
 from agents.evaluation import provenance as machine
-from agents.studies.perf import depth_loops, depth_yield, env_speed_report, estimator_speed_report, flight
-from estimator import CameraIntrinsics
-from estimator.geometry import euler_zyx_to_rotation
+from agents.studies.perf import depth_yield, env_speed_report, estimator_speed_report, flight
 
 
 def read_header(path) -> list[str]:
@@ -28,7 +25,6 @@ def test_estimator_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
         repeats=1,
         width=160,
         height=120,
-        loop_frames=2,
         out_dir=tmp_path,
         progress=False,
     )
@@ -50,7 +46,7 @@ def test_estimator_benchmark_writes_table_csv_and_plot(tmp_path) -> None:
         assert column in header
     with (tmp_path / "estimator_performance.csv").open() as handle:
         assert [row["fast_threshold"] for row in csv.DictReader(handle)] == ["30", "20"]
-    assert "speedup_vs_loop_floats" in read_header(tmp_path / "estimator_performance_depth_stage.csv")
+    assert [path.name for path in paths] == [f"estimator_performance.{ext}" for ext in ("md", "csv", "png")]
     report = (tmp_path / "estimator_performance.md").read_text()
     assert "flownav bench estimator" in report and "## Targets" in report
     assert f"OpenGL renderer: {machine.gl_renderer()}" in report
@@ -98,27 +94,6 @@ def test_gl_renderer_names_the_renderer_the_env_draws_with() -> None:
     assert not machine.is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2")
 
 
-@pytest.mark.parametrize("loop", [depth_loops.depth_loop_floats, depth_loops.depth_loop_numpy])
-def test_depth_loops_match_the_vectorised_stage(loop) -> None:
-    # The speed-up is only meaningful if the loops compute what the kernel computes.
-    rng = np.random.default_rng(0)
-    intrinsics = CameraIntrinsics.from_fov(160, 120, 60.0)
-    depth = rng.uniform(1.0, 8.0, 200)
-    points = rng.uniform([0, 0], [160, 120], (200, 2))
-    rotation = euler_zyx_to_rotation(0.01, -0.02, 0.015)
-    translation = np.array([0.02, -0.01, -0.1])
-    rays = np.column_stack([intrinsics.normalize(points), np.ones(200)]) * depth[:, None]
-    moved = rays @ rotation.T + translation
-    next_points = intrinsics.denormalize(moved[:, :2] / moved[:, 2:])
-    next_points += rng.normal(0, 0.3, next_points.shape)  # some points fail the epipolar check
-    arguments = (points, next_points, rotation, translation, intrinsics, 1.0, 1.0)
-    expected_depth, expected_valid = depth_loops.depth_vectorised(*arguments)
-    got_depth, got_valid = loop(*arguments)
-    np.testing.assert_allclose(got_depth, expected_depth, rtol=1e-9)
-    np.testing.assert_array_equal(got_valid, expected_valid)
-    assert 0 < expected_valid.sum() < 200
-
-
 def test_cli_parses_both_targets() -> None:
     parser = build_parser()
     args = parser.parse_args(["bench", "estimator", "--frames", "5", "--thresholds", "20,10"])
@@ -140,45 +115,6 @@ def test_record_flight_rejects_bad_frame_counts() -> None:
 def test_markdown_table_shape() -> None:
     table = tables.markdown_table(["a", "b"], [[1, math.pi]])
     assert table.splitlines()[0] == "| a | b |" and len(table.splitlines()) == 3
-
-
-def test_training_benchmark_times_each_worker_count_and_runs_side_by_side(tmp_path) -> None:
-    from agents.studies.perf.training_speed import run_training_benchmark
-    from agents.training.train_config import PPOParams, TrainConfig
-
-    config = TrainConfig(
-        name="tiny",
-        env_id="FlowNavSingle-v0",
-        env={"camera_width": 64, "camera_height": 48},
-        n_envs=2,
-        ppo=PPOParams(n_steps=32, batch_size=32, n_epochs=1, net_arch=[8]),
-    )
-    md, csv_path = run_training_benchmark(
-        config,
-        tmp_path / "tiny.yaml",
-        (1, 2),
-        rollouts=1,
-        repeats=1,
-        out_dir=tmp_path,
-        progress=False,
-        side_by_side=2,
-    )
-    rows = list(csv.DictReader(csv_path.open()))
-    assert [(int(r["n_envs"]), int(r["runs_side_by_side"])) for r in rows] == [(1, 1), (2, 1), (2, 2)]
-    assert [r["env_workers"] for r in rows] == ["in process", "one subprocess per env", "in process"]
-    assert [int(r["rollout_steps"]) for r in rows] == [32, 64, 64]
-    assert all(float(r["steps_per_s_median"]) > 0 and float(r["collect_ms_per_step"]) > 0 for r in rows)
-    # The machine's rate of two runs is the sum of theirs: at least the slower run's twice. Both are
-    # rounded to 0.1 step/s, so after rounding the doubled one may be up to 0.15 above.
-    side = rows[2]
-    assert float(side["steps_per_s_median"]) >= 2 * float(side["per_run_steps_per_s_median"]) - 0.15 - 1e-6
-    text = md.read_text()
-    assert "flownav bench train" in text and "--side-by-side 2" in text
-    assert "2 runs side by side train" in text
-    with pytest.raises(ValueError, match=r"--rollouts, --repeats and every --n-envs must be >= 1"):
-        run_training_benchmark(config, tmp_path / "tiny.yaml", (0,), 1, 1, tmp_path)
-    with pytest.raises(ValueError, match=r"--side-by-side must be 0 \(off\) or >= 2 runs, got 1"):
-        run_training_benchmark(config, tmp_path / "tiny.yaml", (1,), 1, 1, tmp_path, side_by_side=1)
 
 
 def test_depth_yield_report_compares_each_variant_in_scene(tmp_path) -> None:

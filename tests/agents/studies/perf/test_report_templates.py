@@ -51,10 +51,8 @@ def facts(case: dict[str, Any]) -> RunFacts:
 def estimator_values(case: dict[str, Any]) -> dict[str, Any]:
     return estimator_speed_report.estimator_report_values(
         case["rows"],
-        case["depth_rows"],
         case["flight"],
         case["repeats"],
-        case["loop_frames"],
         case["defaults"],
         facts(case),
     )
@@ -84,7 +82,7 @@ def test_estimator_report_reproduces_the_golden_file(name: str) -> None:
     expected = (DATA / f"estimator_performance_{name}.md").read_text(encoding="utf-8")
     case = estimator_case(name)
     assert render_estimator(case) == expected
-    case["rows"], case["depth_rows"] = as_numpy(case["rows"]), as_numpy(case["depth_rows"])
+    case["rows"] = as_numpy(case["rows"])
     assert render_estimator(case) == expected
 
 
@@ -105,8 +103,6 @@ def test_estimator_claims_follow_the_data() -> None:
     assert "FB on (default) 1.50× → **missed** (range 1.21–1.50×, met in 5 of 7 rows)" in render_estimator(
         case
     )
-    case["depth_rows"][-1]["speedup_vs_loop_numpy"] = 1.0
-    assert "The speed-up does not grow with the point count here." in render_estimator(case)
 
 
 def test_env_claims_follow_the_data() -> None:
@@ -129,10 +125,8 @@ def test_the_writers_fill_their_templates_with_this_machine_and_estimator() -> N
     case = estimator_case("full")
     values = estimator_speed_report.estimator_report_values(
         case["rows"],
-        case["depth_rows"],
         case["flight"],
         3,
-        10,
         estimator_speed_report.estimator_defaults(),
         run,
     )
@@ -175,10 +169,10 @@ def test_templates_ship_as_package_data() -> None:
 
 def test_an_edited_template_that_drifts_from_its_values_fails() -> None:
     text = template_source(report_kit.PACKAGE, "estimator_performance.md.j2")
-    assert "agreement_pct" in names_in(text)
-    edited = text.replace("{{ agreement_pct }}", "100.00")
+    assert "flow_full_vs_lk" in names_in(text)
+    edited = text.replace("{{ flow_full_vs_lk }}", "2.0")
     values = estimator_values(copy.deepcopy(estimator_case("full")))
-    assert unused_values(edited, values) == ["agreement_pct"]
+    assert unused_values(edited, values) == ["flow_full_vs_lk"]
     drifted = {**values, "extra": "1"}
     with pytest.raises(
         ValueError, match=r"template 'estimator_performance\.md\.j2': value 'extra' is not used"

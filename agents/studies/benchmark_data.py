@@ -58,6 +58,7 @@ class BenchmarkChoices:
     """What the benchmark study chose (``configs/studies.yaml`` says what each is)."""
 
     winner: str
+    student: str
     max_failure: float
     oracle_factor: float
     max_rise: float
@@ -75,6 +76,11 @@ class BenchmarkChoices:
     def truth_recipe(self) -> str:
         """The winner's recipe, both stages and the same budget, on the true depths at the same tracked points."""
         return f"{self.winner}_oracle"
+
+    @property
+    def student_truth(self) -> str:
+        """The planner's student's recipe on the true depths at the same tracked points (privileged)."""
+        return f"{self.student}_oracle"
 
 
 @functools.cache

@@ -27,8 +27,8 @@ from agents.evaluation.paired import Comparison, compare, verdict
 from agents.evaluation.records import read_records
 from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.evaluation.suite import EPISODES_CSV
-from agents.policies import shipped_seed_runs
-from agents.studies.benchmark_data import BenchmarkData, Rate, load_benchmark_data
+from agents.policies import is_learned, shipped_seed_runs
+from agents.studies.benchmark_data import BenchmarkData, Rate, choices, load_benchmark_data
 from agents.studies.benchmark_report import report_values
 from agents.studies.confirmation import (
     COMPARED,
@@ -87,16 +87,23 @@ def gap_row(label: str, flow: np.ndarray, truth: np.ndarray) -> list[str]:
     ]
 
 
-def gap_table(flow: str, truth: str, rows: Sequence[Row], where: str) -> str:
+def gap_table(
+    flow: str, truth: str, rows: Sequence[Row], where: str, ceiling: Mapping[str, np.ndarray] | None = None
+) -> str:
+    """The gap per row; with ``ceiling`` (row label → the planner's failures, one run), its failure beside."""
     header = [where, f"`{flow}` (flow)", f"`{truth}` (true depths)", "flow − truth [95 % CI]", "reading"]
-    return markdown_table(header, [gap_row(*row) for row in rows]) if rows else ""
+    if ceiling is None:
+        return markdown_table(header, [gap_row(*row) for row in rows]) if rows else ""
+    cells = {label: "{:.2f} [{:.2f}, {:.2f}]".format(*_cell(found)) for label, found in ceiling.items()}
+    body = [[*gap_row(*row), cells.get(row[0], "not flown")] for row in rows]
+    return markdown_table([*header, "`planner` (the ceiling)"], body) if rows else ""
 
 
 def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, np.ndarray]:
-    """tier → failures (runs, layouts) of ``agent``'s shipped seeds on the suite's frozen layouts, for the
-    tiers every run has flown whole."""
+    """tier → failures (runs, layouts) of ``agent``'s shipped seeds (a rule or planner: its one run) on the
+    suite's frozen layouts, for the tiers every run has flown whole."""
     path = results / EPISODES_CSV
-    runs = shipped_seed_runs(agent, policies_dir)
+    runs = shipped_seed_runs(agent, policies_dir) if is_learned(agent) else [agent]
     if not path.is_file() or not runs:
         return {}
     rows = [row for row in read_records(path) if row["agent"] in runs]
@@ -113,6 +120,23 @@ def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR)
 def _suite_rows(results: Path, flow: str, truth: str, policies_dir: Path) -> list[Row]:
     flow_tiers, truth_tiers = (suite_matrices(results, a, policies_dir) for a in (flow, truth))
     return [(t, flow_tiers[t], truth_tiers[t]) for t in TIER_NAMES if t in flow_tiers and t in truth_tiers]
+
+
+def _student_values(results: Path, policies_dir: Path) -> dict[str, Any]:
+    """The planner's flow-only student against its true-depth twin per tier, the planner beside as ceiling."""
+    student, twin = choices().student, choices().student_truth
+    return {
+        "student": student,
+        "student_truth": twin,
+        "student_truth_seeds": len(shipped_seed_runs(twin, policies_dir)),
+        "student_suite_table": gap_table(
+            student,
+            twin,
+            _suite_rows(results, student, twin, policies_dir),
+            "tier",
+            ceiling=suite_matrices(results, "planner", policies_dir),
+        ),
+    }
 
 
 def leaderboard_matrix(
@@ -259,6 +283,7 @@ def flow_gap_values(
         **report_values(data),
         **_plain_values(data, results, policies_dir),
         **selection_values(result, search_record(results / "ablation")),
+        **_student_values(results, policies_dir),
         "truth_seeds": {stage: len(shipped_seed_runs(stage, policies_dir)) for stage in stages},
         "seeds_wanted": SEEDS_WANTED,
         "true_depth_stages": TRUE_DEPTH_STAGES,

@@ -95,6 +95,32 @@ def test_suite_matrices_keep_only_tiers_every_seed_flew_whole(tmp_path: Path) ->
     assert suite_matrices(tmp_path, "ppo_oracle", policies) == {}
 
 
+def test_the_students_gap_per_tier_sets_the_planners_failure_beside_it(tmp_path: Path) -> None:
+    policies = tmp_path / "policies"
+    student, twin = "ppo_flow_planner_student", "ppo_flow_planner_student_oracle"
+    for agent in (student, twin):
+        _ship(policies, agent, 2)
+    layouts = list(suite_seeds())
+    episodes = []
+    for tier in ("clean", "hard"):
+        episodes += [(f"{student}@{k}", tier, 0.0, seed, seed % 5 == 0) for seed in layouts for k in range(2)]
+        episodes += [(f"{twin}@{k}", tier, 0.0, seed, seed % 10 == 0) for seed in layouts for k in range(2)]
+    episodes += [("planner", "clean", 0.0, seed, seed % 100 == 0) for seed in layouts]
+    _write_episodes(tmp_path / "suite_episodes.csv", episodes)
+    planner = suite_matrices(tmp_path, "planner", policies)
+    assert list(planner) == ["clean"] and planner["clean"].shape == (1, len(layouts))
+    rows = [
+        (tier, *[suite_matrices(tmp_path, a, policies)[tier] for a in (student, twin)])
+        for tier in ("clean", "hard")
+    ]
+    table = gap_table(student, twin, rows, "tier", ceiling=planner).splitlines()
+    assert table[0].endswith("| `planner` (the ceiling) |")
+    assert table[2].startswith("| clean | 0.20 [") and f"| {planner['clean'].mean():.2f} [" in table[2]
+    assert "truth fails less than flow" in table[2]
+    assert table[3].startswith("| hard |") and table[3].endswith("| not flown |")
+    assert gap_table(student, twin, [], "tier", ceiling=planner) == ""
+
+
 def test_the_clean_test_gap_reads_the_leading_tables_episodes_of_each_shipped_seed(tmp_path: Path) -> None:
     from types import SimpleNamespace
 

@@ -8,8 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.common.folders import write_text_atomically
-from agents.studies.tier_calibration import CALIBRATION_LAYOUTS, report_lines, run_calibration
+from agents.studies.tier_calibration import CALIBRATION_LAYOUTS, write_calibration
 
 HELP = "choose the suite's hard course on validation layouts and check every tier -> calibration.md"
 
@@ -42,14 +41,12 @@ def run(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")
     command = "flownav calibrate-tiers " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    result = run_calibration(
-        Path(args.out),
-        layouts=args.layouts,
-        workers=args.workers,
-        report_only=args.report_only,
-        stages=("course", "tiers") if args.stage == "both" else (args.stage,),
-    )
-    lines = report_lines(result, command.strip())
-    write_text_atomically(Path(args.out) / "calibration.md", "\n".join(lines) + "\n")
-    print("\n".join(lines))
+    stages = ("course", "tiers") if args.stage == "both" else (args.stage,)
+    flights = {
+        "layouts": args.layouts,
+        "workers": args.workers,
+        "report_only": args.report_only,
+        "stages": stages,
+    }
+    print("\n".join(write_calibration(Path(args.out), command.strip(), **flights)))
     return 0

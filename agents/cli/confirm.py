@@ -9,9 +9,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.common.folders import write_text_atomically
-from agents.common.locations import RESULTS_DIR
-from agents.studies.confirmation import CONFIRMATION_LAYOUTS, report_lines, run_confirmation, search_record
+from agents.studies.confirmation import CONFIRMATION_LAYOUTS, write_confirmation
 
 HELP = "confirm the lever search's pick on fresh validation layouts, paired by layout -> confirmation.md"
 
@@ -32,10 +30,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     command = "flownav confirm " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    result = run_confirmation(
-        Path(args.out), layouts=args.layouts, workers=args.workers, report_only=args.report_only
-    )
-    lines = report_lines(result, search_record(RESULTS_DIR / "ablation"), command.strip())
-    write_text_atomically(Path(args.out) / "confirmation.md", "\n".join(lines) + "\n")
-    print("\n".join(lines))
+    flights = {"layouts": args.layouts, "workers": args.workers, "report_only": args.report_only}
+    print("\n".join(write_confirmation(Path(args.out), command.strip(), **flights)))
     return 0

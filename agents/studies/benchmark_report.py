@@ -35,59 +35,16 @@ def _interval(point: float, low: float, high: float) -> str:
     return f"{point:.2f} [{low:.2f}, {high:.2f}]"
 
 
-def agent_table(data: BenchmarkData, readme: bool = False) -> str:
-    """The leading table (the README's shorter one with ``readme``), the best reactive and learned agent bold."""
+def _board(data: BenchmarkData) -> list[dict[str, Any]]:
+    """The leading table's rows (``templates/benchmark_tables.j2`` words them), each with what the agent is,
+    whether it is reactive, and bold for the best reactive and learned agent."""
     bold = {row["agent"] for row in data.best_agents()}
     described = choices().descriptions
-    rows = []
-    for r in data.leaderboard:
-        what = described.get(r["agent"], r["agent"])
-        label = f"{what} (`{r['agent']}`)" if readme else f"`{r['agent']}` ({what})"
-        failure = _interval(r["failure_rate"], r["failure_low"], r["failure_high"])
-        if r["agent"] in bold:
-            label = f"**{label}**" if readme else label.replace(f"`{r['agent']}`", f"**`{r['agent']}`**", 1)
-            failure = f"**{failure}**"
-        shares = [rate(r[key]) for key in ("collision_rate", "out_of_bounds_rate")]
-        if readme:
-            runs = "–" if r["agent"] in REACTIVE_AGENTS else str(r["runs"])
-            rows.append([label, runs, failure, *shares, rate(r["success_rate"])])
-        else:
-            iqm = (
-                "–"
-                if r["runs"] == 1
-                else _interval(r["iqm_failure"], r["iqm_failure_low"], r["iqm_failure_high"])
-            )
-            success = _interval(r["success_rate"], r["success_low"], r["success_high"])
-            rows.append([label, r["runs"], failure, success, *shares, iqm])
-    if readme:
-        header = [
-            "agent",
-            "training runs",
-            "failure rate [95 % CI]",
-            "collision",
-            "out of bounds",
-            "success rate",
-        ]
-    else:
-        header = ["agent", "runs", "failure rate [95 % CI]", "success rate [95 % CI]", "collision"]
-        header += ["out of bounds", "IQM failure [95 % CI]"]
-    return markdown_table(header, rows)
-
-
-def _improvement_table(data: BenchmarkData) -> str:
-    """The probability that each learned agent fails less than each reactive one (straight aside)."""
-    learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
-    reactive = [
-        r["agent"] for r in data.leaderboard if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"
+    return [
+        {**r, "what": described.get(r["agent"], r["agent"])}
+        | {"bold": r["agent"] in bold, "reactive": r["agent"] in REACTIVE_AGENTS}
+        for r in data.leaderboard
     ]
-    rows = [
-        [
-            f"`{x}`",
-            *(_interval(*(data.gain(x, y)[k] for k in ("probability", "low", "high"))) for y in reactive),
-        ]
-        for x in learned
-    ]
-    return markdown_table(["learned X", *(f"over `{y}`" for y in reactive)], rows)
 
 
 def _code_groups(data: BenchmarkData) -> list[tuple[str, str]]:
@@ -140,11 +97,15 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         "leaderboard_episodes": data.leaderboard_episodes,
         "leaderboard_complete": all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard),
         "leaderboard_code": _code_groups(data),
-        "leaderboard_table": agent_table(data),
-        "readme_table": agent_table(data, readme=True),
+        "board": _board(data),
         "block": data.block,
         "seed_ranges": _seed_ranges(data),
-        "improvement_table": _improvement_table(data),
+        # The probability that each learned agent fails less than each reactive one (straight aside).
+        "learned": [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS],
+        "improved_on": [
+            a for a in (r["agent"] for r in data.leaderboard) if a in REACTIVE_AGENTS and a != "straight"
+        ],
+        "gain": data.gain,
         "best_learned": best_learned["agent"],
         "best_reactive": best_reactive["agent"],
         "truth_recipe_flown": c.truth_recipe in rows,

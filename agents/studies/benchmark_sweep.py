@@ -8,8 +8,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from agents.common.jinja_reports import rate
-from agents.common.tables import markdown_table
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, commit_of
 from agents.studies.dose_response import P_VALUE_FLOOR, format_p
@@ -77,29 +75,22 @@ def _later(first: float | None, second: float | None) -> bool:
     return second is not None and (first is None or first > second)
 
 
-def _break_cell(data: BenchmarkData, agent: str, factor: str) -> str:
-    unit = choices().factors.get(factor, [factor, "", ""])[1]
-    parts = []
-    for row in filter(None, (data.tolerance_row(agent, factor, side) for side in ("above", "below"))):
-        if row["breaking_level"] is None:
-            parts.append(f"— ({rate(row['worst_failure'])} at {level_text(row['worst_level'], unit)})")
-        else:
-            parts.append(f"{level_text(row['breaking_level'], unit)} ({rate(row['breaking_failure'])})")
-    return "; ".join(parts)
-
-
-def _breaking_table(data: BenchmarkData, columns: Sequence[str]) -> str:
-    """Where each factor breaks each agent of ``columns``, with what the factor is."""
+def _breaking_rows(data: BenchmarkData, columns: Sequence[str]) -> list[dict[str, Any]]:
+    """Per factor flown, in the study's order: its label, unit and what it is, and each agent of ``columns``'s
+    tolerance rows (``templates/benchmark_tables.j2`` words where each breaks)."""
     factors = choices().factors
     speed, frame_rate = neutral_level("forward_speed"), neutral_level("frame_rate")
     flown = {key[1] for key in data.cells} - {"clean"}
     rows = []
     for factor in sorted(flown, key=lambda f: list(factors).index(f) if f in factors else 99):
-        label, _, what = factors.get(factor, [factor, "", ""])
+        label, unit, what = factors.get(factor, [factor, "", ""])
         if factor == "forward_speed":
             what += f" ({speed / frame_rate:g} m at {speed:g} m/s)"
-        rows.append([label, *(_break_cell(data, a, factor) for a in columns), what])
-    return markdown_table(["factor", *(f"{display_name(a)} breaks at" for a in columns), "what it is"], rows)
+        sides = [[data.tolerance_row(a, factor, side) for side in ("above", "below")] for a in columns]
+        rows.append(
+            {"label": label, "unit": unit, "what": what, "cells": [list(filter(None, s)) for s in sides]}
+        )
+    return rows
 
 
 def _unbroken(data: BenchmarkData, subjects: Sequence[str]) -> tuple[list[dict[str, Any]], bool]:
@@ -264,6 +255,7 @@ def sweep_values(data: BenchmarkData) -> Values:
     clean = {r["agent"]: r["clean_failure"] for r in data.tolerance}
     subjects = [FLOW, best_learned_flow_agent(data.tolerance) or f"{choices().winner}@all"]
     unbroken, cannot = _unbroken(data, subjects)
+    columns = [*subjects, data.best_agents()[0]["agent"]]
     return {
         "sweep_episodes": len(data.sweep_rows),
         "per_cell": sorted({cell.episodes for cell in data.cells.values()}),
@@ -283,41 +275,17 @@ def sweep_values(data: BenchmarkData) -> Values:
         "subjects": [display_name(a) for a in subjects],
         "unbroken": unbroken,
         "unbroken_cannot": cannot,
-        "breaking_table": _breaking_table(data, [*subjects, data.best_agents()[0]["agent"]]),
+        "breaking_columns": columns,
+        "breaking_rows": _breaking_rows(data, columns),
         "cell": data.cell,
         **finding_values(data),
         **dose_values(data, agents),
     }
 
 
-def _term(fit: dict[str, Any], name: str) -> str:
-    return (
-        "–"
-        if name not in fit["params"]
-        else f"{fit['params'][name]:+.2f} (p {format_p(fit['pvalues'][name])})"
-    )
-
-
 def dose_values(data: BenchmarkData, agents: Sequence[str]) -> Values:
     """The dose-response fits per agent, and which agents each depth measure significantly moves."""
     fits = {a: data.fits[a] for a in agents if a in data.fits}
-    rows = [
-        [
-            display_name(a),
-            str(fit["episodes"]),
-            *(_term(fit, t) for t in DOSE_TERMS),
-            f"{fit['wald_statistic']:.1f} on {fit['wald_df']} df (p {format_p(fit['wald_pvalue'])})",
-        ]
-        for a, fit in fits.items()
-    ]
-    header = [
-        "agent",
-        "episodes",
-        "per e-fold of depth error",
-        "per 100 valid depths",
-        "per unit outlier share",
-    ]
-    table = markdown_table([*header, "sensor factors beyond quality (Wald)"], rows)
 
     def moved(term: str, sign: float) -> list[str]:
         return [
@@ -328,7 +296,8 @@ def dose_values(data: BenchmarkData, agents: Sequence[str]) -> Values:
 
     return {
         "p_floor": P_VALUE_FLOOR,
-        "dose_table": table,
+        "fits": fits,
+        "dose_terms": DOSE_TERMS,
         "fit_errors": {display_name(a): e for a, e in data.fit_errors.items()},
         "fitted": [display_name(a) for a in fits],
         "moved": {t: moved(t, sign) for t, sign in zip(DOSE_TERMS, (1.0, -1.0, 1.0), strict=True)},

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.common.folders import check_writable_folder
-from agents.common.locations import POLICIES_DIR
+from agents.common.folders import check_writable_folder, write_text_atomically
+from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
@@ -217,3 +217,11 @@ def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: 
     values = {"result": result, "search": search, "c": choices(), "first_stage": COMPARED[0]}
     values |= {"seed_start": CONFIRMATION_SEED_START, "generated": today(), "command": command}
     return render_report("confirmation.md.j2", values).split("\n")[:-1]
+
+
+def write_confirmation(out: Path, command: str, **flights: Any) -> list[str]:
+    """:func:`run_confirmation` (``flights`` its options) beside the committed search (``results/ablation``),
+    and ``out/confirmation.md`` written; returns its lines."""
+    lines = report_lines(run_confirmation(out, **flights), search_record(RESULTS_DIR / "ablation"), command)
+    write_text_atomically(Path(out) / "confirmation.md", "\n".join(lines) + "\n")
+    return lines

@@ -31,18 +31,8 @@ from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 
 
-def unbroken_reason(row: Mapping[str, Any]) -> str:
-    """Why a factor's levels flown did not break an agent (:func:`~agents.studies.error_analysis.unbroken_kind`)."""
-    worst = f"worst {row['worst_failure']:.2f} at {row['worst_level']:g}"
-    kind = unbroken_kind(row)
-    if kind == "end":
-        allowed = setting_range(row["factor"])
-        return f"flown to the end of the setting's range {allowed.interval}: nothing within it breaks the agent ({worst})"
-    if kind == "easier":
-        return f"this direction makes the task easier: no level fails more than clean ({worst})"
-    return (
-        f"not broken up to {row['levels'][-1]:g} ({worst}), short of the range's end: more levels are needed"
-    )
+def _range_text(row: Mapping[str, Any]) -> str:
+    return setting_range(row["factor"]).interval if unbroken_kind(row) == "end" else ""
 
 
 def plot_dose_response(
@@ -127,7 +117,8 @@ def report_values(
         "first_rows": {r["agent"]: r for r in reversed(table)},
         "keys": [{"factor": f, "side": side, "rows": keys[(f, side)]} for f, side in sorted(keys)],
         "best": best,
-        "unbroken": [{**r, "reason": unbroken_reason(r)} for r in unbroken],
+        # Why no level flown breaks it (error_analysis.unbroken_kind), and the range it was flown to the end of.
+        "unbroken": [{**r, "kind": unbroken_kind(r), "range": _range_text(r)} for r in unbroken],
         "turning": turning,
         "turning_levels": sorted({level for row in turning for level in row["depth_error"]}),
         "quality": quality,

@@ -14,7 +14,6 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from agents.common.folders import write_text_atomically
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.evaluation.leaderboard import run_leaderboard
 from agents.evaluation.records import read_records
@@ -107,25 +106,6 @@ def _ablation(
             reference_agents=ABLATION_REFERENCE,
             env=env,
         )
-
-
-def _calibration(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/calibrate_tiers.py, which writes calibration.md itself.
-
-    result = tier_calibration.run_calibration(folder, report_only=True)
-    write_text_atomically(
-        folder / "calibration.md", "\n".join(tier_calibration.report_lines(result, report.command)) + "\n"
-    )
-
-
-def _confirmation(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/confirm.py: the fresh flights staged in the folder, the search's from results/.
-
-    result = confirmation.run_confirmation(folder, report_only=True)
-    lines = confirmation.report_lines(
-        result, confirmation.search_record(RESULTS_DIR / "ablation"), report.command
-    )
-    write_text_atomically(folder / "confirmation.md", "\n".join(lines) + "\n")
 
 
 def _thesis_block(report: Report, folder: Path) -> None:
@@ -227,7 +207,9 @@ REPORTS: tuple[Report, ...] = (
         name="calibrate-tiers",
         command="flownav calibrate-tiers --out results/suite_calibration --report-only",
         inputs=("suite_calibration/calibration_episodes.csv", "suite_calibration/sensor_pilot_episodes.csv"),
-        write=_calibration,
+        write=lambda report, folder: tier_calibration.write_calibration(
+            folder, report.command, report_only=True
+        ),
     ),
     Report(
         "benchmark.md",
@@ -253,7 +235,9 @@ REPORTS: tuple[Report, ...] = (
         # The fresh flights are staged into the folder the report is written to; the search's are read
         # from results/ablation/ where they lie.
         inputs=("confirmation/*.csv", "ablation/*/*/seed_*.csv"),
-        write=_confirmation,
+        write=lambda report, folder: confirmation.write_confirmation(
+            folder, report.command, report_only=True
+        ),
     ),
     Report(
         "suite.md",

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder, write_text_atomically
+from agents.common.jinja_reports import rate
 from agents.common.locations import REPO_ROOT
 from agents.common.tables import markdown_table
 from agents.common.yaml_config import load_config
@@ -104,20 +105,8 @@ def summarise_curves(
             if r["agent"] == agent and r["factor"] == factor and float(r["level"]) in entry["levels"]
         }
         points = [(neutral_level(factor), entry["clean_failure"]), *rates.items()]
-        summary.append(
-            {
-                "agent": agent,
-                "factor": factor,
-                "side": entry["side"],
-                "levels": len(entry["levels"]),
-                "area": curve_area(points),
-                "clean_failure": entry["clean_failure"],
-                "breaking_level": entry["breaking_level"],
-                "breaking_failure": entry["breaking_failure"],
-                "worst_level": entry["worst_level"],
-                "worst_failure": entry["worst_failure"],
-            }
-        )
+        found = {**entry, "levels": len(entry["levels"]), "area": curve_area(points)}
+        summary.append({column: found[column] for column in SUMMARY_COLUMNS})
     return summary
 
 
@@ -203,23 +192,6 @@ def robustness(
 
 def summary_lines(summary: Sequence[Mapping[str, Any]]) -> list[str]:
     """The summary as a Markdown table, a row per curve."""
-
-    def level(value: float | None) -> str:
-        return "—" if value is None else f"{value:g}"
-
-    rows = [
-        [
-            f"`{r['agent']}`",
-            r["factor"],
-            r["side"],
-            f"{r['area']:.2f}",
-            f"{r['clean_failure']:.2f}",
-            level(r["breaking_level"]),
-            "—" if r["breaking_failure"] is None else f"{r['breaking_failure']:.2f}",
-            f"{level(r['worst_level'])} ({r['worst_failure']:.2f})",
-        ]
-        for r in summary
-    ]
     header = [
         "agent",
         "factor",
@@ -229,5 +201,18 @@ def summary_lines(summary: Sequence[Mapping[str, Any]]) -> list[str]:
         "breaks at",
         "failure there",
         "worst level (failure)",
+    ]
+    rows = [
+        [
+            f"`{r['agent']}`",
+            r["factor"],
+            r["side"],
+            rate(r["area"]),
+            rate(r["clean_failure"]),
+            "—" if r["breaking_level"] is None else f"{r['breaking_level']:g}",
+            "—" if r["breaking_failure"] is None else rate(r["breaking_failure"]),
+            f"{r['worst_level']:g} ({rate(r['worst_failure'])})",
+        ]
+        for r in summary
     ]
     return [markdown_table(header, rows)]

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.common.folders import check_writable_folder
+from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
@@ -252,3 +252,10 @@ def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
         "headroom": HEADROOM_FAILURE,
     }
     return render_report("calibration.md.j2", values).split("\n")[:-1]
+
+
+def write_calibration(out: Path, command: str, **flights: Any) -> list[str]:
+    """:func:`run_calibration` (``flights`` its options) and ``out/calibration.md`` written; returns its lines."""
+    lines = report_lines(run_calibration(out, **flights), command)
+    write_text_atomically(Path(out) / "calibration.md", "\n".join(lines) + "\n")
+    return lines

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -40,6 +41,18 @@ def level_text(level: float | None, unit: str = "") -> str:
     return f"{level:g}{unit}" if unit.startswith("°") or not unit else f"{level:g} {unit}"
 
 
+def num(value: float | None, digits: int = 1) -> str:
+    """``value`` to ``digits`` decimals; a dash where it is missing."""
+    return "–" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}"
+
+
+def pct(value: float | None) -> str:
+    """A fraction as a percentage to one decimal; a dash where it is missing."""
+    return (
+        "–" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.1f} %"
+    )
+
+
 FILTERS = {
     "display": display_name,
     "names": join_words,
@@ -47,6 +60,8 @@ FILTERS = {
     "level": level_text,
     "count": lambda value: f"{value:,.0f}",
     "p": format_p,
+    "num": num,
+    "pct": pct,
 }
 
 

@@ -6,15 +6,29 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from agents.common.tables import markdown_table
-from agents.studies.thesis.comparison import Row, pct
+from agents.studies.thesis.comparison import Row
 from agents.studies.thesis.reference import THESIS_FOCAL_PX
+from agents.studies.wording import pct
 
 # The thesis's breaking point, and the derotation error (px) taken to break depths at this scene's parallax.
 BREAKING_ERROR = 0.08
 BREAKING_PX = 1.0
 # The lower error of the readings table: the thesis saw gradual spreading from 2 %.
 LOW_ERROR = 0.02
+# The readings of "x % rotation error": what the angle is, the motion's median of it, the sweep variable flown.
+READINGS = (
+    ("per-frame rotation (FlowNav's `rotation_error`)", "rotation_deg_median", "rotation_error"),
+    (
+        "absolute attitude, signed Euler angles (`attitude_rotation_error`)",
+        "attitude_deg_median",
+        "attitude_rotation_error",
+    ),
+    (
+        "Unity's Euler angles as reported, in [0°, 360°) (−0.5° reads 359.5°)",
+        "unity_readout_deg_median",
+        None,
+    ),
+)
 
 
 def _row(sweeps: list[Row], variable: str, value: float, method: str = "thesis") -> Row:
@@ -35,8 +49,8 @@ def angle_for_shift_deg(focal_px: float, error: float, shift_px: float) -> float
 
 
 def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
-    """The section's figures and tables from the three-capsule result (its ``motion`` and ``sweeps``); None
-    without a measured motion."""
+    """The section's figures and its tables' rows (``templates/thesis_tables.j2`` words them) from the
+    three-capsule result (its ``motion`` and ``sweeps``); None without a measured motion."""
     motion, sweeps = result.get("motion"), result.get("sweeps", [])
     if not motion:
         return None
@@ -44,50 +58,13 @@ def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
     needed = angle_for_shift_deg(f, eps, BREAKING_PX)
     per_frame, attitude = motion["rotation_deg_median"], motion["attitude_deg_median"]
     readings = [
-        ("per-frame rotation (FlowNav's `rotation_error`)", per_frame, "rotation_error"),
-        (
-            "absolute attitude, signed Euler angles (`attitude_rotation_error`)",
-            attitude,
-            "attitude_rotation_error",
-        ),
-        (
-            "Unity's Euler angles as reported, in [0°, 360°) (−0.5° reads 359.5°)",
-            motion["unity_readout_deg_median"],
-            None,
-        ),
+        {"label": label, "angle": motion[key], "measured": _row(sweeps, variable, eps) if variable else {}}
+        | {
+            "low": derotation_error_px(f, LOW_ERROR, motion[key]),
+            "high": derotation_error_px(f, eps, motion[key]),
+        }
+        for label, key, variable in READINGS
     ]
-    lines = []
-    for label, angle, variable in readings:
-        low, high = derotation_error_px(f, LOW_ERROR, angle), derotation_error_px(f, eps, angle)
-        measured = _row(sweeps, variable, eps) if variable else {}
-        observed = (
-            f"{pct(measured.get('median_rel_error'))} / {pct(measured.get('obstacle_median_rel_error'))}, "
-            f"{pct(measured.get('within_10pct'))}"
-            if measured
-            else "–"
-        )
-        ratio = high / parallax
-        lines.append(
-            [
-                label,
-                f"{angle:.2f}",
-                f"{low:.2f} / {high:.2f}",
-                f"{ratio:.{2 if ratio < 10 else 0}f}",
-                observed,
-            ]
-        )
-    lines.append(
-        [
-            f"what the thesis's verdict needs (8 % → {BREAKING_PX:g} px)",
-            f"{needed:.2f}",
-            f"{derotation_error_px(f, LOW_ERROR, needed):.2f} / {BREAKING_PX:.2f}",
-            f"{BREAKING_PX / parallax:.2f}",
-            "–",
-        ]
-    )
-    header = ['reading of "x % rotation error"', "θ the error is relative to (median, deg)"]
-    header += ["shift at 2 % / 8 % (px, bound f·ε·θ)", "8 % shift / median capsule parallax"]
-    header += ["measured at 8 % (`thesis` method): median error all points / capsule points, within 10 %"]
     attitude_low = _row(sweeps, "attitude_rotation_error", LOW_ERROR)
     return {
         "jitter_deg": f"{motion['jitter_deg']:g}",
@@ -108,7 +85,9 @@ def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
         "needed_deg": f"{needed:.2f}",
         "needed_deg_short": f"{needed:.1f}",
         "needed_thesis_deg": f"{angle_for_shift_deg(THESIS_FOCAL_PX, eps, BREAKING_PX):.2f}",
-        "readings_table": markdown_table(header, lines),
+        "readings": [r | {"ratio": r["high"] / parallax} for r in readings],
+        "needed_low": derotation_error_px(f, LOW_ERROR, needed),
+        "needed_ratio": BREAKING_PX / parallax,
         "per_frame_below": per_frame < needed,
         "per_frame_shift": f"{derotation_error_px(f, eps, per_frame):.2f}",
         "unity_shift": f"{derotation_error_px(f, LOW_ERROR, motion['unity_readout_deg_median']):.0f}",
@@ -116,32 +95,8 @@ def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
         "attitude_low_error": pct(attitude_low.get("median_rel_error")),
         "attitude_low_within": pct(attitude_low.get("within_10pct")),
         "needed_over_per_frame": f"{needed / per_frame:.0f}",
-        "translation_table": _translation_table(sweeps),
+        "translation_rows": sorted(
+            (r for r in sweeps if r["variable"] == "translation_error" and r["method"] == "thesis"),
+            key=lambda r: r["value"],
+        ),
     }
-
-
-def _translation_table(sweeps: list[Row]) -> str:
-    """Translation error against what it predicts: a median error of about ε / 2 over the error-free one."""
-    rows = sorted(
-        (r for r in sweeps if r["variable"] == "translation_error" and r["method"] == "thesis"),
-        key=lambda r: r["value"],
-    )
-    if not rows:
-        return ""
-    base = rows[0]["median_rel_error"] if rows[0]["value"] == 0 else 0.0
-    header = [
-        "translation error ε",
-        "expected median ≈ ε / 2 (plus the 0 % row's)",
-        "measured median (`thesis`)",
-    ]
-    cells = [
-        [
-            f"{100 * r['value']:g} %",
-            f"{pct(r['value'] / 2)} (+{pct(base)})",
-            pct(r["median_rel_error"]),
-            pct(r["within_10pct"]),
-            f"{r['valid_per_frame']:.0f}",
-        ]
-        for r in rows
-    ]
-    return markdown_table([*header, "within 10 %", "valid points / frame"], cells)

@@ -16,16 +16,8 @@ from agents.common.jinja_reports import render
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.provenance import machine_summary
-from agents.studies.thesis.comparison import (
-    metrics_table,
-    sweep_table,
-    table2_comparison,
-    table2_reading,
-    table2_table,
-    table3_comparison,
-    table3_table,
-    verdict_table,
-)
+from agents.studies import wording
+from agents.studies.thesis.comparison import table2_reading, table3_comparison, verdict_rows
 from agents.studies.thesis.experiments import EXPERIMENTS
 from agents.studies.thesis.motion_errors import motion_values
 from agents.studies.thesis.reference import THESIS_FOCAL_PX
@@ -88,39 +80,31 @@ def _json_default(value: object) -> Any:
 
 
 def _experiment_values(name: str, result: dict[str, Any]) -> dict[str, Any]:
-    """One experiment's section of the README: its claim, config, tables and figures."""
+    """One experiment's section of the README: its claim, config, rows and figures; the parts an experiment
+    lacks stay empty and the template leaves them out."""
     section: dict[str, Any] = {key: result[key] for key in ("title", "thesis", "config", "camera")}
     section |= {"name": name, "wall_s": f"{result['wall_s']:.1f}", "figures": result.get("figures", [])}
-    # The parts an experiment lacks stay None: the template leaves them out.
-    section |= dict.fromkeys(
-        ("recorded", "verdict_table", "metrics_table", "table2", "table3", "sweep_table")
-    )
+    section |= {key: result.get(key) for key in ("rows", "sweeps")} | {
+        "recorded": None,
+        "verdicts": None,
+    }
     if name == "three_capsule":
         section["recorded"] = {
             "frames": result["recorded_frames"],
             "length_m": f"{result['recorded_length_m']:.2f}",
             "capsules": ", ".join(f"({x:.2f}, {y:.2f})" for x, y in result["obstacles"]),
         }
-    if name == "three_capsule" and result.get("sweeps"):
-        section["verdict_table"] = verdict_table(result["sweeps"])
-    if result.get("rows"):
-        section["metrics_table"] = metrics_table(result["rows"])
-    if result.get("table2"):
-        section["table2"] = {
-            "focal_px": f"{result.get('focal_px', math.nan):.1f}",
-            "comparison": table2_comparison(result["table2"]),
-            "reading": table2_reading(result["table2"]),
-            "full": table2_table(result["table2"]),
-        }
-    if result.get("table3"):
-        section["table3"] = {
-            "comparison": table3_comparison(
-                result["table3"], result["rows"], result.get("fast_threshold", 20)
-            ),
-            "full": table3_table(result["table3"]),
-        }
-    if result.get("sweeps"):
-        section["sweep_table"] = sweep_table(result["sweeps"])
+        section["verdicts"] = verdict_rows(result["sweeps"]) if result.get("sweeps") else None
+    table2, table3 = result.get("table2"), result.get("table3")
+    section["table2"] = table2 and {
+        "focal_px": f"{result.get('focal_px', math.nan):.1f}",
+        "rows": table2,
+        "reading": table2_reading(table2),
+    }
+    section["table3"] = table3 and {
+        "comparison": table3_comparison(table3, result["rows"], result.get("fast_threshold", 20)),
+        "rows": table3,
+    }
     return section
 
 
@@ -150,5 +134,5 @@ def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:
     text = discussion.read_text().strip() if discussion.is_file() else ""
     values = readme_values(results, ran, wall_s, text)
     readme = out_dir / "README.md"
-    readme.write_text(render("agents.studies", "thesis_readme.md.j2", values, every_value_used=True))
+    readme.write_text(render(wording.PACKAGE, "thesis_readme.md.j2", values, every_value_used=True))
     return readme

@@ -3,6 +3,7 @@ test variable, plus the motion measurements that the rotation-error analysis of 
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -105,14 +106,7 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
         scene = scene_kwargs(config)
         path.obstacles, path.materials = scene["obstacles"], scene["materials"]
     save_path(path, out_dir / "three_capsule_path.npz")
-    base = {
-        "distance_per_frame": config.base.distance_per_frame,
-        "brightness": config.base.brightness,
-        "attitude_jitter_deg": config.base.attitude_jitter_deg,
-        "rotation_error": config.base.rotation_error,
-        "translation_error": config.base.translation_error,
-        "max_frames": config.base.max_frames,
-    }
+    base = dataclasses.asdict(config.base)
     camera = config.camera
     world = PlaybackWorld(path, camera.width, camera.height, camera.fov_deg)
     rows, sweeps = [], []

@@ -37,7 +37,7 @@ def test_names_and_unused_values() -> None:
     text = "{% if met %}{{ value }}{% else %}{{ low | interval(high) }}{% endif %}"
     assert names_in(text) == {"met", "value", "low", "high"}
     assert unused_values(text, {"met": True, "value": "1", "stale": "2"}) == ["stale"]
-    assert "leaderboard_table" in template_names("agents.studies", "benchmark.md.j2")
+    assert "board" in template_names("agents.studies", "benchmark.md.j2")
 
 
 def test_every_value_used_names_the_template_and_the_value() -> None:

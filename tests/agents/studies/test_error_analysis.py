@@ -18,8 +18,9 @@ from agents.studies.error_analysis import (
     neutral_level,
     tolerance_table,
 )
-from agents.studies.error_analysis_report import report_values, unbroken_reason, write_error_analysis
+from agents.studies.error_analysis_report import report_values, write_error_analysis
 from agents.studies.weaving import turning_and_rotation_error
+from agents.studies.wording import render_report
 
 
 def _cell(
@@ -319,12 +320,16 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
     rows += _cell("ppo_flow@all", "forward_speed", 2.0, 60)  # breaks
     table = tolerance_table(rows)
     assert best_learned_flow_agent(table) == "ppo_flow@all"
-    reasons = {(r["factor"], r["side"]): unbroken_reason(r) for r in table if r["agent"] == "ppo_flow@all"}
-    assert reasons[("brightness", "above")].startswith("flown to the end of the setting's range [0.0, 4.0]")
-    assert reasons[("obstacle_density", "below")].startswith("this direction makes the task easier")
-    assert reasons[("depth_noise", "above")].endswith("short of the range's end: more levels are needed")
     values = report_values(rows)
     assert values["best"] == "ppo_flow@all"
+    text = render_report("error_analysis.md.j2", {**values, "generated": "today", "command": "test"})
+    reasons = {(r["factor"], r["side"]) for r in table if r["agent"] == "ppo_flow@all"}
+    assert "- `brightness` (above): flown to the end of the setting's range [0.0, 4.0]" in text
+    assert "- `obstacle_density` (below): this direction makes the task easier" in text
+    assert (
+        "- `depth_noise` (above): not broken up to 0.2 (worst 0.15 at 0.2), short of the range's end: more levels are needed."
+        in text
+    )
     # forward_speed breaks it, so it is not listed
     assert {(r["factor"], r["side"]) for r in values["unbroken"]} == set(reasons) - {
         ("forward_speed", "above")

@@ -12,7 +12,7 @@ from agents.common.yaml_config import load_config
 from agents.evaluation.records import read_records
 from agents.evaluation.sweep import SweepConfig
 from agents.studies.error_analysis import TASK_FACTORS
-from agents.studies.robustness import SWEEP_CONFIG, curve_area, sensor_levels, summarise_curves
+from agents.studies.robustness import SWEEP_CONFIG, curve_area, sensor_levels, summarise_curves, summary_lines
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
 
@@ -112,3 +112,24 @@ def test_bad_robustness_input_is_one_line(argv: list[str], message: str, tmp_pat
     assert main([*base, *argv, "--out", str(tmp_path)]) == 2
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
+
+
+def test_the_summary_table_has_a_row_per_curve_and_a_dash_where_nothing_breaks() -> None:
+    curve = {"agent": "bee", "factor": "depth_noise", "side": "above", "area": 0.25, "clean_failure": 0.1}
+    broken = {
+        **curve,
+        "breaking_level": 0.4,
+        "breaking_failure": 0.5,
+        "worst_level": 0.8,
+        "worst_failure": 0.7,
+    }
+    unbroken = {
+        **curve,
+        "breaking_level": None,
+        "breaking_failure": None,
+        "worst_level": 0.8,
+        "worst_failure": 0.2,
+    }
+    table = summary_lines([broken, unbroken])[0].splitlines()
+    assert table[2] == "| `bee` | depth_noise | above | 0.25 | 0.10 | 0.4 | 0.50 | 0.8 (0.70) |"
+    assert table[3] == "| `bee` | depth_noise | above | 0.25 | 0.10 | — | — | 0.8 (0.20) |"

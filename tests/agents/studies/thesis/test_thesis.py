@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from agents.cli.replicate import EXPERIMENT_NAMES
+from agents.common.jinja_reports import environment
 from agents.common.locations import CONFIGS_DIR
 from agents.common.yaml_config import ConfigError, load_config
+from agents.studies import wording
 from agents.studies.thesis.attitude import (
     AttitudeRotationError,
     unity_angles,
@@ -17,7 +19,7 @@ from agents.studies.thesis.attitude import (
     unity_to_camera_deg,
     zyx_order_rotation,
 )
-from agents.studies.thesis.comparison import table2_comparison, verdict_table
+from agents.studies.thesis.comparison import verdict_rows
 from agents.studies.thesis.experiment_configs import RotationConfig, StraightConfig
 from agents.studies.thesis.experiments import EXPERIMENTS
 from agents.studies.thesis.metrics import component_depth, depth_metrics
@@ -182,6 +184,11 @@ def cv2_vector(rotation: np.ndarray) -> np.ndarray:
     return vector_from_rotation(rotation)
 
 
+def _table(macro: str, *args: object) -> str:
+    """A table of the thesis README, as ``templates/thesis_tables.j2``'s ``macro`` words it."""
+    return str(getattr(environment(wording.PACKAGE).get_template("thesis_tables.j2").module, macro)(*args))
+
+
 TINY_ROTATION = """
 camera: {width: 160, height: 120, fov_deg: 60.0}
 estimator: {forward_backward: false, normalize_brightness: false}
@@ -205,7 +212,7 @@ def test_tiny_rotation_compensates_two_axis_case_and_sets_thesis_beside_ours(tmp
     # The exact rotation compensates a two-axis turn to well under the thesis's 12 px (and under 1 px).
     assert two_axis["matrix_mean_inliers_px"] < 1.0
     assert two_axis["euler_order_shift_px"] == pytest.approx(0.0, abs=1e-9)  # x + y: both orders agree
-    lines = table2_comparison(result["table2"]).splitlines()
+    lines = _table("table2_comparison", result["table2"]).splitlines()
     assert lines[2].startswith("| 9 (-1.4, -4.9, 0) | 1.4, -4.9, 0 | 12.070 / ")
     assert "all outliers /" in lines[2] and lines[3].startswith("| ours (ours) |")
     readme = write_readme(tmp_path / "out", ["rotation"], 1.0).read_text()
@@ -234,7 +241,7 @@ def test_verdict_table_and_motion_error_section_use_the_rows() -> None:
         _sweep("translation_error", 0.0, 0.009),
         _sweep("translation_error", 0.1, 0.054),
     ]
-    table = verdict_table(sweeps)
+    table = _table("verdicts", verdict_rows(sweeps))
     assert "at 0, 0.08, 0.1: median error 1.0, 2.7, 3.3 %" in table and "a strong threat" in table
     assert "angular instability" not in table  # no rows, no line
     # f = 415.7 px: 8 % of 1 deg misplaces points by 0.58 px; 1 px needs 1.72 deg.
@@ -257,8 +264,8 @@ def test_verdict_table_and_motion_error_section_use_the_rows() -> None:
     assert values is not None and values["error_at_10pct"] == "3.3 %"
     assert (
         "| per-frame rotation (FlowNav's `rotation_error`) | 0.90 | 0.13 / 0.52 | 0.25 | 2.7 % / 5.0 %, 90.0 % |"
-        in values["readings_table"]
+        in _table("readings", values)
     )
     assert values["needed_deg"] == "1.72" and values["per_frame_below"] and values["attitude_above"]
-    assert "| 10 % | 5.0 % (+0.9 %) | 5.4 % |" in values["translation_table"]
+    assert "| 10 % | 5.0 % (+0.9 %) | 5.4 % |" in _table("translation", values["translation_rows"])
     assert motion_values({"sweeps": sweeps}) is None

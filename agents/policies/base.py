@@ -15,7 +15,8 @@ REACTIVE_AGENTS = ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
 # ppo_flow_course_approach_curriculum_slow_oracle: the same recipe told the true depths at the same tracked points,
 # the yardstick of what flow costs it (the true-depth comparison), as ppo_oracle is ppo_flow's.
 # ppo_flow_planner_student: the privileged planner distilled (DAgger) into a flow-only policy, one policy trained
-# across the tiers' courses and sensors (configs/experiments/ppo_flow_planner_student.yaml).
+# across the tiers' courses and sensors (configs/experiments/ppo_flow_planner_student.yaml); its _oracle twin is
+# the same recipe on the true depths at the same tracked points, what flow costs the student.
 LEARNED_AGENTS = (
     "ppo_flow",
     "ppo_robust",
@@ -23,9 +24,10 @@ LEARNED_AGENTS = (
     "ppo_flow_course_approach_curriculum_slow",
     "ppo_flow_course_approach_curriculum_slow_oracle",
     "ppo_flow_planner_student",
+    "ppo_flow_planner_student_oracle",
 )
 # Learned agents trained across the tiers, flown on the suite only: the clean tier's history table predates them.
-SUITE_ONLY_AGENTS = ("ppo_flow_planner_student",)
+SUITE_ONLY_AGENTS = ("ppo_flow_planner_student", "ppo_flow_planner_student_oracle")
 # Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
 PLANNERS = ("planner",)
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
@@ -36,7 +38,12 @@ HISTORY_AGENTS = REACTIVE_AGENTS + tuple(agent for agent in LEARNED_AGENTS if ag
 # and the true state). Each is a reference of what perfect sensing allows: listed apart in every table, never
 # ranked or named best. An agent whose settings ask for privileged data without being listed here is refused by
 # the suite.
-PRIVILEGED_AGENTS = ("ppo_oracle", "ppo_flow_course_approach_curriculum_slow_oracle", "planner")
+PRIVILEGED_AGENTS = (
+    "ppo_oracle",
+    "ppo_flow_course_approach_curriculum_slow_oracle",
+    "ppo_flow_planner_student_oracle",
+    "planner",
+)
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
 # results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.
 TRAIN_SEED_MARK = "@"

@@ -2,7 +2,7 @@
 
 The lever search tried configurations one after another on the ablation layouts and stopped at the first whose
 point estimates met the robustness conditions: a best-of-many pick. Here the pick (:data:`PICK`) and what it is compared with
-(:data:`COMPARED`) fly every shipped training seed on :data:`CONFIRMATION_LAYOUTS` fresh validation layouts from
+(:data:`COMPARED`) fly the training seeds the search compared on :data:`CONFIRMATION_LAYOUTS` fresh validation layouts from
 ``CONFIRMATION_SEED_START``, clean and under each of :data:`CONDITIONS`. Every run flies every layout, so
 comparisons are paired by layout; intervals come from a bootstrap that resamples training seeds (of each agent
 apart) and layouts (once for all agents). Each agent's episodes go to ``<out>/<agent>.csv`` (resumable).
@@ -44,15 +44,19 @@ CONDITIONS: dict[str, dict[str, float]] = {
 CONFIRMATION_LAYOUTS = 200
 # The robustness condition: under each harder course, failure at most this much above the agent's own clean rate.
 ALLOWED_RISE = choices().max_rise
+# The training runs per agent the lever search compared (seeds 0-4): the confirmation flies the same runs on
+# fresh layouts, so seeds shipped later (ppo_flow's 5-9) take no part in it.
+SEARCH_RUNS = 5
 # Any learned name loads the policy file it is given; runs of different agents live in different CSVs.
 RUN_LABEL = "ppo_flow"
 
 
 def agent_runs(agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, Path]:
-    """The shipped training seeds of ``agent``: run label (``ppo_flow@k``) → its policy file."""
+    """The shipped training seeds of ``agent`` the search compared (its first :data:`SEARCH_RUNS`): run label
+    (``ppo_flow@k``) → its policy file."""
     return {
         seeded_agent_name(RUN_LABEL, seed): Path(policies_dir) / agent / f"seed_{seed}.zip"
-        for seed in trained_seeds(agent, policies_dir)
+        for seed in trained_seeds(agent, policies_dir)[:SEARCH_RUNS]
     }
 
 

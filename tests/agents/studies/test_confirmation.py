@@ -9,7 +9,9 @@ from agents.common.locations import RESULTS_DIR
 from agents.studies.confirmation import (
     COMPARED,
     PICK,
+    SEARCH_RUNS,
     TRUE_DEPTH_RECIPE,
+    agent_runs,
     confirmation_tasks,
     flow_costs,
     flown_agents,
@@ -102,3 +104,13 @@ def test_flow_costs_are_the_pick_against_its_true_depth_recipe() -> None:
         "differences": [{"condition": "clean", "other": "ppo_flow", "difference": -0.05}, against_truth]
     }
     assert flow_costs(result) == [against_truth]
+
+
+def test_the_confirmation_flies_the_runs_the_search_compared_not_seeds_shipped_later(tmp_path) -> None:
+    folder = tmp_path / "ppo_flow"
+    folder.mkdir()
+    for seed in range(SEARCH_RUNS + 3):
+        (folder / f"seed_{seed}.zip").write_bytes(b"")
+    runs = agent_runs("ppo_flow", tmp_path)
+    assert list(runs) == [f"ppo_flow@{seed}" for seed in range(SEARCH_RUNS)]
+    assert runs["ppo_flow@0"] == folder / "seed_0.zip"

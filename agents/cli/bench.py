@@ -9,8 +9,7 @@ render loop of the same scene, with the per-stage breakdown of a step.
 
 ``flownav bench recipe``: minutes per training seed of whole recipes, measured side by side.
 
-``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights, and
-multi-frame depth (``baseline_frames``) on ICL-NUIM.
+``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights.
 
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
@@ -66,12 +65,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=((64, 48), (96, 72), (128, 96), (160, 120), (240, 180), (320, 240)),
         help="comma-separated WxH candidates (default 64x48,96x72,128x96,160x120,240x180,320x240)",
     )
-    env.add_argument(
-        "--fast-thresholds",
-        type=_int_list,
-        default=(20, 15, 5),
-        help="comma-separated FAST thresholds compared at the default resolution (default 20,15,5)",
-    )
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
     env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
@@ -99,7 +92,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     depth_yield = targets.add_parser(
         "yield",
-        help="valid depths per frame and their accuracy per estimator setting, in-scene (and ICL-NUIM)",
+        help="valid depths per frame and their accuracy per estimator setting, in FlowNav flights",
     )
     depth_yield.add_argument(
         "--frames", type=_int_list, default=(1, 2, 4, 8), help="baseline_frames variants (default 1,2,4,8)"
@@ -119,12 +112,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--flights", type=int, default=6, help="scripted flights per variant (default 6)"
     )
     depth_yield.add_argument("--steps", type=int, default=120, help="steps per flight (default 120)")
-    depth_yield.add_argument(
-        "--sequence",
-        type=Path,
-        default=Path("..") / "shared" / "testdata" / "icl_nuim_livingroom1",
-        help="ICL-NUIM-style sequence (skipped when absent; default ../shared/testdata/icl_nuim_livingroom1)",
-    )
     _add_output_options(depth_yield)
 
 
@@ -155,7 +142,6 @@ def run(args: argparse.Namespace) -> int:
             DEFAULT_SETTINGS if args.setting is None else args.setting,
             args.flights,
             args.steps,
-            args.sequence,
             args.out,
             progress=not args.no_progress,
         )
@@ -184,7 +170,6 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             out_dir=args.out,
             progress=not args.no_progress,
-            fast_thresholds=args.fast_thresholds,
         )
     for path in paths:
         print(f"wrote {path}")

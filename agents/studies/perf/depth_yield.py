@@ -1,6 +1,5 @@
 """Depth yield at equal accuracy: how many valid depths per frame an estimator setting gives, and how good they
-are, in FlowNav flights against the ray-cast truth; multi-frame depth (``baseline_frames``) also on ICL-NUIM
-streamed with its ground-truth motion.
+are, in FlowNav flights against the ray-cast truth.
 
 ``flownav bench yield --out results`` writes ``depth_yield.md`` and ``depth_yield.png``. An accuracy benchmark, not
 a speed one: the estimator's time per frame is a side note. The flights are validation layouts, so settings may be
@@ -25,7 +24,7 @@ from agents.common.tables import markdown_table
 from agents.studies.perf.flight import scripted_action
 from agents.studies.perf.report_kit import RunFacts, saved_figure, table, write_report
 from estimator import CameraIntrinsics, FlowDepthEstimator
-from estimator.accuracy import evaluate_stream, relative_depth_error
+from estimator.accuracy import relative_depth_error
 from flownav_env import FlowNavEnv
 from flownav_env.settings import EnvSettings
 
@@ -42,32 +41,6 @@ DEFAULT_SETTINGS: tuple[str, ...] = (
     "max_lk_error=8",
     "fast_threshold=5;baseline_frames=4",
 )
-ICL_NAME = "ICL-NUIM living room 1"
-ICL_INTRINSICS = CameraIntrinsics(fx=525.0, fy=525.0, cx=319.5, cy=239.5, width=640, height=480)
-
-
-def icl_rows(
-    sequence: Path, baseline_frames: Sequence[int], steps: Sequence[int] = (1, 2)
-) -> list[dict[str, Any]]:
-    """ICL-NUIM streamed every ``step`` frames, per ``baseline_frames``: medians over the streamed pairs."""
-    rows = []
-    for step in steps:
-        for frames in baseline_frames:
-            pairs = evaluate_stream(sequence, ICL_INTRINSICS, step=step, baseline_frames=frames)
-            last = pairs[-1]
-            rows.append(
-                {
-                    "step": step,
-                    "baseline_frames": frames,
-                    "pairs": len(pairs),
-                    "valid_median": float(np.median([pair["valid"] for pair in pairs])),
-                    "valid_last": last["valid"],
-                    "median_rel_error_last": last["median_rel_error"],
-                    "within_10pct_last": last["within_10pct"],
-                    "mean_baseline_last": last["baseline_frames"],
-                }
-            )
-    return rows
 
 
 def scene_rows(
@@ -160,7 +133,6 @@ def run_depth_yield(
     settings: Sequence[str],
     flights: int,
     steps: int,
-    sequence: Path,
     out_dir: Path,
     progress: bool = True,
 ) -> list[Path]:
@@ -177,12 +149,10 @@ def run_depth_yield(
     variants = variant_settings(baseline_frames, fast_thresholds, settings)
     for name, kwargs in variants.items():  # refuse a bad setting before flying anything
         try:
-            FlowDepthEstimator(ICL_INTRINSICS, **kwargs)
+            FlowDepthEstimator(CameraIntrinsics.from_fov(64, 48, 60.0), **kwargs)
         except TypeError as error:
             raise ValueError(f"variant {name!r}: {error}") from None
     started = time.perf_counter()
-    multi = sorted({1, *baseline_frames})
-    icl = icl_rows(sequence, multi) if sequence.is_dir() and len(multi) > 1 else []
     summary, bands = scene_rows(variants, flights, steps, progress)
     out_dir.mkdir(parents=True, exist_ok=True)
     figure = out_dir / "depth_yield.png"
@@ -192,7 +162,7 @@ def run_depth_yield(
         f" --setting {shlex.quote(setting)}" for setting in settings
     )
     command += f" --flights {flights} --steps {steps} --out {out_dir}"
-    values = yield_report_values(icl, summary, bands, sequence, RunFacts.of_this_run(command, started))
+    values = yield_report_values(summary, bands, RunFacts.of_this_run(command, started))
     return [write_report(out_dir / "depth_yield.md", "depth_yield.md.j2", values), figure]
 
 
@@ -219,14 +189,10 @@ def _by_band(bands: list[dict[str, Any]]) -> tuple[list[str], dict[str, list[dic
 
 
 def yield_report_values(
-    icl: list[dict[str, Any]],
-    summary: list[dict[str, Any]],
-    bands: list[dict[str, Any]],
-    sequence: Path,
-    run: RunFacts,
+    summary: list[dict[str, Any]], bands: list[dict[str, Any]], run: RunFacts
 ) -> dict[str, Any]:
-    """Every table of ``templates/depth_yield.md.j2``: :func:`icl_rows` of ``sequence`` (empty where not
-    measured), :func:`scene_rows`' summary and bands, and the run's facts."""
+    """Every table of ``templates/depth_yield.md.j2``: :func:`scene_rows`' summary and bands, and the run's
+    facts."""
     defaults = EnvSettings()
     summary_columns = {
         "variant": "{variant}",
@@ -243,16 +209,6 @@ def yield_report_values(
         [name, *(f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}" for row in rows)]
         for name, rows in variants.items()
     ]
-    icl_columns = {
-        "streamed every": "{step}",
-        "k": "{baseline_frames}",
-        "pairs": "{pairs}",
-        "valid / pair (median)": "{valid_median:.0f}",
-        "valid, last pair": "{valid_last}",
-        "median error, last pair": "{median_rel_error_last:.2%}",
-        "within 10 %, last pair": "{within_10pct_last:.1%}",
-        "mean baseline (frames), last pair": "{mean_baseline_last:.2f}",
-    }
     return {
         "run": run,
         "env_fast_threshold": defaults.estimator_arguments()["fast_threshold"],
@@ -260,10 +216,6 @@ def yield_report_values(
         "first_seed": f"{FLIGHT_SEED_START:,}",
         "summary_table": table(summary, summary_columns),
         "band_table": markdown_table(["variant", *band_names], by_band),
-        "sequence_name": ICL_NAME,
-        "sequence_size": f"{ICL_INTRINSICS.width}×{ICL_INTRINSICS.height}",
-        "icl_table": table(icl, icl_columns) if icl else "",
-        "sequence": sequence,
     }
 
 

@@ -35,10 +35,6 @@ TARGET_RATIO = (
 )
 # The time-to-policy target re-set it on the floor loop (bare + the OpenCV work any FAST + LK estimator does).
 TARGET_FLOOR_RATIO = 1.3
-# Criteria of the default-resolution choice. The env's own test spec asks for a median depth error <= 5 %;
-# two valid points per histogram sector (median) keep most sectors of the observation from being empty.
-MAX_DEPTH_ERROR_PCT = 5.0
-MIN_VALID_PER_SECTOR = 2.0
 TARGET_REAL_TIME_FACTOR = 20.0
 # gym-pybullet-drones' reported real-time factor for one drone with 64×48 vision (their hardware, not ours).
 PYBULLET_DRONES_RTF = 10.8
@@ -51,7 +47,6 @@ class _Subject:
     """One configuration under test: the env, its bare counterpart and the figures collected so far."""
 
     label: str
-    kind: str  # "default", "resolution" or "fast_threshold": which comparison the row belongs to
     env: gym.Env[Any, Any]
     inner: flownav_env.FlowNavEnv
     bare_data: mujoco.MjData
@@ -68,7 +63,7 @@ class _Subject:
     episodes: int = 0
 
 
-def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _Subject:
+def _make_subject(label: str, kwargs: dict[str, Any], seed: int) -> _Subject:
     env = gym.make("FlowNav-v0", **kwargs)
     inner = env.unwrapped
     if not isinstance(inner, flownav_env.FlowNavEnv):
@@ -76,7 +71,6 @@ def _make_subject(label: str, kind: str, kwargs: dict[str, Any], seed: int) -> _
     model, size = inner.physics.model, (inner.intrinsics.width, inner.intrinsics.height)
     subject = _Subject(
         label=label,
-        kind=kind,
         env=env,
         inner=inner,
         bare_data=mujoco.MjData(model),
@@ -170,9 +164,8 @@ def measure_env(
     repeats: int = 5,
     seed: int = 0,
     progress: bool = True,
-    fast_thresholds: Sequence[int] = (),
 ) -> list[dict[str, Any]]:
-    """Time FlowNav-v0 (default config, each resolution, each FAST threshold) against the bare MuJoCo loop.
+    """Time FlowNav-v0 (default config, each resolution) against the bare MuJoCo loop.
 
     Args:
         resolutions: ``(width, height)`` candidates.
@@ -181,10 +174,9 @@ def measure_env(
             every repeat, configurations visited forward and backward on alternate repeats.
         seed: seed of the first episode (later episodes use seed + 1, + 2, ...).
         progress: show a tqdm progress bar.
-        fast_thresholds: FAST thresholds to compare at the default resolution (``estimator_kwargs``).
 
     Returns:
-        One dict per configuration (the default first, then resolutions, then thresholds): steps/s, ratios,
+        One dict per configuration (the default first, then the resolutions): steps/s, ratios,
         real-time factors, per-stage ms, median points per frame and median depth error.
 
     Raises:
@@ -195,16 +187,12 @@ def measure_env(
             f"need steps >= 1, repeats >= 1 and at least one resolution, got steps={steps}, "
             f"repeats={repeats}, resolutions={list(resolutions)}"
         )
-    configs: list[tuple[str, str, dict[str, Any]]] = [("FlowNav-v0 (default)", "default", {})]
+    configs: list[tuple[str, dict[str, Any]]] = [("FlowNav-v0 (default)", {})]
     configs += [
-        (f"{width}×{height}", "resolution", {"camera_width": width, "camera_height": height})
+        (f"{width}×{height}", {"camera_width": width, "camera_height": height})
         for width, height in resolutions
     ]
-    configs += [
-        (f"FAST {threshold}", "fast_threshold", {"estimator_kwargs": {"fast_threshold": threshold}})
-        for threshold in fast_thresholds
-    ]
-    subjects = [_make_subject(label, kind, kwargs, seed) for label, kind, kwargs in configs]
+    subjects = [_make_subject(label, kwargs, seed) for label, kwargs in configs]
     try:
         for subject in subjects:  # warm-up: GL contexts, first-call allocations; not recorded
             _env_block(subject, WARMUP_STEPS, seed, record=False)
@@ -238,7 +226,6 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
     sides = {"env": subject.env_blocks, "bare": subject.bare_blocks, "floor": subject.floor_blocks}
     row: dict[str, Any] = {
         "config": subject.label,
-        "kind": subject.kind,
         "fast_threshold": inner.estimator.fast_threshold,
         "width": inner.intrinsics.width,
         "height": inner.intrinsics.height,
@@ -260,13 +247,11 @@ def _summarise(subject: _Subject) -> dict[str, Any]:
         "ms_step": 1e3 * env_step,
     }
     row |= {f"ms_{key}": 1e3 * median(values) for key, values in subject.stage_blocks.items()}
-    rows_, columns = inner.histogram_sectors
     return row | {
         "points_tracked_median": median(subject.points_tracked),
         "points_valid_median": median(subject.points_valid),
         "depth_error_median_pct": 100 * median(subject.depth_errors),
         "steps_with_depth_error": len(subject.depth_errors) / max(1, len(subject.points_valid)),
         "frame_rate": inner.frame_rate,
-        "histogram_sectors": rows_ * columns,
         "substeps": inner.substeps,
     }

@@ -1,6 +1,5 @@
-"""``env_performance.md`` and its figure: steps per second per resolution and FAST threshold against the bare
-loop, the per-stage breakdown of a step, the reasoning behind the env's default resolution and threshold, and
-the targets: env/bare (throughput), env/floor with where the step goes beyond the floor loop (time to a policy)
+"""``env_performance.md`` and its figure: steps per second per resolution against the bare loop, the per-stage
+breakdown of a step, and the targets: env/bare (throughput), env/floor with where the step goes beyond the floor loop (time to a policy)
 and the real-time factor beside gym-pybullet-drones'. The prose is ``templates/env_performance.md.j2``;
 :func:`env_report_values` computes every figure and verdict it states."""
 
@@ -16,8 +15,6 @@ import numpy as np
 from agents.common.tables import markdown_table, write_csv
 from agents.studies.perf.env_speed import (
     DEFAULT_RESOLUTIONS,
-    MAX_DEPTH_ERROR_PCT,
-    MIN_VALID_PER_SECTOR,
     PYBULLET_DRONES_RTF,
     PYBULLET_DRONES_VISION,
     TARGET_FLOOR_RATIO,
@@ -46,7 +43,6 @@ def run_env_benchmark(
     seed: int = 0,
     out_dir: str | Path = "results",
     progress: bool = True,
-    fast_thresholds: Sequence[int] = (),
 ) -> list[Path]:
     """Run :func:`measure_env` and write ``env_performance.md``, ``.csv`` and ``.png`` to ``out_dir`` (created);
     the arguments are :func:`measure_env`'s. Returns the written paths."""
@@ -55,11 +51,10 @@ def run_env_benchmark(
     command = (
         "flownav bench env --resolutions "
         + ",".join(f"{w}x{h}" for w, h in resolutions)
-        + (" --fast-thresholds " + ",".join(map(str, fast_thresholds)) if fast_thresholds else "")
         + f" --steps {steps} --repeats {repeats} --seed {seed} --out {out_dir}"
     )
     started = time.perf_counter()
-    rows = measure_env(resolutions, steps, repeats, seed, progress, fast_thresholds)
+    rows = measure_env(resolutions, steps, repeats, seed, progress)
     run = RunFacts.of_this_run(command, started)
     paths = [out_dir / f"env_performance.{ext}" for ext in ("md", "csv", "png")]
     write_csv(paths[1], rounded(rows))
@@ -111,8 +106,6 @@ def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) 
         "depth_error_share": f"{100 * default['steps_with_depth_error']:.0f}",
         "table": _speed_table(rows),
         "stage_table": _stage_table(rows),
-        **_choice_values(rows),
-        **_threshold_values(rows),
         **_ratio_target_values(rows),
         **_floor_target_values(default),
         **_real_time_values(rows),
@@ -148,82 +141,6 @@ def _stage_table(rows: list[Row]) -> str:
     for key, label in STAGE_LABELS.items():
         columns[label] = f"{{{key}:.2f}} ({{share_{key[3:]}:.0f}} %)"
     return table(shares, columns)
-
-
-def _choice_values(rows: list[Row]) -> dict[str, str | bool]:
-    """The default-resolution choice: each candidate against the current default, and the criteria."""
-    default = rows[0]
-    candidates = [row for row in rows if row["kind"] == "resolution"]
-    same = [
-        row for row in candidates if (row["width"], row["height"]) == (default["width"], default["height"])
-    ]
-    reference = same[0] if same else default
-    min_valid = MIN_VALID_PER_SECTOR * default["histogram_sectors"]
-
-    def meets(row: Row) -> bool:
-        return bool(
-            row["depth_error_median_pct"] <= MAX_DEPTH_ERROR_PCT and row["points_valid_median"] >= min_valid
-        )
-
-    choices = markdown_table(
-        [
-            "resolution",
-            "steps/s vs current default",
-            "valid points vs current default",
-            "meets both criteria",
-        ],
-        [
-            [
-                row["config"],
-                f"{row['steps_per_s_env'] / reference['steps_per_s_env']:.2f}×",
-                f"{row['points_valid_median'] / max(reference['points_valid_median'], 1e-9):.2f}×",
-                "yes" if meets(row) else "no",
-            ]
-            for row in candidates
-        ],
-    )
-    passing = [row for row in candidates if meets(row)]
-    values: dict[str, str | bool] = {
-        "max_depth_error": f"{MAX_DEPTH_ERROR_PCT:.0f}",
-        "min_valid_per_sector": f"{MIN_VALID_PER_SECTOR:.0f}",
-        "sectors": str(default["histogram_sectors"]),
-        "min_valid": f"{min_valid:.0f}",
-        "default_width": str(default["width"]),
-        "default_height": str(default["height"]),
-        "choice_table": choices,
-        "any_candidate_meets": bool(passing),
-    }
-    if passing:
-        values["smallest_meeting"] = min(passing, key=lambda row: row["width"] * row["height"])["config"]
-    return values
-
-
-def _threshold_values(rows: list[Row]) -> dict[str, str | bool]:
-    """The FAST-threshold section: each threshold against the default config, at the default resolution."""
-    default = rows[0]
-    thresholds = [row for row in rows if row["kind"] == "fast_threshold"]
-    if not thresholds:
-        return {"has_thresholds": False}
-    compared = [
-        {
-            **row,
-            "speed": default["ratio_env_bare"] / row["ratio_env_bare"],
-            "points": row["points_valid_median"] / max(default["points_valid_median"], 1e-9),
-        }
-        for row in sorted([default, *thresholds], key=lambda row: row["fast_threshold"])
-    ]
-    columns = {
-        "FAST threshold": "{fast_threshold}",
-        "steps/s vs default": "{speed:.2f}×",
-        "valid points": "{points_valid_median:.0f}",
-        "valid points vs default": "{points:.2f}×",
-        "depth err. %": "{depth_error_median_pct:.1f}",
-    }
-    return {
-        "has_thresholds": True,
-        "default_threshold": str(default["fast_threshold"]),
-        "threshold_table": table(compared, columns),
-    }
 
 
 def _ratio_target_values(rows: list[Row]) -> dict[str, str | bool]:
@@ -302,8 +219,7 @@ def _floor_target_values(default: Row) -> dict[str, str | bool]:
 def _real_time_values(rows: list[Row]) -> dict[str, str | bool]:
     """The real-time target at the default config, and the smallest resolution beside gym-pybullet-drones."""
     default = rows[0]
-    resolutions = [row for row in rows if row["kind"] == "resolution"] or rows
-    smallest = min(resolutions, key=lambda row: row["width"] * row["height"])
+    smallest = min(rows[1:] or rows, key=lambda row: row["width"] * row["height"])
     return {
         "target_real_time": f"{TARGET_REAL_TIME_FACTOR:.0f}",
         "default_real_time": f"{default['real_time_factor_env']:.1f}",

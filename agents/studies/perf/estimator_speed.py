@@ -36,8 +36,6 @@ MAX_LEVEL = 3
 ESTIMATOR_CONFIGS: dict[str, dict[str, Any]] = {
     "fb_on": {"forward_backward": True, "normalize_brightness": False},
     "fb_off": {"forward_backward": False, "normalize_brightness": False},
-    # The check as it was before the throughput work: the backward pass repeats the full pyramidal search.
-    "fb_full": {"forward_backward": True, "fb_max_level": None, "normalize_brightness": False},
 }
 # The throughput target: the streaming estimator with its forward-backward check at most 1.3x bare FAST + LK.
 TARGET_RATIO_BARE = 1.3

@@ -22,7 +22,6 @@ from agents.studies.perf.flight import record_flight
 from agents.studies.perf.report_kit import (
     PACKAGE,
     RunFacts,
-    median,
     rounded,
     saved_figure,
     table,
@@ -188,7 +187,6 @@ def _stage_table(rows: list[Row]) -> str:
         "bare FAST+LK ms": "{bare_fast_lk_ms}",
         "ratio FB on": "{ratio_fb_on:.2f}",
         "ratio FB off": "{ratio_fb_off:.2f}",
-        "ratio FB full search": "{ratio_fb_full:.2f}",
         "depth err. %": "{depth_error_median_pct:.1f}",
     }
     return table(cells, columns)
@@ -205,7 +203,6 @@ def _target_values(rows: list[Row]) -> dict[str, str | bool]:
         "working_points": str(WORKING_POINTS),
         "any_working": bool(working),
         "target_ratio": f"{TARGET_RATIO_BARE:.1f}",
-        "flow_full_vs_lk": f"{_flow_full_vs_lk(working or rows):.1f}",
     }
     if default is not None:
         values["default_points"] = f"{default['points_found']:.0f}"
@@ -231,19 +228,3 @@ def _verdict(working: list[Row], default: Row | None, key: str) -> str:
         fields.update(at_default=f"{default[key]:.2f}", met=bool(default[key] <= TARGET_RATIO_BARE))
     # The verdict sits inside a line of the report: the template file's final newline is not part of it.
     return render(PACKAGE, "target_verdict.md.j2", fields, every_value_used=True).removesuffix("\n")
-
-
-def _flow_full_vs_lk(working: list[Row]) -> float:
-    """The flow stage with the full backward search over the bare baseline's LK, median over the working rows.
-
-    Neither is timed alone: the full search's flow stage is the FB-on flow stage plus what the full search
-    added to the frame, and the baseline's LK is its frame less FAST (the same detector call as the
-    estimator's FAST stage).
-    """
-    return median(
-        [
-            (row["ms_flow"] + row["ms_total_fb_full"] - row["ms_total"])
-            / max(row["ms_bare_fast_lk"] - row["ms_fast"], 1e-9)
-            for row in working
-        ]
-    )

@@ -1,10 +1,9 @@
 """``results/training_performance.md``: recipes' minutes per seed measured side by side
 (:mod:`agents.studies.perf.recipe_speed`), beside the quality each reaches on the validation layouts
-(``flownav ablation``'s runs) and the minutes their own training records say."""
+(``flownav ablation``'s runs)."""
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -12,7 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START
 from agents.common.tables import write_csv
 from agents.common.yaml_config import load_config
@@ -38,8 +36,6 @@ TARGET_TIME_RATIO = 1 / 3
 CONDITIONS = {"clean": "", "density 0.18": "density_0.18", "1.5 m/s": "speed_1.5"}
 # Validation layouts flownav ablation flies per seed: clean, and under each condition.
 ABLATION_LAYOUTS = {"clean": 100, "conditions": 50}
-# The wider machine the seeds-per-hour estimate scales to.
-WIDE_CORES = 16
 
 
 def parse_recipe(text: str) -> Recipe:
@@ -70,23 +66,6 @@ def quality(recipe: Recipe, ablation_dir: Path) -> dict[str, Any]:
     return {"rates": rates, "meets": meets}
 
 
-def recorded_minutes(recipe: Recipe, runs_dir: Path, policies_dir: Path = POLICIES_DIR) -> list[float]:
-    """Minutes per seed the recipe's training records say (the last stage's, with its earlier stage's when it
-    started from one): run folders first, else shipped records. Each was trained on whatever machine and
-    load it met, so these are context, not the measurement."""
-    name = recipe.stages[-1].name
-    records = sorted((runs_dir / name).glob("seed_*/seed_*.json")) or sorted(
-        (policies_dir / name).glob("seed_*.json")
-    )
-    minutes = []
-    for path in records:
-        record = json.loads(path.read_text())
-        total = record.get("total_wall_minutes_with_init", record.get("total_wall_minutes"))
-        if total:
-            minutes.append(float(total))
-    return minutes
-
-
 def run_recipe_benchmark(
     recipe_specs: Sequence[str],
     rollouts: int,
@@ -95,7 +74,6 @@ def run_recipe_benchmark(
     *,
     make_teacher: TeacherFactory | None = None,
     ablation_dir: Path = Path("results/ablation"),
-    runs_dir: Path = Path("runs"),
     progress: bool = True,
 ) -> list[Path]:
     """Measure the recipes side by side and write ``training_performance.md``, ``.csv`` and ``.png`` to
@@ -109,8 +87,7 @@ def run_recipe_benchmark(
     results = measure_recipes(recipes, rollouts, repeats, make_teacher, progress)
     ratios = block_ratios(results, recipes[0].name)
     rows = [
-        _recipe_row(recipe, results[recipe.name], ratios[recipe.name], ablation_dir, runs_dir)
-        for recipe in recipes
+        _recipe_row(recipe, results[recipe.name], ratios[recipe.name], ablation_dir) for recipe in recipes
     ]
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = [out_dir / f"training_performance.{ext}" for ext in ("md", "csv", "png")]
@@ -127,13 +104,12 @@ def run_recipe_benchmark(
 
 
 def _recipe_row(
-    recipe: Recipe, entries: list[dict[str, Any]], ratios: list[float], ablation_dir: Path, runs_dir: Path
+    recipe: Recipe, entries: list[dict[str, Any]], ratios: list[float], ablation_dir: Path
 ) -> dict[str, Any]:
-    """One recipe's CSV row: its work per seed, measured minutes, ratio to the reference, validation quality
-    and recorded minutes."""
+    """One recipe's CSV row: its work per seed, measured minutes, ratio to the reference and validation
+    quality."""
     medians = median_minutes(entries)
     work = [stage_work(config) for config in recipe.stages]
-    recorded = recorded_minutes(recipe, runs_dir)
     ppo_rates = [1.0 / s["measured"]["ppo_s_per_step"] for e in entries for s in e["stages"]]
     ratio = interval("ratio_to_reference", ratios, "ratio")
     return {
@@ -146,10 +122,7 @@ def _recipe_row(
         "minutes_per_seed": round(medians["total"], 1),
         **{key: round(value, 3) for key, value in ratio.items()},
         "ppo_steps_per_s": round(median(ppo_rates), 1),
-        "seeds_per_hour_here": round(60.0 / medians["total"], 2),
         **_quality_columns(quality(recipe, ablation_dir)),
-        "recorded_minutes_median": round(median(recorded), 1) if recorded else "",
-        "recorded_seeds": len(recorded),
     }
 
 
@@ -202,9 +175,6 @@ def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts
         | {
             "speed": _rate(row["failure_15_m/s"]),
             "meets": {True: "yes", False: "no", "": "not flown"}[row["meets_quality"]],
-            "recorded": f"{row['recorded_minutes_median']} ({row['recorded_seeds']})"
-            if row["recorded_seeds"]
-            else "-",
         }
         for row in rows
     ]
@@ -215,7 +185,6 @@ def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts
         "1.5 m/s": "{speed}",
         "seeds": "{seeds_clean}",
         "meets the bar": "{meets}",
-        "recorded min per seed (median, seeds)": "{recorded}",
     }
     first, clean, conditions = ABLATION_SEED_START, ABLATION_LAYOUTS["clean"], ABLATION_LAYOUTS["conditions"]
     return {
@@ -231,11 +200,6 @@ def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts
         "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
         "targets": [_target(row) for row in rows[1:]],
         "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
-        "wide_cores": str(WIDE_CORES),
-        "seeds_per_hour": "; ".join(f"`{row['recipe']}` {row['seeds_per_hour_here']:.2f}" for row in rows),
-        "seeds_per_hour_wide": "; ".join(
-            f"`{row['recipe']}` {row['seeds_per_hour_here'] * WIDE_CORES / run.cores:.1f}" for row in rows
-        ),
     }
 
 

@@ -114,12 +114,9 @@ def recipe_row(name: str, ratio: float, meets: bool | str, teacher_steps: int) -
         "ratio_min": ratio,
         "ratio_max": ratio,
         "ppo_steps_per_s": 100.0,
-        "seeds_per_hour_here": 15.0,
         **{f"failure_{key}": 0.04 for key in ("clean", "density_018", "15_m/s")},
         "seeds_clean": 5,
         "meets_quality": meets,
-        "recorded_minutes_median": "",
-        "recorded_seeds": 0,
     }
 
 

@@ -108,14 +108,13 @@ def test_estimator_claims_follow_the_data() -> None:
 def test_env_claims_follow_the_data() -> None:
     case = env_case("full")
     report = render_env(case)
-    assert "**missed**." in report and "The smallest candidate meeting both is **128×96**" in report
+    assert "over the configurations →\n  **missed**.\n" in report
     for row in case["rows"]:
         row["ratio_env_bare"] = 1.1
-    case["rows"][2]["points_valid_median"] = 50.0
-    case["rows"][2]["depth_error_median_pct"] = 4.0
+    case["rows"][0]["real_time_factor_env"] = 25.0
     report = render_env(case)
     assert "env/bare ≤ 1.3: 1.10–1.10 over the configurations →\n  **met**.\n" in report
-    assert "The smallest candidate meeting both is **96×72**" in report
+    assert "default config 25.0× →\n  **met**" in report
 
 
 def test_the_writers_fill_their_templates_with_this_machine_and_estimator() -> None:
@@ -169,10 +168,10 @@ def test_templates_ship_as_package_data() -> None:
 
 def test_an_edited_template_that_drifts_from_its_values_fails() -> None:
     text = template_source(report_kit.PACKAGE, "estimator_performance.md.j2")
-    assert "flow_full_vs_lk" in names_in(text)
-    edited = text.replace("{{ flow_full_vs_lk }}", "2.0")
+    assert "equal_counts" in names_in(text)
+    edited = text.replace("{{ equal_counts }}", "True")
     values = estimator_values(copy.deepcopy(estimator_case("full")))
-    assert unused_values(edited, values) == ["flow_full_vs_lk"]
+    assert unused_values(edited, values) == ["equal_counts"]
     drifted = {**values, "extra": "1"}
     with pytest.raises(
         ValueError, match=r"template 'estimator_performance\.md\.j2': value 'extra' is not used"

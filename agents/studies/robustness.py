@@ -29,9 +29,7 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder, write_text_atomically
-from agents.common.jinja_reports import rate
 from agents.common.locations import REPO_ROOT
-from agents.common.tables import markdown_table
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import rows_of
 from agents.evaluation.records import read_records
@@ -41,6 +39,7 @@ from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_ev
 from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
 from agents.policies.base import is_learned, split_agent_name
 from agents.studies.error_analysis import TASK_FACTORS, neutral_level, tolerance_table
+from agents.studies.wording import render_report
 
 SWEEP_CONFIG = REPO_ROOT / "configs" / "sweep.yaml"
 EPISODES_CSV = "robustness_episodes.csv"
@@ -191,28 +190,5 @@ def robustness(
 
 
 def summary_lines(summary: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The summary as a Markdown table, a row per curve."""
-    header = [
-        "agent",
-        "factor",
-        "side",
-        "area",
-        "clean",
-        "breaks at",
-        "failure there",
-        "worst level (failure)",
-    ]
-    rows = [
-        [
-            f"`{r['agent']}`",
-            r["factor"],
-            r["side"],
-            rate(r["area"]),
-            rate(r["clean_failure"]),
-            "—" if r["breaking_level"] is None else f"{r['breaking_level']:g}",
-            "—" if r["breaking_failure"] is None else rate(r["breaking_failure"]),
-            f"{r['worst_level']:g} ({rate(r['worst_failure'])})",
-        ]
-        for r in summary
-    ]
-    return [markdown_table(header, rows)]
+    """The summary as a Markdown table, a row per curve (``templates/robustness_summary.md.j2``)."""
+    return [render_report("robustness_summary.md.j2", {"summary": summary}).rstrip("\n")]

@@ -64,9 +64,8 @@ def select_finalist(
         raise FileNotFoundError(f"{files.config} not found: {files.run_dir} is not a finished training run")
     candidates = finalists(files)
     by_content = {cached_file_sha256(path): label for label, path in reversed(list(candidates.items()))}
-    candidates = {
-        label: candidates[label] for label in reversed(list(by_content.values()))
-    }  # one per content
+    # One candidate per content.
+    candidates = {label: candidates[label] for label in reversed(list(by_content.values()))}
     if not candidates:
         raise FileNotFoundError(f"{files.run_dir} has no best model and no checkpoint to choose from")
     staging = files.run_dir / "finalists"

@@ -116,20 +116,11 @@ def failure_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
-    table = []
-    for (factor, agent), members in groups.items():
-        rate, low, high, episodes = failure(members)
-        table.append(
-            {
-                "factor": factor,
-                "agent": agent,
-                "episodes": episodes,
-                "failure_rate": rate,
-                "failure_low": low,
-                "failure_high": high,
-            }
-        )
-    return table
+    fields = ("failure_rate", "failure_low", "failure_high", "episodes")
+    return [
+        {"factor": factor, "agent": agent, **dict(zip(fields, failure(members), strict=True))}
+        for (factor, agent), members in groups.items()
+    ]
 
 
 def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | None, dict[str, dict]]:
@@ -159,11 +150,6 @@ def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | 
         ),
     )
     return dict(chosen), best
-
-
-def _settings_by_factor(rows: Sequence[Mapping[str, Any]]) -> dict[str, str]:
-    """The env settings each factor of ``rows`` was flown with, as the records carry them."""
-    return {row["factor"]: row["env_kwargs"] for row in rows}
 
 
 def separated_pairs(episodes: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
@@ -209,10 +195,11 @@ def run_calibration(
         if mine:
             flown = [r for r in rows if r["factor"] == tier_label(name)]
             tiers[name] = {"rows": mine, "best": mine[0], "separated": separated_pairs(flown)}
-    pilot = out / PILOT_CSV
+    pilot = read_records(out / PILOT_CSV) if (out / PILOT_CSV).is_file() else []
     return {
-        "pilot": failure_table(read_records(pilot)) if pilot.is_file() else [],
-        "pilot_settings": _settings_by_factor(read_records(pilot)) if pilot.is_file() else {},
+        "pilot": failure_table(pilot),
+        # The env settings each pilot factor was flown with, as the records carry them.
+        "pilot_settings": {row["factor"]: row["env_kwargs"] for row in pilot},
         "layouts": layouts,
         "table": table,
         "chosen": chosen,

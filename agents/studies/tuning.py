@@ -24,6 +24,7 @@ import numpy as np
 from agents.common.folders import check_writable_folder
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import start_new_file
+from agents.studies.perf.report_kit import saved_figure
 from agents.studies.tuning_study import (
     MIN_FINAL_EPISODES,
     SAMPLER_SEED,
@@ -161,42 +162,29 @@ def report_text(
 def plot_tuning_curve(result: TuningResult, path: Path) -> None:
     """The search's failure rate per trial with the best so far (how much more searching could still give),
     beside the finalists' final failure rates with their intervals (how much of that survives fresh layouts)."""
-    # matplotlib takes a second to import: only the writers that draw a figure load it.
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     numbers = [trial.number for trial in result.search]
     rates = [trial.summary["failure_rate"] for trial in result.search]
-    best, best_so_far = float("inf"), []
-    for rate in rates:
-        best = min(best, rate)
-        best_so_far.append(best)
+    best_so_far = np.minimum.accumulate(rates)
     finalist_numbers = {trial.number for trial in result.finals}
-    fig, (curve, finals) = plt.subplots(
-        1, 2, figsize=(9.0, 3.4), gridspec_kw={"width_ratios": [2, 1]}, sharey=True
-    )
-    curve.plot(numbers, rates, "o", color="tab:blue", alpha=0.6, label="trial")
-    curve.step(numbers, best_so_far, where="post", color="k", label="best so far")
-    chosen = [(n, r) for n, r in zip(numbers, rates, strict=True) if n in finalist_numbers]
-    curve.plot(*zip(*chosen, strict=True), "o", mfc="none", mec="tab:red", ms=10, label="finalist")
-    curve.set_xlabel("trial (0 = defaults)")
-    curve.set_ylabel("failure rate")
-    curve.set_ylim(0, 1)
-    curve.set_title(f"{result.agent}: search layouts", fontsize=9)
-    curve.grid(alpha=0.3)
-    curve.legend(fontsize=8)
-    labels = [f"#{trial.number}" + (" def." if trial.number == 0 else "") for trial in result.finals]
-    values = [trial.summary["failure_rate"] for trial in result.finals]
-    errors = [
-        [v - t.summary["failure_ci_low"] for v, t in zip(values, result.finals, strict=True)],
-        [t.summary["failure_ci_high"] - v for v, t in zip(values, result.finals, strict=True)],
-    ]
-    colours = ["tab:red" if i == 0 else "tab:blue" for i in range(len(values))]
-    finals.bar(labels, values, yerr=errors, capsize=4, color=colours, alpha=0.7)
-    finals.set_title("finalists: fresh layouts (95 % CI; winner red)", fontsize=9)
-    finals.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    with saved_figure(path, (9.0, 3.4), dpi=120) as fig:
+        curve, finals = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]}, sharey=True)
+        curve.plot(numbers, rates, "o", color="tab:blue", alpha=0.6, label="trial")
+        curve.step(numbers, best_so_far, where="post", color="k", label="best so far")
+        chosen = [(n, r) for n, r in zip(numbers, rates, strict=True) if n in finalist_numbers]
+        curve.plot(*zip(*chosen, strict=True), "o", mfc="none", mec="tab:red", ms=10, label="finalist")
+        curve.set_xlabel("trial (0 = defaults)")
+        curve.set_ylabel("failure rate")
+        curve.set_ylim(0, 1)
+        curve.set_title(f"{result.agent}: search layouts", fontsize=9)
+        curve.grid(alpha=0.3)
+        curve.legend(fontsize=8)
+        labels = [f"#{trial.number}" + (" def." if trial.number == 0 else "") for trial in result.finals]
+        values = [trial.summary["failure_rate"] for trial in result.finals]
+        errors = [
+            [v - t.summary["failure_ci_low"] for v, t in zip(values, result.finals, strict=True)],
+            [t.summary["failure_ci_high"] - v for v, t in zip(values, result.finals, strict=True)],
+        ]
+        colours = ["tab:red" if i == 0 else "tab:blue" for i in range(len(values))]
+        finals.bar(labels, values, yerr=errors, capsize=4, color=colours, alpha=0.7)
+        finals.set_title("finalists: fresh layouts (95 % CI; winner red)", fontsize=9)
+        finals.grid(alpha=0.3, axis="y")

@@ -52,9 +52,8 @@ def record_episode(
         action, state = agent.predict(observation, episode_start=np.ones(1, bool), deterministic=True)
         out.parent.mkdir(parents=True, exist_ok=True)
         with imageio.get_writer(out, fps=fps, codec="libx264", quality=7, macro_block_size=16) as opened:
-            writer = cast(
-                Format.Writer, opened
-            )  # imageio's v2 stubs type it as a base that lacks append_data
+            # imageio's v2 stubs type it as a base that lacks append_data
+            writer = cast(Format.Writer, opened)
             for step in range(1, max_steps + 1):
                 observation, _, terminated, truncated, info = env.step(action)
                 writer.append_data(np.asarray(env.render()))

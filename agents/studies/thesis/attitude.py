@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from estimator.geometry import euler_zyx_to_rotation
 from flownav_env.rotations import camera_rotation
 
 # (pitch, yaw, roll) in FlowNav = UNITY_SIGNS * (x, y, z) in Unity; the map is its own inverse.
@@ -29,22 +30,14 @@ def unity_to_camera_deg(unity_deg: list[float] | np.ndarray) -> tuple[float, flo
     return float(pitch), float(yaw), float(roll)
 
 
-def _about(axis: int, angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    matrix = np.eye(3)
-    matrix[i, i], matrix[i, j], matrix[j, i], matrix[j, j] = c, -s, s, c
-    return matrix
-
-
 def unity_order_rotation(pitch: float, yaw: float, roll: float) -> np.ndarray:
-    """``Ry(yaw) @ Rx(pitch) @ Rz(roll)`` in camera axes (radians): Unity's Euler order."""
-    return _about(1, yaw) @ _about(0, pitch) @ _about(2, roll)
-
-
-def zyx_order_rotation(pitch: float, yaw: float, roll: float) -> np.ndarray:
-    """``Rz(roll) @ Ry(yaw) @ Rx(pitch)`` in camera axes (radians): the thesis's eq. 4.15 order."""
-    return _about(2, roll) @ _about(1, yaw) @ _about(0, pitch)
+    """``Ry(yaw) @ Rx(pitch) @ Rz(roll)`` in camera axes (radians): Unity's Euler order (the thesis's eq. 4.15
+    order, ``Rz(roll) @ Ry(yaw) @ Rx(pitch)``, is :func:`estimator.geometry.euler_zyx_to_rotation`)."""
+    return (
+        euler_zyx_to_rotation(0.0, yaw, 0.0)
+        @ euler_zyx_to_rotation(pitch, 0.0, 0.0)
+        @ euler_zyx_to_rotation(0.0, 0.0, roll)
+    )
 
 
 def unity_angles(local: np.ndarray) -> np.ndarray:

@@ -8,17 +8,14 @@ import math
 from typing import Any
 
 from agents.studies.thesis.reference import TABLE3, THESIS_FOCAL_PX, VARIABLE_TESTS
+from agents.studies.wording import span
 
 Row = dict[str, Any]
 
 
-def _span(values: list[float], digits: int = 2) -> str:
-    values = [v for v in values if v is not None and not math.isnan(v)]
-    if not values:
-        return "–"
-    low, high = min(values), max(values)
-    same = round(low, digits) == round(high, digits)
-    return f"{low:.{digits}f}" if same else f"{low:.{digits}f}–{high:.{digits}f}"
+def _span(values: list[float]) -> str:
+    found = [v for v in values if v is not None and not math.isnan(v)]
+    return span(found, 2) if found else "–"
 
 
 def _axes_turned(row: Row) -> int:
@@ -37,24 +34,6 @@ def _point_count_gaps(quoted: list[Row]) -> list[str]:
     return gaps
 
 
-def _mean_spans(cases: list[Row], name: str) -> dict[str, str]:
-    """The thesis's and FlowNav's mean errors over ``cases`` as spans: ``<name>_thesis`` and ``<name>_ours``."""
-    return {
-        f"{name}_thesis": _span([r["thesis"]["mean_px"] for r in cases]),
-        f"{name}_ours": _span([r["matrix_mean_px"] for r in cases]),
-    }
-
-
-def _worst_case(quoted: list[Row]) -> dict[str, str]:
-    """The thesis's case with the largest mean error, that error in pixels and as a rotation error in degrees."""
-    worst = max(quoted, key=lambda r: r["thesis"]["mean_px"])
-    return {
-        "worst_test": str(worst["thesis"]["test"]),
-        "worst_px": f"{worst['thesis']['mean_px']:g}",
-        "worst_deg": f"{math.degrees(worst['thesis']['mean_px'] / THESIS_FOCAL_PX):.1f}",
-    }
-
-
 def table2_reading(rows: list[Row]) -> dict[str, str] | None:
     """The figures of the README's reading of Table 2: single- and two-axis cases, thesis and FlowNav, and the
     worst thesis case as a rotation error; None where no case quotes the thesis."""
@@ -63,13 +42,19 @@ def table2_reading(rows: list[Row]) -> dict[str, str] | None:
         return None
     single = [r for r in quoted if _axes_turned(r) == 1]
     double = [r for r in quoted if _axes_turned(r) >= 2]
+    # The thesis's case with the largest mean error: that error in pixels and as a rotation error in degrees.
+    worst = max(quoted, key=lambda r: r["thesis"]["mean_px"])
     return {
-        **_mean_spans(single, "single"),
+        "single_thesis": _span([r["thesis"]["mean_px"] for r in single]),
+        "single_ours": _span([r["matrix_mean_px"] for r in single]),
         "double_tests": ", ".join(str(r["thesis"]["test"]) for r in double),
-        **_mean_spans(double, "double"),
+        "double_thesis": _span([r["thesis"]["mean_px"] for r in double]),
+        "double_ours": _span([r["matrix_mean_px"] for r in double]),
         "double_ours_inliers": _span([r["matrix_mean_inliers_px"] for r in double]),
         "order_shift": f"{max((r.get('euler_order_shift_px', 0.0) for r in double), default=0.0):.2f}",
-        **_worst_case(quoted),
+        "worst_test": str(worst["thesis"]["test"]),
+        "worst_px": f"{worst['thesis']['mean_px']:g}",
+        "worst_deg": f"{math.degrees(worst['thesis']['mean_px'] / THESIS_FOCAL_PX):.1f}",
         "count_outliers": "; ".join(_point_count_gaps(quoted)),
     }
 

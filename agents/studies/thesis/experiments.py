@@ -45,33 +45,20 @@ from flownav_env.playback import CameraPath, PlaybackSettings, PlaybackWorld
 __all__ = ["EXPERIMENTS", "SWEEP_VARIABLES", "Experiment"]
 
 
-def _play(
-    path: CameraPath,
-    config: ExperimentConfig,
-    description: str,
-    progress: bool,
-    component_variants: bool = False,
-) -> RunResult:
-    """One playback of ``path`` through both estimators, in a world of its own closed afterwards."""
+def _play(path: CameraPath, config: ExperimentConfig, description: str, **options: Any) -> RunResult:
+    """One playback of ``path`` through both estimators (``options``: :func:`run_playback`'s), in a world of its
+    own closed afterwards."""
     world = PlaybackWorld(path, config.camera.width, config.camera.height, config.camera.fov_deg)
     try:
         settings = PlaybackSettings(seed=config.seed)
-        return run_playback(
-            path,
-            world,
-            settings,
-            config.estimator,
-            component_variants=component_variants,
-            progress=progress,
-            description=description,
-        )
+        return run_playback(path, world, settings, config.estimator, description=description, **options)
     finally:
         world.close()
 
 
 def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 1 (Figs. 22–24): straight flight toward one capsule; four depth variants."""
-    result = _play(straight_path(config), config, "straight", progress, component_variants=True)
+    result = _play(straight_path(config), config, "straight", progress=progress, component_variants=True)
     titles = {
         "x-flow": "x-flow only (Fig. 22)",
         "y-flow": "y-flow only (Fig. 23)",
@@ -93,7 +80,7 @@ def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = T
     marks: dict[int, float] = {}
     for scene in config.scenes:
         path, turn = translation_path(config, scene)
-        result = _play(path, config, f"translation {scene.name}", progress)
+        result = _play(path, config, f"translation {scene.name}", progress=progress)
         rows += metric_rows(scene.name, result.methods, METHODS)
         for method in METHODS:
             marks[len(panels)] = turn - 0.5
@@ -105,7 +92,7 @@ def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = T
 
 def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
     """Experiment 4 (Fig. 38, Table 3): random 6-DoF path; depth errors and per-stage timings."""
-    result = _play(random_6dof_path(config), config, "random6dof", progress)
+    result = _play(random_6dof_path(config), config, "random6dof", progress=progress)
     figure = save_depth_figure(
         [(method, result.methods[method], result.references) for method in METHODS],
         out_dir / "random6dof.png",
@@ -134,60 +121,37 @@ def _timing_row(method: str, stage: str, seconds: list[float]) -> dict[str, Any]
 
 @dataclass(frozen=True)
 class Experiment:
-    """An experiment: its config schema, runner and what the thesis showed."""
+    """An experiment: its config schema and runner (``templates/thesis_readme.md.j2`` states what the thesis
+    showed)."""
 
     name: str
     title: str
     schema: type[ExperimentConfig]
     runner: Callable[..., dict[str, Any]]
-    thesis: str
 
 
 EXPERIMENTS: dict[str, Experiment] = {
-    e.name: e
-    for e in (
-        Experiment(
-            "straight",
-            "1. Straight flight toward one capsule (Figs. 22–24)",
-            StraightConfig,
-            run_straight,
-            "Figs. 22–24 plot per-frame depths from x-flow, y-flow and bidirectional flow against the truth. "
-            "The thesis gives them as plots only, with no numbers to set beside ours.",
-        ),
-        Experiment(
-            "rotation",
-            "2. Rotation compensation on pure rotations (Table 2)",
-            RotationConfig,
-            run_rotation,
-            "Table 2 lists, for nine pure-rotation cases, the mean distance p1–p2′ including and excluding "
-            "outliers (> 5 px) and the point counts. We fly its nine cases with its own angles and set its "
-            "numbers beside ours below.",
-        ),
-        Experiment(
+    name: Experiment(name, title, schema, runner)
+    for name, title, schema, runner in (
+        ("straight", "1. Straight flight toward one capsule (Figs. 22–24)", StraightConfig, run_straight),
+        ("rotation", "2. Rotation compensation on pure rotations (Table 2)", RotationConfig, run_rotation),
+        (
             "translation",
             "3. x then y translation past one and four capsules (Figs. 33, 35)",
             TranslationConfig,
             run_translation,
-            "Figs. 33 and 35 plot per-frame depths for x then y translation past one capsule and past four. "
-            "The thesis gives them as plots only, with no numbers to set beside ours.",
         ),
-        Experiment(
+        (
             "random6dof",
             "4. Human-like random 6-DoF path (Fig. 38) and performance (Table 3)",
             Random6DofConfig,
             run_random6dof,
-            "Fig. 38 plots per-frame depths on a random 6-DoF path (a plot only, no numbers to set beside "
-            "ours); Table 3 gives the estimator's run time per stage against the FAST threshold, set beside "
-            "ours below.",
         ),
-        Experiment(
+        (
             "three_capsule",
             "5. Three-capsule scene and its test variables (Figs. 41–43, Appendices C–H)",
             ThreeCapsuleConfig,
             run_three_capsule,
-            "Figs. 41–43 and Appendices C–H plot per-frame depths in the three-capsule scene for the base run and "
-            "for angular instability, distance per frame, brightness, rotation error and translation error, "
-            "as plots with qualitative verdicts and no numbers; its verdicts stand beside our rows below.",
         ),
     )
 }

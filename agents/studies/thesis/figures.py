@@ -58,10 +58,10 @@ def save_depth_figure(
     panels: list[tuple[str, list[dict[str, Any]], np.ndarray]],
     file: Path,
     suptitle: str,
-    columns: int = 2,
     marks: dict[int, float] | None = None,
 ) -> Path:
     """A figure of :func:`plot_depth_panel` panels; ``marks`` draws a dashed line at a frame in some panels."""
+    columns = 2
     rows = math.ceil(len(panels) / columns)
     with saved_figure(file, (5.0 * columns, 3.4 * rows), rect=(0, 0.05, 1, 0.97)) as fig:
         axes = fig.subplots(rows, columns, squeeze=False)

@@ -56,7 +56,6 @@ def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
         return None
     f, eps, parallax = motion["focal_px"], BREAKING_ERROR, motion["capsule_parallax_px_median"]
     needed = angle_for_shift_deg(f, eps, BREAKING_PX)
-    per_frame, attitude = motion["rotation_deg_median"], motion["attitude_deg_median"]
     readings = [
         {"label": label, "angle": motion[key], "measured": _row(sweeps, variable, eps) if variable else {}}
         | {
@@ -65,36 +64,20 @@ def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
         }
         for label, key, variable in READINGS
     ]
-    attitude_low = _row(sweeps, "attitude_rotation_error", LOW_ERROR)
     return {
-        "jitter_deg": f"{motion['jitter_deg']:g}",
+        "run": motion,
+        "needed": needed,
         "error_at_10pct": pct(_row(sweeps, "rotation_error", 0.1).get("median_rel_error")),
-        "focal_px": f"{f:.1f}",
-        "frame_pairs": motion["frame_pairs"],
-        "rotation_deg": f"{per_frame:.2f}",
-        "rotation_axes": ", ".join(f"{v:.2f}" for v in motion["rotation_axis_deg_median"]),
-        "attitude_deg": f"{attitude:.2f}",
-        "attitude_deg_short": f"{attitude:.1f}",
-        "attitude_axes": ", ".join(f"{v:.2f}" for v in motion["attitude_axis_deg_median"]),
-        "parallax": f"{parallax:.1f}",
-        "parallax_p25": f"{motion['capsule_parallax_px_p25']:.1f}",
-        "capsule_points": motion["capsule_points"],
         "breaking_px": f"{BREAKING_PX:g}",
         "breaking_pct": f"{100 * eps:g}",
         "breaking_depth_error": pct(BREAKING_PX / parallax),
-        "needed_deg": f"{needed:.2f}",
-        "needed_deg_short": f"{needed:.1f}",
         "needed_thesis_deg": f"{angle_for_shift_deg(THESIS_FOCAL_PX, eps, BREAKING_PX):.2f}",
         "readings": [r | {"ratio": r["high"] / parallax} for r in readings],
         "needed_low": derotation_error_px(f, LOW_ERROR, needed),
         "needed_ratio": BREAKING_PX / parallax,
-        "per_frame_below": per_frame < needed,
-        "per_frame_shift": f"{derotation_error_px(f, eps, per_frame):.2f}",
+        "per_frame_shift": f"{derotation_error_px(f, eps, motion['rotation_deg_median']):.2f}",
         "unity_shift": f"{derotation_error_px(f, LOW_ERROR, motion['unity_readout_deg_median']):.0f}",
-        "attitude_above": attitude > needed,
-        "attitude_low_error": pct(attitude_low.get("median_rel_error")),
-        "attitude_low_within": pct(attitude_low.get("within_10pct")),
-        "needed_over_per_frame": f"{needed / per_frame:.0f}",
+        "attitude_low": _row(sweeps, "attitude_rotation_error", LOW_ERROR),
         "translation_rows": sorted(
             (r for r in sweeps if r["variable"] == "translation_error" and r["method"] == "thesis"),
             key=lambda r: r["value"],

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -14,7 +13,14 @@ from agents.studies.thesis.attitude import AttitudeRotationError
 from agents.studies.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
 from estimator import CameraIntrinsics, DepthPoints, FlowDepthEstimator
 from estimator.geometry import solve_depth, valid_depth_mask
-from flownav_env.playback import CameraPath, PlaybackFrame, PlaybackSettings, PlaybackWorld, play_back
+from flownav_env.playback import (
+    CameraPath,
+    PlaybackFrame,
+    PlaybackSettings,
+    PlaybackWorld,
+    play_back,
+    resample_by_distance,
+)
 
 
 @dataclass
@@ -153,15 +159,10 @@ def _residuals(
 
 
 def _frame_count(path: CameraPath, settings: PlaybackSettings) -> int:
-    """How many frames the playback renders: one per ``distance_per_frame`` of arc (else one per pose), at
-    most ``max_frames``."""
+    """How many frames :func:`play_back` renders, for the progress bar."""
     if settings.distance_per_frame is not None:
-        total = math.floor(path.arc_length()[-1] / settings.distance_per_frame + 1e-9) + 1
-    else:
-        total = len(path)
-    if settings.max_frames is not None:
-        total = min(total, settings.max_frames)
-    return total
+        return len(resample_by_distance(path, settings.distance_per_frame, settings.max_frames))
+    return min(len(path), settings.max_frames or len(path))
 
 
 class _GroundTruth:

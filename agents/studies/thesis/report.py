@@ -5,7 +5,6 @@ from every result present there."""
 from __future__ import annotations
 
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -53,7 +52,6 @@ def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool =
         {
             "name": name,
             "title": experiment.title,
-            "thesis": experiment.thesis,
             "config": _display_path(config_path),
             "camera": f"{config.camera.width}x{config.camera.height}, vertical FOV {config.camera.fov_deg:g} deg",
             "wall_s": time.perf_counter() - started,
@@ -79,33 +77,19 @@ def _json_default(value: object) -> Any:
     return str(value)
 
 
-def _experiment_values(name: str, result: dict[str, Any]) -> dict[str, Any]:
-    """One experiment's section of the README: its claim, config, rows and figures; the parts an experiment
-    lacks stay empty and the template leaves them out."""
-    section: dict[str, Any] = {key: result[key] for key in ("title", "thesis", "config", "camera")}
-    section |= {"name": name, "wall_s": f"{result['wall_s']:.1f}", "figures": result.get("figures", [])}
-    section |= {key: result.get(key) for key in ("rows", "sweeps")} | {
-        "recorded": None,
-        "verdicts": None,
+def _experiment_values(result: dict[str, Any]) -> dict[str, Any]:
+    """One experiment's section of the README: its JSON result with the comparisons with the thesis beside it;
+    the parts an experiment lacks stay empty and the template leaves them out."""
+    table2, table3, sweeps = result.get("table2"), result.get("table3"), result.get("sweeps")
+    return result | {
+        "verdicts": verdict_rows(sweeps) if sweeps else None,
+        "table2": table2 and {"rows": table2, "reading": table2_reading(table2)},
+        "table3": table3
+        and {
+            "comparison": table3_comparison(table3, result["rows"], result.get("fast_threshold", 20)),
+            "rows": table3,
+        },
     }
-    if name == "three_capsule":
-        section["recorded"] = {
-            "frames": result["recorded_frames"],
-            "length_m": f"{result['recorded_length_m']:.2f}",
-            "capsules": ", ".join(f"({x:.2f}, {y:.2f})" for x, y in result["obstacles"]),
-        }
-        section["verdicts"] = verdict_rows(result["sweeps"]) if result.get("sweeps") else None
-    table2, table3 = result.get("table2"), result.get("table3")
-    section["table2"] = table2 and {
-        "focal_px": f"{result.get('focal_px', math.nan):.1f}",
-        "rows": table2,
-        "reading": table2_reading(table2),
-    }
-    section["table3"] = table3 and {
-        "comparison": table3_comparison(table3, result["rows"], result.get("fast_threshold", 20)),
-        "rows": table3,
-    }
-    return section
 
 
 def readme_values(
@@ -118,7 +102,7 @@ def readme_values(
         "ran": ", ".join(ran),
         "wall_s": f"{wall_s:.0f}",
         "thesis_focal_px": f"{THESIS_FOCAL_PX:g}",
-        "experiments": [_experiment_values(name, result) for name, result in results.items()],
+        "experiments": [_experiment_values(result) for result in results.values()],
         "motion": motion_values(results["three_capsule"]) if "three_capsule" in results else None,
         "discussion": discussion,
         "hardware": next(iter(results.values()))["hardware"] if results else "",

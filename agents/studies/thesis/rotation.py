@@ -2,24 +2,22 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from agents.studies.perf.report_kit import saved_figure
-from agents.studies.thesis.attitude import unity_order_rotation, zyx_order_rotation
+from agents.studies.thesis.attitude import unity_order_rotation
 from agents.studies.thesis.camera_paths import rotation_path
 from agents.studies.thesis.experiment_configs import RotationCase, RotationConfig
 from agents.studies.thesis.metrics import rotation_residuals
 from agents.studies.thesis.playback_runs import run_playback
 from estimator import CameraIntrinsics
-from estimator.geometry import derotate
+from estimator.geometry import derotate, euler_zyx_to_rotation
 from flownav_env.playback import PlaybackSettings, PlaybackWorld
-
-if TYPE_CHECKING:  # matplotlib is slow to import: the figure imports it when it draws
-    from matplotlib.axes import Axes
 
 
 def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: CameraIntrinsics) -> np.ndarray:
@@ -28,7 +26,7 @@ def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: Cam
     angles = np.deg2rad([case.pitch_deg, case.yaw_deg, case.roll_deg])
     normalized = intrinsics.normalize(np.asarray(points, np.float64).reshape(-1, 2))
     unity, _ = derotate(normalized, unity_order_rotation(*angles))
-    zyx, _ = derotate(normalized, zyx_order_rotation(*angles))
+    zyx, _ = derotate(normalized, euler_zyx_to_rotation(*angles))
     return np.linalg.norm(intrinsics.denormalize(unity) - intrinsics.denormalize(zyx), axis=1)
 
 
@@ -41,14 +39,7 @@ def _case_row(
         "flown_deg": [case.pitch_deg, case.yaw_deg, case.roll_deg],
     }
     if case.thesis is not None:
-        row["thesis"] = {
-            "test": case.thesis.test,
-            "unity_deg": list(case.thesis.unity_deg),
-            "mean_px": case.thesis.mean_px,
-            "mean_inliers_px": case.thesis.mean_inliers_px,
-            "points": case.thesis.points,
-            "points_inliers": case.thesis.points_inliers,
-        }
+        row["thesis"] = dataclasses.asdict(case.thesis)
     order_shift = []
     for label, thesis_derotation in (("matrix", False), ("euler", True)):
         compensated, uncompensated, detected = [], [], 0
@@ -82,32 +73,31 @@ def _case_row(
 
 def _save_figure(table: list[dict[str, Any]], outlier_px: float, file: Path) -> None:
     with saved_figure(file, (10, 3.8)) as fig:
-        _plot_table2(fig.subplots(), table, outlier_px)
-
-
-def _plot_table2(ax: Axes, table: list[dict[str, Any]], outlier_px: float) -> None:
-    x = np.arange(len(table))
-    thesis = [r.get("thesis") or {} for r in table]
-    ax.bar(x - 0.3, [r["matrix_mean_px"] for r in table], 0.2, label="FlowNav, incl. outliers")
-    ax.bar(
-        x - 0.1,
-        [r["matrix_mean_inliers_px"] for r in table],
-        0.2,
-        label=f"FlowNav, excl. (> {outlier_px:g} px)",
-    )
-    ax.bar(x + 0.1, [t.get("mean_px", math.nan) for t in thesis], 0.2, label="thesis, incl. outliers")
-    ax.bar(
-        x + 0.3,
-        [math.nan if t.get("mean_inliers_px") is None else t["mean_inliers_px"] for t in thesis],
-        0.2,
-        label="thesis, excl. outliers",
-    )
-    ax.set_yscale("log")
-    ax.set_xticks(x, [r["case"] for r in table], rotation=30, ha="right", fontsize=8)
-    ax.set_ylabel("mean |p2 - p2′| (px)")
-    ax.set_title("Rotation compensation on pure rotations (Table 2): FlowNav beside the thesis", fontsize=10)
-    ax.legend(fontsize=7, ncol=2)
-    ax.grid(alpha=0.3, axis="y")
+        ax = fig.subplots()
+        x = np.arange(len(table))
+        thesis = [r.get("thesis") or {} for r in table]
+        ax.bar(x - 0.3, [r["matrix_mean_px"] for r in table], 0.2, label="FlowNav, incl. outliers")
+        ax.bar(
+            x - 0.1,
+            [r["matrix_mean_inliers_px"] for r in table],
+            0.2,
+            label=f"FlowNav, excl. (> {outlier_px:g} px)",
+        )
+        ax.bar(x + 0.1, [t.get("mean_px", math.nan) for t in thesis], 0.2, label="thesis, incl. outliers")
+        ax.bar(
+            x + 0.3,
+            [math.nan if t.get("mean_inliers_px") is None else t["mean_inliers_px"] for t in thesis],
+            0.2,
+            label="thesis, excl. outliers",
+        )
+        ax.set_yscale("log")
+        ax.set_xticks(x, [r["case"] for r in table], rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel("mean |p2 - p2′| (px)")
+        ax.set_title(
+            "Rotation compensation on pure rotations (Table 2): FlowNav beside the thesis", fontsize=10
+        )
+        ax.legend(fontsize=7, ncol=2)
+        ax.grid(alpha=0.3, axis="y")
 
 
 def run_rotation(config: RotationConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:

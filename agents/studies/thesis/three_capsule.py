@@ -71,31 +71,29 @@ def measure_motion(result: RunResult, intrinsics: CameraIntrinsics) -> dict[str,
 def _sweep_figure(sweeps: list[dict[str, Any]], file: Path) -> None:
     with saved_figure(file, (3.2 * len(SWEEP_VARIABLES), 5.6)) as fig:
         axes = fig.subplots(2, len(SWEEP_VARIABLES), squeeze=False)
-        _plot_sweeps(axes, sweeps)
         fig.suptitle(
             "Three capsules: one test variable changed from the base run (Appendices C–H)", fontsize=10
         )
-
-
-def _plot_sweeps(axes: np.ndarray, sweeps: list[dict[str, Any]]) -> None:
-    for column, (variable, label) in enumerate(SWEEP_VARIABLES):
-        for method, marker in zip(METHODS, ("o", "s"), strict=True):
-            points = [r for r in sweeps if r["variable"] == variable and r["method"] == method]
-            values = [r["value"] for r in points]
-            axes[0, column].plot(
-                values, [100 * r["median_rel_error"] for r in points], marker=marker, label=method
-            )
-            axes[1, column].plot(values, [r["valid_per_frame"] for r in points], marker=marker, label=method)
-        axes[0, column].set_title(label, fontsize=8)
-        axes[1, column].set_xlabel(label, fontsize=8)
-        if variable == "distance_per_frame":
-            axes[0, column].set_xscale("log")
-            axes[1, column].set_xscale("log")
-        for row in range(2):
-            axes[row, column].grid(alpha=0.3)
-    axes[0, 0].set_ylabel("median |rel. depth error| (%)")
-    axes[1, 0].set_ylabel("valid points per frame")
-    axes[0, 0].legend(fontsize=8)
+        for column, (variable, label) in enumerate(SWEEP_VARIABLES):
+            for method, marker in zip(METHODS, ("o", "s"), strict=True):
+                points = [r for r in sweeps if r["variable"] == variable and r["method"] == method]
+                values = [r["value"] for r in points]
+                axes[0, column].plot(
+                    values, [100 * r["median_rel_error"] for r in points], marker=marker, label=method
+                )
+                axes[1, column].plot(
+                    values, [r["valid_per_frame"] for r in points], marker=marker, label=method
+                )
+            axes[0, column].set_title(label, fontsize=8)
+            axes[1, column].set_xlabel(label, fontsize=8)
+            if variable == "distance_per_frame":
+                axes[0, column].set_xscale("log")
+                axes[1, column].set_xscale("log")
+            for row in range(2):
+                axes[row, column].grid(alpha=0.3)
+        axes[0, 0].set_ylabel("median |rel. depth error| (%)")
+        axes[1, 0].set_ylabel("valid points per frame")
+        axes[0, 0].legend(fontsize=8)
 
 
 def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
@@ -111,19 +109,10 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
     world = PlaybackWorld(path, camera.width, camera.height, camera.fov_deg)
     rows, sweeps = [], []
 
-    def play(
-        settings: dict[str, Any], description: str, keep_residuals: bool = False, attitude_error: float = 0.0
-    ) -> RunResult:
+    def play(settings: dict[str, Any], description: str, **options: Any) -> RunResult:
         playback = PlaybackSettings(seed=config.seed, **settings)
         return run_playback(
-            path,
-            world,
-            playback,
-            config.estimator,
-            keep_residuals=keep_residuals,
-            attitude_error=attitude_error,
-            progress=progress,
-            description=description,
+            path, world, playback, config.estimator, progress=progress, description=description, **options
         )
 
     try:

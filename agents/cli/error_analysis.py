@@ -9,7 +9,6 @@ import sys
 from pathlib import Path
 
 from agents.common.locations import RESULTS_DIR, SCRATCH_DIR
-from agents.evaluation.records import read_records
 
 HELP = (
     "tolerance table and dose-response fits from a sweep's episodes -> error_analysis.md, dose_response.png"
@@ -37,22 +36,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.evaluation.sweep import pool_every_seed
-    from agents.studies.error_analysis_report import write_error_analysis
+    from agents.studies.error_analysis_report import write_error_analysis_from
 
-    episodes = Path(args.episodes)
-    if not episodes.is_file():
-        raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
-    rows = pool_every_seed(read_records(episodes))
-    if not rows:
-        raise ValueError(f"--episodes {episodes} holds no readable episode")
-    baseline = []
-    if args.baseline:
-        if not Path(args.baseline).is_file():
-            raise FileNotFoundError(
-                f"--baseline {args.baseline}: no such file (flownav leaderboard writes it)"
-            )
-        baseline = pool_every_seed(read_records(Path(args.baseline)))
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    print("\n".join(write_error_analysis(rows, Path(args.out), command.strip(), baseline)))
+    baseline = Path(args.baseline) if args.baseline else None
+    print(
+        "\n".join(write_error_analysis_from(Path(args.episodes), Path(args.out), command.strip(), baseline))
+    )
     return 0

@@ -34,8 +34,8 @@ from agents.evaluation.episode_tasks import (
 )
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.policies.base import REACTIVE_AGENTS
+from agents.studies.error_analysis import failure, runs_failure
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
@@ -220,19 +220,18 @@ def seed_files(
 
 
 def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> dict[str, Any]:
-    """A config's row: failure over runs × layouts (two-level bootstrap interval from two seeds on), its
-    outcome rates and each seed's failure."""
-    success = float(outcomes.mean())
-    low, high = runs_and_layouts_interval(outcomes) if len(outcomes) > 1 else (None, None)
-    total = outcomes.size
+    """A config's row: failure over runs × layouts (its interval from two seeds on), its outcome rates and each
+    seed's failure."""
+    rate, low, high = runs_failure(outcomes)
+    several, total = len(outcomes) > 1, outcomes.size
     return {
         "config": name,
         "seeds": len(outcomes),
         "episodes": total,
-        "failure": 1 - success,
-        "failure_low": None if high is None else 1 - high,
-        "failure_high": None if low is None else 1 - low,
-        "success": success,
+        "failure": rate,
+        "failure_low": low if several else None,
+        "failure_high": high if several else None,
+        "success": float(outcomes.mean()),
         "collision": counts["collision"] / total,
         "out_of_bounds": counts["out_of_bounds"] / total,
         "per_seed": per_seed,
@@ -251,17 +250,15 @@ def _fly(
 
 def _reference_row(agent: str, flown: list[dict[str, Any]]) -> dict[str, Any]:
     """A reactive reference agent's row: one run, a Wilson interval over its layouts."""
-    total = len(flown)
-    failures = sum(not bool(row["success"]) for row in flown)
-    low, high = wilson_interval(failures, total)
+    rate, low, high, total = failure(flown)
     return {
         "config": f"{agent} (reactive, reference)",
         "seeds": None,
         "episodes": total,
-        "failure": failures / total,
+        "failure": rate,
         "failure_low": low,
         "failure_high": high,
-        "success": 1 - failures / total,
+        "success": 1 - rate,
         "collision": sum(bool(row["collision"]) for row in flown) / total,
         "out_of_bounds": sum(bool(row["out_of_bounds"]) for row in flown) / total,
         "per_seed": None,

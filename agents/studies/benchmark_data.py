@@ -3,7 +3,7 @@ discussion are written from, read and summarised once, and what the study chose 
 
 Everything comes from files under ``results/``: the leaderboard's and the sweep's episodes, the training seeds'
 rates, the ablations on validation layouts, the diagnostic flights on true depths, the shipped policies' training
-records and configs, the suite's top groups and the thesis replication's measured motion. Nothing is flown.
+records and configs and the suite's top groups. Nothing is flown.
 """
 
 from __future__ import annotations
@@ -22,11 +22,10 @@ import yaml
 
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
-from agents.evaluation.leaderboard import improvements, summarise_runs
+from agents.evaluation.leaderboard import summarise_runs
 from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
-from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite import suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
@@ -36,8 +35,7 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.dose_response import cell_quality, fit_every_flow_agent
-from agents.studies.error_analysis import failure, is_flow_agent, tolerance_table
+from agents.studies.error_analysis import failure, is_flow_agent, runs_failure, tolerance_table
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
@@ -46,7 +44,6 @@ INPUTS = {
     "training_seeds.csv": "flownav leaderboard --out results",
     "sweep_episodes.csv": "flownav sweep --config configs/sweep.yaml --out results",
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
-    "thesis/three_capsule.json": "flownav replicate --out results/thesis",
     "suite_episodes.csv": "flownav suite --out results",
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
@@ -116,22 +113,16 @@ class BenchmarkData:
     """The summaries every report section draws on (see :func:`load_benchmark_data`)."""
 
     leaderboard: list[dict[str, Any]]
-    gains: list[dict[str, Any]]
     layouts: list[int]
     leaderboard_episodes: int
     code_versions: dict[str, list[str]]
     seed_rows: list[dict[str, Any]]
     sweep_rows: list[dict[str, Any]]
-    sweep_seeds: dict[str, int]
-    sweep_code_versions: list[tuple[str, int, list[str]]]
     tolerance: list[dict[str, Any]]
     cells: dict[tuple[str, str, float], Rate]
-    fits: dict[str, dict[str, Any]]
-    fit_errors: dict[str, str]
     validation: dict[str, dict[str, Rate]]
     oracle_reactive: dict[str, Rate]
     training: dict[str, Training]
-    thesis_motion: dict[str, Any]
     block: int = LAYOUT_BLOCK
     # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
     # compared by (agents.evaluation.paired).
@@ -159,10 +150,6 @@ class BenchmarkData:
         """``agent`` against ``reference`` (base names) on the leading table's layouts, paired by layout with
         each one's training runs resampled: failure(agent) − failure(reference)."""
         return compare(agent, self.failures[agent], reference, self.failures[reference])
-
-    def gain(self, learned: str, reactive: str) -> dict[str, Any]:
-        """P(``learned`` > ``reactive``) with its interval."""
-        return next(g for g in self.gains if g["learned"] == learned and g["reactive"] == reactive)
 
     def sweep_name(self, agent: str) -> str:
         """The sweep's name for a base agent name: itself, or its pooled ``<agent>@all``."""
@@ -211,7 +198,6 @@ def _leaderboard(results: Path) -> dict[str, Any]:
     layouts = sorted({int(r["seed"]) for r in rows})
     return {
         "leaderboard": summarise_runs(rows, runs, layouts),
-        "gains": improvements(rows, runs, layouts),
         "layouts": layouts,
         "leaderboard_episodes": len(rows),
         "code_versions": {agent: sorted(versions[agent]) for agent in runs},
@@ -229,29 +215,15 @@ def _seed_rows(results: Path) -> list[dict[str, Any]]:
 
 
 def _sweep(results: Path) -> dict[str, Any]:
-    raw = read_records(require(results / "sweep_episodes.csv"))
-    seeds: dict[str, set[int]] = {}
-    versions: dict[str, tuple[int, set[str]]] = {}
-    for r in raw:
-        base, seed = split_agent_name(r["agent"])
-        if seed is not None:
-            seeds.setdefault(base, set()).add(seed)
-        count, agents = versions.get(str(r["code_version"]), (0, set()))
-        versions[str(r["code_version"])] = (count + 1, agents | {base})
-    rows = pool_every_seed(raw)
+    rows = pool_every_seed(read_records(require(results / "sweep_episodes.csv")))
     cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
-    fits, errors = fit_every_flow_agent(rows, cell_quality(rows))
     baseline = pool_every_seed(read_records(results / "leaderboard_episodes.csv"))
     return {
         "sweep_rows": rows,
-        "sweep_seeds": {base: len(found) for base, found in seeds.items()},
-        "sweep_code_versions": [(v, n, sorted(agents)) for v, (n, agents) in versions.items()],
         "tolerance": tolerance_table(rows, baseline),
         "cells": {key: _rate(members) for key, members in cells.items()},
-        "fits": fits,
-        "fit_errors": errors,
     }
 
 
@@ -266,7 +238,7 @@ def seed_failures(folder: Path) -> np.ndarray | None:
 
 
 def _config_rate(folder: Path) -> Rate:
-    """Failure of a config's ablation runs: over runs and layouts (as ``flownav ablation``), Wilson for one run.
+    """Failure of a config's ablation runs (:func:`~agents.studies.error_analysis.runs_failure`).
 
     Raises:
         ValueError: runs that flew different layouts.
@@ -274,12 +246,7 @@ def _config_rate(folder: Path) -> Rate:
     failures = seed_failures(folder)
     if failures is None:
         raise ValueError(f"{folder}: its runs have not all flown the same layouts")
-    successes = 1.0 - failures
-    if len(successes) > 1:
-        low, high = runs_and_layouts_interval(successes)
-    else:
-        low, high = wilson_interval(int(successes.sum()), successes.size)
-    return Rate(float(1 - successes.mean()), 1 - high, 1 - low, failures.size, len(failures))
+    return Rate(*runs_failure(1.0 - failures), failures.size, len(failures))
 
 
 def _validation(results: Path) -> dict[str, dict[str, Rate]]:
@@ -343,7 +310,7 @@ def load_benchmark_data(results_dir: Path) -> BenchmarkData:
     return _summarise(results, _fingerprint(results))
 
 
-# One summary kept: the probabilities of improvement take a while, and every report of one regeneration reads
+# One summary kept: the bootstrap intervals take a while, and every report of one regeneration reads
 # the same files; the fingerprint in the key makes a changed file read anew.
 @functools.lru_cache(maxsize=1)
 def _summarise(results: Path, fingerprint: tuple[tuple[str, int, int], ...]) -> BenchmarkData:
@@ -358,7 +325,6 @@ def _summarise(results: Path, fingerprint: tuple[tuple[str, int, int], ...]) -> 
         validation=_validation(results),
         oracle_reactive=_rates_per_agent(oracle),
         training=_training(results, learned),
-        thesis_motion=json.loads((results / "thesis/three_capsule.json").read_text())["motion"],
         suite_top=suite_top_groups(results),
     )
 

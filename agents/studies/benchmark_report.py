@@ -11,7 +11,6 @@ are hand-written files with one generated block each, between two marker lines; 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -100,12 +99,6 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         "board": _board(data),
         "block": data.block,
         "seed_ranges": _seed_ranges(data),
-        # The probability that each learned agent fails less than each reactive one (straight aside).
-        "learned": [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS],
-        "improved_on": [
-            a for a in (r["agent"] for r in data.leaderboard) if a in REACTIVE_AGENTS and a != "straight"
-        ],
-        "gain": data.gain,
         "best_learned": best_learned["agent"],
         "best_reactive": best_reactive["agent"],
         "truth_recipe_flown": c.truth_recipe in rows,
@@ -163,14 +156,9 @@ def validation_values(data: BenchmarkData) -> Values:
         "validation_condition_layouts": sorted(per_run["density"] | per_run["speed"]),
         "validation_ok": {n: n in within for n in names},
         "stage2_steps": stage2["total_timesteps"],
-        "stage2_lr": _learning_rate(stage2["ppo"]["learning_rate"]),
-        "stage1_lr": _learning_rate(stage1.get("ppo", {}).get("learning_rate", float("nan"))),
+        "stage2_lr": stage2["ppo"]["learning_rate"],
+        "stage1_lr": stage1.get("ppo", {}).get("learning_rate", float("nan")),
     }
-
-
-def _learning_rate(value: float) -> str:
-    mantissa, exponent = f"{value:.0e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
 
 
 def _test_rises(data: BenchmarkData) -> dict[str, list[float]]:
@@ -238,34 +226,8 @@ def setup_values(data: BenchmarkData) -> Values:
         "ppo_cores": "/".join(map(str, sorted({n for a in learned for n in data.training[a].cores}))),
         "stage1": data.training[c.winner].init_config or {},
         "stage2": data.training[c.winner].config,
-        "train_seeds": {a: _seed_list(s) for a, s in seeds.items()},
-        "randomized": [
-            _randomized(data.training[c.winner].init_config or {}),
-            _randomized(data.training[c.winner].config),
-        ],
+        "train_seeds": seeds,
     }
-
-
-def _randomized(config: Mapping[str, Any]) -> str:
-    """What a training config draws per episode: ``speeds 0.5–2 m/s, densities 0.06–0.18``."""
-    units = {
-        "forward_speed": ("speeds", " m/s"),
-        "obstacle_density": ("densities", ""),
-        "brightness": ("brightness", ""),
-    }
-    parts = []
-    for key, (low, high) in (config.get("randomize") or {}).items():
-        noun, unit = units.get(key, (key, ""))
-        parts.append(f"{noun} {low:g}–{high:g}{unit}")
-    return join_words(parts)
-
-
-def _seed_list(seeds: Sequence[int]) -> str:
-    """``0-4`` for consecutive seeds, else ``0,2,3``."""
-    ordered = sorted(seeds)
-    if len(ordered) > 1 and ordered == list(range(ordered[0], ordered[-1] + 1)):
-        return f"{ordered[0]}-{ordered[-1]}"
-    return ",".join(map(str, ordered))
 
 
 def report_values(data: BenchmarkData) -> Values:

@@ -17,7 +17,9 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from agents.evaluation.statistics import failure_interval
+import numpy as np
+
+from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -53,6 +55,16 @@ def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int
     failures = sum(not bool(r["success"]) for r in rows)
     low, high = failure_interval(rows)
     return failures / n, low, high, n
+
+
+def runs_failure(successes: np.ndarray) -> tuple[float, float, float]:
+    """Failure over runs × layouts (``successes``: a row of 0/1 per run, every run on the same layouts) and its
+    95 % interval: a two-level bootstrap from two runs on (as ``flownav ablation``), Wilson's for one run."""
+    if len(successes) > 1:
+        low, high = runs_and_layouts_interval(successes)
+    else:
+        low, high = wilson_interval(int(successes.sum()), successes.size)
+    return float(1 - successes.mean()), 1 - high, 1 - low
 
 
 BASELINE_SOURCE = "the 300-layout clean table"

@@ -12,6 +12,8 @@ import numpy as np
 
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
+from agents.evaluation.records import read_records
+from agents.evaluation.sweep import pool_every_seed
 from agents.studies.dose_response import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
@@ -145,3 +147,24 @@ def write_error_analysis(
     text = render_report("error_analysis.md.j2", {**values, "generated": today(), "command": command})
     (out / "error_analysis.md").write_text(text)
     return text.split("\n")[:-1]
+
+
+def write_error_analysis_from(
+    episodes: Path, out: Path, command: str, baseline: Path | None = None
+) -> list[str]:
+    """:func:`write_error_analysis` from a sweep's episodes CSV, each learned agent pooled over its seeds, and
+    the clean table's (``baseline``; None: each agent's clean cell in the sweep).
+
+    Raises:
+        FileNotFoundError: ``episodes`` or ``baseline`` missing.
+        ValueError: ``episodes`` holds no readable episode.
+    """
+    if not Path(episodes).is_file():
+        raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
+    rows = pool_every_seed(read_records(Path(episodes)))
+    if not rows:
+        raise ValueError(f"--episodes {episodes} holds no readable episode")
+    if baseline is not None and not Path(baseline).is_file():
+        raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
+    clean = pool_every_seed(read_records(Path(baseline))) if baseline is not None else []
+    return write_error_analysis(rows, out, command, clean)

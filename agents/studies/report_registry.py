@@ -16,14 +16,13 @@ from typing import Any
 
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.evaluation.leaderboard import run_leaderboard
-from agents.evaluation.records import read_records
 from agents.evaluation.suite import run_suite, suite_agents
-from agents.evaluation.sweep import pool_every_seed, run_sweep
+from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
 from agents.studies import confirmation, tier_calibration
 from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
-from agents.studies.error_analysis_report import write_error_analysis
+from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
 
 
@@ -76,14 +75,6 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
         )
 
 
-def _error_analysis(report: Report, folder: Path) -> None:
-    # The same calls as agents/cli/error_analysis.py with its default --baseline (the leaderboard's episodes).
-
-    rows = pool_every_seed(read_records(RESULTS_DIR / "sweep_episodes.csv"))
-    baseline = pool_every_seed(read_records(RESULTS_DIR / "leaderboard_episodes.csv"))
-    write_error_analysis(rows, folder, report.command, baseline)
-
-
 def _ablation(
     report: Report,
     folder: Path,
@@ -124,7 +115,6 @@ BENCHMARK_INPUTS = (
     "training_seeds.csv",
     "sweep_episodes.csv",
     "diagnostics/reactive_oracle_episodes.csv",
-    "thesis/three_capsule.json",
     "ablation/*/seed_*.csv",
     "ablation/*/*/seed_*.csv",
     "ablation/reference/*.csv",
@@ -195,7 +185,12 @@ REPORTS: tuple[Report, ...] = (
         name="error-analysis",
         command="flownav error-analysis --episodes results/sweep_episodes.csv --out results",
         inputs=("sweep_episodes.csv", "leaderboard_episodes.csv"),
-        write=_error_analysis,
+        write=lambda report, folder: write_error_analysis_from(
+            RESULTS_DIR / "sweep_episodes.csv",
+            folder,
+            report.command,
+            RESULTS_DIR / "leaderboard_episodes.csv",
+        ),
         staged=False,
     ),
     _ablation_report("ablation", _CLEAN_ABLATION, 100, {}),

@@ -74,12 +74,12 @@ def test_a_factor_breaks_an_agent_at_or_after_its_first_breaking_level() -> None
         broken_agents(data, "rotation_noise_deg", 1.0)
 
 
-def _phrase(call: str, **values: Any) -> str:
-    """A phrase of ``wording.j2`` rendered with ``values``."""
+def _phrase(call: str, macros: str = "wording.j2", **values: Any) -> str:
+    """A phrase of ``macros`` (``wording.j2``'s) rendered with ``values``."""
     environment(PACKAGE).filters.update(FILTERS)
     return (
         environment(PACKAGE)
-        .from_string('{% import "wording.j2" as w %}{{ w.' + call + " }}")
+        .from_string(f'{{% import "{macros}" as w %}}{{{{ w.' + call + " }}")
         .render(**values)
     )
 
@@ -130,33 +130,23 @@ def test_a_comparison_is_worded_from_its_paired_interval(low: float, high: float
     assert _phrase('verdict(c, "flow", "truth")', c=found) == flow_truth
 
 
-def test_the_unbroken_factors_say_why() -> None:
-    clause = {
-        "where": "`brightness` above 1",
-        "who": ["`ppo_flow`"],
-        "worst": [0.1],
-        "last": "2",
-        "farthest": "2",
-    }
-    clauses = [
-        {**clause, "kind": "end"},
-        {**clause, "kind": "easier", "who": ["`ppo_flow`", "the winner"]},
-        {**clause, "kind": "short"},
-    ]
-    text = _phrase("unbroken(s, c, False)", s=["`ppo_flow`", "the winner"], c=clauses)
-    assert text.startswith(
-        "**Every factor breaks `ppo_flow` and the winner within its physical range, except:**"
-    )
-    assert (
-        "up to the setting's end (2; worst 0.10), " in text and "easier for `ppo_flow` and the winner" in text
-    )
-    assert text.endswith(
-        " and `brightness` above 1 does not break `ppo_flow` up to 2 (worst 0.10): more levels are needed."
-    )
-    assert (
-        _phrase("unbroken(s, [], True)", s=["`ppo_flow`"])
-        == "**Every factor breaks `ppo_flow` on every side flown.**"
-    )
+@pytest.mark.parametrize(
+    ("call", "expected"),
+    [
+        ("lr(0.0003)", "3e-4"),
+        ("seed_list([2, 0, 1])", "0-2"),
+        ("seed_list([0, 2, 3])", "0,2,3"),
+        ("seed_list([4])", "4"),
+        (
+            'randomized({"randomize": {"forward_speed": [0.5, 2.0], "brightness": [0.5, 1.5]}})',
+            "speeds 0.5–2 m/s and brightness 0.5–1.5",
+        ),
+        ('randomized({"randomize": {"obstacle_density": [0.06, 0.18]}})', "densities 0.06–0.18"),
+        ("randomized({})", ""),
+    ],
+)
+def test_a_training_config_is_worded_from_its_values(call: str, expected: str) -> None:
+    assert _phrase(call, macros="benchmark_tables.j2") == expected
 
 
 def test_the_picks_standing_and_stage_verdicts_are_worded_from_the_intervals() -> None:
@@ -267,7 +257,7 @@ def test_generated_blocks_are_committed_idempotent_and_local(tmp_path: Path, sou
 
 
 # The lists a template words differently when empty.
-BRANCHING_LISTS = ("worse", "first_target_met", "validation_within", "pick_rises", "unbroken", "factors_add")
+BRANCHING_LISTS = ("first_target_met", "validation_within", "pick_rises")
 
 
 def _variants(name: str, value: Any) -> list[Any]:

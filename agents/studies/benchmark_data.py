@@ -56,6 +56,9 @@ class BenchmarkChoices:
 
     winner: str
     student: str
+    plain: list[str]
+    truth_stages: list[str]
+    gap_seeds: int
     max_failure: float
     oracle_factor: float
     max_rise: float

@@ -44,14 +44,6 @@ from agents.studies.confirmation import (
 from agents.studies.wording import render_report
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
-# The plain recipe: PPO on the estimator's depths and on the true depths, all else the same.
-PLAIN_FLOW, PLAIN_TRUTH = "ppo_flow", "ppo_oracle"
-# How many training seeds a recipe's gap is measured over.
-SEEDS_WANTED = 5
-TRUE_DEPTH_STAGES = (
-    "configs/experiments/ppo_flow_course_approach_oracle.yaml",
-    "configs/experiments/ppo_flow_course_approach_curriculum_slow_oracle.yaml",
-)
 Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
 Row = tuple[str, np.ndarray, np.ndarray]  # where, flow's failures, truth's failures (runs, layouts)
 Bar = tuple[str, Cell | None, Cell | None]  # where, flow's failure, truth's failure (None: not flown)
@@ -139,18 +131,6 @@ def _student_values(results: Path, policies_dir: Path) -> dict[str, Any]:
     }
 
 
-def leaderboard_matrix(
-    data: BenchmarkData, results: Path, agent: str, policies_dir: Path
-) -> np.ndarray | None:
-    """Failures (runs, layouts) of ``agent``'s shipped seeds on the leading clean table's test layouts, or None
-    where it is not in that table (not flown yet)."""
-    runs = shipped_seed_runs(agent, policies_dir)
-    if not runs or not any(r["agent"] == agent for r in data.leaderboard):
-        return None
-    rows = [row for row in read_records(results / "leaderboard_episodes.csv") if row["agent"] in runs]
-    return episode_outcomes(rows, runs, data.layouts, "failure")
-
-
 def confirmation_rows(result: Mapping[str, Any], results: Path, policies_dir: Path) -> list[Row]:
     """The pick against its true-depth recipe per condition on the confirmation layouts; empty until the
     true-depth recipe has flown."""
@@ -179,14 +159,12 @@ def selection_values(result: Mapping[str, Any], search: Mapping[str, Any]) -> di
 
 
 def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dict[str, Any]:
+    flow, truth = choices().plain
     clean = data.validation["clean"]
-    steps = [data.training[a].config["total_timesteps"] for a in (PLAIN_FLOW, PLAIN_TRUTH)]
     return {
-        "plain_steps": steps,
-        "plain_validation": [clean[PLAIN_FLOW], clean[PLAIN_TRUTH]],
-        "plain_suite_table": gap_table(
-            PLAIN_FLOW, PLAIN_TRUTH, _suite_rows(results, PLAIN_FLOW, PLAIN_TRUTH, policies_dir), "tier"
-        ),
+        "plain_steps": [data.training[a].config["total_timesteps"] for a in (flow, truth)],
+        "plain_validation": [clean[flow], clean[truth]],
+        "plain_suite_table": gap_table(flow, truth, _suite_rows(results, flow, truth, policies_dir), "tier"),
     }
 
 
@@ -194,18 +172,18 @@ def gap_bars(
     data: BenchmarkData, result: Mapping[str, Any], results: Path, policies_dir: Path
 ) -> dict[str, list[Bar]]:
     """What the figure shows, per recipe: (where, flow's failure, truth's failure), None where not flown."""
-    flow, truth = data.row(PLAIN_FLOW), data.row(PLAIN_TRUTH)
+    plain_flow, plain_truth = choices().plain
     clean = data.validation["clean"]
     plain: list[Bar] = [
-        ("test, clean", _row_cell(flow), _row_cell(truth)),
-        ("validation, clean", _rate_cell(clean[PLAIN_FLOW]), _rate_cell(clean[PLAIN_TRUTH])),
+        ("test, clean", _row_cell(data.row(plain_flow)), _row_cell(data.row(plain_truth))),
+        ("validation, clean", _rate_cell(clean[plain_flow]), _rate_cell(clean[plain_truth])),
     ]
     rates = {(r["condition"], r["agent"]): (r["failure"], r["low"], r["high"]) for r in result["rates"]}
     pick: list[Bar] = [
         (f"fresh validation, {k}", rates.get((k, PICK)), rates.get((k, TRUE_DEPTH_RECIPE)))
         for k in dict.fromkeys(r["condition"] for r in result["rates"])
     ]
-    for bars, agents in ((plain, (PLAIN_FLOW, PLAIN_TRUTH)), (pick, (PICK, TRUE_DEPTH_RECIPE))):
+    for bars, agents in ((plain, (plain_flow, plain_truth)), (pick, (PICK, TRUE_DEPTH_RECIPE))):
         flow_tiers, truth_tiers = (suite_matrices(results, a, policies_dir) for a in agents)
         bars += [
             (
@@ -216,7 +194,7 @@ def gap_bars(
             for t in TIER_NAMES
             if t in flow_tiers or t in truth_tiers
         ]
-    return {f"`{PLAIN_FLOW}` / `{PLAIN_TRUTH}`": plain, f"the pick / {TRUE_DEPTH_RECIPE}": pick}
+    return {f"`{plain_flow}` / `{plain_truth}`": plain, f"the pick / {TRUE_DEPTH_RECIPE}": pick}
 
 
 def plot_gap(panels: Mapping[str, Sequence[Bar]], path: Path) -> None:
@@ -276,20 +254,18 @@ def flow_gap_values(
     if result is None:
         result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     confirmation = confirmation_rows(result, results, policies_dir)
-    flow, truth = (leaderboard_matrix(data, results, a, policies_dir) for a in (PICK, TRUE_DEPTH_RECIPE))
-    test = [] if flow is None or truth is None else [("clean", flow, truth)]
-    stages = [Path(config).stem for config in TRUE_DEPTH_STAGES]
     return {
         **report_values(data),
         **_plain_values(data, results, policies_dir),
         **selection_values(result, search_record(results / "ablation")),
         **_student_values(results, policies_dir),
-        "truth_seeds": {stage: len(shipped_seed_runs(stage, policies_dir)) for stage in stages},
-        "seeds_wanted": SEEDS_WANTED,
-        "true_depth_stages": TRUE_DEPTH_STAGES,
+        "truth_seeds": {
+            Path(c).stem: len(shipped_seed_runs(Path(c).stem, policies_dir)) for c in choices().truth_stages
+        },
+        "seeds_wanted": choices().gap_seeds,
+        "true_depth_stages": choices().truth_stages,
         "truth_confirmation_table": gap_table(PICK, TRUE_DEPTH_RECIPE, confirmation, "condition"),
         "truth_confirmation": [(where, gap(flow, truth)) for where, flow, truth in confirmation],
-        "truth_test_table": gap_table(PICK, TRUE_DEPTH_RECIPE, test, "test layouts"),
         "truth_suite_table": gap_table(
             PICK, TRUE_DEPTH_RECIPE, _suite_rows(results, PICK, TRUE_DEPTH_RECIPE, policies_dir), "tier"
         ),

@@ -17,7 +17,6 @@ from agents.studies.flow_gap_report import (
     gap,
     gap_row,
     gap_table,
-    leaderboard_matrix,
     plot_gap,
     selection_values,
     suite_matrices,
@@ -119,24 +118,6 @@ def test_the_students_gap_per_tier_sets_the_planners_failure_beside_it(tmp_path:
     assert "truth fails less than flow" in table[2]
     assert table[3].startswith("| hard |") and table[3].endswith("| not flown |")
     assert gap_table(student, twin, [], "tier", ceiling=planner) == ""
-
-
-def test_the_clean_test_gap_reads_the_leading_tables_episodes_of_each_shipped_seed(tmp_path: Path) -> None:
-    from types import SimpleNamespace
-
-    policies = tmp_path / "policies"
-    _ship(policies, PICK, 2)
-    layouts = list(range(1_000_000, 1_000_020))
-    episodes = [(f"{PICK}@{k}", "clean", 0.0, seed, seed % 4 == 0) for seed in layouts for k in range(2)]
-    _write_episodes(tmp_path / "leaderboard_episodes.csv", episodes)
-    data = SimpleNamespace(leaderboard=[{"agent": PICK}], layouts=layouts)
-    found = leaderboard_matrix(data, tmp_path, PICK, policies)
-    assert found is not None and found.shape == (2, 20) and found.mean() == pytest.approx(0.25)
-    # not in the table yet, or no seeds shipped: nothing to pair
-    assert leaderboard_matrix(data, tmp_path, TRUE_DEPTH_RECIPE, policies) is None
-    assert (
-        leaderboard_matrix(SimpleNamespace(leaderboard=[], layouts=layouts), tmp_path, PICK, policies) is None
-    )
 
 
 def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path) -> None:

@@ -56,6 +56,7 @@ TIER_AGENTS = (
     "ppo_flow_course_approach_curriculum_slow",
 )
 CALIBRATION_LAYOUTS = 100
+CALIBRATION_RUNS = 5  # a learned agent's seeds shipped when the tiers were frozen (ppo_flow's 5-9 came later)
 # The clean tier is today's defaults, flown on validation layouts many times already (results/ablation/).
 CALIBRATED_TIERS = tuple(name for name in TIER_NAMES if name != "clean")
 TARGET_FAILURE = (0.20, 0.50)
@@ -81,7 +82,7 @@ def calibration_tasks(
     """Stage 1, ``course`` (every candidate course × course agent), then stage 2, ``tiers`` (every tier × tier
     agent), layout by layout within each. Stage 2 flies the tiers as frozen, so it runs after the pick."""
     seeds = range(TIER_CALIBRATION_SEED_START, TIER_CALIBRATION_SEED_START + layouts)
-    runs = {agent: runs_to_fly(agent)[0] for agent in TIER_AGENTS}
+    runs = {agent: runs_to_fly(agent)[0][:CALIBRATION_RUNS] for agent in TIER_AGENTS}
 
     def run_on(agent: str, index: int) -> str:
         return runs[agent][index % len(runs[agent])]  # a learned agent: its training seeds in turn

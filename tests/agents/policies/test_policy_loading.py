@@ -140,14 +140,14 @@ def test_an_agent_named_alone_flies_its_shipped_seeds_one_episode_each_in_turn()
         warnings.simplefilter("error", UnverifiedPolicyWarning)  # the shipped, verified seeds
         agent = load_agent("ppo_flow")
         seeds = {name: load_agent(name) for name in runs}
-    assert isinstance(agent, TrainingSeedsAgent) and agent.run_names == runs and len(runs) == 5
+    assert isinstance(agent, TrainingSeedsAgent) and agent.run_names == runs and len(runs) >= 2
     env = gym.make("FlowNav-v0", **SMALL)
     observation, _ = env.reset(seed=TEST_SEED_START)
     observation, *_ = env.step(np.zeros(3))
     env.close()
     observation["state"][-1] = 0.4  # off the goal's heading, so the seeds disagree
     flown = []
-    for episode in range(7):
+    for episode in range(len(runs) + 2):
         action, _ = agent.predict(observation, episode_start=np.ones(1, bool))
         flown.append(agent.current_run)
         np.testing.assert_array_equal(action, seeds[agent.current_run].predict(observation)[0])

@@ -220,7 +220,9 @@ def test_relative_policy_dirs_resolve_against_the_repository(tmp_path: Path, mon
     monkeypatch.chdir(tmp_path)
     assert config.policy_folder() == POLICIES_DIR
     # An agent named alone stands for its first shipped training seed (there is no single ppo_flow.zip).
-    assert {Path(t.policy) for t in build_tasks(config, ["ppo_flow"])} == {POLICIES_DIR / "ppo_flow" / "seed_0.zip"}
+    assert {Path(t.policy) for t in build_tasks(config, ["ppo_flow"])} == {
+        POLICIES_DIR / "ppo_flow" / "seed_0.zip"
+    }
 
 
 def test_all_seeds_of_a_learned_agent_share_each_cells_layouts_in_turn(tmp_path: Path) -> None:

@@ -259,7 +259,7 @@ def test_training_seeds_keeps_a_flown_sweeps_rotation_when_more_seeds_are_shippe
 
 
 def test_a_negative_training_seed_count_is_refused_naming_the_range(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="training_seeds.*-1"):
+    with pytest.raises(ValueError, match=r"training_seeds.*-1"):
         load_config(write_sweep_config(tmp_path, training_seeds=-1), SweepConfig)
 
 

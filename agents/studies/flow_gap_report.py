@@ -25,7 +25,6 @@ from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import Comparison, compare, verdict
 from agents.evaluation.records import read_records
-from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.evaluation.suite import EPISODES_CSV
 from agents.policies import is_learned, shipped_seed_runs
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, load_benchmark_data
@@ -41,6 +40,7 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
+from agents.studies.error_analysis import runs_failure
 from agents.studies.wording import render_report
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
@@ -55,8 +55,8 @@ def gap(flow: np.ndarray, truth: np.ndarray) -> Comparison:
 
 
 def _cell(matrix: np.ndarray) -> Cell:
-    """A failure rate with its interval over runs and layouts."""
-    return (float(matrix.mean()), *runs_and_layouts_interval(matrix))
+    """A failure rate with its interval over runs and layouts (Wilson's for one run, such as the planner's)."""
+    return (float(matrix.mean()), *runs_failure(1 - matrix)[1:])
 
 
 def _row_cell(row: Mapping[str, Any]) -> Cell:

@@ -19,10 +19,11 @@ Sub-ranges with one use each:
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
-Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy trained for a suite tier learns on the training range and is
-judged on the tier's validation range, both flown with the tier's course and sensor. Every tier has the same
-ranges, as every tier of the suite flies the same test layouts: a seed fixes the field, and the tier its speed,
-density and sensor, so the layouts of one tier's training are the same fields as another's and never a test one.
+Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
+trained for a suite tier learns on the training range and is judged on the tier's validation range, both flown
+with the tier's course and sensor. Every tier has the same ranges, as every tier of the suite flies the same test
+layouts: a seed fixes the field and the tier its speed, density and sensor, so a tier's training layouts are
+never a test one.
 
 A layout is a function of its seed alone, so disjoint ranges mean no reported layout was ever trained on or
 used to pick anything.

@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.policies.teachers import check_teacher
 
-        check_teacher(config.imitation.teacher, config.env, str(config_path))
+        check_teacher(config.imitation.teacher, config.env, str(config_path), config.imitation.teacher_params)
     if args.seeds is None and (args.backend != "local" or args.address is not None or args.parallel != 1):
         raise ValueError("--backend, --address and --parallel apply to --seeds runs only")
     _check_output_folders(args, config.name)

@@ -10,6 +10,7 @@ privileged planner reads the layout and true state (``observe_layout=True``): it
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
@@ -28,8 +29,10 @@ class PlannerTeacher:
 
     privileged_settings: Mapping[str, Any] = PLANNER_ENV_KWARGS["planner"]
 
-    def __init__(self) -> None:
+    def __init__(self, params: Mapping[str, float] | None = None) -> None:
+        self.params = dict(params or {})
         self.planners: list[PlannerAgent] = []
+        PlannerAgent(**self.params)  # checks the parameters now, not at the first step
 
     def predict(
         self,
@@ -40,7 +43,7 @@ class PlannerTeacher:
     ) -> tuple[np.ndarray, Any]:
         count = len(next(iter(observation.values())))
         while len(self.planners) < count:
-            self.planners.append(PlannerAgent())
+            self.planners.append(PlannerAgent(**self.params))
         starts = np.ones(count, bool) if episode_start is None else np.asarray(episode_start, bool)
         actions = [
             planner.predict(
@@ -52,18 +55,23 @@ class PlannerTeacher:
         return np.stack(actions), state
 
 
-def check_teacher(name: str, env: Mapping[str, Any], source: str) -> None:
-    """Check that ``name`` can teach a run whose env is made with ``env`` (a config's ``env`` section).
+def check_teacher(
+    name: str, env: Mapping[str, Any], source: str, params: Mapping[str, float] | None = None
+) -> None:
+    """Check that ``name`` can teach a run whose env is made with ``env`` (a config's ``env`` section), with its
+    own parameters ``params`` (a config's ``imitation.teacher_params``).
 
     Raises:
         ValueError: ``name`` is neither a reactive agent nor the planner (a teacher acts from the observation
-            alone, so learned policies, which need their own env settings, are not offered), or the env lacks
-            a setting the teacher reads; the message names the key and the config file ``source``.
+            alone, so learned policies, which need their own env settings, are not offered), the env lacks
+            a setting the teacher reads, or ``params`` are not the teacher's; the message names the key and the
+            config file ``source``.
     """
     if name not in TEACHERS:
         raise ValueError(
             f"{source}: key 'imitation.teacher' must be one of {', '.join(TEACHERS)}, got {name!r}"
         )
+    check_teacher_params(name, params or {}, source)
     wanted = agent_env_kwargs(name)
     # A privileged teacher's own opt-in is given to the training envs by the teacher start, not by 'env'.
     for setting, value in wanted.items():
@@ -74,9 +82,33 @@ def check_teacher(name: str, env: Mapping[str, Any], source: str) -> None:
             )
 
 
-def make_teacher(name: str) -> Agent:
-    """The teacher agent ``name``: a rule with its shipped gains, or the planner over a batch of envs (a
-    module-level function, so a training job that carries it pickles)."""
+def check_teacher_params(name: str, params: Mapping[str, float], source: str) -> None:
+    """Raise ValueError unless ``params`` are parameters of teacher ``name``: the planner's fields, each a
+    number in its range; a rule flies its shipped gains and takes none."""
+    if params and name not in PLANNERS:
+        raise ValueError(
+            f"{source}: key 'imitation.teacher_params' sets the planner teacher's parameters; {name!r} flies its "
+            f"shipped gains and takes none, got {sorted(params)}"
+        )
+    allowed = [item.name for item in fields(PlannerAgent)]
+    for key, value in params.items():
+        if key not in allowed:
+            raise ValueError(
+                f"{source}: key 'imitation.teacher_params.{key}' is not a planner parameter; allowed: "
+                f"{', '.join(allowed)}"
+            )
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be a number, got {value!r}")
+    try:
+        PlannerAgent(**params)
+    except ValueError as error:
+        raise ValueError(f"{source}: key 'imitation.teacher_params': {error}") from error
+
+
+def make_teacher(name: str, params: Mapping[str, float] | None = None) -> Agent:
+    """The teacher agent ``name``: a rule with its shipped gains, or the planner (with ``params`` on its
+    defaults) over a batch of envs (a module-level function, so a training job that carries it pickles)."""
+    check_teacher_params(name, params or {}, "teacher")
     if name in PLANNERS:
-        return PlannerTeacher()
+        return PlannerTeacher(params)
     return load_agent(name)

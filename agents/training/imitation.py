@@ -18,6 +18,7 @@ teacher reads; a privileged teacher (the planner) reads, besides, the keys that 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -35,6 +36,9 @@ if TYPE_CHECKING:
 
 # What a teacher start needs of its teacher: any agent's ``predict``, over a batch of envs.
 Teacher = Agent
+# Builds the teacher a config names from its name and ``imitation.teacher_params``
+# (agents.policies.teachers.make_teacher; the rules live above this layer).
+TeacherFactory = Callable[[str, Mapping[str, float]], Teacher]
 
 
 @dataclass

@@ -19,7 +19,7 @@ import multiprocessing
 import queue
 import re
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from multiprocessing.process import BaseProcess
     from multiprocessing.queues import Queue
 
-    from agents.training.imitation import Teacher
+    from agents.training.imitation import TeacherFactory
 
 # What a seed trained side by side reports: its index, its policy path or None, its error or None.
 SeedOutcome = tuple[int, str | None, BaseException | None]
@@ -82,7 +82,7 @@ class SeedJob:
     parked_dir: Path | None = None
     command: str | None = None  # the command line that trains the seeds, for the record
     # Builds the agent a config's ``imitation.teacher`` names; a module-level function, so a job pickles.
-    make_teacher: Callable[[str], Teacher] | None = None
+    make_teacher: TeacherFactory | None = None
 
     @property
     def files(self) -> RunFiles:
@@ -105,7 +105,7 @@ def seed_jobs(
     ship_to: Path | None,
     parked_dir: Path | None = None,
     command: str | None = None,
-    make_teacher: Callable[[str], Teacher] | None = None,
+    make_teacher: TeacherFactory | None = None,
 ) -> list[SeedJob]:
     """One job per seed; a ``ship_to`` policies folder becomes ``ship_to/<name>/`` for the seeds; seeds parked
     in ``parked_dir`` (:mod:`agents.training.parking`) resume from there when their run folder is empty;

@@ -14,7 +14,6 @@ Everything goes to ``runs/<name>/`` (see :class:`agents.training.outputs.RunFile
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 from typing import Any
@@ -43,7 +42,7 @@ from agents.training.callbacks import (
 )
 from agents.training.curves import plot_learning_curves
 from agents.training.envs import build_envs, close_quietly
-from agents.training.imitation import Teacher, imitate
+from agents.training.imitation import Teacher, TeacherFactory, imitate
 from agents.training.outputs import RunFiles
 from agents.training.run_record import FAILED, FINISHED, INTERRUPTED, SessionRecord
 from agents.training.shipping import ship_run
@@ -166,7 +165,7 @@ def train(
     in_process_envs: bool = False,
     progress_bar: bool = True,
     command: str | None = None,
-    make_teacher: Callable[[str], Teacher] | None = None,
+    make_teacher: TeacherFactory | None = None,
 ) -> Path:
     """Run the training described by ``config`` into ``runs_dir/<name>/`` (or ``files``, for one of several
     training seeds); returns the run's policy path.
@@ -198,7 +197,11 @@ def train(
     torch.set_num_threads(1)  # the env workers need the cores; small MLPs gain nothing from threads
     # Built before the envs: a privileged teacher's own settings (the planner's observe_layout) go to the
     # training envs, behind a view that hides their keys from the student (agents.training.student_view).
-    teacher = make_teacher(config.imitation.teacher) if config.imitation.teacher and make_teacher else None
+    teacher = (
+        make_teacher(config.imitation.teacher, config.imitation.teacher_params)
+        if config.imitation.teacher and make_teacher
+        else None
+    )
     envs, eval_env = build_envs(
         config, in_process=in_process_envs, teacher_settings=privileged_settings(teacher)
     )

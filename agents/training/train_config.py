@@ -54,6 +54,9 @@ class ImitationParams:
     batch_size: int = field_range(8, 100_000, default=256)
     learning_rate: float = field_range(1e-6, 1.0, default=1e-3)
     value_weight: float = field_range(0.0, 100.0, default=0.5)
+    # The planner teacher's own parameters (fields of agents.policies.planner.PlannerAgent), e.g. wider margins
+    # than the reference flies so that a student's imitation error has room; empty = the reference planner.
+    teacher_params: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass

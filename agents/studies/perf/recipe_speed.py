@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +36,7 @@ from agents.training.student_view import privileged_settings
 from agents.training.train_config import TrainConfig
 
 # Makes the teacher agent a training config names (agents.policies.teachers.make_teacher).
-TeacherFactory = Callable[[str], Any]
+TeacherFactory = Callable[[str, Mapping[str, float]], Any]
 # The kinds of work a seed does, each timed on its own.
 KINDS = ("startup", "ppo", "evaluation", "teacher")
 
@@ -89,7 +89,7 @@ def measure_stage(
             raise ValueError(
                 f"{config.name} starts from teacher {config.imitation.teacher!r}: give make_teacher"
             )
-        teacher = make_teacher(config.imitation.teacher)
+        teacher = make_teacher(config.imitation.teacher, config.imitation.teacher_params)
     # A privileged teacher's opt-in (the planner's observe_layout) reaches the training envs, as in training.
     envs, eval_env = build_envs(config, teacher_settings=privileged_settings(teacher))
     try:

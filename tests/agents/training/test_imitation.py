@@ -147,7 +147,7 @@ def test_an_interrupted_teacher_start_is_recorded_and_the_same_command_starts_af
         "progress_bar": False,
     }
     with pytest.raises(KeyboardInterrupt):
-        train(config, make_teacher=lambda name: _StoppedTeacher(5), **arguments)
+        train(config, make_teacher=lambda name, params: _StoppedTeacher(5), **arguments)
     files = RunFiles.of(tmp_path / "runs", config.name)
     assert interrupted_at(files) == 0
     train(config, make_teacher=make_teacher, **arguments)

@@ -102,6 +102,32 @@ def test_the_planner_teaches_without_asking_the_env_section_for_its_keys() -> No
         check_teacher("ppo_oracle", {}, "run.yaml")
 
 
+def test_the_planner_teacher_flies_the_parameters_a_config_gives_it() -> None:
+    teacher = make_teacher("planner", {"soft_clearance": 0.8, "hard_margin": 0.15})
+    assert isinstance(teacher, PlannerTeacher)
+    assert teacher.params == {"soft_clearance": 0.8, "hard_margin": 0.15}
+    check_teacher("planner", {}, "run.yaml", {"clearance_weight": 4.0})
+
+
+@pytest.mark.parametrize(
+    ("name", "params", "message"),
+    [
+        ("planner", {"margin": 0.2}, r"run.yaml: key 'imitation.teacher_params.margin' is not a planner "
+         r"parameter; allowed: hard_margin, soft_clearance"),
+        ("planner", {"soft_clearance": "wide"}, r"'imitation.teacher_params.soft_clearance' must be a number, "
+         r"got 'wide'"),
+        ("planner", {"hard_margin": -0.1}, r"run.yaml: key 'imitation.teacher_params': hard_margin must be > 0, "
+         r"got -0.1"),
+        ("bee_ttc", {"soft_clearance": 0.8}, r"sets the planner teacher's parameters; 'bee_ttc' flies its shipped "
+         r"gains and takes none, got \['soft_clearance'\]"),
+    ],
+)
+def test_teacher_parameters_that_are_not_the_planners_are_refused(name, params, message) -> None:
+    env = agent_env_kwargs(name) if name != "planner" else {}
+    with pytest.raises(ValueError, match=message):
+        check_teacher(name, env, "run.yaml", params)
+
+
 def test_a_teacher_declaring_another_privileged_setting_is_refused() -> None:
     class _OracleTeacher:
         privileged_settings: ClassVar[dict[str, str]] = {"obs_source": "oracle"}

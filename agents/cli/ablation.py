@@ -44,6 +44,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "FlowNavEnv setting every run flies with, repeatable (e.g. --env obstacle_density=0.18; default: "
         "none, clean); give each condition its own --out, for its own ablation.md",
     )
+    parser.add_argument(
+        "--tier",
+        default=None,
+        help="a suite tier (clean, hard, noisy, hard_noisy): fly its course and sensor on its validation layouts "
+        "(from 960,100) instead of the ablation layouts; takes no --env",
+    )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -68,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
         command=command.strip(),
         reference_agents=[agent.strip() for agent in args.reference.split(",") if agent.strip()],
         env=dict(args.env),
+        tier=args.tier,
     )
     print("\n".join(lines))
     return 0

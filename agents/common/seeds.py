@@ -17,6 +17,7 @@ Sub-ranges with one use each:
 | sensor reading (validation) | ``SENSOR_READING_SEED_START ..`` | the noisy tier at other readings of its specifications |
 | planner tuning (validation) | ``PLANNER_TUNING_SEED_START ..`` | tuning the privileged ``planner`` and measuring its failure per tier |
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
+| student recipes (validation) | ``STUDENT_RECIPE_SEED_START ..`` | recipes for the planner's student compared per tier (``flownav ablation --tier``) |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -46,7 +47,7 @@ MAX_RUN_SEED = VALIDATION_SEED_START // RUN_SEED_STRIDE - 1
 ABLATION_SEED_START = 900_000
 # Fresh validation layouts for confirming a selection made on the ablation layouts (flownav confirm).
 CONFIRMATION_SEED_START = 910_000
-# Validation layouts on which the suite's tiers are calibrated (flownav suite calibrate).
+# Validation layouts on which the suite's tiers are calibrated (flownav calibrate-tiers).
 TIER_CALIBRATION_SEED_START = 920_000
 # Validation layouts on which versions of the suite's realistic sensor were tried (sensor_pilot_episodes.csv).
 SENSOR_PILOT_SEED_START = 930_000
@@ -56,6 +57,9 @@ SENSOR_READING_SEED_START = 940_000
 PLANNER_TUNING_SEED_START = 950_000
 # Validation layouts on which the planner's distilled student (ppo_flow_planner_student) is checked per tier.
 STUDENT_CHECK_SEED_START = 960_000
+# Validation layouts on which recipes for that student are compared per tier (flownav ablation --tier): past the
+# first check's 100.
+STUDENT_RECIPE_SEED_START = 960_100
 # The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
 SUITE_SEED_START = 2_000_000
 SUITE_LAYOUTS = 300

@@ -22,7 +22,7 @@ import numpy as np
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
-from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START
+from agents.common.seeds import ABLATION_SEED_START, STUDENT_RECIPE_SEED_START, TEST_SEED_START
 from agents.common.tables import today
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import (
@@ -40,6 +40,7 @@ from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
 from flownav_env.settings_check import check_env_kwargs
+from flownav_env.tiers import tier as tier_of
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
 # labels the rows, and each run has its own CSV, so one name serves every config.
@@ -47,27 +48,34 @@ RUN_LABEL = "ppo_flow"
 
 
 def ablation_tasks(
-    policy: Path | None, episodes: int, env: Mapping[str, Any] | None = None, agent: str = RUN_LABEL
+    policy: Path | None,
+    episodes: int,
+    env: Mapping[str, Any] | None = None,
+    agent: str = RUN_LABEL,
+    *,
+    env_id: str = "FlowNav-v0",
+    first_layout: int = ABLATION_SEED_START,
 ) -> list[EpisodeTask]:
-    """One run's episodes on validation layouts ``ABLATION_SEED_START ..``: clean, or with the env settings
-    ``env`` on top of the run's own (the robustness conditions, such as ``obstacle_density=0.18``).
-    ``policy`` None: a reactive ``agent``.
+    """One run's episodes on validation layouts ``first_layout ..`` of ``env_id`` (a tier's id flies its
+    course and sensor): clean, or with the env settings ``env`` on top of the run's own (the robustness
+    conditions, such as ``obstacle_density=0.18``). ``policy`` None: a reactive ``agent``.
 
     Raises:
         ValueError: so many episodes that they would reach the test layouts.
     """
-    if episodes < 1 or ABLATION_SEED_START + episodes > TEST_SEED_START:
+    if episodes < 1 or first_layout + episodes > TEST_SEED_START:
         raise ValueError(
-            f"--episodes must be in [1, {TEST_SEED_START - ABLATION_SEED_START}] (validation layouts from "
-            f"{ABLATION_SEED_START:,}), got {episodes}"
+            f"--episodes must be in [1, {TEST_SEED_START - first_layout}] (validation layouts from "
+            f"{first_layout:,}), got {episodes}"
         )
-    seeds = range(ABLATION_SEED_START, ABLATION_SEED_START + episodes)
+    seeds = range(first_layout, first_layout + episodes)
     env = dict(env or {})
     factor, level = record_label(env)
     settings = tuple(sorted(env.items()))
     policy_path = str(policy) if policy is not None else None
     return [
-        EpisodeTask(agent, factor, level, seed, env_kwargs=settings, policy=policy_path) for seed in seeds
+        EpisodeTask(agent, factor, level, seed, env_id=env_id, env_kwargs=settings, policy=policy_path)
+        for seed in seeds
     ]
 
 
@@ -84,19 +92,23 @@ def compare_configs(
     command: str = "flownav ablation",
     reference_agents: Sequence[str] = (),
     env: Mapping[str, Any] | None = None,
+    tier: str | None = None,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
     policy shipped to ``policies_dir`` (None: runs only); one that is neither is listed as missing, not flown.
     ``env``: FlowNavEnv settings every run and reference agent flies with (default: clean). Its episodes are
     labelled with the setting, so they never count with another condition's in the same CSV; ``ablation.md``
-    reports the condition asked, so give each condition its own ``out`` to keep each report.
+    reports the condition asked, so give each condition its own ``out`` to keep each report. ``tier``: fly the
+    suite tier's env (its course and sensor) on its validation layouts from ``STUDENT_RECIPE_SEED_START``.
 
     Raises:
         ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
             reactive.
     """
     env = check_env_kwargs(dict(env or {}), "command line", key="--env")
+    if tier is not None and env:
+        raise ValueError(f"--env and --tier {tier}: a tier fixes its own settings, so give one or the other")
     for agent in reference_agents:
         if agent not in REACTIVE_AGENTS:
             raise ValueError(
@@ -105,7 +117,10 @@ def compare_configs(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    flights = _Flights(out, episodes, env, workers, report_only)
+    env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
+    if tier is not None:
+        env_id, first_layout = tier_of(tier).env_id, STUDENT_RECIPE_SEED_START
+    flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
     rows: list[dict[str, Any]] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
@@ -125,7 +140,7 @@ def compare_configs(
     text = render(
         "agents.studies",
         "ablation.md.j2",
-        ablation_values(rows, missing, seeds, episodes, command, env, bool(curves)),
+        ablation_values(rows, missing, seeds, command, env, bool(curves), flights, tier),
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
@@ -134,13 +149,21 @@ def compare_configs(
 @dataclass(frozen=True)
 class _Flights:
     """How every run and reference agent of a comparison flies: into CSVs under ``out``, ``episodes`` each,
-    in the env setting ``env``, with ``workers`` processes, or not at all with ``report_only``."""
+    in the env setting ``env``, with ``workers`` processes, or not at all with ``report_only``, on ``env_id``'s
+    layouts from ``first_layout``."""
 
     out: Path
     episodes: int
     env: dict[str, Any]
     workers: int
     report_only: bool
+    env_id: str
+    first_layout: int
+
+    def tasks(self, policy: Path | None, agent: str = RUN_LABEL) -> list[EpisodeTask]:
+        return ablation_tasks(
+            policy, self.episodes, self.env, agent, env_id=self.env_id, first_layout=self.first_layout
+        )
 
 
 def _fly_config(
@@ -163,7 +186,7 @@ def _fly_config(
             unfinished = f" (unfinished: {steps:,} of {config.total_timesteps:,} steps)" if steps else ""
             missing.append(f"{name} seed {seed}{unfinished}")
             continue
-        tasks = ablation_tasks(files.policy, flights.episodes, flights.env)
+        tasks = flights.tasks(files.policy)
         csv_path = flights.out / name / f"seed_{seed}.csv"
         flown = _fly(tasks, csv_path, flights.workers, flights.report_only, f"{name} seed {seed}")
         if len(flown) < flights.episodes:
@@ -191,7 +214,7 @@ def _evaluations_file(files: RunFiles) -> Path | None:
 def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> dict[str, Any] | None:
     """Fly a reactive reference agent; its report row, or None (and a line in ``missing``) while short of
     episodes."""
-    tasks = ablation_tasks(None, flights.episodes, flights.env, agent=agent)
+    tasks = flights.tasks(None, agent=agent)
     reference_csv = flights.out / "reference" / f"{agent}.csv"
     if not flights.report_only:
         set_aside_stale_episodes(tasks, reference_csv, f"{agent}'s parameters have changed; flying it anew")
@@ -269,18 +292,20 @@ def ablation_values(
     rows: list[dict[str, Any]],
     missing: list[str],
     seeds: Sequence[int],
-    episodes: int,
     command: str,
     env: dict[str, Any],
     curves: bool,
+    flights: _Flights,
+    tier: str | None = None,
 ) -> dict[str, Any]:
     """Every value ``ablation.md`` words (``templates/ablation.md.j2``)."""
+    condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
     return {
         "generated": today(),
         "command": command,
-        "first_layout": ABLATION_SEED_START,
-        "last_layout": ABLATION_SEED_START + episodes - 1,
-        "condition": ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors",
+        "first_layout": flights.first_layout,
+        "last_layout": flights.first_layout + flights.episodes - 1,
+        "condition": f"tier `{tier}`, {flights.env_id}" if tier else condition,
         "seeds": list(seeds),
         "rows": rows,
         "missing": missing,

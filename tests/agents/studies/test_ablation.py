@@ -11,7 +11,13 @@ import pytest
 from helpers import tiny_train_config
 
 from agents.cli import main
-from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.common.seeds import (
+    ABLATION_SEED_START,
+    STUDENT_RECIPE_SEED_START,
+    TEST_SEED_START,
+    TIER_VALIDATION_SEEDS,
+    VALIDATION_SEED_START,
+)
 from agents.evaluation.records import read_records
 from agents.policies import REACTIVE_AGENTS
 from agents.studies.ablation import ablation_tasks, compare_configs, seed_files
@@ -28,6 +34,32 @@ def test_ablation_layouts_are_validation_layouts() -> None:
         match=r"--episodes must be in \[1, 100000\] \(validation layouts from 900,000\), got 100001",
     ):
         ablation_tasks(Path("p.zip"), 100_001)
+
+
+def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> None:
+    tasks = ablation_tasks(
+        Path("p.zip"), 2, env_id="FlowNavHard-v0", first_layout=STUDENT_RECIPE_SEED_START
+    )
+    assert {t.env_id for t in tasks} == {"FlowNavHard-v0"}
+    assert [t.seed for t in tasks] == [STUDENT_RECIPE_SEED_START, STUDENT_RECIPE_SEED_START + 1]
+    assert tasks[-1].seed in TIER_VALIDATION_SEEDS
+    out = tmp_path / "hard"
+    lines = compare_configs([], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard")
+    row = read_records(out / "reference" / "straight.csv")[0]
+    assert row["env_id"] == "FlowNavHard-v0" and row["seed"] == STUDENT_RECIPE_SEED_START
+    assert f"validation layouts {STUDENT_RECIPE_SEED_START:,}–{STUDENT_RECIPE_SEED_START:,} (tier `hard`, FlowNavHard-v0)" in "\n".join(lines)
+
+
+@pytest.mark.parametrize(
+    ("tier", "env", "message"),
+    [
+        ("steep", {}, r"^tier must be one of clean, hard, noisy, hard_noisy, got 'steep'$"),
+        ("hard", {"obstacle_density": 0.2}, r"^--env and --tier hard: a tier fixes its own settings"),
+    ],
+)
+def test_a_bad_tier_or_a_tier_with_env_settings_is_refused(tmp_path: Path, tier, env, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        compare_configs([], [0], tmp_path / "out", episodes=1, workers=1, env=env, tier=tier)
 
 
 def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tmp_path: Path) -> None:

@@ -37,6 +37,7 @@ from agents.evaluation.suite_page import (
     SENSOR_READING_DIR,
     rank_suite,
     reading_values,
+    student_recipe_reports,
     suite_page,
     suite_values,
     tier_failures,
@@ -392,6 +393,7 @@ def run_suite(
         readings=reading_values(out / SENSOR_READING_DIR),
         bounds=suite_bounds(failures, bests, seeds),
         gains=learning_gains(failures, rankings),
+        recipe_reports=student_recipe_reports(out),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

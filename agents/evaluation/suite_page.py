@@ -28,6 +28,8 @@ from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier
 # episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).
 SENSOR_READING_DIR = "sensor_reading"
 SUITE_READING = "per_axis"
+# Where recipes for the planner's student are compared per tier (flownav ablation --tier), beside the suite.
+STUDENT_RECIPES_DIR = "student_recipes"
 
 
 def tier_failures(
@@ -140,6 +142,7 @@ def suite_values(
     readings: Sequence[Mapping[str, Any]] = (),
     bounds: Mapping[str, Mapping[str, Any]] | None = None,
     gains: Sequence[LearningGain] = (),
+    recipe_reports: Mapping[str, str] | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -178,6 +181,17 @@ def suite_values(
         "reading_dir": SENSOR_READING_DIR,
         "gains": list(gains),
         "trained_on": {gain.learned: _trained_on(gain.learned) for gain in gains},
+        "recipe_reports": dict(recipe_reports or {}),
+    }
+
+
+def student_recipe_reports(out: Path) -> dict[str, str]:
+    """Per tier, the comparison of recipes for the planner's student on its validation layouts, where
+    ``flownav ablation --tier <tier> --out <out>/student_recipes/<tier>`` wrote one: its path from ``out``."""
+    return {
+        name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md"
+        for name in TIER_NAMES
+        if (Path(out) / STUDENT_RECIPES_DIR / name / "ablation.md").is_file()
     }
 
 

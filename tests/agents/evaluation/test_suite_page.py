@@ -10,7 +10,13 @@ import pytest
 
 from agents.common.seeds import suite_seeds
 from agents.evaluation.paired import MIN_RANKED_SEEDS
-from agents.evaluation.suite_page import rank_suite, suite_page, suite_values
+from agents.evaluation.suite_page import (
+    STUDENT_RECIPES_DIR,
+    rank_suite,
+    student_recipe_reports,
+    suite_page,
+    suite_values,
+)
 from agents.evaluation.suite_report import SUMMARY_COLUMNS
 from flownav_env.tiers import TIERS
 
@@ -149,3 +155,17 @@ def test_a_tier_flown_only_by_references_has_no_ranking() -> None:
     matrices = {"planner": np.zeros((1, 60))}
     table = [_row("planner", "hard", matrices["planner"], privileged=True)]
     assert rank_suite(table, {"hard": matrices}) == {}
+
+
+def test_the_student_recipe_comparisons_beside_the_suite_are_linked(tmp_path) -> None:
+    assert student_recipe_reports(tmp_path) == {}
+    report = tmp_path / STUDENT_RECIPES_DIR / "hard" / "ablation.md"
+    report.parent.mkdir(parents=True)
+    report.write_text("# Ablations\n")
+    (tmp_path / STUDENT_RECIPES_DIR / "noisy").mkdir()  # a folder without its report is not linked
+    links = student_recipe_reports(tmp_path)
+    assert links == {"hard": "student_recipes/hard/ablation.md"}
+    text = suite_page(_values([]) | {"recipe_reports": links})
+    assert "Recipes tried for the planner's flow student" in text
+    assert "[`hard`](student_recipes/hard/ablation.md)." in text
+    assert "Recipes tried" not in suite_page(_values([]))

@@ -393,7 +393,7 @@ def run_suite(
         readings=reading_values(out / SENSOR_READING_DIR),
         bounds=suite_bounds(failures, bests, seeds),
         gains=learning_gains(failures, rankings),
-        recipe_reports=student_recipe_reports(out),
+        recipe_reports=student_recipe_reports(tier_names),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

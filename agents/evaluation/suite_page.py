@@ -185,14 +185,11 @@ def suite_values(
     }
 
 
-def student_recipe_reports(out: Path) -> dict[str, str]:
-    """Per tier, the comparison of recipes for the planner's student on its validation layouts, where
-    ``flownav ablation --tier <tier> --out <out>/student_recipes/<tier>`` wrote one: its path from ``out``."""
-    return {
-        name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md"
-        for name in TIER_NAMES
-        if (Path(out) / STUDENT_RECIPES_DIR / name / "ablation.md").is_file()
-    }
+def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:
+    """Per tier, where ``flownav ablation --tier <tier> --out results/student_recipes/<tier>`` compares recipes
+    for the planner's student on the tier's validation layouts, relative to ``results/`` (as every link of
+    ``suite.md``; the suite's report lives there)."""
+    return {name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md" for name in tier_names}
 
 
 def suite_page(values: Mapping[str, Any]) -> str:

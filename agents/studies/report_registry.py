@@ -24,6 +24,7 @@ from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
+from flownav_env.tiers import TIER_NAMES
 
 
 @dataclass(frozen=True)
@@ -82,20 +83,24 @@ def _ablation(
     configs: Sequence[str],
     episodes: int,
     env: Mapping[str, Any],
+    seeds: Sequence[int] = range(5),
+    reference: Sequence[str] = ("bee_robust", "bee_ttc"),
+    tier: str | None = None,
 ) -> None:
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.
     with tempfile.TemporaryDirectory(prefix="flownav-no-runs-") as no_runs:
         compare_configs(
             [REPO_ROOT / config for config in configs],
-            ABLATION_SEEDS,
+            seeds,
             folder,
             runs_dir=Path(no_runs),
             episodes=episodes,
             report_only=True,
             command=report.command,
-            reference_agents=ABLATION_REFERENCE,
+            reference_agents=reference,
             env=env,
+            tier=tier,
         )
 
 
@@ -124,8 +129,6 @@ BENCHMARK_INPUTS = (
 )
 
 
-ABLATION_SEEDS = range(5)
-ABLATION_REFERENCE = ("bee_robust", "bee_ttc")
 _LEVERS = tuple(
     f"configs/experiments/ppo_flow_{lever}.yaml"
     for lever in (
@@ -141,18 +144,33 @@ _LEVERS = tuple(
 )
 _CLEAN_ABLATION = ("configs/ppo_flow.yaml", "configs/ppo_oracle.yaml", "configs/ppo_robust.yaml", *_LEVERS)
 _CONDITION_ABLATION = ("configs/ppo_flow.yaml", *_LEVERS)
+# Recipes tried for the planner's flow student (flownav ablation --tier), the shipped one first.
+STUDENT_RECIPES = tuple(
+    f"configs/experiments/ppo_flow_planner_student{variant}.yaml" for variant in ("", "_wide", "_finetune")
+)
 
 
-def _ablation_report(folder: str, configs: Sequence[str], episodes: int, env: Mapping[str, Any]) -> Report:
+def _ablation_report(
+    folder: str,
+    configs: Sequence[str],
+    episodes: int,
+    env: Mapping[str, Any],
+    seeds: Sequence[int] = range(5),
+    reference: Sequence[str] = ("bee_robust", "bee_ttc"),
+    tier: str | None = None,
+) -> Report:
     """An ``ablation.md``, its command written from the same settings the writer is called with."""
     options = f" --episodes {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
+    options += f" --tier {tier}" if tier else ""
     return Report(
         f"{folder}/ablation.md",
         name=folder.replace("/", "-").replace("_", "-"),
-        command=f"flownav ablation --configs {' '.join(configs)} --seeds 0-4 "
-        f"--reference {','.join(ABLATION_REFERENCE)}{options} --out results/{folder} --report-only",
+        command=f"flownav ablation --configs {' '.join(configs)} --seeds {','.join(map(str, seeds))} "
+        f"--reference {','.join(reference)}{options} --out results/{folder} --report-only",
         inputs=(f"{folder}/*/seed_*.csv", f"{folder}/reference/*.csv"),
-        write=partial(_ablation, configs=configs, episodes=episodes, env=env),
+        write=partial(
+            _ablation, configs=configs, episodes=episodes, env=env, seeds=seeds, reference=reference, tier=tier
+        ),
     )
 
 
@@ -196,6 +214,10 @@ REPORTS: tuple[Report, ...] = (
     _ablation_report("ablation", _CLEAN_ABLATION, 100, {}),
     _ablation_report("ablation/density_0.18", _CONDITION_ABLATION, 50, {"obstacle_density": 0.18}),
     _ablation_report("ablation/speed_1.5", _CONDITION_ABLATION, 50, {"forward_speed": 1.5}),
+    *(
+        _ablation_report(f"student_recipes/{name}", STUDENT_RECIPES, 50, {}, (0, 1), ("bee_ttc",), name)
+        for name in TIER_NAMES
+    ),
     Report(
         "suite_calibration/calibration.md",
         name="calibrate-tiers",

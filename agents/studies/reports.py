@@ -21,12 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from agents.common.locations import RESULTS_DIR
-from agents.studies.report_registry import (  # noqa: F401  (the registry, re-exported)
-    ABLATION_REFERENCE,
-    ABLATION_SEEDS,
-    REPORTS,
-    Report,
-)
+from agents.studies.report_registry import REPORTS, Report
 
 # Lines of a report's preamble that record how it was made, not what it says: every writer but the sweep's puts
 # the date, command, commit and machine on one "Generated ..." line; the sweep's header

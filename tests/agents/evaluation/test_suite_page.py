@@ -157,15 +157,13 @@ def test_a_tier_flown_only_by_references_has_no_ranking() -> None:
     assert rank_suite(table, {"hard": matrices}) == {}
 
 
-def test_the_student_recipe_comparisons_beside_the_suite_are_linked(tmp_path) -> None:
-    assert student_recipe_reports(tmp_path) == {}
-    report = tmp_path / STUDENT_RECIPES_DIR / "hard" / "ablation.md"
-    report.parent.mkdir(parents=True)
-    report.write_text("# Ablations\n")
-    (tmp_path / STUDENT_RECIPES_DIR / "noisy").mkdir()  # a folder without its report is not linked
-    links = student_recipe_reports(tmp_path)
-    assert links == {"hard": "student_recipes/hard/ablation.md"}
+def test_each_tiers_comparison_of_recipes_for_the_student_is_linked() -> None:
+    links = student_recipe_reports(["hard", "noisy"])
+    assert links == {
+        "hard": f"{STUDENT_RECIPES_DIR}/hard/ablation.md",
+        "noisy": f"{STUDENT_RECIPES_DIR}/noisy/ablation.md",
+    }
     text = suite_page(_values([]) | {"recipe_reports": links})
     assert "Recipes tried for the planner's flow student" in text
-    assert "[`hard`](student_recipes/hard/ablation.md)." in text
+    assert "[`hard`](student_recipes/hard/ablation.md), [`noisy`](student_recipes/noisy/ablation.md)." in text
     assert "Recipes tried" not in suite_page(_values([]))

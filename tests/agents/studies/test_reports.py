@@ -179,9 +179,10 @@ def test_each_command_is_a_valid_report_only_call_that_writes_where_the_report_l
     assert Path(args.out) == Path("results") / Path(report.path).parent
     if hasattr(args, "report_only"):
         assert args.report_only, report.command
-    if report.name.startswith("ablation"):
+    if report.name.startswith(("ablation", "student-recipes")):
         write = report.write
         assert [str(path) for path in args.configs] == list(write.keywords["configs"])
         assert args.episodes == write.keywords["episodes"] and dict(args.env) == write.keywords["env"]
-        assert parse_seeds(args.seeds) == list(reports.ABLATION_SEEDS)
-        assert args.reference == ",".join(reports.ABLATION_REFERENCE)
+        assert parse_seeds(args.seeds) == list(write.keywords["seeds"])
+        assert args.reference == ",".join(write.keywords["reference"])
+        assert args.tier == write.keywords["tier"]

@@ -32,6 +32,7 @@ from agents.evaluation.episode_tasks import (
     rows_of,
     set_aside_stale_episodes,
 )
+from agents.evaluation.paired import compare
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.policies.base import REACTIVE_AGENTS
@@ -133,6 +134,10 @@ def compare_configs(
         row = _fly_reference(agent, flights, missing)
         if row is not None:
             rows.append(row)
+    for row in rows:
+        # Paired by layout (every row flew the same ones), each row's runs resampled on their own.
+        first = rows[0]
+        row["versus_first"] = None if row is first else compare("", row["failures"], "", first["failures"])
     if curves:
         plot_grouped_learning_curves(
             curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
@@ -222,7 +227,8 @@ def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> dict[st
     if len(flown) < flights.episodes:
         missing.append(f"{agent} ({len(flown)} of {flights.episodes} episodes)")
         return None
-    return _reference_row(agent, flown)
+    by_seed = {int(r["seed"]): r for r in flown}
+    return _reference_row(agent, [by_seed[task.seed] for task in tasks])
 
 
 def seed_files(
@@ -258,6 +264,7 @@ def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[st
         "collision": counts["collision"] / total,
         "out_of_bounds": counts["out_of_bounds"] / total,
         "per_seed": per_seed,
+        "failures": 1.0 - outcomes,
     }
 
 
@@ -285,6 +292,7 @@ def _reference_row(agent: str, flown: list[dict[str, Any]]) -> dict[str, Any]:
         "collision": sum(bool(row["collision"]) for row in flown) / total,
         "out_of_bounds": sum(bool(row["out_of_bounds"]) for row in flown) / total,
         "per_seed": None,
+        "failures": np.array([[0.0 if row["success"] else 1.0 for row in flown]]),
     }
 
 

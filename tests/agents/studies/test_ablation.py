@@ -7,6 +7,7 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 from helpers import tiny_train_config
 
@@ -37,9 +38,7 @@ def test_ablation_layouts_are_validation_layouts() -> None:
 
 
 def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> None:
-    tasks = ablation_tasks(
-        Path("p.zip"), 2, env_id="FlowNavHard-v0", first_layout=STUDENT_RECIPE_SEED_START
-    )
+    tasks = ablation_tasks(Path("p.zip"), 2, env_id="FlowNavHard-v0", first_layout=STUDENT_RECIPE_SEED_START)
     assert {t.env_id for t in tasks} == {"FlowNavHard-v0"}
     assert [t.seed for t in tasks] == [STUDENT_RECIPE_SEED_START, STUDENT_RECIPE_SEED_START + 1]
     assert tasks[-1].seed in TIER_VALIDATION_SEEDS
@@ -47,7 +46,10 @@ def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> N
     lines = compare_configs([], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard")
     row = read_records(out / "reference" / "straight.csv")[0]
     assert row["env_id"] == "FlowNavHard-v0" and row["seed"] == STUDENT_RECIPE_SEED_START
-    assert f"validation layouts {STUDENT_RECIPE_SEED_START:,}–{STUDENT_RECIPE_SEED_START:,} (tier `hard`, FlowNavHard-v0)" in "\n".join(lines)
+    assert (
+        f"validation layouts {STUDENT_RECIPE_SEED_START:,}–{STUDENT_RECIPE_SEED_START:,} (tier `hard`, FlowNavHard-v0)"
+        in "\n".join(lines)
+    )
 
 
 @pytest.mark.parametrize(
@@ -197,3 +199,28 @@ def test_a_condition_flies_every_run_and_reference_with_its_env_settings(tmp_pat
     with pytest.raises(SystemExit):
         main([*command[:3], "--env", "density", "--out", str(out)])
     assert "argument --env: expected KEY=VALUE, got 'density'" in capsys.readouterr().err
+
+
+def test_each_row_is_compared_with_the_first_on_the_same_layouts(tmp_path: Path) -> None:
+    from agents.evaluation.paired import compare
+
+    out = tmp_path / "two"
+    lines = compare_configs([], [0], out, episodes=2, workers=1, reference_agents=["straight", "bee_ttc"])
+    text = "\n".join(lines)
+    assert "| failure per seed | − straight (reactive, reference), paired [95 % CI] |" in text
+    assert "only an interval that excludes zero tells the two apart" in text
+    failures = {
+        agent: np.array(
+            [
+                [
+                    0.0 if r["success"] else 1.0
+                    for r in sorted(read_records(out / "reference" / f"{agent}.csv"), key=lambda r: r["seed"])
+                ]
+            ]
+        )
+        for agent in ("straight", "bee_ttc")
+    }
+    expected = compare("", failures["bee_ttc"], "", failures["straight"])
+    row = next(line for line in lines if line.startswith("| bee_ttc"))
+    assert row.endswith(f"| {expected.difference:+.3f} [{expected.low:+.3f}, {expected.high:+.3f}] |")
+    assert next(line for line in lines if line.startswith("| straight")).endswith("| - |")

@@ -29,7 +29,7 @@ class PlannerTeacher:
 
     privileged_settings: Mapping[str, Any] = PLANNER_ENV_KWARGS["planner"]
 
-    def __init__(self, params: Mapping[str, float] | None = None) -> None:
+    def __init__(self, params: Mapping[str, Any] | None = None) -> None:
         self.params = dict(params or {})
         self.planners: list[PlannerAgent] = []
         PlannerAgent(**self.params)  # checks the parameters now, not at the first step
@@ -56,7 +56,7 @@ class PlannerTeacher:
 
 
 def check_teacher(
-    name: str, env: Mapping[str, Any], source: str, params: Mapping[str, float] | None = None
+    name: str, env: Mapping[str, Any], source: str, params: Mapping[str, Any] | None = None
 ) -> None:
     """Check that ``name`` can teach a run whose env is made with ``env`` (a config's ``env`` section), with its
     own parameters ``params`` (a config's ``imitation.teacher_params``).
@@ -82,30 +82,32 @@ def check_teacher(
             )
 
 
-def check_teacher_params(name: str, params: Mapping[str, float], source: str) -> None:
+def check_teacher_params(name: str, params: Mapping[str, Any], source: str) -> None:
     """Raise ValueError unless ``params`` are parameters of teacher ``name``: the planner's fields, each a
-    number in its range; a rule flies its shipped gains and takes none."""
+    number (an integer where the field counts) in its range; a rule flies its shipped gains and takes none."""
     if params and name not in PLANNERS:
         raise ValueError(
             f"{source}: key 'imitation.teacher_params' sets the planner teacher's parameters; {name!r} flies its "
             f"shipped gains and takes none, got {sorted(params)}"
         )
-    allowed = [item.name for item in fields(PlannerAgent)]
+    defaults = {item.name: item.default for item in fields(PlannerAgent)}
     for key, value in params.items():
-        if key not in allowed:
+        if key not in defaults:
             raise ValueError(
                 f"{source}: key 'imitation.teacher_params.{key}' is not a planner parameter; allowed: "
-                f"{', '.join(allowed)}"
+                f"{', '.join(defaults)}"
             )
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be a number, got {value!r}")
+        kind = int if isinstance(defaults[key], int) else int | float
+        if isinstance(value, bool) or not isinstance(value, kind):
+            what = "an integer" if kind is int else "a number"
+            raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be {what}, got {value!r}")
     try:
         PlannerAgent(**params)
     except ValueError as error:
         raise ValueError(f"{source}: key 'imitation.teacher_params': {error}") from error
 
 
-def make_teacher(name: str, params: Mapping[str, float] | None = None) -> Agent:
+def make_teacher(name: str, params: Mapping[str, Any] | None = None) -> Agent:
     """The teacher agent ``name``: a rule with its shipped gains, or the planner (with ``params`` on its
     defaults) over a batch of envs (a module-level function, so a training job that carries it pickles)."""
     check_teacher_params(name, params or {}, "teacher")

@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,13 +30,11 @@ from tqdm import tqdm
 
 from agents.studies.perf.report_kit import median
 from agents.training.envs import build_envs, close_quietly
-from agents.training.imitation import fit, fly
+from agents.training.imitation import TeacherFactory, fit, fly
 from agents.training.ppo import new_model
 from agents.training.student_view import privileged_settings
 from agents.training.train_config import TrainConfig
 
-# Makes the teacher agent a training config names (agents.policies.teachers.make_teacher).
-TeacherFactory = Callable[[str, Mapping[str, float]], Any]
 # The kinds of work a seed does, each timed on its own.
 KINDS = ("startup", "ppo", "evaluation", "teacher")
 

@@ -118,6 +118,7 @@ def test_the_planner_teacher_flies_the_parameters_a_config_gives_it() -> None:
          r"got 'wide'"),
         ("planner", {"hard_margin": -0.1}, r"run.yaml: key 'imitation.teacher_params': hard_margin must be > 0, "
          r"got -0.1"),
+        ("planner", {"commands": 9.5}, r"'imitation.teacher_params.commands' must be an integer, got 9.5"),
         ("bee_ttc", {"soft_clearance": 0.8}, r"sets the planner teacher's parameters; 'bee_ttc' flies its shipped "
          r"gains and takes none, got \['soft_clearance'\]"),
     ],

@@ -18,6 +18,7 @@ Sub-ranges with one use each:
 | planner tuning (validation) | ``PLANNER_TUNING_SEED_START ..`` | tuning the privileged ``planner`` and measuring its failure per tier |
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | student recipes (validation) | ``STUDENT_RECIPE_SEED_START ..`` | recipes for the planner's student compared per tier (``flownav ablation --tier``) |
+| lane check (validation) | ``LANE_SEED_START ..`` | whether agents leave the capsule field for the free lane beside it (``agents/evaluation/lane.py``) |
 | suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -60,6 +61,9 @@ STUDENT_CHECK_SEED_START = 960_000
 # Validation layouts on which recipes for that student are compared per tier (flownav ablation --tier): past the
 # first check's 100.
 STUDENT_RECIPE_SEED_START = 960_100
+# Validation layouts on which every agent is flown once per tier to see whether it leaves the capsule field for the
+# free lane beside it (agents/evaluation/lane.py): past the student recipes' 100.
+LANE_SEED_START = 960_200
 # The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
 SUITE_SEED_START = 2_000_000
 SUITE_LAYOUTS = 300

@@ -53,6 +53,9 @@ class EpisodeRecord:
     mean_depth_outlier_share: float = math.nan
     # The benchmark suite's version (flownav_env.tiers.SUITE_VERSION) for episodes of the suite, else "".
     suite_version: str = ""
+    # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
+    # free lane beside it (agents/evaluation/lane.py); NaN in files written before it was recorded.
+    max_abs_lateral_m: float = math.nan
 
 
 def run_episode(
@@ -67,7 +70,7 @@ def run_episode(
     """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
     observation, info = env.reset(seed=seed)
     position = np.array([0.0, 0.0, 0.0])
-    path_length, total_return, steps = 0.0, 0.0, 0
+    path_length, total_return, steps, widest = 0.0, 0.0, 0, 0.0
     valid_points, depth_errors, outlier_shares = [], [], []
     terminated = truncated = False
     # As SB3's evaluate_policy: an agent with memory gets its state back and is told where an episode starts.
@@ -84,6 +87,7 @@ def run_episode(
         if steps > 1:
             path_length += float(np.linalg.norm(new_position - position))
         position = new_position
+        widest = max(widest, abs(float(position[1])))
         valid_points.append(info["points_valid"])
         if "depth_error_median" in info:
             depth_errors.append(info["depth_error_median"])
@@ -107,4 +111,5 @@ def run_episode(
         median_depth_error=float(np.median(depth_errors)) if depth_errors else math.nan,
         episode_return=float(total_return),
         mean_depth_outlier_share=float(np.mean(outlier_shares)) if outlier_shares else math.nan,
+        max_abs_lateral_m=widest,
     )

@@ -39,7 +39,7 @@ CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
 # Columns added since identities, last in the record, oldest first: a file written before one of them keeps its
 # own columns when episodes are appended (the newer values are then unknown, None on reading), so resuming never
 # re-flies. EARLIER_CSV_FIELDS[k] is the header of files from before ADDED_FIELDS[k].
-ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version")
+ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version", "max_abs_lateral_m")
 EARLIER_CSV_FIELDS = [
     [name for name in CSV_FIELDS if name not in ADDED_FIELDS[since:]] for since in range(len(ADDED_FIELDS))
 ]

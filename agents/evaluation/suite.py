@@ -34,10 +34,8 @@ from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
 from agents.evaluation.suite_page import (
-    SENSOR_READING_DIR,
+    beside_suite,
     rank_suite,
-    reading_values,
-    student_recipe_reports,
     suite_page,
     suite_values,
     tier_failures,
@@ -390,10 +388,9 @@ def run_suite(
         machine=machine_summary(),
         missing=missing,
         generated=today(),
-        readings=reading_values(out / SENSOR_READING_DIR),
         bounds=suite_bounds(failures, bests, seeds),
         gains=learning_gains(failures, rankings),
-        recipe_reports=student_recipe_reports(tier_names),
+        **beside_suite(out, tier_names),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

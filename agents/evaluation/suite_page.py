@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from agents.common.jinja_reports import render
+from agents.common.seeds import LANE_SEED_START
+from agents.evaluation.lane import LANE_DIR, lane_values
 from agents.evaluation.learning_gain import LearningGain
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
@@ -143,6 +145,7 @@ def suite_values(
     bounds: Mapping[str, Mapping[str, Any]] | None = None,
     gains: Sequence[LearningGain] = (),
     recipe_reports: Mapping[str, str] | None = None,
+    lanes: Sequence[Mapping[str, Any]] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -182,6 +185,19 @@ def suite_values(
         "gains": list(gains),
         "trained_on": {gain.learned: _trained_on(gain.learned) for gain in gains},
         "recipe_reports": dict(recipe_reports or {}),
+        "lanes": list(lanes),
+        "lane_dir": LANE_DIR,
+        "lane_seed": LANE_SEED_START,
+    }
+
+
+def beside_suite(out: Path, tier_names: Sequence[str]) -> dict[str, Any]:
+    """What ``suite.md`` reports from flights and reports kept beside it in ``out``: the noisy tier at other
+    readings, the student's recipes per tier, and the capsule-free lane (:func:`suite_values`' arguments)."""
+    return {
+        "readings": reading_values(Path(out) / SENSOR_READING_DIR),
+        "recipe_reports": student_recipe_reports(tier_names),
+        "lanes": lane_values(Path(out) / LANE_DIR),
     }
 
 

@@ -66,7 +66,8 @@ def test_rows_round_trip_with_their_identity_and_checksum(tmp_path: Path) -> Non
 def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     # Committed leaderboard, ablation and tuning CSVs predate mean_depth_outlier_share: resuming into them must
     # neither be refused nor fly their episodes again.
-    assert [*PREVIOUS_CSV_FIELDS[:-1], "mean_depth_outlier_share", "suite_version", "row_crc"] == CSV_FIELDS
+    added = ["mean_depth_outlier_share", "suite_version", "max_abs_lateral_m"]
+    assert [*PREVIOUS_CSV_FIELDS[:-1], *added, "row_crc"] == CSV_FIELDS
     append_record(tmp_path / "new.csv", replace(RECORD, mean_depth_outlier_share=0.25))
     assert read_records(tmp_path / "new.csv")[0]["mean_depth_outlier_share"] == 0.25
     old = tmp_path / "old.csv"
@@ -83,7 +84,7 @@ def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp
 
 def test_a_file_from_before_the_suite_version_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     before_suite = EARLIER_CSV_FIELDS[1]
-    assert before_suite == [name for name in CSV_FIELDS if name != "suite_version"]
+    assert before_suite == [name for name in CSV_FIELDS if name not in ("suite_version", "max_abs_lateral_m")]
     old = tmp_path / "old.csv"
     values = [str(getattr(RECORD, name)) for name in before_suite[:-1]]
     old.write_text(",".join(before_suite) + "\r\n" + sealed_line(values), newline="")
@@ -95,6 +96,19 @@ def test_a_file_from_before_the_suite_version_keeps_its_columns_when_resumed(tmp
     append_record(tmp_path / "new.csv", replace(RECORD, suite_version="1"))
     assert read_records(tmp_path / "new.csv")[0]["suite_version"] == "1"
     assert rows[1]["env_kwargs"] == RECORD.env_kwargs
+
+
+def test_a_suite_file_from_before_the_lateral_extent_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
+    before_lateral = EARLIER_CSV_FIELDS[2]
+    assert before_lateral == [name for name in CSV_FIELDS if name != "max_abs_lateral_m"]
+    old = tmp_path / "suite.csv"
+    values = [str(getattr(RECORD, name)) for name in before_lateral[:-1]]
+    old.write_text(",".join(before_lateral) + "\r\n" + sealed_line(values), newline="")
+    assert append_record(old, replace(RECORD, seed=1_000_001, max_abs_lateral_m=4.8))
+    assert old.read_text().splitlines()[0] == ",".join(before_lateral)
+    assert [r["max_abs_lateral_m"] for r in read_records(old)] == [None, None]  # unknown in that format
+    append_record(tmp_path / "new.csv", replace(RECORD, max_abs_lateral_m=4.8))
+    assert read_records(tmp_path / "new.csv")[0]["max_abs_lateral_m"] == 4.8
 
 
 def test_a_torn_last_row_is_skipped_wherever_it_was_cut(tmp_path: Path) -> None:

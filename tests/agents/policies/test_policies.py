@@ -41,6 +41,8 @@ def test_bee_passes_the_single_capsule_where_straight_collides() -> None:
     assert straight.collision and not straight.success
     assert bee.success and not bee.collision
     assert bee.min_clearance_m > 0.2
+    # Straight flies the axis; bee slides sideways around the capsule, and the record keeps how far.
+    assert straight.max_abs_lateral_m < 0.05 < bee.max_abs_lateral_m < 6.0
 
 
 def test_agents_accept_batched_observations_like_sb3() -> None:

@@ -1,0 +1,51 @@
+"""The capsule-free lane beside every field: a tier's capsules stand within ``field_width / 2`` of the course
+axis, while out of bounds starts only at ``lateral_bound``, so a strip free of capsules runs along each side. An
+agent that drifts there instead of weaving would pass a tier without avoiding anything.
+
+This counts, per agent and tier, the episodes whose drone went farther sideways than any capsule's surface
+reaches (``field_width / 2 + obstacle_radius``), from flights that record ``max_abs_lateral_m``: one run per
+agent on validation layouts from :data:`~agents.common.seeds.LANE_SEED_START`, flown by ``flownav evaluate``
+into ``results/lane/<agent>_<tier>.csv``. Suite v1's own episodes predate that field.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from agents.evaluation.records import read_records
+from flownav_env.tiers import TIER_NAMES, TIERS, tier_value
+
+# Where the lane flights lie, beside the suite's report.
+LANE_DIR = "lane"
+
+
+def lane_edge(tier_name: str) -> float:
+    """How far sideways (m) a drone of ``tier_name`` is past every capsule surface: the lane's inner edge."""
+    return float(tier_value(tier_name, "field_width")) / 2.0 + float(tier_value(tier_name, "obstacle_radius"))
+
+
+def lane_values(folder: Path) -> list[dict[str, Any]]:
+    """Per (agent, tier) flown into ``folder``'s CSVs, in agent then tier order: the episodes that recorded
+    their sideways extent, how many entered the lane, the farthest one (m), and the lane's edges (m)."""
+    tiers_by_env = {spec.env_id: name for name, spec in TIERS.items()}
+    extents: dict[tuple[str, str], list[float]] = {}
+    for path in sorted(Path(folder).glob("*.csv")):
+        for row in read_records(path):
+            extent = row.get("max_abs_lateral_m")
+            if row["env_id"] in tiers_by_env and extent is not None and not math.isnan(extent):
+                extents.setdefault((row["agent"], tiers_by_env[row["env_id"]]), []).append(float(extent))
+    order = {name: index for index, name in enumerate(TIER_NAMES)}
+    return [
+        {
+            "agent": agent,
+            "tier": name,
+            "episodes": len(found),
+            "entered": sum(extent > lane_edge(name) for extent in found),
+            "widest": max(found),
+            "edge": lane_edge(name),
+            "bound": float(tier_value(name, "lateral_bound")),
+        }
+        for (agent, name), found in sorted(extents.items(), key=lambda item: (item[0][0], order[item[0][1]]))
+    ]

@@ -1,0 +1,84 @@
+"""The capsule-free lane: its edge per tier, the count of episodes past it per agent and tier from flights that
+record how far sideways they went, and suite.md's section in both verdicts."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.lane import lane_edge, lane_values
+from agents.evaluation.records import append_record
+from agents.evaluation.suite_page import beside_suite, suite_page, suite_values
+from flownav_env.tiers import TIERS, tier_value
+
+RECORD = EpisodeRecord(
+    agent="bee_ttc",
+    factor="clean",
+    level=0.0,
+    seed=960_200,
+    collision=False,
+    success=True,
+    out_of_bounds=False,
+    truncated=False,
+    progress_m=20.0,
+    time_s=20.0,
+    steps=200,
+    min_clearance_m=0.3,
+    path_length_m=20.5,
+    mean_points_valid=100.0,
+    median_depth_error=0.05,
+    episode_return=30.0,
+    env_id="FlowNav-v0",
+    max_abs_lateral_m=1.0,
+)
+
+
+def _page(lanes: list) -> str:
+    """suite.md with no agent flown, the lane rows ``lanes`` beside it."""
+    return suite_page(
+        suite_values(
+            [], {}, command="c", layouts=range(1), machine="m", missing=[], generated="today", lanes=lanes
+        )
+    )
+
+
+@pytest.mark.parametrize("name", sorted(TIERS))
+def test_the_lane_starts_past_every_capsule_surface_and_inside_the_bounds(name: str) -> None:
+    edge = float(tier_value(name, "field_width")) / 2 + float(tier_value(name, "obstacle_radius"))
+    assert lane_edge(name) == pytest.approx(edge)
+    assert lane_edge(name) < float(tier_value(name, "lateral_bound"))
+
+
+def test_episodes_past_the_edge_are_counted_per_agent_and_tier(tmp_path: Path) -> None:
+    folder = tmp_path / "lane"
+    folder.mkdir()
+    clean, hard = folder / "bee_ttc_clean.csv", folder / "bee_ttc_hard.csv"
+    append_record(clean, RECORD)
+    append_record(clean, replace(RECORD, seed=960_201, max_abs_lateral_m=lane_edge("clean") + 0.1))
+    append_record(clean, replace(RECORD, seed=960_202, max_abs_lateral_m=math.nan))  # not recorded
+    append_record(hard, replace(RECORD, env_id="FlowNavHard-v0", max_abs_lateral_m=2.0))
+    append_record(folder / "other.csv", replace(RECORD, env_id="FlowNavSingle-v0", max_abs_lateral_m=9.0))
+    rows = lane_values(folder)
+    assert [(r["agent"], r["tier"], r["episodes"], r["entered"]) for r in rows] == [
+        ("bee_ttc", "clean", 2, 1),
+        ("bee_ttc", "hard", 1, 0),
+    ]
+    assert rows[0]["widest"] == pytest.approx(lane_edge("clean") + 0.1) and rows[1]["bound"] == 6.0
+    assert lane_values(tmp_path / "none") == []
+
+
+def test_the_suite_page_says_whether_any_agent_entered_the_lane(tmp_path: Path) -> None:
+    folder = tmp_path / "lane"
+    append_record(folder / "bee_ttc_clean.csv", RECORD)
+    beside = beside_suite(tmp_path, ["clean"])
+    text = _page(beside["lanes"])
+    assert "## The capsule-free lane" in text and "| `bee_ttc` | `clean` | 1 | 0 | 1.00 | 4.50 | 6.0 |" in text
+    assert "No agent entered the lane on any tier" in text
+    append_record(folder / "bee_ttc_clean.csv", replace(RECORD, seed=960_201, max_abs_lateral_m=5.0))
+    text = _page(beside_suite(tmp_path, ["clean"])["lanes"])
+    assert "Agents that entered the lane: `bee_ttc` on `clean` (1 of 2). The next suite version closes it" in text
+    assert "## The capsule-free lane" not in _page([])

@@ -259,7 +259,7 @@ REPORTS: tuple[Report, ...] = (
         "suite.md",
         name="suite",
         command="flownav suite --out results --report-only",
-        inputs=("suite_episodes.csv", "sensor_reading/*.csv"),
+        inputs=("suite_episodes.csv", "sensor_reading/*.csv", "lane/*.csv"),
         write=lambda report, folder: run_suite(
             suite_agents(), folder, report_only=True, command=report.command
         ),

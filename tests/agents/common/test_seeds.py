@@ -37,3 +37,12 @@ def test_a_tiers_validation_layouts_are_none_the_other_decisions_used() -> None:
 def test_an_unknown_tier_is_refused_naming_the_tiers() -> None:
     with pytest.raises(ValueError, match=r"tier must be one of clean, hard, noisy, hard_noisy, got 'easy'"):
         tier_seed_split("easy")
+
+
+def test_the_tier_validation_uses_take_their_own_layouts_in_turn() -> None:
+    from agents.common.seeds import LANE_SEED_START, STUDENT_RECIPE_SEED_START, TIER_VALIDATION_SEEDS
+
+    # The first check flew 100 layouts, the recipe comparisons 100 (50 used); the lane check starts past both.
+    assert STUDENT_CHECK_SEED_START + 100 == STUDENT_RECIPE_SEED_START
+    assert STUDENT_RECIPE_SEED_START + 100 == LANE_SEED_START
+    assert LANE_SEED_START in TIER_VALIDATION_SEEDS

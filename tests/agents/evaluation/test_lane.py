@@ -80,5 +80,5 @@ def test_the_suite_page_says_whether_any_agent_entered_the_lane(tmp_path: Path) 
     assert "No agent entered the lane on any tier" in text
     append_record(folder / "bee_ttc_clean.csv", replace(RECORD, seed=960_201, max_abs_lateral_m=5.0))
     text = _page(beside_suite(tmp_path, ["clean"])["lanes"])
-    assert "Agents that entered the lane: `bee_ttc` on `clean` (1 of 2). The next suite version closes it" in text
+    assert "Agents that entered the lane: `bee_ttc` on `clean` (1 of 2). An agent there flies past capsules it need not avoid" in text
     assert "## The capsule-free lane" not in _page([])

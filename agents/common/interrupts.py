@@ -37,6 +37,30 @@ def stop_signals_interrupt() -> Iterator[None]:
             signal.signal(signum, handler)
 
 
+@contextmanager
+def stop_signals_deferred() -> Iterator[None]:
+    """Within the block, a SIGINT or SIGTERM is only noted; once the block ends, the first noted one is raised
+    again, so the handler in force outside the block acts on it (within learning, :func:`stop_signals_interrupt`
+    raises ``KeyboardInterrupt``). For writes that an exception must not cut in two: torch's zip writer,
+    interrupted mid-write, fails with its own RuntimeError that hides the stop, and the run would end as failed
+    instead of saved. Outside the main thread the block runs unchanged."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[int] = []
+    previous = {signum: signal.getsignal(signum) for signum in STOP_SIGNALS}
+    for signum, handler in previous.items():
+        if handler not in (signal.SIG_IGN, None):  # an ignored signal stays ignored
+            signal.signal(signum, lambda received, _frame: noted.append(received))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    if noted:
+        signal.raise_signal(noted[0])
+
+
 def ignore_stop_signals() -> None:
     """For env worker processes: leave stopping to the main process, which closes them after saving."""
     for signum in STOP_SIGNALS:

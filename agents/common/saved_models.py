@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from agents.common.folders import naming_file, replacing_atomically
+from agents.common.interrupts import stop_signals_deferred
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
@@ -130,7 +131,8 @@ def save_atomically(model: BaseAlgorithm, path: Path) -> Path:
     path = Path(path)
     with naming_file(path):
         path.parent.mkdir(parents=True, exist_ok=True)
-    with replacing_atomically(path) as temporary:
+    # A stop that arrives mid-save takes effect once the file is whole.
+    with stop_signals_deferred(), replacing_atomically(path) as temporary:
         model.save(temporary)
     return path
 

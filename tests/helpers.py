@@ -11,6 +11,7 @@ from pathlib import Path
 import yaml
 
 from agents.common.yaml_config import load_config
+from agents.evaluation.episode import EpisodeRecord
 from agents.training.train_config import TrainConfig
 
 # The real third-party images with ground truth, in ../shared beside the repository.
@@ -46,3 +47,29 @@ def with_other_defaults(init, **defaults):
         init(self, **{**defaults, **kwargs})
 
     return patched
+
+
+# One flown episode's record, for tests of what reads and writes episodes.
+EPISODE = EpisodeRecord(
+    agent="straight",
+    factor="clean",
+    level=0.0,
+    seed=1_000_000,
+    collision=True,
+    success=False,
+    out_of_bounds=False,
+    truncated=False,
+    progress_m=3.87,
+    time_s=3.9,
+    steps=39,
+    min_clearance_m=0.19,
+    path_length_m=3.77,
+    mean_points_valid=127.9,
+    median_depth_error=0.046,
+    episode_return=-6.125,
+    env_id="FlowNavSingle-v0",
+    env_kwargs='{"camera_height":72,"camera_width":96}',
+    agent_params="{}",
+    policy_sha256="",
+    code_version="commit `abc1234`",
+)

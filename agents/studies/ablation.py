@@ -134,10 +134,9 @@ def compare_configs(
         row = _fly_reference(agent, flights, missing)
         if row is not None:
             rows.append(row)
-    for row in rows:
-        # Paired by layout (every row flew the same ones), each row's runs resampled on their own.
-        first = rows[0]
-        row["versus_first"] = None if row is first else compare("", row["failures"], "", first["failures"])
+    # Paired by layout (every row flew the same ones), each row's runs resampled on their own.
+    for index, row in enumerate(rows):
+        row["versus_first"] = compare("", row["failures"], "", rows[0]["failures"]) if index else None
     if curves:
         plot_grouped_learning_curves(
             curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"

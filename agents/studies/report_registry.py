@@ -83,9 +83,9 @@ def _ablation(
     configs: Sequence[str],
     episodes: int,
     env: Mapping[str, Any],
-    seeds: Sequence[int] = range(5),
-    reference: Sequence[str] = ("bee_robust", "bee_ttc"),
-    tier: str | None = None,
+    seeds: Sequence[int],
+    reference: Sequence[str],
+    tier: str | None,
 ) -> None:
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.

@@ -8,31 +8,21 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from helpers import EPISODE
 
-from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.lane import lane_edge, lane_values
 from agents.evaluation.records import append_record
 from agents.evaluation.suite_page import beside_suite, suite_page, suite_values
 from flownav_env.tiers import TIERS, tier_value
 
-RECORD = EpisodeRecord(
+RECORD = replace(
+    EPISODE,
     agent="bee_ttc",
-    factor="clean",
-    level=0.0,
     seed=960_200,
     collision=False,
     success=True,
-    out_of_bounds=False,
-    truncated=False,
-    progress_m=20.0,
-    time_s=20.0,
-    steps=200,
-    min_clearance_m=0.3,
-    path_length_m=20.5,
-    mean_points_valid=100.0,
-    median_depth_error=0.05,
-    episode_return=30.0,
     env_id="FlowNav-v0",
+    env_kwargs="",
     max_abs_lateral_m=1.0,
 )
 

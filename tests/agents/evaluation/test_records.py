@@ -7,9 +7,9 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from helpers import EPISODE
 
 from agents.evaluation.csv_file import LEGACY_FIELDS, sealed_line
-from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.records import (
     CSV_FIELDS,
     EARLIER_CSV_FIELDS,
@@ -21,29 +21,7 @@ from agents.evaluation.records import (
     start_new_file,
 )
 
-RECORD = EpisodeRecord(
-    agent="straight",
-    factor="clean",
-    level=0.0,
-    seed=1_000_000,
-    collision=True,
-    success=False,
-    out_of_bounds=False,
-    truncated=False,
-    progress_m=3.87,
-    time_s=3.9,
-    steps=39,
-    min_clearance_m=0.19,
-    path_length_m=3.77,
-    mean_points_valid=127.9,
-    median_depth_error=0.046,
-    episode_return=-6.125,
-    env_id="FlowNavSingle-v0",
-    env_kwargs='{"camera_height":72,"camera_width":96}',
-    agent_params="{}",
-    policy_sha256="",
-    code_version="commit `abc1234`",
-)
+RECORD = EPISODE
 LEGACY_ROW = "straight,clean,0.0,1000000,True,False,False,False,3.87,3.9,39,0.19,3.77,127.9,0.046,-6.125"
 
 

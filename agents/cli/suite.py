@@ -15,7 +15,7 @@ from pathlib import Path
 from agents.cli.arguments import add_workers_argument
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS
-from agents.policies import AGENT_NAMES
+from agents.policies import SUITE_AGENTS
 from flownav_env.tiers import TIER_NAMES
 
 HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
@@ -43,8 +43,8 @@ def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--agents",
-        default=",".join(AGENT_NAMES),
-        help=f"comma-separated agents, flown in this order (default: all, {', '.join(AGENT_NAMES)})",
+        default=",".join(SUITE_AGENTS),
+        help=f"comma-separated agents, flown in this order (default: all, {', '.join(SUITE_AGENTS)})",
     )
     add_tier_arguments(parser)
     parser.add_argument(

@@ -43,8 +43,9 @@ from agents.evaluation.suite_page import (
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
-    AGENT_NAMES,
+    SUITE_AGENTS,
     agent_env_kwargs,
+    check_not_retired,
     default_runs,
     is_learned,
     is_privileged,
@@ -306,9 +307,9 @@ def write_summary_csv(path: Path, table: Sequence[Mapping[str, Any]]) -> None:
 
 
 def suite_agents() -> list[str]:
-    """Every agent the suite reports: all of :data:`~agents.policies.base.AGENT_NAMES` but a learned agent with
+    """Every agent the suite reports: all of :data:`~agents.policies.base.SUITE_AGENTS` but a learned agent with
     no shipped policy yet (one being trained), which has no runs to report."""
-    return [agent for agent in AGENT_NAMES if not is_learned(agent) or default_runs(agent)[0]]
+    return [agent for agent in SUITE_AGENTS if not is_learned(agent) or default_runs(agent)[0]]
 
 
 def suite_top_groups(folder: Path, layouts: int = SUITE_LAYOUTS) -> list[dict[str, Any]]:
@@ -356,12 +357,12 @@ def run_suite(
     into ``out``; returns the report's lines.
 
     Raises:
-        ValueError: a bad agent, tier, layout count, worker count or folder.
+        ValueError: a bad or retired agent, tier, layout count, worker count or folder.
     """
     tier_names = parse_tiers(tiers)
     if workers < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")
-    runs = {agent: agent_runs(resolve_agent(agent)) for agent in agents}
+    runs = {agent: agent_runs(resolve_agent(check_not_retired(agent))) for agent in agents}
     tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, tier_names, layouts)]
     out = Path(out)
     check_writable_folder(out)
@@ -390,7 +391,7 @@ def run_suite(
         generated=today(),
         bounds=suite_bounds(failures, bests, seeds),
         gains=learning_gains(failures, rankings),
-        **beside_suite(out, tier_names),
+        **beside_suite(out, tier_names, csv_path, layouts),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

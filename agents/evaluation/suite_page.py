@@ -22,7 +22,7 @@ from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
 from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
-from agents.policies import is_learned, trained_on
+from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
 
@@ -146,6 +146,7 @@ def suite_values(
     gains: Sequence[LearningGain] = (),
     recipe_reports: Mapping[str, str] | None = None,
     lanes: Sequence[Mapping[str, Any]] = (),
+    retired: Sequence[Mapping[str, Any]] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
     reference rows, its best agent, top group and headroom."""
@@ -188,17 +189,42 @@ def suite_values(
         "lanes": list(lanes),
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
+        "retired": list(retired),
     }
 
 
-def beside_suite(out: Path, tier_names: Sequence[str]) -> dict[str, Any]:
+def beside_suite(out: Path, tier_names: Sequence[str], episodes_csv: Path, layouts: int) -> dict[str, Any]:
     """What ``suite.md`` reports from flights and reports kept beside it in ``out``: the noisy tier at other
-    readings, the student's recipes per tier, and the capsule-free lane (:func:`suite_values`' arguments)."""
+    readings, the student's recipes per tier, the capsule-free lane, and the agents retired from the suite with
+    the episodes ``episodes_csv`` kept of them (:func:`suite_values`' arguments)."""
     return {
         "readings": reading_values(Path(out) / SENSOR_READING_DIR),
         "recipe_reports": student_recipe_reports(tier_names),
         "lanes": lane_values(Path(out) / LANE_DIR),
+        "retired": retired_values(episodes_csv, layouts),
     }
+
+
+def retired_values(episodes_csv: Path, layouts: int) -> list[dict[str, Any]]:
+    """Per agent retired from the suite (:data:`~agents.policies.base.RETIRED_AGENTS`), why, and each of its
+    training seeds' failure rate per tier over the frozen layouts it flew in full, read from the episodes
+    ``episodes_csv`` kept of it (none when it has none there)."""
+    failed: dict[tuple[str, str], dict[int, list[float]]] = {}
+    if Path(episodes_csv).is_file():
+        for row in read_records(episodes_csv):
+            agent, seed = split_agent_name(row["agent"])
+            if agent in RETIRED_AGENTS:
+                by_seed = failed.setdefault((agent, row["factor"]), {})
+                by_seed.setdefault(seed if seed is not None else 0, []).append(float(not row["success"]))
+    found = []
+    for agent, why in RETIRED_AGENTS.items():
+        tiers = []
+        for name in TIER_NAMES:
+            whole = {k: v for k, v in failed.get((agent, name), {}).items() if len(v) >= layouts}
+            if whole:
+                tiers.append({"tier": name, "failures": [float(np.mean(whole[k])) for k in sorted(whole)]})
+        found.append({"agent": agent, "why": why, "tiers": tiers})
+    return found
 
 
 def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:

@@ -44,9 +44,35 @@ PRIVILEGED_AGENTS = (
     "ppo_flow_planner_student_oracle",
     "planner",
 )
+# Agents retired from the suite: neither flown nor ranked there any more, each with why. They keep their names, so
+# the committed sweep, robustness profiles and the clean tier's history table still read their episodes, and the
+# suite's report lists each one's flown seeds per tier from the episodes it kept.
+RETIRED_AGENTS = {
+    "ppo_robust": (
+        "trained on clean courses across the sweep's error models, never on a tier's course or sensor, with too "
+        "few training seeds to rank and seeds far apart"
+    ),
+}
+# The agents the suite flies and ranks (with its references): every agent but the retired ones.
+SUITE_AGENTS = tuple(agent for agent in AGENT_NAMES if agent not in RETIRED_AGENTS)
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
 # results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.
 TRAIN_SEED_MARK = "@"
+
+
+def check_not_retired(name: str) -> str:
+    """``name`` itself, unless it names an agent retired from the suite (or one of its training seeds).
+
+    Raises:
+        ValueError: a retired agent, with why it was retired.
+    """
+    base = str(name).partition(TRAIN_SEED_MARK)[0]
+    if base in RETIRED_AGENTS:
+        raise ValueError(
+            f"{name!r} is retired from the suite ({RETIRED_AGENTS[base]}); fly it with flownav evaluate, or "
+            "name an agent of the suite"
+        )
+    return name
 
 
 def split_agent_name(name: str) -> tuple[str, int | None]:

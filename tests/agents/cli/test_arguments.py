@@ -9,7 +9,7 @@ import pytest
 
 from agents.cli import build_parser, main
 from agents.cli.arguments import DEFAULT_WORKERS, env_kwarg
-from agents.policies import AGENT_NAMES, HISTORY_AGENTS
+from agents.policies import HISTORY_AGENTS, SUITE_AGENTS
 
 
 @pytest.mark.parametrize(
@@ -46,7 +46,7 @@ def test_demo_takes_the_policies_folder_by_leaderboard_s_name_and_its_old_one() 
     assert parser.parse_args(["leaderboard", "--policies-dir", "/tmp/p"]).policies_dir == "/tmp/p"
 
 
-@pytest.mark.parametrize(("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", AGENT_NAMES)])
+@pytest.mark.parametrize(("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", SUITE_AGENTS)])
 def test_help_never_cuts_an_agent_name(
     command: str, names: tuple[str, ...], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -26,7 +26,9 @@ from agents.evaluation.suite import (
     RUNS_INTERVAL,
     SUMMARY_COLUMNS,
     parse_tiers,
+    run_suite,
     score,
+    suite_agents,
     suite_rows,
     suite_tasks,
     summarise_suite,
@@ -92,6 +94,17 @@ def test_an_agent_that_changes_what_a_tier_fixes_is_refused(tmp_path: Path) -> N
         ValueError, match=re.escape("asks for forward_speed=1.0, but tier hard fixes forward_speed=2.0")
     ):
         score(f"{agent_file}:make", tiers="hard", layouts=1, out=tmp_path / "out")
+
+
+def test_a_retired_agent_is_neither_flown_nor_reported_by_the_suite(tmp_path: Path) -> None:
+    from agents.policies import RETIRED_AGENTS, SUITE_AGENTS
+
+    retired = next(iter(RETIRED_AGENTS))
+    assert retired not in SUITE_AGENTS and retired not in suite_agents()
+    for name in (retired, f"{retired}@0"):
+        with pytest.raises(ValueError, match=re.escape(f"{name!r} is retired from the suite (")):
+            run_suite([name], tmp_path / "out", tiers="hard", layouts=1)
+    assert not (tmp_path / "out").exists()  # refused before anything is written
 
 
 def _row(agent: str, tier: str, failure: float, version: str = SUITE_VERSION) -> dict:

@@ -4,6 +4,7 @@ headroom and what is not yet flown."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -167,3 +168,31 @@ def test_each_tiers_comparison_of_recipes_for_the_student_is_linked() -> None:
     assert "Recipes tried for the planner's flow student" in text
     assert "[`hard`](student_recipes/hard/ablation.md), [`noisy`](student_recipes/noisy/ablation.md)." in text
     assert "Recipes tried" not in suite_page(_values([]))
+
+
+def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_kept(tmp_path: Path) -> None:
+    import dataclasses
+
+    from helpers import EPISODE
+
+    from agents.evaluation.records import append_record
+    from agents.evaluation.suite_page import retired_values
+    from agents.policies import RETIRED_AGENTS
+
+    retired = next(iter(RETIRED_AGENTS))
+    path = tmp_path / "suite_episodes.csv"
+    # Seed 0 flies both hard layouts (one failed), seed 1 only one of them: only whole seeds are reported.
+    for seed, layout, success in ((0, 10, True), (0, 11, False), (1, 10, True)):
+        record = dataclasses.replace(
+            EPISODE, agent=f"{retired}@{seed}", factor="hard", seed=layout, success=success, collision=not success
+        )
+        append_record(path, record)
+    append_record(path, dataclasses.replace(EPISODE, factor="hard"))  # a suite agent: not reported here
+    (found,) = [r for r in retired_values(path, layouts=2) if r["agent"] == retired]
+    assert found["why"] == RETIRED_AGENTS[retired]
+    assert found["tiers"] == [{"tier": "hard", "failures": [0.5]}]
+    assert all(r["tiers"] == [] for r in retired_values(tmp_path / "none.csv", layouts=2))
+    text = suite_page(_values([]) | {"retired": [found]})
+    assert "### Retired from the suite" in text
+    assert f"- `{retired}`: {RETIRED_AGENTS[retired]}. `hard`: 0.50." in text
+    assert "Retired from the suite" not in suite_page(_values([]))

@@ -35,7 +35,7 @@ from agents.evaluation.over_seeds import (
     run_rates,
     success_outcomes,
 )
-from agents.evaluation.paired import Comparison, compare, verdict
+from agents.evaluation.paired import Comparison, compare, provisional_note, verdict
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
@@ -278,7 +278,7 @@ def report_lines(
         lines += ["", "## What the strongest reactive agent leaves to learning", ""]
         lines += [
             f"- `{c.agent}` − `{best}` = {c.difference:+.3f} [{c.low:+.3f}, {c.high:+.3f}], paired by layout: "
-            f"{verdict(c)}."
+            f"{verdict(c)}{provisional_note(c)}."
             for c in against_best
         ]
         lines.append(

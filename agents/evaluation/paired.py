@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from agents.policies.base import LEARNED_AGENTS, base_agent_name
+
 CONFIDENCE = 0.95
 BOOTSTRAP_REPS = 2_000
 # A corrected p-value at or above this leaves two agents unseparated.
@@ -38,6 +40,9 @@ class Comparison:
     probability_of_improvement: float
     p_value: float
     p_holm: float = 1.0
+    # How many runs each side pooled: a learned agent's training seeds, 1 for a rule.
+    agent_runs: int = 1
+    reference_runs: int = 1
 
     @property
     def separated(self) -> bool:
@@ -111,7 +116,16 @@ def compare(
     p = float(max(p, 1.0 / len(draws)))
     difference = float(np.mean(agent) - np.mean(reference))
     return Comparison(
-        name, reference_name, difference, float(low), float(high), probability_of_improvement(agent, reference), p, p
+        name,
+        reference_name,
+        difference,
+        float(low),
+        float(high),
+        probability_of_improvement(agent, reference),
+        p,
+        p,
+        agent_runs=agent.shape[0],
+        reference_runs=reference.shape[0],
     )
 
 
@@ -126,6 +140,19 @@ def verdict(comparison: Comparison, agent: str = "", reference: str = "") -> str
     if comparison.fails_less == comparison.reference:
         return f"{reference} fails less than {agent}"
     return "no difference shown"
+
+
+def provisional_note(comparison: Comparison) -> str:
+    """What a sentence worded from ``comparison`` adds when a learned agent in it pooled fewer than
+    :data:`MIN_RANKED_SEEDS` training seeds (``"; provisional: `ppo_oracle` (5 training seeds)"``), so that no
+    comparison resting on a few runs reads like one about a recipe; empty otherwise."""
+    sides = ((comparison.agent, comparison.agent_runs), (comparison.reference, comparison.reference_runs))
+    few = [
+        f"`{base_agent_name(name)}` ({runs} training seed{'s' if runs != 1 else ''})"
+        for name, runs in sides
+        if base_agent_name(name) in LEARNED_AGENTS and runs < MIN_RANKED_SEEDS
+    ]
+    return f"; provisional: {' and '.join(few)}" if few else ""
 
 
 def holm(p_values: Sequence[float]) -> list[float]:

@@ -8,6 +8,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from agents.common.jinja_reports import environment, render
+from agents.evaluation.paired import provisional_note
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import choices
 from agents.studies.dose_response import format_p
@@ -62,6 +63,8 @@ FILTERS = {
     "p": format_p,
     "num": num,
     "pct": pct,
+    # A comparison's note on the learned agents in it that pooled too few training seeds to rank (or "").
+    "provisional": lambda comparison: provisional_note(comparison) if hasattr(comparison, "agent_runs") else "",
 }
 
 

@@ -14,6 +14,7 @@ from agents.evaluation.paired import (
     holm,
     paired_bootstrap,
     probability_of_improvement,
+    provisional_note,
     rank_tier,
     refuse_privileged,
     seed_interval,
@@ -104,3 +105,17 @@ def test_bad_input_is_one_line() -> None:
         rank_tier({"oracle": _failures(0.0)}, privileged=["oracle"])
     with pytest.raises(ValueError, match=r"agent ppo_oracle is privileged .* cannot be ranked"):
         refuse_privileged(["bee", "ppo_oracle"], privileged=["ppo_oracle"])
+
+
+def test_a_comparison_names_the_learned_agents_it_rests_on_too_few_seeds_of() -> None:
+    rng = np.random.default_rng(3)
+    few = (rng.random((MIN_RANKED_SEEDS - 7, 40)) < 0.3).astype(float)
+    enough = (rng.random((MIN_RANKED_SEEDS, 40)) < 0.3).astype(float)
+    rule = (rng.random((1, 40)) < 0.3).astype(float)
+    c = compare("ppo_oracle", few, "bee_ttc", rule)
+    assert (c.agent_runs, c.reference_runs) == (MIN_RANKED_SEEDS - 7, 1)
+    assert provisional_note(c) == f"; provisional: `ppo_oracle` ({MIN_RANKED_SEEDS - 7} training seeds)"
+    assert provisional_note(compare("ppo_flow@all", enough, "bee_ttc", rule)) == ""
+    both = provisional_note(compare("ppo_flow", enough[:1], "ppo_robust@all", few))
+    assert both == f"; provisional: `ppo_flow` (1 training seed) and `ppo_robust` ({MIN_RANKED_SEEDS - 7} training seeds)"
+    assert provisional_note(compare("my_agent.py:make", rule, "bee", rule)) == ""  # rules and outside agents: one run

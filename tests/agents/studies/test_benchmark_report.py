@@ -16,7 +16,7 @@ import pytest
 
 from agents.common.jinja_reports import environment
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.evaluation.paired import Comparison
+from agents.evaluation.paired import MIN_RANKED_SEEDS, Comparison
 from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices, load_benchmark_data
 from agents.studies.benchmark_report import (
     README_MARKERS,
@@ -121,11 +121,12 @@ def test_a_breaking_sentence_gives_the_rates_on_each_side(broken: int, unbroken:
     ],
 )
 def test_a_comparison_is_worded_from_its_paired_interval(low: float, high: float, expected: str) -> None:
-    found = Comparison(WINNER, "bee_ttc", (low + high) / 2, low, high, 0.5, 1.0)
+    found = Comparison(WINNER, "bee_ttc", (low + high) / 2, low, high, 0.5, 1.0, agent_runs=MIN_RANKED_SEEDS)
     assert _phrase("verdict(c)", c=found) == expected
-    assert _phrase("reading(c)", c=found) == (
-        f"paired by layout, the winner − `bee_ttc` = {found.difference:+.3f} [{low:+.3f}, {high:+.3f}]: {expected}"
-    )
+    reading = f"paired by layout, the winner − `bee_ttc` = {found.difference:+.3f} [{low:+.3f}, {high:+.3f}]: {expected}"
+    assert _phrase("reading(c)", c=found) == reading
+    few = dataclasses.replace(found, agent_runs=MIN_RANKED_SEEDS - 5)
+    assert _phrase("reading(c)", c=few) == f"{reading}; provisional: `{WINNER}` ({MIN_RANKED_SEEDS - 5} training seeds)"
     flow_truth = expected.replace("the winner", "flow").replace("`bee_ttc`", "truth")
     assert _phrase('verdict(c, "flow", "truth")', c=found) == flow_truth
 

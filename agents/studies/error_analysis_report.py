@@ -153,7 +153,7 @@ def write_error_analysis_from(
     episodes: Path, out: Path, command: str, baseline: Path | None = None
 ) -> list[str]:
     """:func:`write_error_analysis` from a sweep's episodes CSV, each learned agent pooled over its seeds, and
-    the clean table's (``baseline``; None: each agent's clean cell in the sweep).
+    the clean table's of the same training runs (``baseline``; None: each agent's clean cell in the sweep).
 
     Raises:
         FileNotFoundError: ``episodes`` or ``baseline`` missing.
@@ -161,10 +161,15 @@ def write_error_analysis_from(
     """
     if not Path(episodes).is_file():
         raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
-    rows = pool_every_seed(read_records(Path(episodes)))
+    flown = read_records(Path(episodes))
+    rows = pool_every_seed(flown)
     if not rows:
         raise ValueError(f"--episodes {episodes} holds no readable episode")
     if baseline is not None and not Path(baseline).is_file():
         raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
-    clean = pool_every_seed(read_records(Path(baseline))) if baseline is not None else []
+    # A breaking point's rise is over the clean rate of the same training runs the sweep flew: a learned agent
+    # may have shipped more seeds since (they join the clean table but not the committed sweep).
+    runs = {row["agent"] for row in flown}
+    clean = [row for row in read_records(Path(baseline)) if row["agent"] in runs] if baseline is not None else []
+    clean = pool_every_seed(clean)
     return write_error_analysis(rows, out, command, clean)

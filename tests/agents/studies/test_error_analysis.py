@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import EPISODE
 
 from agents.cli import main
 from agents.studies.dose_response import cell_quality, fit_dose_response, format_p
@@ -334,3 +335,34 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
     assert {(r["factor"], r["side"]) for r in values["unbroken"]} == set(reasons) - {
         ("forward_speed", "above")
     }
+
+
+def test_the_clean_baseline_holds_only_the_training_runs_the_sweep_flew(tmp_path: Path) -> None:
+    import dataclasses
+
+    from agents.evaluation.records import append_record, read_records
+    from agents.studies.error_analysis_report import write_error_analysis_from
+
+    episodes = tmp_path / "sweep_episodes.csv"
+    _write_sweep_episodes(episodes, separated=False)
+    baseline = tmp_path / "leaderboard_episodes.csv"
+    clean = [row for row in read_records(episodes) if row["factor"] == "clean"]
+    template = dataclasses.replace(EPISODE, env_kwargs="{}", factor="clean", level=0.0)
+    for row in clean:  # the sweep's own clean runs, and a seed shipped later that fails every layout
+        append_record(
+            baseline,
+            dataclasses.replace(
+                template,
+                agent=row["agent"],
+                seed=row["seed"],
+                success=row["success"],
+                collision=not row["success"],
+            ),
+        )
+        append_record(
+            baseline, dataclasses.replace(template, agent="ppo_flow@3", seed=row["seed"], success=False)
+        )
+    write_error_analysis_from(episodes, tmp_path, "flownav error-analysis", baseline)
+    rate = sum(not row["success"] for row in clean) / len(clean)
+    text = (tmp_path / "error_analysis.md").read_text()
+    assert f"| clean failure |  | {rate:.2f} [" in text and f"], {len(clean)} episodes |" in text

@@ -35,7 +35,13 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.error_analysis import failure, is_flow_agent, runs_failure, tolerance_table
+from agents.studies.error_analysis import (
+    baseline_of_flown_runs,
+    failure,
+    is_flow_agent,
+    runs_failure,
+    tolerance_table,
+)
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
@@ -130,6 +136,9 @@ class BenchmarkData:
     # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
     # compared by (agents.evaluation.paired).
     failures: dict[str, np.ndarray] = field(default_factory=dict)
+    # Per sweep agent (its sweep name), its clean failure on the leading table's layouts over the training runs
+    # the sweep flew: what a sweep cell's rise is measured from.
+    sweep_clean: dict[str, Rate] = field(default_factory=dict)
     # Per suite tier: its best ranked agent, that agent's failure and the tier's top group (suite.md's ranking).
     suite_top: list[dict[str, Any]] = field(default_factory=list)
 
@@ -218,15 +227,18 @@ def _seed_rows(results: Path) -> list[dict[str, Any]]:
 
 
 def _sweep(results: Path) -> dict[str, Any]:
-    rows = pool_every_seed(read_records(require(results / "sweep_episodes.csv")))
+    flown = read_records(require(results / "sweep_episodes.csv"))
+    rows = pool_every_seed(flown)
     cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
-    baseline = pool_every_seed(read_records(results / "leaderboard_episodes.csv"))
+    baseline = pool_every_seed(baseline_of_flown_runs(read_records(results / "leaderboard_episodes.csv"), flown))
+    clean = [r for r in baseline if r["factor"] == "clean"]
     return {
         "sweep_rows": rows,
         "tolerance": tolerance_table(rows, baseline),
         "cells": {key: _rate(members) for key, members in cells.items()},
+        "sweep_clean": _rates_per_agent(clean),
     }
 
 

@@ -24,6 +24,7 @@ from agents.studies.dose_response import (
 )
 from agents.studies.error_analysis import (
     TASK_FACTORS,
+    baseline_of_flown_runs,
     best_learned_flow_agent,
     tolerance_table,
     unbroken_kind,
@@ -167,9 +168,6 @@ def write_error_analysis_from(
         raise ValueError(f"--episodes {episodes} holds no readable episode")
     if baseline is not None and not Path(baseline).is_file():
         raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
-    # A breaking point's rise is over the clean rate of the same training runs the sweep flew: a learned agent
-    # may have shipped more seeds since (they join the clean table but not the committed sweep).
-    runs = {row["agent"] for row in flown}
-    clean = [row for row in read_records(Path(baseline)) if row["agent"] in runs] if baseline is not None else []
+    clean = baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline is not None else []
     clean = pool_every_seed(clean)
     return write_error_analysis(rows, out, command, clean)

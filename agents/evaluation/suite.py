@@ -391,7 +391,7 @@ def run_suite(
         generated=today(),
         bounds=suite_bounds(failures, bests, seeds),
         gains=learning_gains(failures, rankings),
-        **beside_suite(out, tier_names, csv_path, layouts),
+        **beside_suite(out, tier_names, csv_path, seeds),
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

@@ -16,6 +16,7 @@ import numpy as np
 
 from agents.common.jinja_reports import render
 from agents.common.seeds import LANE_SEED_START
+from agents.evaluation.episode_tasks import with_tier
 from agents.evaluation.lane import LANE_DIR, lane_values
 from agents.evaluation.learning_gain import LearningGain
 from agents.evaluation.over_seeds import episode_outcomes
@@ -23,6 +24,7 @@ from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking
 from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
+from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
 
@@ -193,7 +195,9 @@ def suite_values(
     }
 
 
-def beside_suite(out: Path, tier_names: Sequence[str], episodes_csv: Path, layouts: int) -> dict[str, Any]:
+def beside_suite(
+    out: Path, tier_names: Sequence[str], episodes_csv: Path, layouts: Sequence[int]
+) -> dict[str, Any]:
     """What ``suite.md`` reports from flights and reports kept beside it in ``out``: the noisy tier at other
     readings, the student's recipes per tier, the capsule-free lane, and the agents retired from the suite with
     the episodes ``episodes_csv`` kept of them (:func:`suite_values`' arguments)."""
@@ -205,24 +209,20 @@ def beside_suite(out: Path, tier_names: Sequence[str], episodes_csv: Path, layou
     }
 
 
-def retired_values(episodes_csv: Path, layouts: int) -> list[dict[str, Any]]:
+def retired_values(episodes_csv: Path, layouts: Sequence[int]) -> list[dict[str, Any]]:
     """Per agent retired from the suite (:data:`~agents.policies.base.RETIRED_AGENTS`), why, and each of its
-    training seeds' failure rate per tier over the frozen layouts it flew in full, read from the episodes
-    ``episodes_csv`` kept of it (none when it has none there)."""
-    failed: dict[tuple[str, str], dict[int, list[float]]] = {}
-    if Path(episodes_csv).is_file():
-        for row in read_records(episodes_csv):
-            agent, seed = split_agent_name(row["agent"])
-            if agent in RETIRED_AGENTS:
-                by_seed = failed.setdefault((agent, row["factor"]), {})
-                by_seed.setdefault(seed if seed is not None else 0, []).append(float(not row["success"]))
+    training seeds' failure rate per tier over the frozen ``layouts``, for the seeds that flew them all, read
+    from the episodes ``episodes_csv`` kept of it (none when it has none there)."""
+    rows = [with_tier(row) for row in read_records(episodes_csv)] if Path(episodes_csv).is_file() else []
     found = []
     for agent, why in RETIRED_AGENTS.items():
+        names = {row["agent"] for row in rows if base_agent_name(row["agent"]) == agent}
+        runs = {run: [run] for run in sorted(names, key=lambda run: split_agent_name(run)[1] or 0)}
         tiers = []
         for name in TIER_NAMES:
-            whole = {k: v for k, v in failed.get((agent, name), {}).items() if len(v) >= layouts}
+            whole = tier_failures(rows, runs, name, layouts)  # only the seeds that flew every layout
             if whole:
-                tiers.append({"tier": name, "failures": [float(np.mean(whole[k])) for k in sorted(whole)]})
+                tiers.append({"tier": name, "failures": [float(matrix.mean()) for matrix in whole.values()]})
         found.append({"agent": agent, "why": why, "tiers": tiers})
     return found
 

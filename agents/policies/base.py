@@ -66,7 +66,7 @@ def check_not_retired(name: str) -> str:
     Raises:
         ValueError: a retired agent, with why it was retired.
     """
-    base = str(name).partition(TRAIN_SEED_MARK)[0]
+    base = base_agent_name(name)
     if base in RETIRED_AGENTS:
         raise ValueError(
             f"{name!r} is retired from the suite ({RETIRED_AGENTS[base]}); fly it with flownav evaluate, or "

@@ -64,13 +64,13 @@ def test_episodes_past_the_edge_are_counted_per_agent_and_tier(tmp_path: Path) -
 def test_the_suite_page_says_whether_any_agent_entered_the_lane(tmp_path: Path) -> None:
     folder = tmp_path / "lane"
     append_record(folder / "bee_ttc_clean.csv", RECORD)
-    beside = beside_suite(tmp_path, ["clean"], tmp_path / "suite_episodes.csv", 300)
+    beside = beside_suite(tmp_path, ["clean"], tmp_path / "suite_episodes.csv", [])
     text = _page(beside["lanes"])
     assert "## The capsule-free lane" in text and "| agent | `clean` (lane 4.5–6.0 m) |" in text
     assert "| `bee_ttc` | 0 of 1 (1.00 m) |" in text
     assert "No agent entered the lane on any tier" in text
     append_record(folder / "bee_ttc_clean.csv", replace(RECORD, seed=960_201, max_abs_lateral_m=5.0))
-    text = _page(beside_suite(tmp_path, ["clean"], tmp_path / "suite_episodes.csv", 300)["lanes"])
+    text = _page(beside_suite(tmp_path, ["clean"], tmp_path / "suite_episodes.csv", [])["lanes"])
     assert "| `bee_ttc` | 1 of 2 (5.00 m) |" in text
     assert "1 of 1 agents entered the lane on at least one tier. An agent there flies past capsules" in text
     assert "## The capsule-free lane" not in _page([])

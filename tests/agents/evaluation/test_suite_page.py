@@ -188,10 +188,10 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
         )
         append_record(path, record)
     append_record(path, dataclasses.replace(EPISODE, factor="hard"))  # a suite agent: not reported here
-    (found,) = [r for r in retired_values(path, layouts=2) if r["agent"] == retired]
+    (found,) = [r for r in retired_values(path, layouts=[10, 11]) if r["agent"] == retired]
     assert found["why"] == RETIRED_AGENTS[retired]
     assert found["tiers"] == [{"tier": "hard", "failures": [0.5]}]
-    assert all(r["tiers"] == [] for r in retired_values(tmp_path / "none.csv", layouts=2))
+    assert all(r["tiers"] == [] for r in retired_values(tmp_path / "none.csv", layouts=[10, 11]))
     text = suite_page(_values([]) | {"retired": [found]})
     assert "### Retired from the suite" in text
     assert f"- `{retired}`: {RETIRED_AGENTS[retired]}. `hard`: 0.50." in text

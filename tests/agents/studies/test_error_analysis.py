@@ -255,7 +255,8 @@ def test_rotation_error_is_set_beside_how_much_each_agent_weaves(tmp_path: Path)
 
 
 def _write_sweep_episodes(path: Path, separated: bool) -> None:
-    from agents.evaluation.episode import EpisodeRecord
+    import dataclasses
+
     from agents.evaluation.records import append_record
 
     rng = np.random.default_rng(0)
@@ -269,29 +270,27 @@ def _write_sweep_episodes(path: Path, separated: bool) -> None:
         cell_error = 0.02 + 0.3 * level
         for i in range(60):
             failed = level >= 0.5 if separated else bool(rng.random() < 0.1 + 0.6 * level)
-            append_record(
-                path,
-                EpisodeRecord(
-                    agent=f"ppo_flow@{i % 3}",
-                    factor=factor,
-                    level=level,
-                    seed=1_000_000 + i,
-                    collision=failed,
-                    success=not failed,
-                    out_of_bounds=False,
-                    truncated=False,
-                    progress_m=20.0,
-                    time_s=20.0,
-                    steps=200,
-                    min_clearance_m=0.5,
-                    path_length_m=20.4,
-                    mean_points_valid=float(rng.uniform(50, 200)),
-                    median_depth_error=cell_error * float(rng.uniform(0.9, 1.1)),
-                    episode_return=1.0,
-                    env_kwargs=json.dumps({"obs_source": "flow"}),
-                    mean_depth_outlier_share=float(rng.uniform(0.0, 0.2)),
-                ),
+            # A full-course flight of a flow agent: what the dose-response fits are over.
+            record = dataclasses.replace(
+                EPISODE,
+                agent=f"ppo_flow@{i % 3}",
+                factor=factor,
+                level=level,
+                seed=1_000_000 + i,
+                collision=failed,
+                success=not failed,
+                progress_m=20.0,
+                time_s=20.0,
+                steps=200,
+                min_clearance_m=0.5,
+                path_length_m=20.4,
+                mean_points_valid=float(rng.uniform(50, 200)),
+                median_depth_error=cell_error * float(rng.uniform(0.9, 1.1)),
+                episode_return=1.0,
+                env_kwargs=json.dumps({"obs_source": "flow"}),
+                mean_depth_outlier_share=float(rng.uniform(0.0, 0.2)),
             )
+            append_record(path, record)
 
 
 def test_the_command_pools_a_learned_agents_training_seeds(tmp_path: Path) -> None:

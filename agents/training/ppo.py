@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import torch
-from stable_baselines3.common.callbacks import CallbackList
+from stable_baselines3.common.callbacks import CallbackList, ProgressBarCallback
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
@@ -221,7 +221,7 @@ def train(
         record.restart_clock()  # the session's minutes count from here: the teacher start and learning
         if resume_step is None and config.imitation.teacher:
             _teacher_start(model, envs, config, record, teacher)
-        status = _learn(model, config, files, record, callbacks, resume_step, progress_bar)
+        status = _learn(model, config, files, record, callbacks, resume_step)
     finally:
         close_quietly(envs)
         close_quietly(eval_env)
@@ -315,7 +315,11 @@ def _callbacks(
         ),
         WallClockBudget(config.max_minutes),
     ]
-    if not progress_bar:
+    # Our own bar rather than learn(progress_bar=True): a session that stops early must close it (_learn), or its
+    # refresh thread goes on printing into whatever runs next.
+    if progress_bar:
+        callbacks.append(ProgressBarCallback())
+    else:
         callbacks.append(ProgressLines(config.checkpoint_every, f"{config.name} seed {config.seed}"))
     return CallbackList(callbacks)
 
@@ -327,7 +331,6 @@ def _learn(
     record: SessionRecord,
     callbacks: CallbackList,
     resume_step: int | None,
-    progress_bar: bool,
 ) -> str:
     """Learn up to ``total_timesteps`` and save the final checkpoint, the resume point; returns the session's
     status, :data:`FINISHED` or :data:`INTERRUPTED` (Ctrl-C or SIGTERM).
@@ -344,7 +347,6 @@ def _learn(
             model.learn(
                 max(0, config.total_timesteps - model.num_timesteps),
                 callback=callbacks,
-                progress_bar=progress_bar,
                 reset_num_timesteps=resume_step is None,
                 tb_log_name=config.name,
             )
@@ -363,6 +365,10 @@ def _learn(
         if isinstance(error, OSError) and not isinstance(error, ConnectionError):
             raise named_os_error(error, files.run_dir) from None
         raise
+    finally:
+        for bar in callbacks.callbacks:
+            if isinstance(bar, ProgressBarCallback) and hasattr(bar, "pbar"):
+                bar.pbar.close()  # idempotent: a finished session closed it already
     _save_checkpoint(model, config, files)
     return FINISHED
 

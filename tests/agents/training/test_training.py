@@ -8,6 +8,7 @@ import multiprocessing
 import os
 import shutil
 import signal
+import threading
 import time
 import warnings
 from dataclasses import dataclass
@@ -209,6 +210,8 @@ def test_ctrl_c_with_subprocess_workers_still_writes_the_run(tmp_path: Path, mon
     assert (files.checkpoints / "tiny_two_80_steps.zip").is_file()
     assert json.loads(files.record.read_text())["sessions"][0]["interrupted"] is True
     assert not (tmp_path / "s").exists()  # an interrupted run is not shipped
+    # Its progress bar is closed: a live one's refresh thread would print into whatever runs next.
+    assert not [thread for thread in threading.enumerate() if type(thread).__name__ == "_RefreshThread"]
 
 
 def test_workers_ignore_ctrl_c_and_a_dead_worker_closes_quietly() -> None:

@@ -7,9 +7,10 @@
 | ``FlowNavSingle-v0``    | single     | 200                |
 | ``FlowNavThree-v0``     | three      | 250                |
 
-The benchmark suite's tiers (:mod:`flownav_env.tiers`, frozen under ``SUITE_VERSION``) are registered too:
-``FlowNavHard-v0``, ``FlowNavNoisy-v0`` and ``FlowNavHardNoisy-v0``, field layouts with 400 steps, each
-fixing the course and sensor settings its :class:`~flownav_env.tiers.Tier` states (``clean`` is
+The benchmark suite's tiers (:mod:`flownav_env.tiers`, one set per suite version) are registered too, field
+layouts with 400 steps, each fixing the course and sensor settings its :class:`~flownav_env.tiers.Tier` states:
+suite v2's ``FlowNav-v1``, ``FlowNavHard-v1``, ``FlowNavNoisy-v1`` and ``FlowNavHardNoisy-v1`` (a closed field),
+and suite v1's ``FlowNavHard-v0``, ``FlowNavNoisy-v0`` and ``FlowNavHardNoisy-v0`` (v1's ``clean`` is
 ``FlowNav-v0``).
 
 Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``: the settings
@@ -31,7 +32,7 @@ from gymnasium.envs.registration import register, registry  # noqa: E402  (after
 from estimator import __version__  # noqa: E402
 from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)
 from flownav_env.settings import EnvSettings  # noqa: E402
-from flownav_env.tiers import TIERS  # noqa: E402
+from flownav_env.tiers import TIERS_BY_VERSION  # noqa: E402
 
 ENV_IDS = {
     "FlowNav-v0": ({"layout": "field"}, 400),
@@ -40,7 +41,8 @@ ENV_IDS = {
     "FlowNavThree-v0": ({"layout": "three"}, 250),
     **{
         tier.env_id: ({"layout": "field", **tier.settings}, 400)
-        for tier in TIERS.values()
+        for tiers in TIERS_BY_VERSION.values()
+        for tier in tiers.values()
         if tier.env_id != "FlowNav-v0"
     },
 }

@@ -20,6 +20,7 @@ from flownav_env.rotations import rotation_from_vector, vector_from_rotation
 from flownav_env.sensor_errors import (
     add_motion_noise,
     corrupt_depths,
+    gauss_markov_step,
     lagged_attitude,
     outlier_depth_range,
     scale_motion,
@@ -99,12 +100,14 @@ class SensorPipeline:
        depths through the depth errors (:meth:`corrupt_points`) before the histogram.
 
     The random draws come in this order from the caller's generator, so a seed fixes them: jitter, relative
-    errors, bias walk (rotation, translation), noise floor (rotation, translation), then depth noise,
+    errors, bias walk (rotation, translation), noise floor (rotation, translation: white, or the next step of
+    its time-correlated process), then depth noise,
     outliers and dropout; each only when its setting is non-zero. Nothing here moves or renders the camera.
 
-    The one per-episode state is the random walk of the biases (:mod:`flownav_env.sensor_errors`), restarted
-    at 0 by every first frame; the applied bias is the current ``rotation_bias``/``translation_bias`` setting
-    plus the walk, clipped to ±:data:`~flownav_env.settings.BIAS_LIMIT`.
+    The per-episode state is the random walk of the biases (:mod:`flownav_env.sensor_errors`), restarted
+    at 0 by every first frame (the applied bias is the current ``rotation_bias``/``translation_bias`` setting
+    plus the walk, clipped to ±:data:`~flownav_env.settings.BIAS_LIMIT`), and the time-correlated translation
+    noise's last value, drawn afresh from its stationary distribution after every first frame.
 
     Args:
         frame_rate: Frames per second of the captured sequence, Hz: a bias's walk steps every 1/frame_rate s.
@@ -121,6 +124,8 @@ class SensorPipeline:
         # Set with the pose by start(); motion() refuses to run before it.
         self._previous_told_attitude: np.ndarray = np.eye(3)
         self._walk = (0.0, 0.0)
+        # The time-correlated translation noise's last value (world axes, m per frame); None before its first.
+        self._velocity_error: np.ndarray | None = None
 
     @staticmethod
     def jitter(sensor: SensorSettings, rng: np.random.Generator) -> np.ndarray:
@@ -131,7 +136,7 @@ class SensorPipeline:
     def start(self, pose: Pose) -> FrameMotion:
         """The first frame of a sequence, taken from ``pose``: no motion, no error draws; the bias walk
         restarts."""
-        self._previous_pose, self._walk = pose, (0.0, 0.0)
+        self._previous_pose, self._walk, self._velocity_error = pose, (0.0, 0.0), None
         self._previous_told_attitude = pose[0]
         still = (np.eye(3), np.zeros(3))
         return FrameMotion(pose, pose, still, still)
@@ -158,11 +163,27 @@ class SensorPipeline:
         told_motion = corrupt_motion(*told_motion, sensor.rotation_error, sensor.translation_error, rng)
         bias = self._step_bias(sensor, rng)
         told_motion = scale_motion(*told_motion, 1.0 + bias[0], 1.0 + bias[1])
-        told_motion = add_motion_noise(
-            *told_motion, sensor.rotation_noise_deg, sensor.translation_noise_m, rng
-        )
+        correlated = sensor.translation_noise_correlation_s > 0
+        white_noise_m = 0.0 if correlated else sensor.translation_noise_m
+        told_motion = add_motion_noise(*told_motion, sensor.rotation_noise_deg, white_noise_m, rng)
+        if correlated and sensor.translation_noise_m > 0:
+            told_motion = self._add_velocity_error(sensor, rng, pose, told_motion)
         self._previous_pose = pose
         return FrameMotion(pose, previous, true_motion, told_motion, bias)
+
+    def _add_velocity_error(
+        self, sensor: SensorSettings, rng: np.random.Generator, pose: Pose, motion: Pose
+    ) -> Pose:
+        """``motion`` with the time-correlated translation noise: the told displacement is off by the
+        Gauss-Markov error (world axes), seen in the new camera's axes (``t = R_next^T (p_prev − p_next)``)."""
+        self._velocity_error = gauss_markov_step(
+            self._velocity_error,
+            sensor.translation_noise_m,
+            sensor.translation_noise_correlation_s,
+            self.frame_interval,
+            rng,
+        )
+        return motion[0], motion[1] - pose[0].T @ self._velocity_error
 
     def _step_bias(self, sensor: SensorSettings, rng: np.random.Generator) -> tuple[float, float]:
         """Walk the biases one frame on and return the applied ``(rotation, translation)`` bias."""

@@ -20,6 +20,11 @@ untouched, so at the defaults an episode is the same as before these settings ex
   axis-angle vector is N(0, ``rotation_noise_deg``²) per axis is composed onto the told rotation (on the
   left: in the new camera's axes), and N(0, ``translation_noise_m``²) per axis is added to the told
   translation. Order: relative error, bias, then noise.
+* **Time-correlated translation noise** (a flight stack's velocity estimate: its error persists for a while):
+  with ``translation_noise_correlation_s`` τ > 0 the noise floor's translation part is not drawn afresh each
+  frame but follows :func:`gauss_markov_step`, a first-order Gauss-Markov process with stationary σ
+  ``translation_noise_m`` per axis, in the world's axes (where a velocity estimate lives), turned into the
+  camera's axes of the frame it is told with. It is drawn where the white translation noise would be.
 * **Camera-IMU time offset** (unsynchronised clocks): the attitude told for a frame is the camera's
   ``imu_time_offset_ms`` earlier, interpolated between this frame and the one before (:func:`lagged_attitude`),
   and the told motion is the motion between those lagged attitudes (the positions are the true ones). Turning
@@ -96,6 +101,34 @@ def add_motion_noise(
     if translation_noise_m > 0:
         translation = translation + rng.normal(0.0, translation_noise_m, 3)
     return rotation, translation
+
+
+def gauss_markov_step(
+    previous: np.ndarray | None,
+    sigma: float,
+    correlation_s: float,
+    interval: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """One frame's step of a first-order Gauss-Markov process per axis (3,), stationary σ ``sigma``.
+
+    ``e_k = φ e_{k-1} + √(1 − φ²) σ w_k`` with ``φ = exp(−interval / correlation_s)`` and ``w_k ~ N(0, 1)``: the
+    error of a velocity estimate, which a flight stack's filter carries from one frame to the next. The first
+    frame (``previous`` None) draws from the stationary distribution N(0, σ²), so every frame has the same σ.
+    Three normal draws per call.
+
+    Args:
+        previous: The last frame's error, or None at an episode's first frame.
+        sigma: Stationary standard deviation per axis (> 0).
+        correlation_s: Correlation time τ, s (> 0).
+        interval: Seconds per frame.
+        rng: The episode's generator.
+    """
+    draw = rng.normal(0.0, sigma, 3)
+    if previous is None:
+        return draw
+    phi = math.exp(-interval / correlation_s)
+    return phi * previous + math.sqrt(1.0 - phi * phi) * draw
 
 
 def outlier_depth_range(bin_edges: tuple[float, ...] | np.ndarray) -> tuple[float, float]:

@@ -105,6 +105,13 @@ class SensorSettings:
         Range(0.0, 0.5, unit="m"),
         "absolute noise floor of the told translation: N(0, this²) per axis added every frame",
     )
+    translation_noise_correlation_s: float = _setting(
+        0.0,
+        Range(0.0, 600.0, unit="s"),
+        "correlation time of ``translation_noise_m``: 0 draws it afresh every frame (white noise); τ > 0 makes it "
+        "a velocity estimate's error, a first-order Gauss-Markov process in the world's axes with stationary "
+        "σ ``translation_noise_m`` per frame and correlation exp(−Δt/τ) from one frame to the next",
+    )
     imu_time_offset_ms: float = _setting(
         0.0,
         Range(0.0, 100.0, unit="ms"),

@@ -1,96 +1,67 @@
-"""The benchmark suite's task tiers: a registered Gymnasium id each, frozen under :data:`SUITE_VERSION`.
+"""The benchmark suite's task tiers, by suite version: a registered Gymnasium id each. A tier never changes after
+results are published under its version; a changed task is a new version with new ids (Gymnasium's rule), and
+the old version stays registered and reproducible.
+
+**Suite v2** (:data:`SUITE_VERSION`, the current one) closes the field: capsules stand across the whole region the
+drone may fly in (``field_width`` = 2 × ``lateral_bound``), so no lane leads around them. Its tiers are fixed from
+physics stated here, before any agent flew them; the only flights before the freeze are feasibility checks of the
+privileged references on validation layouts (``results/suite_v2_calibration/``).
 
 | tier | id | course | sensor |
 |---|---|---|---|
-| ``clean`` | ``FlowNav-v0`` | today's defaults: 1 m/s, 0.12 capsules/m² | perfect rotation and translation |
-| ``hard`` | ``FlowNavHard-v0`` | :data:`HARD_COURSE` | perfect |
-| ``noisy`` | ``FlowNavNoisy-v0`` | defaults | :func:`realistic_sensor`, from datasheets |
-| ``hard_noisy`` | ``FlowNavHardNoisy-v0`` | :data:`HARD_COURSE` | :func:`realistic_sensor` |
+| ``clean`` | ``FlowNav-v1`` | 1 m/s, 0.12 capsules/m², closed field | perfect rotation and translation |
+| ``hard`` | ``FlowNavHard-v1`` | :data:`V2_HARD_COURSE`, closed field | perfect |
+| ``noisy`` | ``FlowNavNoisy-v1`` | as clean | :func:`~flownav_env.sensor_specs.flight_stack_sensor` |
+| ``hard_noisy`` | ``FlowNavHardNoisy-v1`` | as hard | :func:`~flownav_env.sensor_specs.flight_stack_sensor` |
 
-How each number was chosen is in ``results/suite_calibration/calibration.md``: the hard course on validation
-layouts only (``flownav calibrate-tiers``), the sensor from the specifications cited below, read as stated at
-each constant. A tier never changes after results are published under its version; any change is a new
-:data:`SUITE_VERSION` and new ids.
+The physics of v2's courses (:func:`hard_course`): the clean course is the env's defaults (the thesis's 1 m/s,
+0.1 m per frame). The hard course doubles the distance per frame (the thesis's variable: 0.2 m, so 2 m/s) and
+makes the field's mean free path λ = 1 / (n · 2 (r_capsule + r_hull)), the distance flown between capsules
+in the path, the distance of 2 s of flight at that speed (4 m): n = 0.18 capsules/m². These equal v1's hard
+course, whose numbers v1 picked by an agent's failure; v2 fixes them by this rule, not by any failure.
 
-The realistic sensor is one reading of its specifications, not the only one. Two changes were made after a
-pilot on validation layouts showed the first version left no headroom (``sensor_pilot_episodes.csv``): the
-velocity accuracy, first read as a standard deviation, became a 50 % bound (σ = 0.074 m/s per axis), and the
-uncalibrated camera-IMU clock offset was added. The velocity reading carries most of the tier's difficulty:
-read as a 3-D speed error the same bound gives σ = 0.033 m/s per axis, as a 2-D one 0.042 m/s
-(:data:`VELOCITY_READINGS`), and at those readings translation noise alone costs a rule little.
+**Suite v1** (ids ``...-v0``) is history: its field left a capsule-free lane inside the bounds, and its hard
+course and sensor were tuned on agents (``results/suite_v1/``).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from flownav_env.sensor_specs import flight_stack_sensor, realistic_sensor
 from flownav_env.settings import EnvSettings
 
-# Bump with any change to a tier's settings (and the ids' -vN); every suite result row carries it.
-SUITE_VERSION = "1"
+# The current suite version: every suite result row carries its version; `--suite-version 1` reproduces v1.
+SUITE_VERSION = "2"
+SUITE_VERSIONS = ("1", "2")
 
-# Sensor specifications of parts a small drone flies with (the datasheets' numbers; how each is read is ours,
-# stated beside it):
-# Bosch Sensortec BMI088 datasheet (BST-BMI088-DS001), gyroscope output noise density: 0.014 °/s/√Hz.
-GYRO_NOISE_DENSITY_DEG_S_RTHZ = 0.014
-# InvenSense MPU-6000/MPU-6050 product specification (PS-MPU-6000A), gyroscope sensitivity scale factor
-# tolerance at 25 °C: ±3 %.
-GYRO_SCALE_TOLERANCE = 0.03
-# u-blox NEO-M8 data sheet (UBX-15031086), velocity accuracy: 0.05 m/s, a 50 % bound ("50 % @ 30 m/s"). For a
-# normal error per axis, half its draws lie within 0.6745 σ, so σ = 0.05 / 0.6745 = 0.074 m/s.
-VELOCITY_ACCURACY_M_S = 0.05
-MEDIAN_ABS_NORMAL = 0.6745
-# The same 50 % bound read three ways, as the per-axis σ (m/s) of a normal error. Suite v1 takes the largest,
-# per axis; a 50 % bound on the 3-D speed error |v| (a Maxwell distribution, median 1.5382 σ) or on the 2-D
-# horizontal one (a Rayleigh distribution, median 1.1774 σ) gives a milder sensor.
-VELOCITY_READINGS: dict[str, tuple[str, float]] = {
-    "per_axis": ("a 50 % bound per axis", VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL),
-    "3d_speed": ("a 50 % bound on the 3-D speed error", VELOCITY_ACCURACY_M_S / 1.5382),
-    "2d_speed": ("a 50 % bound on the 2-D speed error", VELOCITY_ACCURACY_M_S / 1.1774),
-}
-# Camera and IMU clocks that are not hardware-synchronised differ by tens of milliseconds, which is why VIO
-# systems estimate the offset online (Li & Mourikis, "Online temporal calibration for camera-IMU systems",
-# IJRR 2014; Qin & Shen, "Online temporal calibration for monocular visual-inertial systems", IROS 2018).
-# The low end of that order, for a drone whose offset was never calibrated:
-CAMERA_IMU_OFFSET_MS = 20.0
-# Monocular visual-inertial odometry drifts by about 1 % of the distance flown on the EuRoC MAV sequences
-# (Delmerico & Scaramuzza, "A Benchmark Comparison of Monocular Visual-Inertial Odometry Algorithms for
-# Flying Robots", ICRA 2018): a scale error of the told translation.
-ODOMETRY_SCALE_ERROR = 0.01
-
-
-def translation_noise_m(velocity_sigma_m_s: float, frame_rate: float = 10.0) -> float:
-    """The per-frame translation noise (m, per axis) of a velocity error with σ ``velocity_sigma_m_s``."""
-    return round(velocity_sigma_m_s / frame_rate, 6)
-
-
-def realistic_sensor(frame_rate: float = 10.0) -> dict[str, float]:
-    """The error settings a drone with the parts above has, per camera frame at ``frame_rate`` (Hz).
-
-    - ``rotation_noise_deg``: the gyro's white rate noise integrated over one frame, N·√Δt;
-    - ``rotation_bias``: the gyro's scale-factor tolerance, at its worst sign-free value;
-    - ``translation_noise_m``: the velocity source's error over one frame, σ_v·Δt per axis;
-    - ``translation_bias``: odometry's scale drift as a share of the distance;
-    - ``imu_time_offset_ms``: an uncalibrated camera-IMU clock offset.
-
-    Each but the time offset reuses a setting the sweep already varies (``flownav_env.settings.SensorSettings``).
-    """
-    frame_time = 1.0 / frame_rate
-    return {
-        "rotation_noise_deg": round(GYRO_NOISE_DENSITY_DEG_S_RTHZ * math.sqrt(frame_time), 6),
-        "rotation_bias": GYRO_SCALE_TOLERANCE,
-        "translation_noise_m": translation_noise_m(VELOCITY_ACCURACY_M_S / MEDIAN_ABS_NORMAL, frame_rate),
-        "translation_bias": ODOMETRY_SCALE_ERROR,
-        "imu_time_offset_ms": CAMERA_IMU_OFFSET_MS,
-    }
-
-
-# Chosen on validation layouts by `flownav calibrate-tiers` (results/suite_calibration/calibration.md): the one whose
-# best reactive agent fails closest to the middle of 0.20-0.50.
+# v1: chosen on validation layouts by `flownav calibrate-tiers` (results/suite_v1/calibration/calibration.md), the
+# one whose best reactive agent failed closest to the middle of 0.20-0.50.
 HARD_COURSE: dict[str, float] = {"forward_speed": 2.0, "obstacle_density": 0.18}
+
+# v2's physics (module docstring): the hull's radius is flownav_env.quadrotor's collision radius.
+CAPSULE_RADIUS_M = 0.5
+HULL_RADIUS_M = 0.2
+CLEAN_SPEED_M_S = 1.0
+HARD_DISTANCE_PER_FRAME_FACTOR = 2.0
+HARD_FREE_PATH_S = 2.0
+
+
+def hard_course(clean_speed: float = CLEAN_SPEED_M_S) -> dict[str, float]:
+    """v2's hard course from its physics: twice the distance per frame, and a field whose mean free path is
+    :data:`HARD_FREE_PATH_S` of flight (n = 1 / (λ · 2 (r_capsule + r_hull)), rounded to 0.01 capsules/m²)."""
+    speed = clean_speed * HARD_DISTANCE_PER_FRAME_FACTOR
+    free_path = speed * HARD_FREE_PATH_S
+    density = 1.0 / (free_path * 2.0 * (CAPSULE_RADIUS_M + HULL_RADIUS_M))
+    return {"forward_speed": speed, "obstacle_density": round(density, 2)}
+
+
+# The closed field: capsules across the whole lateral bound (the env's default bound, 6 m each side).
+LATERAL_BOUND_M = 6.0
+CLOSED_FIELD: dict[str, float] = {"field_width": 2.0 * LATERAL_BOUND_M, "lateral_bound": LATERAL_BOUND_M}
+V2_HARD_COURSE: dict[str, float] = hard_course()
 
 
 @dataclass(frozen=True)
@@ -109,43 +80,69 @@ class Tier:
         return {**self.course, **self.sensor}
 
 
-TIERS: dict[str, Tier] = {
-    tier.name: tier
-    for tier in (
-        Tier("clean", "FlowNav-v0", why="today's defaults, for continuity with the 300-layout history"),
-        Tier(
-            "hard",
-            "FlowNavHard-v0",
-            course=HARD_COURSE,
-            why="a faster flight through a denser field, where the best existing agent fails 0.20-0.50",
-        ),
-        Tier(
-            "noisy",
-            "FlowNavNoisy-v0",
-            sensor=realistic_sensor(),
-            why="the default course told rotation and translation with a real drone's sensor errors",
-        ),
-        Tier(
-            "hard_noisy",
-            "FlowNavHardNoisy-v0",
-            course=HARD_COURSE,
-            sensor=realistic_sensor(),
-            why="the hard course with the realistic sensor",
-        ),
-    )
-}
+def _v1_tiers() -> dict[str, Tier]:
+    return {
+        spec.name: spec
+        for spec in (
+            Tier("clean", "FlowNav-v0", why="the env's defaults, for continuity with the 300-layout history"),
+            Tier("hard", "FlowNavHard-v0", course=HARD_COURSE, why="a faster flight through a denser field"),
+            Tier("noisy", "FlowNavNoisy-v0", sensor=realistic_sensor(), why="the default course, datasheet errors"),
+            Tier("hard_noisy", "FlowNavHardNoisy-v0", course=HARD_COURSE, sensor=realistic_sensor(), why="both"),
+        )
+    }
+
+
+def _v2_tiers() -> dict[str, Tier]:
+    clean = dict(CLOSED_FIELD)
+    hard = {**CLOSED_FIELD, **V2_HARD_COURSE}
+    sensor = flight_stack_sensor()
+    return {
+        spec.name: spec
+        for spec in (
+            Tier("clean", "FlowNav-v1", course=clean, why="the env's defaults over a closed field"),
+            Tier("hard", "FlowNavHard-v1", course=hard, why="twice the distance per frame, a 2-s mean free path"),
+            Tier("noisy", "FlowNavNoisy-v1", course=clean, sensor=sensor, why="motion told as a flight stack does"),
+            Tier("hard_noisy", "FlowNavHardNoisy-v1", course=hard, sensor=sensor, why="the hard course, told so"),
+        )
+    }
+
+
+TIERS_BY_VERSION: dict[str, dict[str, Tier]] = {"1": _v1_tiers(), "2": _v2_tiers()}
+TIERS: dict[str, Tier] = TIERS_BY_VERSION[SUITE_VERSION]
 TIER_NAMES = tuple(TIERS)
 
 
-def tier(name: str) -> Tier:
-    """The tier called ``name``.
+def check_suite_version(version: str) -> str:
+    """``version`` as a suite version string.
 
     Raises:
-        ValueError: not a tier; the message lists them.
+        ValueError: not one of :data:`SUITE_VERSIONS`.
     """
-    if name not in TIERS:
-        raise ValueError(f"tier must be one of {', '.join(TIER_NAMES)}, got {name!r}")
-    return TIERS[name]
+    text = str(version)
+    if text not in SUITE_VERSIONS:
+        raise ValueError(f"suite version must be one of {', '.join(SUITE_VERSIONS)}, got {version!r}")
+    return text
+
+
+def tier(name: str, version: str = SUITE_VERSION) -> Tier:
+    """The tier called ``name`` in suite ``version``.
+
+    Raises:
+        ValueError: not a tier, or not a suite version; the message lists them.
+    """
+    tiers = TIERS_BY_VERSION[check_suite_version(version)]
+    if name not in tiers:
+        raise ValueError(f"tier must be one of {', '.join(tiers)}, got {name!r}")
+    return tiers[name]
+
+
+def tier_of_env_id(env_id: str) -> tuple[str, Tier] | None:
+    """The (suite version, tier) whose registered id is ``env_id``, or None."""
+    for version, tiers in TIERS_BY_VERSION.items():
+        for spec in tiers.values():
+            if spec.env_id == env_id:
+                return version, spec
+    return None
 
 
 # The only settings an agent may choose on a tier: each adds an observation key (or shapes one, for
@@ -165,14 +162,14 @@ PRIVILEGED_SETTING_VALUES: dict[str, tuple[Any, ...]] = {
 }
 
 
-def tier_value(tier_name: str, setting: str) -> Any:
+def tier_value(tier_name: str, setting: str, version: str = SUITE_VERSION) -> Any:
     """The value ``tier_name`` flies ``setting`` with: the tier's own, else the env's default (a tier fixes
     every setting an agent may not choose).
 
     Raises:
         ValueError: an unknown tier or setting.
     """
-    spec = tier(tier_name)
+    spec = tier(tier_name, version)
     defaults = {item.name: item.default for item in fields(EnvSettings)}
     if setting not in defaults:
         raise ValueError(f"{setting!r} is not a FlowNav env setting")
@@ -189,7 +186,12 @@ def privileged_requests(wanted: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def check_agent_settings(
-    agent: str, wanted: Mapping[str, Any], tier_name: str, *, privileged: bool = False
+    agent: str,
+    wanted: Mapping[str, Any],
+    tier_name: str,
+    *,
+    privileged: bool = False,
+    version: str = SUITE_VERSION,
 ) -> None:
     """Refuse an agent that asks ``tier_name`` for anything but observation keys, so every agent on a tier flies
     the same task. Asking for a setting's tier value is no change and passes; privileged data (true depths)
@@ -201,7 +203,7 @@ def check_agent_settings(
     for key, value in wanted.items():
         if key in AGENT_OBSERVATION_SETTINGS:
             continue
-        fixed = tier_value(tier_name, key)
+        fixed = tier_value(tier_name, key, version)
         if key in privileged_requests({key: value}):
             if privileged:
                 continue
@@ -218,7 +220,12 @@ def check_agent_settings(
 
 
 def check_flown_settings(
-    agent: str, flown: Mapping[str, Any], tier_name: str, *, privileged: bool = False
+    agent: str,
+    flown: Mapping[str, Any],
+    tier_name: str,
+    *,
+    privileged: bool = False,
+    version: str = SUITE_VERSION,
 ) -> None:
     """Refuse episodes of ``agent`` recorded on ``tier_name`` with settings ``flown`` (the env kwargs its
     episode records hold) that are not the tier's task: a tier setting missing or changed, or anything else
@@ -227,11 +234,12 @@ def check_flown_settings(
     Raises:
         ValueError: one line naming the agent, the tier and the first setting that differs.
     """
-    for key, value in tier(tier_name).settings.items():
+    fixed = tier(tier_name, version).settings
+    for key, value in fixed.items():
         if key not in flown or flown[key] != value:
             raise ValueError(
                 f"agent {agent} was flown on tier {tier_name} with {key}={flown.get(key, 'the default')!r}, but "
                 f"the tier fixes {key}={value!r}: these are not the tier's episodes"
             )
-    others = {key: value for key, value in flown.items() if key not in tier(tier_name).settings}
-    check_agent_settings(agent, others, tier_name, privileged=privileged)
+    others = {key: value for key, value in flown.items() if key not in fixed}
+    check_agent_settings(agent, others, tier_name, privileged=privileged, version=version)

@@ -19,7 +19,9 @@ Sub-ranges with one use each:
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | student recipes (validation) | ``STUDENT_RECIPE_SEED_START ..`` | recipes for the planner's student compared per tier (``flownav ablation --tier``) |
 | lane check (validation) | ``LANE_SEED_START ..`` | whether agents leave the capsule field for the free lane beside it (``agents/evaluation/lane.py``) |
-| suite (test, frozen) | ``SUITE_SEED_START .. + SUITE_LAYOUTS`` | the suite's leading table and ``flownav score``; nothing is chosen by looking at it |
+| suite v2 checks (validation) | ``SUITE_V2_CHECK_SEED_START ..`` | the privileged references' feasibility checks of suite v2's tiers, before the freeze |
+| suite v2 sensor readings (validation) | ``SUITE_V2_SENSOR_READING_SEED_START ..`` | v2's noisy tiers at other readings of the velocity specification |
+| suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
 trained for a suite tier learns on the training range and is judged on the tier's validation range, both flown
@@ -64,8 +66,15 @@ STUDENT_RECIPE_SEED_START = 960_100
 # Validation layouts on which every agent is flown once per tier to see whether it leaves the capsule field for the
 # free lane beside it (agents/evaluation/lane.py): past the student recipes' 100.
 LANE_SEED_START = 960_200
-# The suite's frozen test layouts: no run of the project touched them before the suite was frozen.
-SUITE_SEED_START = 2_000_000
+# Validation layouts on which suite v2's tiers are checked for feasibility before they are frozen (the privileged
+# planner and the camera-limited reference; results/suite_v2_calibration/).
+SUITE_V2_CHECK_SEED_START = 970_000
+# Validation layouts on which suite v2's noisy tiers are flown at other readings of the velocity specification
+# (the sensitivity table): past the checks' 1,000.
+SUITE_V2_SENSOR_READING_SEED_START = 971_000
+# Each suite version's frozen test layouts: no run of the project touched them before that version was frozen.
+SUITE_SEED_STARTS = {"1": 2_000_000, "2": 3_000_000}
+SUITE_SEED_START = SUITE_SEED_STARTS["1"]
 SUITE_LAYOUTS = 300
 
 
@@ -75,15 +84,19 @@ TIER_TRAINING_SEEDS = range(0, VALIDATION_SEED_START)
 TIER_VALIDATION_SEEDS = range(STUDENT_CHECK_SEED_START, TEST_SEED_START)
 
 
-def suite_seeds(layouts: int = SUITE_LAYOUTS) -> range:
-    """The first ``layouts`` frozen test layouts of the suite.
+def suite_seeds(layouts: int = SUITE_LAYOUTS, version: str | None = None) -> range:
+    """The first ``layouts`` frozen test layouts of suite ``version`` (default: the newest).
 
     Raises:
-        ValueError: ``layouts`` is not between 1 and :data:`SUITE_LAYOUTS`.
+        ValueError: ``layouts`` is not between 1 and :data:`SUITE_LAYOUTS`, or an unknown version.
     """
     if isinstance(layouts, bool) or not isinstance(layouts, int) or not 1 <= layouts <= SUITE_LAYOUTS:
         raise ValueError(f"suite layouts must be an integer in [1, {SUITE_LAYOUTS}], got {layouts!r}")
-    return range(SUITE_SEED_START, SUITE_SEED_START + layouts)
+    version = max(SUITE_SEED_STARTS) if version is None else str(version)
+    if version not in SUITE_SEED_STARTS:
+        raise ValueError(f"suite version must be one of {', '.join(SUITE_SEED_STARTS)}, got {version!r}")
+    start = SUITE_SEED_STARTS[version]
+    return range(start, start + layouts)
 
 
 def training_env_seed(run_seed: int) -> int:

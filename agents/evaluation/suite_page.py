@@ -26,7 +26,8 @@ from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
 from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, VELOCITY_READINGS, tier, translation_noise_m
+from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
 
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
 # episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).

@@ -22,8 +22,10 @@ from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
     AGENT_OBSERVATION_SETTINGS,
     PRIVILEGED_SETTING_VALUES,
+    SUITE_VERSION,
     TIER_NAMES,
     tier,
+    tier_of_env_id,
     tier_value,
 )
 
@@ -72,10 +74,12 @@ def _flown(value: object, fixed: object, bounds: Sequence[float] | None) -> bool
 
 
 def tiers_covered(
-    env: Mapping[str, object], randomize: Mapping[str, Sequence[float] | None]
+    env: Mapping[str, object],
+    randomize: Mapping[str, Sequence[float] | None],
+    version: str = SUITE_VERSION,
 ) -> tuple[str, ...]:
-    """The tiers (suite order) whose every task setting a training run with fixed settings ``env`` and per-episode
-    ranges ``randomize`` flew. Settings that only shape the observation are not compared.
+    """The tiers of suite ``version`` (suite order) whose every task setting a training run with fixed settings
+    ``env`` and per-episode ranges ``randomize`` flew. Settings that only shape the observation are not compared.
 
     Raises:
         ValueError: ``env`` or ``randomize`` names something that is not a FlowNav env setting.
@@ -88,37 +92,40 @@ def tiers_covered(
         )
     defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
     compared = sorted(
-        ({key for key, bounds in randomize.items() if bounds} | set(env) | _tier_settings()) - _SHOWN_SETTINGS
+        ({key for key, bounds in randomize.items() if bounds} | set(env) | _tier_settings(version))
+        - _SHOWN_SETTINGS
     )
     return tuple(
         name
         for name in TIER_NAMES
         if all(
-            _flown(tier_value(name, key), env.get(key, defaults[key]), randomize.get(key)) for key in compared
+            _flown(tier_value(name, key, version), env.get(key, defaults[key]), randomize.get(key))
+            for key in compared
         )
     )
 
 
-def _tier_settings() -> set[str]:
-    """Every setting some tier fixes away from the env's defaults."""
-    return {key for name in TIER_NAMES for key in tier(name).settings}
+def _tier_settings(version: str) -> set[str]:
+    """Every setting some tier of suite ``version`` fixes away from the env's defaults."""
+    return {key for name in TIER_NAMES for key in tier(name, version).settings}
 
 
-def config_tiers(config_path: str | Path) -> tuple[str, ...]:
-    """The tiers the training config at ``config_path`` (a policy's ``.yaml``) trained on. Its env id is a tier's
-    (whose settings it starts from, under its own ``env``); any other id gives none."""
+def config_tiers(config_path: str | Path, version: str = SUITE_VERSION) -> tuple[str, ...]:
+    """The tiers of suite ``version`` the training config at ``config_path`` (a policy's ``.yaml``) trained on.
+    Its env id is a tier's of any version (whose settings it starts from, under its own ``env``); any other id
+    gives none."""
     config = load_config(config_path, TrainConfig)
-    registered = {tier(name).env_id: tier(name).settings for name in TIER_NAMES}
-    if config.env_id not in registered:
+    found = tier_of_env_id(config.env_id)
+    if found is None:
         return ()
-    env = {**registered[config.env_id], **dict(config.env)}
-    return tiers_covered(env, dataclasses.asdict(config.randomize))
+    env = {**found[1].settings, **dict(config.env)}
+    return tiers_covered(env, dataclasses.asdict(config.randomize), version)
 
 
-def agent_tiers(name: str) -> tuple[str, ...]:
-    """The tiers the shipped learned agent ``name`` trained on, from the training config beside its policy; none
-    for an agent that did not learn or whose policy has no config beside it."""
+def agent_tiers(name: str, version: str = SUITE_VERSION) -> tuple[str, ...]:
+    """The tiers of suite ``version`` the shipped learned agent ``name`` trained on, from the training config
+    beside its policy; none for an agent that did not learn or whose policy has no config beside it."""
     if not is_learned(name):
         return ()
     config_path = policy_file(name).with_suffix(".yaml")
-    return config_tiers(config_path) if config_path.is_file() else ()
+    return config_tiers(config_path, version) if config_path.is_file() else ()

@@ -11,20 +11,23 @@ import pytest
 
 import flownav_env
 from flownav_env.settings import EnvSettings
-from flownav_env.tiers import (
+from flownav_env.sensor_specs import (
     CAMERA_IMU_OFFSET_MS,
     GYRO_NOISE_DENSITY_DEG_S_RTHZ,
+    VELOCITY_ACCURACY_M_S,
+    realistic_sensor,
+)
+from flownav_env.tiers import (
     HARD_COURSE,
     SUITE_VERSION,
     TIER_NAMES,
     TIERS,
-    VELOCITY_ACCURACY_M_S,
-    realistic_sensor,
+    TIERS_BY_VERSION,
     tier,
 )
 
 
-@pytest.mark.parametrize("name", [name for name in TIER_NAMES if name != "clean"])
+@pytest.mark.parametrize("name", TIER_NAMES)
 def test_every_tier_passes_gymnasium_and_sb3_env_checkers(name: str) -> None:
     from gymnasium.utils.env_checker import check_env as gymnasium_check
     from stable_baselines3.common.env_checker import check_env as sb3_check
@@ -37,17 +40,26 @@ def test_every_tier_passes_gymnasium_and_sb3_env_checkers(name: str) -> None:
         env.close()
 
 
-def test_each_tier_flies_the_settings_it_states() -> None:
-    assert TIER_NAMES[0] == "clean" and TIERS["clean"].env_id == "FlowNav-v0" and not TIERS["clean"].settings
-    for spec in TIERS.values():
+@pytest.mark.parametrize("version", list(TIERS_BY_VERSION))
+def test_each_tier_flies_the_settings_it_states(version: str) -> None:
+    tiers = TIERS_BY_VERSION[version]
+    assert TIER_NAMES == tuple(tiers) and TIER_NAMES[0] == "clean"
+    for spec in tiers.values():
         env = gym.make(spec.env_id)
         settings = env.unwrapped.settings
         env.close()
         for key, value in spec.settings.items():
             assert getattr(settings, key) == value, (spec.name, key)
         assert spec.env_id in flownav_env.ENV_IDS and spec.why
-    assert TIERS["hard"].course == HARD_COURSE == TIERS["hard_noisy"].course
-    assert TIERS["noisy"].sensor == TIERS["hard_noisy"].sensor == realistic_sensor()
+    assert tiers["hard"].course == tiers["hard_noisy"].course
+    assert tiers["noisy"].sensor == tiers["hard_noisy"].sensor
+
+
+def test_v1_keeps_its_task() -> None:
+    v1 = TIERS_BY_VERSION["1"]
+    assert v1["clean"].env_id == "FlowNav-v0" and not v1["clean"].settings
+    assert v1["hard"].course == HARD_COURSE == v1["hard_noisy"].course
+    assert v1["noisy"].sensor == v1["hard_noisy"].sensor == realistic_sensor()
 
 
 def test_the_realistic_sensor_is_its_specifications_per_frame() -> None:

@@ -78,7 +78,7 @@ def test_the_page_renders_every_branch() -> None:
 def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
     from agents.common.locations import RESULTS_DIR
     from agents.evaluation.suite_page import SENSOR_READING_DIR, reading_values
-    from flownav_env.tiers import VELOCITY_READINGS, translation_noise_m
+    from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
 
     readings = reading_values(RESULTS_DIR / SENSOR_READING_DIR)
     assert {r["agent"] for r in readings} >= {"bee_ttc"}

@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
         name=args.name,
         overwrite=args.overwrite,
         step_timeout_s=args.step_timeout,
+        version=args.suite_version,
         **common,
     )
     print("\n".join(tier_tables(rows)))

@@ -16,7 +16,7 @@ from agents.cli.arguments import add_workers_argument
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.policies import SUITE_AGENTS
-from flownav_env.tiers import TIER_NAMES
+from flownav_env.tiers import SUITE_VERSION, SUITE_VERSIONS, TIER_NAMES
 
 HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
 
@@ -35,9 +35,21 @@ def add_tier_arguments(parser: argparse.ArgumentParser) -> None:
         default=SUITE_LAYOUTS,
         help="the first N frozen test layouts per run (default: all %(default)s; fewer is a stated prefix)",
     )
+    add_suite_version_argument(parser)
     add_workers_argument(parser)
     parser.add_argument("--backend", choices=("local", "ray"), default="local", help="where episodes fly")
     parser.add_argument("--address", help="Ray cluster address (with --backend ray; default: a local Ray)")
+
+
+def add_suite_version_argument(parser: argparse.ArgumentParser) -> None:
+    """``--suite-version``: which version's tiers and frozen layouts (the current one by default)."""
+    parser.add_argument(
+        "--suite-version",
+        choices=SUITE_VERSIONS,
+        default=SUITE_VERSION,
+        help=f"the suite version whose tiers and frozen layouts to fly (default: {SUITE_VERSION}, the current one; "
+        "1 reproduces suite v1, whose field left a capsule-free lane)",
+    )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -70,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         address=args.address,
         report_only=args.report_only,
         command=command.strip(),
+        version=args.suite_version,
     )
     print("\n".join(lines))
     return 0

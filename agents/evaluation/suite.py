@@ -61,7 +61,7 @@ from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, t
 EPISODES_CSV = "suite_episodes.csv"
 
 
-def parse_tiers(text: str | Sequence[str]) -> list[str]:
+def parse_tiers(text: str | Sequence[str]) -> list[str]:  # the tier names are the same in every version
     """``"all"`` or comma-separated tier names (or a list of them) → the tier names, in suite order.
 
     Raises:
@@ -89,11 +89,13 @@ def agent_runs(agent: str, policy: str | None = None) -> list[str]:
     return runs_to_fly(agent, policy)[0]
 
 
-def _check_agent_fits_tier(name: str, policy: str | None, tier_name: str) -> None:
+def _check_agent_fits_tier(name: str, policy: str | None, tier_name: str, version: str) -> None:
     """An agent may choose observation keys, never change the task a tier fixes; privileged data only when it
     is declared privileged (:func:`flownav_env.tiers.check_agent_settings`)."""
     path = policy_file(name, policy, directory=POLICIES_DIR) if is_learned(name) else policy
-    check_agent_settings(name, agent_env_kwargs(name, path), tier_name, privileged=is_privileged(name))
+    check_agent_settings(
+        name, agent_env_kwargs(name, path), tier_name, privileged=is_privileged(name), version=version
+    )
 
 
 def suite_tasks(
@@ -103,9 +105,10 @@ def suite_tasks(
     *,
     policies: Mapping[str, str | None] | None = None,
     trust_pickle: bool = False,
+    version: str = SUITE_VERSION,
 ) -> list[EpisodeTask]:
-    """Every run of every agent on the first ``layouts`` frozen layouts of each tier, tier by tier and layout by
-    layout (an interrupted flight leaves every run with about the same layouts).
+    """Every run of every agent on the first ``layouts`` frozen layouts of each tier of suite ``version``, tier by
+    tier and layout by layout (an interrupted flight leaves every run with about the same layouts).
 
     Args:
         runs: agent → its run names (:func:`agent_runs`).
@@ -118,12 +121,12 @@ def suite_tasks(
         ValueError: a bad tier or layout count, or an agent that sets a setting a tier fixes.
     """
     policies = policies or {}
-    seeds = suite_seeds(layouts)
+    seeds = suite_seeds(layouts, version)
     tasks = []
     for tier_name in tiers:
-        spec = tier(tier_name)
+        spec = tier(tier_name, version)
         for agent, names in runs.items():
-            _check_agent_fits_tier(names[0], policies.get(agent), tier_name)
+            _check_agent_fits_tier(names[0], policies.get(agent), tier_name, version)
         for seed in seeds:
             for agent, names in runs.items():
                 for name in names:
@@ -134,7 +137,7 @@ def suite_tasks(
                             seed,
                             env_id=spec.env_id,
                             settings=spec.settings,
-                            suite_version=SUITE_VERSION,
+                            suite_version=version,
                             policy=policies.get(agent),
                             trust_pickle=trust_pickle,
                         )
@@ -152,6 +155,7 @@ def summarise_suite(
     runs: Mapping[str, Sequence[str]],
     tiers: Sequence[str],
     layouts: int = SUITE_LAYOUTS,
+    version: str = SUITE_VERSION,
 ) -> list[dict[str, Any]]:
     """One row per (agent, tier) with :data:`SUMMARY_COLUMNS` from the suite's episode rows (:func:`suite_rows`):
     each outcome's rate, with a 95 % interval over layouts (Wilson) for one run, or over runs × layouts
@@ -159,7 +163,7 @@ def summarise_suite(
     partial flight reports what is whole).
     """
     rows = list(rows)
-    seeds = list(suite_seeds(layouts))
+    seeds = list(suite_seeds(layouts, version))
     table = []
     for tier_name in tiers:
         tier_rows = [row for row in rows if row["tier"] == tier_name]
@@ -169,9 +173,9 @@ def summarise_suite(
             except ValueError:
                 continue
             row: dict[str, Any] = {
-                "suite_version": SUITE_VERSION,
+                "suite_version": version,
                 "tier": tier_name,
-                "env_id": tier(tier_name).env_id,
+                "env_id": tier(tier_name, version).env_id,
                 "agent": agent,
                 "runs": len(names),
                 "layouts": len(seeds),
@@ -228,8 +232,9 @@ def score(
     name: str | None = None,
     overwrite: bool = False,
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
+    version: str = SUITE_VERSION,
 ) -> list[dict[str, Any]]:
-    """Fly ``agent`` on the suite and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
+    """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
     Episodes are appended to ``<out>/suite_episodes.csv`` (calling again resumes); the rows are written to
     ``<out>/score.csv``, which ``flownav leaderboard --include`` sets beside the published table.
@@ -257,7 +262,9 @@ def score(
     agent = resolve_agent(agent, trust_pickle=trust_pickle)
     shown = check_display_name(display_name(agent) if name is None else name, agent)
     runs = {agent: agent_runs(agent, policy)}
-    tasks = suite_tasks(runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle)
+    tasks = suite_tasks(
+        runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle, version=version
+    )
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -276,7 +283,7 @@ def score(
         by_factor=True,
     )
     rows = suite_rows(tasks, csv_path)
-    table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts)]
+    table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)]
     write_summary_csv(out / "score.csv", table)
     return table
 
@@ -312,7 +319,9 @@ def suite_agents() -> list[str]:
     return [agent for agent in SUITE_AGENTS if not is_learned(agent) or default_runs(agent)[0]]
 
 
-def suite_top_groups(folder: Path, layouts: int = SUITE_LAYOUTS) -> list[dict[str, Any]]:
+def suite_top_groups(
+    folder: Path, layouts: int = SUITE_LAYOUTS, version: str = SUITE_VERSION
+) -> list[dict[str, Any]]:
     """Per tier flown in full, in suite order: its best ranked agent with its failure, and its top group, from
     ``folder``'s suite episodes (the ranking of ``suite.md``).
 
@@ -323,10 +332,14 @@ def suite_top_groups(folder: Path, layouts: int = SUITE_LAYOUTS) -> list[dict[st
     if not path.is_file():
         raise FileNotFoundError(f"no suite episodes at {path}: flownav suite --out {folder}")
     runs = {agent: agent_runs(agent) for agent in suite_agents()}
-    tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, TIER_NAMES, layouts)]
+    tasks = [
+        task
+        for agent in runs
+        for task in suite_tasks({agent: runs[agent]}, TIER_NAMES, layouts, version=version)
+    ]
     rows = suite_rows(tasks, path)
-    table = summarise_suite(rows, runs, TIER_NAMES, layouts)
-    seeds = list(suite_seeds(layouts))
+    table = summarise_suite(rows, runs, TIER_NAMES, layouts, version)
+    seeds = list(suite_seeds(layouts, version))
     rankings = rank_suite(table, {name: tier_failures(rows, runs, name, seeds) for name in TIER_NAMES})
     failure = {(row["tier"], row["agent"]): row["failure_rate"] for row in table}
     return [
@@ -351,6 +364,7 @@ def run_suite(
     address: str | None = None,
     report_only: bool = False,
     command: str = "flownav suite",
+    version: str = SUITE_VERSION,
 ) -> list[str]:
     """Fly (unless ``report_only``) every agent on the suite, agent by agent in the order given (an interrupted
     flight leaves whole agents), and write ``suite_episodes.csv``, ``suite.csv``, ``suite.md`` and ``suite.png``
@@ -363,7 +377,11 @@ def run_suite(
     if workers < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")
     runs = {agent: agent_runs(resolve_agent(check_not_retired(agent))) for agent in agents}
-    tasks = [task for agent in runs for task in suite_tasks({agent: runs[agent]}, tier_names, layouts)]
+    tasks = [
+        task
+        for agent in runs
+        for task in suite_tasks({agent: runs[agent]}, tier_names, layouts, version=version)
+    ]
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -371,13 +389,13 @@ def run_suite(
     if not report_only:
         execute(tasks, csv_path, backend=backend, workers=workers, address=address, description="suite")
     rows = suite_rows(tasks, csv_path) if csv_path.is_file() else []
-    table = summarise_suite(rows, runs, tier_names, layouts)
+    table = summarise_suite(rows, runs, tier_names, layouts, version)
     whole = {(row["agent"], row["tier"]) for row in table}
     missing = [f"{agent} on {name}" for name in tier_names for agent in runs if (agent, name) not in whole]
     write_summary_csv(out / "suite.csv", table)
     if table:
         plot_suite(table, out / "suite.png")
-    seeds = list(suite_seeds(layouts))
+    seeds = list(suite_seeds(layouts, version))
     failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
     rankings = rank_suite(table, failures)
     bests = {name: ranking.best for name, ranking in rankings.items()}
@@ -385,13 +403,14 @@ def run_suite(
         table,
         rankings,
         command=command,
-        layouts=suite_seeds(layouts),
+        layouts=suite_seeds(layouts, version),
         machine=machine_summary(),
         missing=missing,
         generated=today(),
-        bounds=suite_bounds(failures, bests, seeds),
+        bounds=suite_bounds(failures, bests, seeds, version),
         gains=learning_gains(failures, rankings),
         **beside_suite(out, tier_names, csv_path, seeds),
+        version=version,
     )
     text = suite_page(values)
     write_text_atomically(out / "suite.md", text)

@@ -27,7 +27,7 @@ from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, traine
 from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, tier
+from flownav_env.tiers import SUITE_VERSION, SUITE_VERSIONS, TIER_NAMES, tier
 
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
 # episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).
@@ -69,20 +69,26 @@ def rank_suite(
     return rankings
 
 
-def _trained_on(agent: str) -> str:
-    """The tiers a learned agent trained on (all of them for one policy across the tiers), else what it trained
-    on in the training config's words; a dash for an agent that did not learn."""
+def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
+    """The tiers of suite ``version`` a learned agent trained on (all of them for one policy across the tiers),
+    else those of an earlier version it trained on, named with their version, else what it trained on in the
+    training config's words; a dash for an agent that did not learn."""
     try:
-        tiers = agent_tiers(agent)
+        tiers = agent_tiers(agent, version)
         if tiers:
             return "every tier (one policy)" if tiers == TIER_NAMES else ", ".join(tiers)
+        for earlier in (v for v in reversed(SUITE_VERSIONS) if v < version):
+            tiers = agent_tiers(agent, earlier)
+            if tiers:
+                named = "every tier" if tiers == TIER_NAMES else ", ".join(tiers)
+                return f"v{earlier}: {named} (none of v{version}'s)"
         return trained_on(agent) or "—"
     except (ValueError, OSError):  # an included outside agent: nothing of its training is known here
         return "—"
 
 
-def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking) -> dict[str, Any]:
-    by_agent = {row["agent"]: dict(row) | {"trained_on": _trained_on(row["agent"])} for row in rows}
+def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking, version: str) -> dict[str, Any]:
+    by_agent = {row["agent"]: dict(row) | {"trained_on": _trained_on(row["agent"], version)} for row in rows}
     compared = {c.agent: c for c in ranking.comparisons}
     ranked = []
     for agent in [ranking.best, *sorted(compared, key=lambda a: (by_agent[a]["failure_rate"], a))]:
@@ -150,26 +156,29 @@ def suite_values(
     recipe_reports: Mapping[str, str] | None = None,
     lanes: Sequence[Mapping[str, Any]] = (),
     retired: Sequence[Mapping[str, Any]] = (),
+    version: str = SUITE_VERSION,
 ) -> dict[str, Any]:
-    """Every value ``suite.md`` words: the tiers in suite order, each with its ranked, provisional and
-    reference rows, its best agent, top group and headroom."""
+    """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
+    provisional and reference rows, its best agent, top group and headroom."""
     tiers = []
     for name in TIER_NAMES:
         if name not in rankings:
             continue
-        spec = tier(name)
+        spec = tier(name, version)
         rows = [row for row in table if row["tier"] == name]
         tiers.append(
             {
                 "name": name,
                 "env_id": spec.env_id,
                 "why": spec.why,
-                **_tier_values(rows, rankings[name]),
+                **_tier_values(rows, rankings[name], version),
                 "bound": (bounds or {}).get(name),
             }
         )
     return {
-        "suite_version": SUITE_VERSION,
+        "suite_version": version,
+        "current_version": SUITE_VERSION,
+        "seed_start_name": f'SUITE_SEED_STARTS["{version}"]',
         "generated": generated,
         "command": command,
         "machine": machine,
@@ -187,7 +196,7 @@ def suite_values(
         "suite_reading": VELOCITY_READINGS[SUITE_READING][0],
         "reading_dir": SENSOR_READING_DIR,
         "gains": list(gains),
-        "trained_on": {gain.learned: _trained_on(gain.learned) for gain in gains},
+        "trained_on": {gain.learned: _trained_on(gain.learned, version) for gain in gains},
         "recipe_reports": dict(recipe_reports or {}),
         "lanes": list(lanes),
         "lane_dir": LANE_DIR,

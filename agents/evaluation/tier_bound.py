@@ -16,17 +16,18 @@ from agents.evaluation.paired import compare
 from agents.evaluation.statistics import wilson_interval
 from agents.policies.planner_feasibility import corridor_exists
 from flownav_env.privileged import COURSE_INFO_FIELDS
-from flownav_env.tiers import tier
+from flownav_env.tiers import SUITE_VERSION, tier
 
 BOUND_AGENT = "planner"
 # The layout does not depend on the camera: the smallest frames make the check cheap.
 _CHECK_FRAME: dict[str, Any] = {"camera_width": 32, "camera_height": 24}
 
 
-def layout_is_feasible(tier_name: str, seed: int) -> bool:
-    """Whether the layout of ``seed`` on ``tier_name`` has a collision-free corridor to the goal line at the
-    tier's forward speed and the drone's lateral speed limit (read from the env's privileged keys)."""
-    spec = tier(tier_name)
+def layout_is_feasible(tier_name: str, seed: int, version: str = SUITE_VERSION) -> bool:
+    """Whether the layout of ``seed`` on ``tier_name`` of suite ``version`` has a collision-free corridor to the
+    goal line at the tier's forward speed and the drone's lateral speed limit (read from the env's privileged
+    keys)."""
+    spec = tier(tier_name, version)
     env = gym.make(spec.env_id, observe_layout=True, **_CHECK_FRAME)
     try:
         observation, _ = env.reset(seed=seed)
@@ -75,11 +76,19 @@ def tier_bound(
 
 
 def suite_bounds(
-    failures: Mapping[str, Mapping[str, np.ndarray]], bests: Mapping[str, str], layouts: Sequence[int]
+    failures: Mapping[str, Mapping[str, np.ndarray]],
+    bests: Mapping[str, str],
+    layouts: Sequence[int],
+    version: str = SUITE_VERSION,
 ) -> dict[str, dict[str, Any]]:
-    """:func:`tier_bound` for each tier the planner has flown in full, against that tier's best ranked agent."""
+    """:func:`tier_bound` for each tier the planner has flown in full, against that tier's best ranked agent
+    (the layouts of suite ``version``)."""
+
+    def feasible(tier_name: str, seed: int) -> bool:
+        return layout_is_feasible(tier_name, seed, version)
+
     return {
-        name: tier_bound(name, matrices[BOUND_AGENT], bests[name], matrices[bests[name]], layouts)
+        name: tier_bound(name, matrices[BOUND_AGENT], bests[name], matrices[bests[name]], layouts, feasible)
         for name, matrices in failures.items()
         if BOUND_AGENT in matrices and name in bests
     }

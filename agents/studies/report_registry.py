@@ -19,7 +19,7 @@ from agents.evaluation.leaderboard import run_leaderboard
 from agents.evaluation.suite import run_suite, suite_agents
 from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
-from agents.studies import confirmation, tier_calibration
+from agents.studies import confirmation, suite_checks, tier_calibration
 from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
@@ -219,10 +219,13 @@ REPORTS: tuple[Report, ...] = (
         for name in TIER_NAMES
     ),
     Report(
-        "suite_calibration/calibration.md",
+        "suite_v1/suite_calibration/calibration.md",
         name="calibrate-tiers",
-        command="flownav calibrate-tiers --out results/suite_calibration --report-only",
-        inputs=("suite_calibration/calibration_episodes.csv", "suite_calibration/sensor_pilot_episodes.csv"),
+        command="flownav calibrate-tiers --out results/suite_v1/suite_calibration --report-only",
+        inputs=(
+            "suite_v1/suite_calibration/calibration_episodes.csv",
+            "suite_v1/suite_calibration/sensor_pilot_episodes.csv",
+        ),
         write=lambda report, folder: tier_calibration.write_calibration(
             folder, report.command, report_only=True
         ),
@@ -259,9 +262,25 @@ REPORTS: tuple[Report, ...] = (
         "suite.md",
         name="suite",
         command="flownav suite --out results --report-only",
-        inputs=("suite_episodes.csv", "sensor_reading/*.csv", "lane/*.csv"),
+        inputs=("suite_episodes.csv", "suite_v2_calibration/*.csv"),
         write=lambda report, folder: run_suite(
-            suite_agents(), folder, report_only=True, command=report.command
+            suite_agents(), folder, report_only=True, command=report.command, version="2"
+        ),
+    ),
+    Report(
+        "suite_v2_calibration/calibration.md",
+        name="suite-checks",
+        command="flownav reports --out results --only suite-checks",
+        inputs=("suite_v2_calibration/*.csv",),
+        write=lambda report, folder: suite_checks.write_checks(folder, report.command),
+    ),
+    Report(
+        "suite_v1/suite.md",
+        name="suite-v1",
+        command="flownav suite --suite-version 1 --out results/suite_v1 --report-only",
+        inputs=("suite_v1/suite_episodes.csv", "suite_v1/sensor_reading/*.csv", "suite_v1/lane/*.csv"),
+        write=lambda report, folder: run_suite(
+            suite_agents(), folder, report_only=True, command=report.command, version="1"
         ),
     ),
     Report(

@@ -1,4 +1,6 @@
-"""How the suite's tiers were chosen, on validation layouts only (``flownav calibrate-tiers``).
+"""How suite v1's tiers were chosen, on validation layouts only (``flownav calibrate-tiers``). Suite v2 chose
+none of its tiers this way: they are fixed from physics (:mod:`flownav_env.tiers`), so this study is v1's
+history and reads v1's tiers (:data:`CALIBRATED_VERSION`).
 
 1. **Hard course.** Every candidate of :data:`CANDIDATE_COURSES` (forward speed × obstacle density) is flown
    by the :data:`COURSE_AGENTS` on :data:`CALIBRATION_LAYOUTS` validation layouts from
@@ -32,7 +34,16 @@ from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
 from agents.studies.error_analysis import failure
 from agents.studies.wording import render_report
-from flownav_env.tiers import HARD_COURSE, TIER_NAMES, tier
+from flownav_env.tiers import HARD_COURSE, TIER_NAMES
+from flownav_env.tiers import tier as tier_of_version
+
+# The suite version whose tiers this study calibrated.
+CALIBRATED_VERSION = "1"
+
+
+def tier(name: str) -> Any:
+    """The tier ``name`` of the calibrated version."""
+    return tier_of_version(name, CALIBRATED_VERSION)
 
 CANDIDATE_COURSES = tuple(
     {"forward_speed": speed, "obstacle_density": density}

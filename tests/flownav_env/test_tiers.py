@@ -10,13 +10,13 @@ import gymnasium as gym
 import pytest
 
 import flownav_env
-from flownav_env.settings import EnvSettings
 from flownav_env.sensor_specs import (
     CAMERA_IMU_OFFSET_MS,
     GYRO_NOISE_DENSITY_DEG_S_RTHZ,
     VELOCITY_ACCURACY_M_S,
     realistic_sensor,
 )
+from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
     HARD_COURSE,
     SUITE_VERSION,

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from agents.cli.arguments import add_workers_argument
+from agents.cli.suite import add_suite_version_argument
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.evaluation.leaderboard import MIN_EPISODES, run_leaderboard
@@ -56,9 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--suite",
-        default=str(RESULTS_DIR / "suite.csv"),
-        help="the published suite table --include adds to (default: %(default)s)",
+        help="the published suite table --include adds to (default: results/suite.csv for the current version, "
+        "results/suite_v1/suite.csv for --suite-version 1)",
     )
+    add_suite_version_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,10 +84,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _include(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.evaluation.suite import write_summary_csv
+    from agents.evaluation.suite import published_suite_csv, write_summary_csv
 
-    published = read_suite_csv(Path(args.suite))
-    included, files = read_included(args.include)
+    version = args.suite_version
+    suite_path = Path(args.suite) if args.suite else published_suite_csv(version)
+    published = read_suite_csv(suite_path, version)
+    included, files = read_included(args.include, version)
     rows = merge_rows(published, included)
     out = Path(args.out)
     check_writable_folder(out)
@@ -94,7 +98,7 @@ def _include(args: argparse.Namespace) -> int:
     lines = [
         f"# The suite table with {count} included row{'' if count == 1 else 's'}",
         "",
-        f"Published rows from `{args.suite}`; included rows from {', '.join(f'`{p}`' for p in files)}. An included "
+        f"Published rows from `{suite_path}`; included rows from {', '.join(f'`{p}`' for p in files)}. An included "
         "row rests on the layouts its `layouts` column says, the first of the published rows' frozen layouts.",
         "",
         *tier_tables(rows),

@@ -74,7 +74,8 @@ SUITE_V2_CHECK_SEED_START = 970_000
 SUITE_V2_SENSOR_READING_SEED_START = 971_000
 # Each suite version's frozen test layouts: no run of the project touched them before that version was frozen.
 SUITE_SEED_STARTS = {"1": 2_000_000, "2": 3_000_000}
-SUITE_SEED_START = SUITE_SEED_STARTS["1"]
+# The current (newest) version's first frozen layout.
+SUITE_SEED_START = SUITE_SEED_STARTS[max(SUITE_SEED_STARTS)]
 SUITE_LAYOUTS = 300
 
 

@@ -15,21 +15,24 @@ from pathlib import Path
 from typing import Any
 
 from agents.evaluation.records import read_records
-from flownav_env.tiers import TIER_NAMES, TIERS, tier_value
+from flownav_env.tiers import TIER_NAMES, TIERS_BY_VERSION, tier_value
 
 # Where the lane flights lie, beside the suite's report.
 LANE_DIR = "lane"
+# The suite version whose open field left the lane (v2 closed it: its field reaches the bounds).
+LANE_VERSION = "1"
 
 
 def lane_edge(tier_name: str) -> float:
     """How far sideways (m) a drone of ``tier_name`` is past every capsule surface: the lane's inner edge."""
-    return float(tier_value(tier_name, "field_width")) / 2.0 + float(tier_value(tier_name, "obstacle_radius"))
+    width, radius = (float(tier_value(tier_name, key, LANE_VERSION)) for key in ("field_width", "obstacle_radius"))
+    return width / 2.0 + radius
 
 
 def lane_values(folder: Path) -> list[dict[str, Any]]:
     """Per (agent, tier) flown into ``folder``'s CSVs, in agent then tier order: the episodes that recorded
     their sideways extent, how many entered the lane, the farthest one (m), and the lane's edges (m)."""
-    tiers_by_env = {spec.env_id: name for name, spec in TIERS.items()}
+    tiers_by_env = {spec.env_id: name for name, spec in TIERS_BY_VERSION[LANE_VERSION].items()}
     extents: dict[tuple[str, str], list[float]] = {}
     for path in sorted(Path(folder).glob("*.csv")):
         for row in read_records(path):
@@ -45,7 +48,7 @@ def lane_values(folder: Path) -> list[dict[str, Any]]:
             "entered": sum(extent > lane_edge(name) for extent in found),
             "widest": max(found),
             "edge": lane_edge(name),
-            "bound": float(tier_value(name, "lateral_bound")),
+            "bound": float(tier_value(name, "lateral_bound", LANE_VERSION)),
         }
         for (agent, name), found in sorted(extents.items(), key=lambda item: (item[0][0], order[item[0][1]]))
     ]

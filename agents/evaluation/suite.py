@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from agents.common.folders import check_writable_folder, write_text_atomically
-from agents.common.locations import POLICIES_DIR
+from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of, suite_task, with_tier
@@ -59,6 +59,14 @@ from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
 EPISODES_CSV = "suite_episodes.csv"
+# Where each suite version's published files lie under results/: the current version at the top, earlier ones as
+# history in their own folder.
+SUITE_RESULTS_FOLDERS = {"1": "suite_v1", "2": "."}
+
+
+def published_suite_csv(version: str = SUITE_VERSION) -> Path:
+    """The published ``suite.csv`` of suite ``version``."""
+    return RESULTS_DIR / SUITE_RESULTS_FOLDERS[version] / "suite.csv"
 
 
 def parse_tiers(text: str | Sequence[str]) -> list[str]:  # the tier names are the same in every version

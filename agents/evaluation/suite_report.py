@@ -45,7 +45,7 @@ HEADROOM_FAILURE = 0.15
 SCORE_CSV_HINT = "flownav score writes one"
 
 
-def read_suite_csv(path: Path) -> list[dict[str, Any]]:
+def read_suite_csv(path: Path, version: str = SUITE_VERSION) -> list[dict[str, Any]]:
     """Rows of a suite or score CSV (:data:`SUMMARY_COLUMNS`), typed.
 
     Raises:
@@ -77,13 +77,14 @@ def read_suite_csv(path: Path) -> list[dict[str, Any]]:
                 f"{path}, line {line}: the row has {fewer_or_more} fields than the header (torn or edited); "
                 "score the agent again with flownav score"
             )
-        if row["suite_version"] != SUITE_VERSION:
+        if row["suite_version"] != version:
             raise ValueError(
                 f"{path} holds rows of suite version {row['suite_version']!r}, but this is suite version "
-                f"{SUITE_VERSION!r}: its tiers are other tasks; score the agent again with flownav score"
+                f"{version!r}: its tiers are other tasks; score the agent again with flownav score "
+                f"--suite-version {version}, or pass --suite-version {row['suite_version']}"
             )
         try:
-            tier(row["tier"])
+            tier(row["tier"], version)
         except ValueError as error:
             raise ValueError(f"{path}, line {line}: {error}") from None
         check_row_task(row, path)
@@ -115,7 +116,9 @@ def _typed_row(row: Mapping[str, str], path: Path, line: int) -> dict[str, Any]:
     return typed
 
 
-def read_included(paths: Sequence[str | Path]) -> tuple[list[dict[str, Any]], list[Path]]:
+def read_included(
+    paths: Sequence[str | Path], version: str = SUITE_VERSION
+) -> tuple[list[dict[str, Any]], list[Path]]:
     """The rows of the ``score.csv`` files ``paths`` (:func:`read_suite_csv`), each file read once however
     often or under whatever spelling it is named, and the files read, in the order first given.
 
@@ -126,7 +129,7 @@ def read_included(paths: Sequence[str | Path]) -> tuple[list[dict[str, Any]], li
     files = list(dict.fromkeys(Path(path).resolve() for path in paths))
     rows: list[dict[str, Any]] = []
     for path in files:
-        found = read_suite_csv(path)
+        found = read_suite_csv(path, version)
         if not found:
             raise ValueError(f"{path} holds no rows: flownav score writes one per tier it flew whole")
         rows += found
@@ -145,7 +148,11 @@ def check_row_task(row: Mapping[str, Any], path: Path) -> None:
         if not isinstance(flown, dict):
             raise ValueError(f"env_kwargs is not a JSON object: {row['env_kwargs']!r}")
         check_flown_settings(
-            row["agent"], flown, row["tier"], privileged=str(row["privileged"]) in ("True", "true")
+            row["agent"],
+            flown,
+            row["tier"],
+            privileged=str(row["privileged"]) in ("True", "true"),
+            version=str(row.get("suite_version") or SUITE_VERSION),
         )
     except (ValueError, json.JSONDecodeError) as error:
         raise ValueError(f"{path}: {error}") from None
@@ -174,7 +181,7 @@ def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
         mine = sorted((r for r in rows if r["tier"] == name), key=lambda r: (r["failure_rate"], r["agent"]))
         if not mine:
             continue
-        spec = tier(name)
+        spec = tier(name, str(mine[0].get("suite_version") or SUITE_VERSION))
         lines += [f"### `{name}` (`{spec.env_id}`)", "", spec.why + ".", ""]
         table_rows = [
             [
@@ -218,8 +225,9 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
         if any(r.get("included") for r in rows)
         else ""
     )
+    version = str(rows[0].get("suite_version") or SUITE_VERSION) if rows else SUITE_VERSION
     figure.suptitle(
-        f"FlowNav suite v{SUITE_VERSION}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}; grey: "
+        f"FlowNav suite v{version}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}; grey: "
         f"privileged references, never ranked){included}"
     )
     figure.tight_layout()

@@ -26,7 +26,7 @@ from agents.evaluation.leaderboard import summarise_runs
 from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.evaluation.paired import Comparison, compare
 from agents.evaluation.records import read_records
-from agents.evaluation.suite import suite_top_groups
+from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
     AGENT_NAMES,
@@ -50,7 +50,7 @@ INPUTS = {
     "training_seeds.csv": "flownav leaderboard --out results",
     "sweep_episodes.csv": "flownav sweep --config configs/sweep.yaml --out results",
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
-    "suite_episodes.csv": "flownav suite --out results",
+    "suite_v1/suite_episodes.csv": "flownav suite --suite-version 1 --out results/suite_v1",
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
 ABLATION_CONDITIONS = {"clean": "", "density": "density_0.18", "speed": "speed_1.5"}
@@ -340,7 +340,7 @@ def _summarise(results: Path, fingerprint: tuple[tuple[str, int, int], ...]) -> 
         validation=_validation(results),
         oracle_reactive=_rates_per_agent(oracle),
         training=_training(results, learned),
-        suite_top=suite_top_groups(results),
+        suite_top=suite_top_groups(results / SUITE_RESULTS_FOLDERS["1"], version="1"),
     )
 
 

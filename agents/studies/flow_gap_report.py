@@ -6,7 +6,7 @@ and on the true depths at the same tracked points. Two recipes answer it: the pl
 (:func:`agents.evaluation.paired.compare`): every training seed of both agents flew the same layouts, the
 interval resamples training seeds (each agent's apart) and layouts (once for both). The sources are the
 confirmation flights on fresh validation layouts (``results/confirmation/``), the suite's frozen test layouts
-(``results/suite_episodes.csv``) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
+(``results/suite_v1/suite_episodes.csv``, suite v1) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
 benchmark's values (:mod:`agents.studies.benchmark_report`) beside this report's own; nothing is flown.
 """
 
@@ -25,7 +25,7 @@ from agents.common.tables import markdown_table, today
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import Comparison, compare, verdict
 from agents.evaluation.records import read_records
-from agents.evaluation.suite import EPISODES_CSV
+from agents.evaluation.suite import EPISODES_CSV, SUITE_RESULTS_FOLDERS
 from agents.policies import is_learned, shipped_seed_runs
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, load_benchmark_data
 from agents.studies.benchmark_report import report_values
@@ -42,7 +42,11 @@ from agents.studies.confirmation import (
 )
 from agents.studies.error_analysis import runs_failure
 from agents.studies.wording import render_report
-from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
+from flownav_env.tiers import TIER_NAMES
+
+# The suite version whose frozen layouts this page reads: v1's, the one its agents have flown in full (v2's
+# flights are under way; results/suite.md lists what is left).
+READ_SUITE_VERSION = "1"
 
 Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
 Row = tuple[str, np.ndarray, np.ndarray]  # where, flow's failures, truth's failures (runs, layouts)
@@ -94,7 +98,7 @@ def gap_table(
 def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, np.ndarray]:
     """tier → failures (runs, layouts) of ``agent``'s shipped seeds (a rule or planner: its one run) on the
     suite's frozen layouts, for the tiers every run has flown whole."""
-    path = results / EPISODES_CSV
+    path = results / SUITE_RESULTS_FOLDERS[READ_SUITE_VERSION] / EPISODES_CSV
     runs = shipped_seed_runs(agent, policies_dir) if is_learned(agent) else [agent]
     if not path.is_file() or not runs:
         return {}
@@ -103,7 +107,9 @@ def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR)
     for tier_name in TIER_NAMES:
         try:
             mine = [row for row in rows if row["factor"] == tier_name]
-            found[tier_name] = episode_outcomes(mine, runs, list(suite_seeds()), "failure")
+            found[tier_name] = episode_outcomes(
+                mine, runs, list(suite_seeds(version=READ_SUITE_VERSION)), "failure"
+            )
         except ValueError:
             continue
     return found
@@ -269,7 +275,7 @@ def flow_gap_values(
         "truth_suite_table": gap_table(
             PICK, TRUE_DEPTH_RECIPE, _suite_rows(results, PICK, TRUE_DEPTH_RECIPE, policies_dir), "tier"
         ),
-        "suite_version": SUITE_VERSION,
+        "suite_version": READ_SUITE_VERSION,
         "confirmation_layouts_wanted": CONFIRMATION_LAYOUTS,
     }
 

@@ -38,9 +38,9 @@ def _page(lanes: list) -> str:
 
 @pytest.mark.parametrize("name", sorted(TIERS))
 def test_the_lane_starts_past_every_capsule_surface_and_inside_the_bounds(name: str) -> None:
-    edge = float(tier_value(name, "field_width")) / 2 + float(tier_value(name, "obstacle_radius"))
+    edge = float(tier_value(name, "field_width", "1")) / 2 + float(tier_value(name, "obstacle_radius", "1"))
     assert lane_edge(name) == pytest.approx(edge)
-    assert lane_edge(name) < float(tier_value(name, "lateral_bound"))
+    assert lane_edge(name) < float(tier_value(name, "lateral_bound", "1"))
 
 
 def test_episodes_past_the_edge_are_counted_per_agent_and_tier(tmp_path: Path) -> None:

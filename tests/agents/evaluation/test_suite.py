@@ -63,7 +63,7 @@ def test_suite_tasks_carry_the_tier_settings_and_the_suite_version() -> None:
     tasks = suite_tasks({"bee": ["bee"]}, ["hard_noisy"], layouts=2)
     assert [t.seed for t in tasks] == [SUITE_SEED_START, SUITE_SEED_START + 1]
     task = tasks[0]
-    assert task.factor == "hard_noisy" and task.env_id == "FlowNavHardNoisy-v0"
+    assert task.factor == "hard_noisy" and task.env_id == "FlowNavHardNoisy-v1"
     assert dict(task.env_kwargs) == TIERS["hard_noisy"].settings and task.suite_version == SUITE_VERSION
     assert task.tier == "hard_noisy" and replace(task, suite_version="").tier == ""
 
@@ -337,7 +337,8 @@ def test_true_depths_need_a_declared_privileged_agent_whose_rows_say_so(tmp_path
         score(f"{undeclared}:make", tiers="clean", layouts=1, out=tmp_path / "undeclared")
     declared = _agent_file(tmp_path / "reference.py", {"obs_source": "oracle"}, privileged=True)
     (row,) = score(f"{declared}:make", tiers="clean", layouts=1, out=tmp_path / "declared")
-    assert row["privileged"] is True and json.loads(row["env_kwargs"]) == {"obs_source": "oracle"}
+    assert row["privileged"] is True
+    assert json.loads(row["env_kwargs"]) == {**TIERS[row["tier"]].settings, "obs_source": "oracle"}
     (again,) = read_suite_csv(tmp_path / "declared" / "score.csv")
     assert again["privileged"] is True
 

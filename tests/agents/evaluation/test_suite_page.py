@@ -80,7 +80,7 @@ def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
     from agents.evaluation.suite_page import SENSOR_READING_DIR, reading_values
     from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
 
-    readings = reading_values(RESULTS_DIR / SENSOR_READING_DIR)
+    readings = reading_values(RESULTS_DIR / "suite_v1" / SENSOR_READING_DIR)
     assert {r["agent"] for r in readings} >= {"bee_ttc"}
     for row in readings:
         assert row["layouts"] == 100 and row["first_seed"] >= 500_000  # validation layouts only
@@ -121,7 +121,7 @@ def test_each_row_says_which_tiers_its_agent_trained_on() -> None:
     (hard,) = _values([])["tiers"]
     rows = {row["agent"]: row for row in [*hard["ranked"], *hard["provisional"], *hard["references"]]}
     assert rows["bee_ttc"]["trained_on"] == "—"
-    assert rows["ppo_flow"]["trained_on"] == "clean"  # FlowNav-v0 with its defaults
+    assert rows["ppo_flow"]["trained_on"] == "v1: clean (none of v2's)"  # FlowNav-v0 with its defaults
 
 
 def test_the_page_sets_the_best_learned_agent_against_the_best_rule() -> None:
@@ -148,7 +148,7 @@ def test_the_page_sets_the_best_learned_agent_against_the_best_rule() -> None:
             gains=[gain],
         )
     )
-    assert "| `hard` | `ppo_flow` | clean |" in text
+    assert "| `hard` | `ppo_flow` | v1: clean (none of v2's) |" in text
     assert "learning beats the rule" in text
 
 

@@ -15,7 +15,7 @@ from agents.studies.tier_calibration import (
     separated_pairs,
 )
 
-CALIBRATION = RESULTS_DIR / "suite_calibration" / EPISODES_CSV
+CALIBRATION = RESULTS_DIR / "suite_v1" / "suite_calibration" / EPISODES_CSV
 
 
 def test_the_calibration_agents_are_those_that_flew_the_frozen_calibration() -> None:

@@ -256,7 +256,8 @@ class EnvSettings(SensorSettings):
     histogram_sectors: tuple[int, int] = _setting(
         (3, 5),
         Sectors(Range(1, 32, integer=True)),
-        "image sector rows and columns of the observation",
+        "image sector rows and columns of the observation; like ``depth_bin_edges``, an agent may ask any tier for "
+        "another resolution (the same depths binned otherwise; ``flownav_env.tiers.AGENT_OBSERVATION_SETTINGS``)",
     )
     depth_bin_edges: tuple[float, ...] = _setting(
         tuple(DEFAULT_BIN_EDGES),

@@ -145,14 +145,17 @@ def tier_of_env_id(env_id: str) -> tuple[str, Tier] | None:
     return None
 
 
-# The only settings an agent may choose on a tier: each adds an observation key (or shapes one, for
-# ``near_smoothing``), so it changes what the agent is shown, never the course it flies or the sensor's errors.
+# The only settings an agent may choose on a tier: each adds an observation key or shapes one (``near_smoothing``;
+# the histogram's resolution, ``histogram_sectors`` and ``depth_bin_edges``: the same estimated depths binned finer
+# or coarser), so it changes what the agent is shown, never the course it flies or the sensor's errors.
 AGENT_OBSERVATION_SETTINGS = (
     "observe_unresolved",
     "observe_counts",
     "observe_nearness",
     "observe_approach",
     "near_smoothing",
+    "histogram_sectors",
+    "depth_bin_edges",
 )
 # Setting values that show an agent what no tier's sensor gives: asked for only by an agent declared privileged
 # (true depths; the capsule layout and the drone's true state, flownav_env.privileged).

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import re
 
+import gymnasium as gym
 import pytest
+
+import flownav_env  # noqa: F401  (registers the ids)
 
 from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
@@ -21,7 +24,8 @@ from flownav_env.tiers import (
 
 @pytest.mark.parametrize("name", TIER_NAMES)
 def test_observation_keys_and_the_tiers_own_values_pass_on_every_tier(name: str) -> None:
-    wanted = {setting: True for setting in AGENT_OBSERVATION_SETTINGS if setting != "near_smoothing"}
+    shaping = ("near_smoothing", "histogram_sectors", "depth_bin_edges")
+    wanted = {setting: True for setting in AGENT_OBSERVATION_SETTINGS if setting not in shaping}
     check_agent_settings("mine", {**wanted, "near_smoothing": 0.5, "obs_source": "flow"}, name)
     check_agent_settings("mine", {"forward_speed": tier_value(name, "forward_speed")}, name)
 
@@ -73,3 +77,17 @@ def test_flown_settings_must_hold_the_tiers_and_nothing_an_agent_may_not_choose(
         check_flown_settings("mine", {k: v for k, v in hard.items() if k != "obstacle_density"}, "hard")
     with pytest.raises(ValueError, match=re.escape("asks for max_height=9.0, but tier hard fixes")):
         check_flown_settings("mine", {**hard, "max_height": 9.0}, "hard")
+
+
+def test_an_agent_may_ask_for_a_finer_histogram_on_any_tier() -> None:
+    """The histogram's resolution is an observation setting: the same depths binned finer, the task unchanged."""
+    finer = {"histogram_sectors": (3, 15), "depth_bin_edges": (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 8.0, 13.0)}
+    for name in TIERS:
+        check_agent_settings("fine", finer, name)
+        check_flown_settings("fine", {**TIERS[name].settings, **finer}, name)
+    env = gym.make(TIERS["hard"].env_id, camera_width=64, camera_height=48, **finer)
+    try:
+        observation, _ = env.reset(seed=0)
+    finally:
+        env.close()
+    assert observation["depth_histogram"].shape == (3, 15, 8)

@@ -10,9 +10,12 @@ results/suite_v2_calibration/AGENT_ENV.csv``; the noisy tier at other readings o
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from agents.common.folders import write_text_atomically
 from agents.common.jinja_reports import render
@@ -35,6 +38,17 @@ FEASIBLE_FAILURE = 0.02
 # The references checked, in the order the page lists them; a missing one is listed as not yet flown.
 CHECK_AGENTS = ("planner", "planner_camera")
 SENSITIVITY_DIR = "sensitivity"
+# sensitivity/<agent>_<env id>_<reading>_tau<τ>.csv: agent names and readings hold underscores, ids do not.
+SENSITIVITY_NAME = re.compile(
+    r"^(?P<agent>.+)_(?P<env_id>FlowNav[A-Za-z]*-v\d+)_(?P<reading>[a-z0-9_]+)_tau(?P<tau>[0-9.]+)$"
+)
+
+
+def sensitivity_file(agent: str, env_id: str, reading: str, tau: float) -> str:
+    """The file name of ``agent``'s flight of ``env_id`` at velocity ``reading`` and correlation time ``tau``."""
+    return f"{agent}_{env_id}_{reading}_tau{tau:g}.csv"
+
+
 PAGE = "calibration.md"
 
 
@@ -79,10 +93,13 @@ def sensitivity_rows(folder: Path) -> list[dict[str, Any]]:
     found = []
     frozen = (sensor_specs.FLIGHT_STACK_READING, sensor_specs.VELOCITY_CORRELATION_S)
     for path in sorted((Path(folder) / SENSITIVITY_DIR).glob("*.csv")):
-        agent, env_id, reading, tau = path.stem.rsplit("_", 3)
+        match = SENSITIVITY_NAME.match(path.stem)
+        if match is None:
+            continue
+        agent, env_id, reading, tau = match.group("agent", "env_id", "reading", "tau")
         if (reading, float(tau)) == frozen:
             continue
-        base_path = path.with_name(f"{agent}_{env_id}_{frozen[0]}_{frozen[1]:g}.csv")
+        base_path = path.with_name(sensitivity_file(agent, env_id, *frozen))
         if not base_path.is_file():
             continue
         other = {int(r["seed"]): float(not r["success"]) for r in _episodes(path)}
@@ -90,8 +107,6 @@ def sensitivity_rows(folder: Path) -> list[dict[str, Any]]:
         seeds = sorted(set(other) & set(base))
         if not seeds:
             continue
-        import numpy as np
-
         mine = np.array([[other[s] for s in seeds]])
         reference = np.array([[base[s] for s in seeds]])
         found.append(
@@ -135,7 +150,9 @@ def check_values(folder: Path, command: str) -> dict[str, Any]:
         "lateral_bound": hard["lateral_bound"],
         "reading": readings[sensor_specs.FLIGHT_STACK_READING][0],
         "velocity_sigma": readings[sensor_specs.FLIGHT_STACK_READING][1],
-        "readings": [{"name": key, "meaning": meaning, "sigma": sigma} for key, (meaning, sigma) in readings.items()],
+        "readings": [
+            {"name": key, "meaning": meaning, "sigma": sigma} for key, (meaning, sigma) in readings.items()
+        ],
         "tau": sensor_specs.VELOCITY_CORRELATION_S,
         "taus": list(sensor_specs.VELOCITY_CORRELATION_READINGS_S),
         "accuracy": sensor_specs.VELOCITY_ACCURACY_M_S,

@@ -9,7 +9,6 @@ import gymnasium as gym
 import pytest
 
 import flownav_env  # noqa: F401  (registers the ids)
-
 from flownav_env.settings import EnvSettings
 from flownav_env.tiers import (
     AGENT_OBSERVATION_SETTINGS,

@@ -57,7 +57,7 @@ def observation_space(settings: EnvSettings) -> spaces.Dict:
     if settings.observe_approach:
         boxes["approach"] = spaces.Box(0.0, 1.0, (rows, cols), np.float32)
     if settings.observe_layout:
-        boxes.update(privileged_spaces())
+        boxes.update(privileged_spaces(settings))
     return spaces.Dict(boxes)
 
 

@@ -200,8 +200,9 @@ class EnvSettings(SensorSettings):
     observe_layout: bool = _setting(
         False,
         Flag(),
-        "add the observation keys ``layout``, ``layout_mask``, ``true_state`` and ``course``: the capsules, the "
-        "drone's true state and the course's limits, which no sensor gives (privileged: reference agents only)",
+        "add the observation keys ``layout``, ``layout_mask``, ``true_state``, ``course``, ``camera`` and "
+        "``depth_bin_edges``: the capsules, the drone's true state, the course's limits and the camera's true pose "
+        "and view, which no sensor gives (privileged: reference agents only)",
     )
     near_smoothing: float = _setting(
         1.0,

@@ -19,6 +19,7 @@ Sub-ranges with one use each:
 | student check (validation) | ``STUDENT_CHECK_SEED_START ..`` | flying the planner's flow-only student against ``bee_ttc`` per tier (``flownav evaluate --seed-start``) |
 | student recipes (validation) | ``STUDENT_RECIPE_SEED_START ..`` | recipes for the planner's student compared per tier (``flownav ablation --tier``) |
 | lane check (validation) | ``LANE_SEED_START ..`` | whether agents leave the capsule field for the free lane beside it (``agents/evaluation/lane.py``) |
+| camera-limited references (validation) | ``CAMERA_REFERENCE_SEED_START ..`` | checking the camera-limited planners (``planner_camera``, ``planner_camera_observed``) against ``planner`` on a field across the whole lateral bounds (``results/camera_reference/``) |
 | suite v2 checks (validation) | ``SUITE_V2_CHECK_SEED_START ..`` | the privileged references' feasibility checks of suite v2's tiers, before the freeze |
 | suite v2 sensor readings (validation) | ``SUITE_V2_SENSOR_READING_SEED_START ..`` | v2's noisy tiers at other readings of the velocity specification |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
@@ -66,6 +67,9 @@ STUDENT_RECIPE_SEED_START = 960_100
 # Validation layouts on which every agent is flown once per tier to see whether it leaves the capsule field for the
 # free lane beside it (agents/evaluation/lane.py): past the student recipes' 100.
 LANE_SEED_START = 960_200
+# Validation layouts on which the camera-limited planners (agents/policies/planner_camera.py) are checked against
+# the planner with the map (results/camera_reference/): past the lane check's 25 (960,200-960,224).
+CAMERA_REFERENCE_SEED_START = 960_300
 # Validation layouts on which suite v2's tiers are checked for feasibility before they are frozen (the privileged
 # planner and the camera-limited reference; results/suite_v2_calibration/).
 SUITE_V2_CHECK_SEED_START = 970_000

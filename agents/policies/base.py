@@ -28,8 +28,11 @@ LEARNED_AGENTS = (
 )
 # Learned agents trained across the tiers, flown on the suite only: the clean tier's history table predates them.
 SUITE_ONLY_AGENTS = ("ppo_flow_planner_student", "ppo_flow_planner_student_oracle")
-# Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all.
-PLANNERS = ("planner",)
+# Agents that plan with the whole course known (agents/policies/planner.py): what a tier allows at all; and the
+# same planning knowing only the capsules the camera has seen (agents/policies/planner_camera.py): at their
+# exact positions (what the camera's view allows), or as the observation's histogram resolves them (what the
+# observation's resolution allows).
+PLANNERS = ("planner", "planner_camera", "planner_camera_observed")
 AGENT_NAMES = REACTIVE_AGENTS + LEARNED_AGENTS + PLANNERS
 # The agents of the clean tier's history table: every agent but the planners, which are flown only on the suite,
 # as each tier's bound, and the suite-only learned agents. (The demo flies every rule and every shipped policy.)
@@ -43,6 +46,8 @@ PRIVILEGED_AGENTS = (
     "ppo_flow_course_approach_curriculum_slow_oracle",
     "ppo_flow_planner_student_oracle",
     "planner",
+    "planner_camera",
+    "planner_camera_observed",
 )
 # Agents retired from the suite: neither flown nor ranked there any more, each with why. They keep their names, so
 # the committed sweep, robustness profiles and the clean tier's history table still read their episodes, and the

@@ -33,6 +33,11 @@ from agents.policies.external import (
 )
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
+from agents.policies.planner_camera import (
+    CAMERA_PLANNER_ENV_KWARGS,
+    CameraPlannerAgent,
+    ObservedCameraPlannerAgent,
+)
 from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
 from agents.policies.sb3_models import (
@@ -52,6 +57,12 @@ if TYPE_CHECKING:
 
 
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
+# The planners (agents.policies.base.PLANNERS) by name: each a dataclass of its parameters.
+PLANNER_CLASSES: dict[str, type[PlannerAgent]] = {
+    "planner": PlannerAgent,
+    "planner_camera": CameraPlannerAgent,
+    "planner_camera_observed": ObservedCameraPlannerAgent,
+}
 # The agents that are a dataclass of their gains, built with a caller's gains over the defaults (the straight
 # flight, whose gains hold its height, takes none).
 _GAIN_AGENTS: dict[str, Callable[..., RuleAgent]] = {
@@ -59,7 +70,7 @@ _GAIN_AGENTS: dict[str, Callable[..., RuleAgent]] = {
     "bee_robust": BeeRobustAgent,
     "bee_ttc": BeeTTCAgent,
     "vfh": VFHAgent,
-    "planner": PlannerAgent,
+    **PLANNER_CLASSES,
 }
 
 POLICY_OPTION_HELP = (
@@ -163,7 +174,7 @@ def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any
         return dict(external_env_settings(name))
     if not is_learned(name):
         base = split_agent_name(name)[0]
-        return dict({**REACTIVE_ENV_KWARGS, **PLANNER_ENV_KWARGS}.get(base, {}))
+        return dict({**REACTIVE_ENV_KWARGS, **PLANNER_ENV_KWARGS, **CAMERA_PLANNER_ENV_KWARGS}.get(base, {}))
     config_path = policy_file(name, path).with_suffix(".yaml")
     if not config_path.is_file():
         return {}

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from agents.policies.base import PLANNERS, REACTIVE_AGENTS, Agent
-from agents.policies.learned import agent_env_kwargs, load_agent
+from agents.policies.learned import PLANNER_CLASSES, agent_env_kwargs, load_agent
 from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
 from flownav_env.tiers import privileged_requests
 
@@ -24,15 +24,17 @@ TEACHERS = REACTIVE_AGENTS + PLANNERS
 
 
 class PlannerTeacher:
-    """The planner over a batch of envs: one :class:`~agents.policies.planner.PlannerAgent` per env, since each
-    plans its own episode's course and keeps that plan between steps."""
+    """A planner (``planner`` unless ``name`` says which of :data:`~agents.policies.base.PLANNERS`) over a batch
+    of envs: one agent per env, since each plans its own episode's course and keeps that plan between steps.
+    Every planner reads the same privileged keys (``observe_layout=True``)."""
 
     privileged_settings: Mapping[str, Any] = PLANNER_ENV_KWARGS["planner"]
 
-    def __init__(self, params: Mapping[str, Any] | None = None) -> None:
+    def __init__(self, params: Mapping[str, Any] | None = None, name: str = "planner") -> None:
         self.params = dict(params or {})
+        self.planner_class = PLANNER_CLASSES[name]
         self.planners: list[PlannerAgent] = []
-        PlannerAgent(**self.params)  # checks the parameters now, not at the first step
+        self.planner_class(**self.params)  # checks the parameters now, not at the first step
 
     def predict(
         self,
@@ -43,7 +45,7 @@ class PlannerTeacher:
     ) -> tuple[np.ndarray, Any]:
         count = len(next(iter(observation.values())))
         while len(self.planners) < count:
-            self.planners.append(PlannerAgent(**self.params))
+            self.planners.append(self.planner_class(**self.params))
         starts = np.ones(count, bool) if episode_start is None else np.asarray(episode_start, bool)
         actions = [
             planner.predict(
@@ -90,19 +92,25 @@ def check_teacher_params(name: str, params: Mapping[str, Any], source: str) -> N
             f"{source}: key 'imitation.teacher_params' sets the planner teacher's parameters; {name!r} flies its "
             f"shipped gains and takes none, got {sorted(params)}"
         )
-    defaults = {item.name: item.default for item in fields(PlannerAgent)}
+    planner_class = PLANNER_CLASSES[name]
+    defaults = {item.name: item.default for item in fields(planner_class)}
     for key, value in params.items():
         if key not in defaults:
             raise ValueError(
                 f"{source}: key 'imitation.teacher_params.{key}' is not a planner parameter; allowed: "
                 f"{', '.join(defaults)}"
             )
-        kind = int if isinstance(defaults[key], int) else int | float
-        if isinstance(value, bool) or not isinstance(value, kind):
-            what = "an integer" if kind is int else "a number"
+        default = defaults[key]
+        if isinstance(default, bool):
+            fits, what = isinstance(value, bool), "true or false"
+        elif isinstance(default, int):
+            fits, what = isinstance(value, int) and not isinstance(value, bool), "an integer"
+        else:
+            fits, what = isinstance(value, int | float) and not isinstance(value, bool), "a number"
+        if not fits:
             raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be {what}, got {value!r}")
     try:
-        PlannerAgent(**params)
+        planner_class(**params)
     except ValueError as error:
         raise ValueError(f"{source}: key 'imitation.teacher_params': {error}") from error
 
@@ -112,5 +120,5 @@ def make_teacher(name: str, params: Mapping[str, Any] | None = None) -> Agent:
     defaults) over a batch of envs (a module-level function, so a training job that carries it pickles)."""
     check_teacher_params(name, params or {}, "teacher")
     if name in PLANNERS:
-        return PlannerTeacher(params)
+        return PlannerTeacher(params, name)
     return load_agent(name)

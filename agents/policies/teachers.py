@@ -85,13 +85,16 @@ def check_teacher(
 
 
 def check_teacher_params(name: str, params: Mapping[str, Any], source: str) -> None:
-    """Raise ValueError unless ``params`` are parameters of teacher ``name``: the planner's fields, each a
-    number (an integer where the field counts) in its range; a rule flies its shipped gains and takes none."""
+    """Raise ValueError unless ``params`` are parameters of teacher ``name``: a planner's fields, each a
+    number (an integer where the field counts, true or false for a switch) in its range; a rule flies its
+    shipped gains and takes none."""
     if params and name not in PLANNERS:
         raise ValueError(
             f"{source}: key 'imitation.teacher_params' sets the planner teacher's parameters; {name!r} flies its "
             f"shipped gains and takes none, got {sorted(params)}"
         )
+    if name not in PLANNERS:
+        return
     planner_class = PLANNER_CLASSES[name]
     defaults = {item.name: item.default for item in fields(planner_class)}
     for key, value in params.items():

@@ -11,6 +11,7 @@ import pytest
 
 import flownav_env  # noqa: F401  (registers the env ids)
 from flownav_env.privileged import (
+    CAMERA_FIELDS,
     COURSE_INFO_FIELDS,
     MAX_CAPSULES,
     PRIVILEGED_KEYS,
@@ -39,7 +40,7 @@ def test_the_keys_hold_the_scenes_capsules_and_the_true_state() -> None:
         observation, *_ = env.step(np.array([0.5, 0.0, 0.0]))
         assert env.observation_space.contains(observation)
         physics = env.unwrapped.physics
-        layout, mask, state, course = (observation[key] for key in PRIVILEGED_KEYS)
+        layout, mask, state, course = (observation[key] for key in PRIVILEGED_KEYS[:4])
         assert layout.shape == (MAX_CAPSULES, 3) and mask.shape == (MAX_CAPSULES,)
         assert state.shape == (len(TRUE_STATE_FIELDS),) and course.shape == (len(COURSE_INFO_FIELDS),)
         count = len(physics.obstacle_positions)
@@ -52,6 +53,26 @@ def test_the_keys_hold_the_scenes_capsules_and_the_true_state() -> None:
         named = dict(zip(COURSE_INFO_FIELDS, course.tolist(), strict=True))
         assert named["goal_x"] == 20.0 and named["forward_speed"] == 2.0 and named["frame_rate"] == 10.0
         assert named["drone_radius"] == pytest.approx(physics.quad.collision_radius)
+    finally:
+        env.close()
+
+
+def test_the_camera_key_holds_its_true_pose_and_view_and_the_bin_edges_are_the_settings() -> None:
+    edges = (0.0, 0.5, 1.0, 2.0, 4.0)
+    env = gym.make("FlowNav-v0", observe_layout=True, depth_bin_edges=edges, **SMALL)
+    try:
+        env.reset(seed=950_000)
+        observation, *_ = env.step(np.array([0.5, 0.0, 0.2]))
+        assert env.observation_space.contains(observation)
+        physics = env.unwrapped.physics
+        camera = dict(zip(CAMERA_FIELDS, observation["camera"].tolist(), strict=True))
+        rotation, position = physics.camera_pose()
+        np.testing.assert_allclose([camera["x"], camera["y"], camera["z"]], position, atol=1e-5)
+        np.testing.assert_allclose(observation["camera"][3:12].reshape(3, 3), rotation, atol=1e-6)
+        intrinsics = env.unwrapped.settings.intrinsics()
+        assert camera["fx"] == pytest.approx(intrinsics.fx, rel=1e-6) and camera["cx"] == intrinsics.cx
+        assert camera["width"] == SMALL["camera_width"]
+        np.testing.assert_array_equal(observation["depth_bin_edges"], np.array(edges, np.float32))
     finally:
         env.close()
 

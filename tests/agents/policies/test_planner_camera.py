@@ -1,0 +1,133 @@
+"""The camera-limited planners: shipped privileged agents asking for observe_layout, their parameters checked in
+one line, and short real flights in which they know only capsules the camera has seen."""
+
+from __future__ import annotations
+
+import re
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import flownav_env  # noqa: F401  (registers the env ids)
+from agents.common.seeds import CAMERA_REFERENCE_SEED_START
+from agents.policies import AGENT_NAMES, PRIVILEGED_AGENTS, agent_env_kwargs, is_privileged, load_agent
+from agents.policies.base import PLANNERS
+from agents.policies.planner_camera import CameraPlannerAgent, ObservedCameraPlannerAgent
+from agents.policies.teachers import PlannerTeacher, check_teacher_params, make_teacher
+from flownav_env.tiers import TIERS, check_agent_settings
+
+SMALL = {"camera_width": 64, "camera_height": 48, "depth_error_info": False}
+# The closed field (capsules across the whole lateral bound) on the hard course: capsules come into view early.
+CLOSED_HARD = {**TIERS["hard"].settings, "field_width": 12.0}
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [("planner_camera", CameraPlannerAgent), ("planner_camera_observed", ObservedCameraPlannerAgent)],
+)
+def test_each_is_a_shipped_privileged_planner_asking_for_the_layout(name: str, kind: type) -> None:
+    assert name in AGENT_NAMES and name in PLANNERS and name in PRIVILEGED_AGENTS and is_privileged(name)
+    assert agent_env_kwargs(name) == {"observe_layout": True}
+    agent = load_agent(name, view_range=1.5, memory=False)
+    assert type(agent) is kind and agent.view_range == 1.5 and agent.memory is False
+    check_agent_settings(name, agent_env_kwargs(name), "hard", privileged=is_privileged(name))
+
+
+@pytest.mark.parametrize(
+    ("parameters", "message"),
+    [
+        ({"view_range": 0.0}, "view_range must be a finite distance > 0 (m), got 0.0"),
+        ({"view_range": -1.0}, "view_range must be a finite distance > 0 (m), got -1.0"),
+        ({"view_range": float("inf")}, "view_range must be a finite distance > 0 (m), got inf"),
+        ({"view_range": True}, "view_range must be a finite distance > 0 (m), got True"),
+        ({"memory": 1}, "memory must be True or False, got 1"),
+        ({"hard_margin": 0.0}, "hard_margin must be > 0, got 0.0"),
+    ],
+)
+def test_bad_parameters_are_one_line_errors(parameters: dict, message: str) -> None:
+    for kind in (CameraPlannerAgent, ObservedCameraPlannerAgent):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            kind(**parameters)
+
+
+def test_an_env_without_the_privileged_keys_is_refused_in_one_line() -> None:
+    with pytest.raises(
+        ValueError,
+        match=re.escape("planner_camera reads layout, layout_mask, true_state, course, camera, depth_"),
+    ):
+        CameraPlannerAgent().predict({"state": np.zeros(7)}, episode_start=np.ones(1, bool))
+    with pytest.raises(ValueError, match=re.escape("planner_camera_observed reads layout, layout_mask")):
+        ObservedCameraPlannerAgent().predict({"state": np.zeros(7)}, episode_start=np.ones(1, bool))
+
+
+def _fly(agent: CameraPlannerAgent, steps: int) -> list[tuple[dict[str, np.ndarray], np.ndarray]]:
+    """``steps`` steps of the closed hard field's first camera-reference layout: each observation the agent
+    acted on, with its action."""
+    env = gym.make("FlowNav-v0", **CLOSED_HARD, observe_layout=True, **SMALL)
+    flown = []
+    try:
+        observation, _ = env.reset(seed=CAMERA_REFERENCE_SEED_START)
+        start = np.ones(1, bool)
+        for _ in range(steps):
+            action, _ = agent.predict(observation, episode_start=start)
+            start = np.zeros(1, bool)
+            flown.append((observation, action))
+            observation, _, terminated, truncated, _ = env.step(action)
+            assert not (terminated or truncated)
+    finally:
+        env.close()
+    return flown
+
+
+def _in_reach(observation: dict[str, np.ndarray], view_range: float) -> set[int]:
+    """The capsules whose surface lies within ``view_range`` of the camera."""
+    capsules = observation["layout"][observation["layout_mask"] > 0.5]
+    camera = observation["camera"][:2]
+    surface = np.hypot(*(capsules[:, :2] - camera).T) - capsules[:, 2]
+    return set(np.flatnonzero(surface <= view_range).tolist())
+
+
+def test_it_knows_only_capsules_it_has_seen_and_replans_as_they_come() -> None:
+    agent = CameraPlannerAgent()
+    flown = _fly(agent, 20)
+    reached = set().union(*(_in_reach(observation, agent.view_range) for observation, _ in flown))
+    assert agent._known and set(agent._known) <= reached
+    layout = flown[-1][0]["layout"]
+    for row, capsule in agent._known.items():
+        np.testing.assert_array_equal(capsule, layout[row])
+    assert agent.replans >= 1
+    assert all(action.shape == (3,) and np.all(np.abs(action) <= 1.0) for _, action in flown)
+    # Far fewer than the whole field: the map would hold every capsule.
+    assert len(agent._known) < int(flown[-1][0]["layout_mask"].sum())
+
+
+def test_without_memory_it_knows_only_what_is_in_view_now() -> None:
+    agent = CameraPlannerAgent(memory=False)
+    flown = _fly(agent, 20)
+    assert set(agent._known) <= _in_reach(flown[-1][0], agent.view_range)
+
+
+def test_the_observed_planner_knows_capsules_where_the_histogram_puts_them() -> None:
+    agent = ObservedCameraPlannerAgent()
+    flown = _fly(agent, 20)
+    layout = flown[-1][0]["layout"]
+    whole = [row for row, seen_whole in agent._whole.items() if seen_whole]
+    assert whole and set(agent._whole) == set(agent._known)
+    for row in whole:
+        # Seen whole, off by at most half a 1 m depth bin and half a 15° sector column at 2.5 m, and the turn
+        # that moves its centre behind the front point.
+        capsule = agent._known[row]
+        assert capsule[2] == layout[row, 2]
+        assert 0.0 < np.hypot(*(capsule[:2] - layout[row, :2])) < 0.5 + 2.5 * np.tan(np.radians(7.6)) + 0.1
+
+
+def test_a_camera_planner_teaches_over_a_batch_with_its_own_parameters() -> None:
+    teacher = make_teacher("planner_camera", {"view_range": 1.5, "memory": False})
+    assert isinstance(teacher, PlannerTeacher) and teacher.planner_class is CameraPlannerAgent
+    with pytest.raises(
+        ValueError, match=re.escape("key 'imitation.teacher_params.memory' must be true or false")
+    ):
+        check_teacher_params("planner_camera", {"memory": 1}, "config.yaml")
+    with pytest.raises(ValueError, match=re.escape("view_range must be a finite distance > 0 (m), got -1.0")):
+        check_teacher_params("planner_camera_observed", {"view_range": -1.0}, "config.yaml")

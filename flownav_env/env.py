@@ -72,7 +72,7 @@ class FlowNavEnv(gym.Env):
     | ``layout_mask``   | (64,)                   | {0, 1}               | only with ``observe_layout=True``: 1 where a row of ``layout`` is a capsule |
     | ``true_state``    | (12,)                   | ±1000 m, ±50 m/s, angles, ±100 rad/s | only with ``observe_layout=True``: the true world position x, y, z (m), world velocity (m/s), roll, pitch, yaw (rad) and body rates (rad/s) |
     | ``course``        | (9,)                    | [0, 1000]            | only with ``observe_layout=True``: goal line x, ``lateral_bound``, ``max_height`` (m), ``forward_speed``, ``max_lateral_speed``, ``max_vertical_speed`` (m/s), ``max_yaw_rate`` (rad/s), the drone's hull radius (m) and ``frame_rate`` (Hz) |
-    | ``camera``        | (15,)                   | ±1000 m, [-1, 1], [0, 1e5] px | only with ``observe_layout=True``: the camera's true world position (m), world-from-camera rotation in OpenCV axes row by row, and horizontal focal length, principal point and image width (px) |
+    | ``camera``        | (15,)                   | ±1000 m, [-1, 1], ±1e5 px | only with ``observe_layout=True``: the camera's true world position (m), world-from-camera rotation in OpenCV axes row by row, and horizontal focal length, principal point and image width (px) |
     | ``depth_bin_edges``| (bins + 1,)            | [0, 1000]            | only with ``observe_layout=True``: the histogram's ``depth_bin_edges`` (m) |
 
     ``state`` (clipped to the bounds of the space):

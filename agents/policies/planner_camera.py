@@ -67,6 +67,17 @@ class CameraPlannerAgent(PlannerAgent):
         self.replans = 0
 
     @property
+    def known_capsules(self) -> dict[int, np.ndarray]:
+        """What it knows this episode: each capsule's row in the layout → (x, y, radius) as it knows them (m)."""
+        return {row: capsule.copy() for row, capsule in self._known.items()}
+
+    @property
+    def seen_whole(self) -> dict[int, bool]:
+        """Per known capsule, whether what it knows comes from a view with the capsule's front point inside the
+        image (always, for the exact planner)."""
+        return dict(self._whole)
+
+    @property
     def reader(self) -> str:
         """The agent's name, for errors."""
         return "planner_camera"

@@ -92,32 +92,32 @@ def test_it_knows_only_capsules_it_has_seen_and_replans_as_they_come() -> None:
     agent = CameraPlannerAgent()
     flown = _fly(agent, 20)
     reached = set().union(*(_in_reach(observation, agent.view_range) for observation, _ in flown))
-    assert agent._known and set(agent._known) <= reached
+    assert agent.known_capsules and set(agent.known_capsules) <= reached
     layout = flown[-1][0]["layout"]
-    for row, capsule in agent._known.items():
+    for row, capsule in agent.known_capsules.items():
         np.testing.assert_array_equal(capsule, layout[row])
     assert agent.replans >= 1
     assert all(action.shape == (3,) and np.all(np.abs(action) <= 1.0) for _, action in flown)
     # Far fewer than the whole field: the map would hold every capsule.
-    assert len(agent._known) < int(flown[-1][0]["layout_mask"].sum())
+    assert len(agent.known_capsules) < int(flown[-1][0]["layout_mask"].sum())
 
 
 def test_without_memory_it_knows_only_what_is_in_view_now() -> None:
     agent = CameraPlannerAgent(memory=False)
     flown = _fly(agent, 20)
-    assert set(agent._known) <= _in_reach(flown[-1][0], agent.view_range)
+    assert set(agent.known_capsules) <= _in_reach(flown[-1][0], agent.view_range)
 
 
 def test_the_observed_planner_knows_capsules_where_the_histogram_puts_them() -> None:
     agent = ObservedCameraPlannerAgent()
     flown = _fly(agent, 20)
     layout = flown[-1][0]["layout"]
-    whole = [row for row, seen_whole in agent._whole.items() if seen_whole]
-    assert whole and set(agent._whole) == set(agent._known)
+    whole = [row for row, seen_whole in agent.seen_whole.items() if seen_whole]
+    assert whole and set(agent.seen_whole) == set(agent.known_capsules)
     for row in whole:
         # Seen whole, off by at most half a 1 m depth bin and half a 15° sector column at 2.5 m, and the turn
         # that moves its centre behind the front point.
-        capsule = agent._known[row]
+        capsule = agent.known_capsules[row]
         assert capsule[2] == layout[row, 2]
         assert 0.0 < np.hypot(*(capsule[:2] - layout[row, :2])) < 0.5 + 2.5 * np.tan(np.radians(7.6)) + 0.1
 

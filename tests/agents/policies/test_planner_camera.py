@@ -13,13 +13,14 @@ import flownav_env  # noqa: F401  (registers the env ids)
 from agents.common.seeds import CAMERA_REFERENCE_SEED_START
 from agents.policies import AGENT_NAMES, PRIVILEGED_AGENTS, agent_env_kwargs, is_privileged, load_agent
 from agents.policies.base import PLANNERS
+from agents.policies.planner import build_cost_to_go
 from agents.policies.planner_camera import CameraPlannerAgent, ObservedCameraPlannerAgent
 from agents.policies.teachers import PlannerTeacher, check_teacher_params, make_teacher
 from flownav_env.tiers import TIERS, check_agent_settings
 
 SMALL = {"camera_width": 64, "camera_height": 48, "depth_error_info": False}
-# The closed field (capsules across the whole lateral bound) on the hard course: capsules come into view early.
-CLOSED_HARD = {**TIERS["hard"].settings, "field_width": 12.0}
+# The hard tier: a closed field (capsules across the whole lateral bound), so capsules come into view early.
+HARD = TIERS["hard"]
 
 
 @pytest.mark.parametrize(
@@ -62,9 +63,9 @@ def test_an_env_without_the_privileged_keys_is_refused_in_one_line() -> None:
 
 
 def _fly(agent: CameraPlannerAgent, steps: int) -> list[tuple[dict[str, np.ndarray], np.ndarray]]:
-    """``steps`` steps of the closed hard field's first camera-reference layout: each observation the agent
+    """``steps`` steps of the hard tier's first camera-reference layout: each observation the agent
     acted on, with its action."""
-    env = gym.make("FlowNav-v0", **CLOSED_HARD, observe_layout=True, **SMALL)
+    env = gym.make(HARD.env_id, **HARD.settings, observe_layout=True, **SMALL)
     flown = []
     try:
         observation, _ = env.reset(seed=CAMERA_REFERENCE_SEED_START)
@@ -131,3 +132,24 @@ def test_a_camera_planner_teaches_over_a_batch_with_its_own_parameters() -> None
         check_teacher_params("planner_camera", {"memory": 1}, "config.yaml")
     with pytest.raises(ValueError, match=re.escape("view_range must be a finite distance > 0 (m), got -1.0")):
         check_teacher_params("planner_camera_observed", {"view_range": -1.0}, "config.yaml")
+
+
+@pytest.mark.parametrize("kind", [CameraPlannerAgent, ObservedCameraPlannerAgent])
+def test_the_refilled_table_equals_one_built_afresh_for_what_it_knows(kind: type[CameraPlannerAgent]) -> None:
+    agent = kind(memory=False)
+    flown = _fly(agent, 30)
+    assert agent.replans >= 2  # refilled over some stages more than once
+    true, course = flown[-1][0]["true_state"], flown[-1][0]["course"]
+    known = np.array([agent.known_capsules[row] for row in sorted(agent.known_capsules)]).reshape(-1, 3)
+    fresh = build_cost_to_go(
+        known,
+        float(course[0]),
+        agent._sweep.stage_dx,
+        agent._sweep.grid,
+        agent._cost_terms(course),
+        agent.control_weight,
+        agent.change_weight,
+    )
+    # From the drone's stage on (those behind it are never read again).
+    here = agent._sweep.stage_of(float(true[0]))
+    np.testing.assert_array_equal(agent._table[here:], fresh[here:])

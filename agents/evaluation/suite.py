@@ -30,6 +30,7 @@ from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import seed_interval
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.records import overwrite_hint, read_records, start_new_file
+from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
@@ -417,6 +418,7 @@ def run_suite(
         generated=today(),
         bounds=suite_bounds(failures, bests, seeds, version),
         gains=learning_gains(failures, rankings),
+        chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
         **beside_suite(out, tier_names, csv_path, seeds),
         version=version,
     )

@@ -22,6 +22,7 @@ from agents.evaluation.learning_gain import LearningGain
 from agents.evaluation.over_seeds import episode_outcomes
 from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
 from agents.evaluation.records import read_records
+from agents.evaluation.reference_chain import ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
 from agents.policies.base import base_agent_name
@@ -157,6 +158,7 @@ def suite_values(
     lanes: Sequence[Mapping[str, Any]] = (),
     retired: Sequence[Mapping[str, Any]] = (),
     version: str = SUITE_VERSION,
+    chains: Mapping[str, Sequence[ChainLink]] | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom."""
@@ -202,6 +204,7 @@ def suite_values(
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),
+        "chains": {name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
     }
 
 

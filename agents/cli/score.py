@@ -21,9 +21,9 @@ import argparse
 from pathlib import Path
 
 from agents.cli.suite import add_tier_arguments
-from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
 from agents.evaluation.suite_report import tier_tables
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
+from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
 from agents.policies.sb3_models import SB3_ALGORITHMS, sb3_model_name
 
 HELP = "score any agent on the suite's frozen test layouts (a row per tier)"

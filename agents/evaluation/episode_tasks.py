@@ -35,6 +35,7 @@ from agents.policies import (
     policy_file,
     split_agent_name,
 )
+from agents.policies.agent_limits import AgentLimits
 
 
 def canonical_json(value: object) -> str:
@@ -100,6 +101,11 @@ class EpisodeTask:
     suite_version: str = ""
     # The most an outside agent's predict may take per call (0: no limit); how it flies, not which episode.
     step_timeout_s: float = 0.0
+    # The memory and CPU time an outside agent's process may use; how it flies, not which episode.
+    agent_limits: AgentLimits = field(default_factory=AgentLimits)
+    # An outside agent's settings (canonical JSON) where the run was planned: where the episode flies, the
+    # agent's process must declare the same ("" where nothing was planned).
+    planned_settings: str = ""
 
     @property
     def tier(self) -> str:

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import multiprocessing
+import multiprocessing.util
+import os
 import signal
 import time
 from collections.abc import Generator, Iterator
@@ -35,11 +36,13 @@ from agents.evaluation.records import (
     read_episodes,
     repair_episodes_header,
 )
-from agents.evaluation.step_limit import STEP_TIMEOUT_OPTION, TimeLimitedAgent, timeout_message
 from agents.policies import Agent, load_agent
+from agents.policies.agent_limits import AgentLimits, check_step_timeout
+from agents.policies.agent_process import IsolatedAgent, end_agent_processes
 from agents.policies.external import is_external_name
+from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.limits import episode_step_limit
-from flownav_env.tiers import SUITE_VERSION
+from flownav_env.tiers import SUITE_VERSION, check_agent_settings
 
 # How often a run that is done checks whether another run has written the episodes it claimed.
 AWAIT_POLL_S = 0.5
@@ -54,29 +57,36 @@ class FlightCache:
     def __init__(self, max_agents: int = 16) -> None:
         self.max_agents = max_agents
         self.envs: dict[tuple[str, str], gym.Env] = {}
-        self.agents: dict[tuple[str, str | None, tuple[tuple[str, float], ...], bool], Agent] = {}
+        self.agents: dict[tuple[str, str | None, tuple[tuple[str, float], ...], bool, AgentLimits], Agent] = {}
 
-    def env_and_agent(self, task: EpisodeTask) -> tuple[gym.Env, Agent]:
-        """The env and agent that fly ``task``, built only when its env settings or agent are new here."""
-        settings = task.env_settings()
+    def env_and_agent(self, task: EpisodeTask) -> tuple[gym.Env, Agent, dict[str, Any]]:
+        """The env and agent that fly ``task``, built only when its env settings or agent are new here, and the
+        settings the env flies with (:func:`flown_settings`, checked there)."""
+        agent_key = (task.agent, task.policy, task.bee_params, task.trust_pickle, task.agent_limits)
+        if agent_key not in self.agents:
+            if len(self.agents) >= self.max_agents:
+                del self.agents[next(iter(self.agents))]  # the oldest
+            self.agents[agent_key] = load_agent(
+                task.agent,
+                task.policy_path(),
+                trust_pickle=task.trust_pickle,
+                limits=task.agent_limits,
+                **dict(task.bee_params),
+            )
+        agent = self.agents[agent_key]
+        settings = flown_settings(task, agent)
         # JSON, not a tuple of items: settings may nest (estimator_kwargs) and dicts do not hash.
         env_key = (task.env_id, canonical_json(settings))
         if env_key not in self.envs:
             self.clear()
+            self.agents[agent_key] = agent
             limit = episode_step_limit(task.env_id, settings)
             self.envs[env_key] = (
                 gym.make(task.env_id, max_episode_steps=limit, **settings)
                 if limit
                 else gym.make(task.env_id, **settings)
             )
-        agent_key = (task.agent, task.policy, task.bee_params, task.trust_pickle)
-        if agent_key not in self.agents:
-            if len(self.agents) >= self.max_agents:
-                del self.agents[next(iter(self.agents))]  # the oldest
-            self.agents[agent_key] = load_agent(
-                task.agent, task.policy_path(), trust_pickle=task.trust_pickle, **dict(task.bee_params)
-            )
-        return self.envs[env_key], self.agents[agent_key]
+        return self.envs[env_key], agent, settings
 
     def clear(self) -> None:
         """Close the env and forget it and the agents: the next task builds its own."""
@@ -106,14 +116,53 @@ def run_task(task: EpisodeTask, cache: FlightCache = WORKER_CACHE) -> EpisodeRec
     import torch  # heavy, and only a worker that flies needs it
 
     torch.set_num_threads(1)
-    env, agent = cache.env_and_agent(task)
-    if task.step_timeout_s > 0 and is_external_name(task.agent):
-        limit = task.step_timeout_s
-        agent = TimeLimitedAgent(agent, limit, timeout_message(task.agent, _episode_name(task), limit))
+    env, agent, settings = cache.env_and_agent(task)
+    if isinstance(agent, IsolatedAgent):
+        agent.step_timeout_s, agent.episode = task.step_timeout_s, _episode_name(task)
     record = run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
+    identity = task.identity()
+    identity["env_kwargs"] = canonical_json(settings)  # what flew, as it flew
     return dataclasses.replace(
-        record, **task.identity(), code_version=_code_version(), suite_version=task.suite_version
+        record, **identity, code_version=_code_version(), suite_version=task.suite_version
     )
+
+
+def flown_settings(task: EpisodeTask, agent: Agent) -> dict[str, Any]:
+    """The env settings ``task`` flies with: for an outside agent, what its own process declares (plain values
+    only), checked here, where the episode flies, against the tier and against what the run planned with.
+
+    Raises:
+        ValueError: one line naming the agent and the episode: settings a tier fixes, privileged data for an
+            agent not declared privileged, or settings other than those the run was planned with.
+    """
+    if not isinstance(agent, IsolatedAgent) or is_sb3_model_name(task.agent):
+        return task.env_settings()
+    declared = agent.declarations()
+    if task.tier:
+        check_agent_settings(task.agent, declared.env_settings, task.tier, privileged=declared.privileged)
+    settings = {**declared.env_settings, **dict(task.env_kwargs)}
+    if task.planned_settings and canonical_json(settings) != task.planned_settings:
+        raise ValueError(
+            f"agent {task.agent} declares env settings {canonical_json(settings)} in the process that flies "
+            f"{_episode_name(task)}, but {task.planned_settings} where the run was planned: an agent's "
+            "env_settings must be the same in every process; nothing was recorded of that episode"
+        )
+    return settings
+
+
+def plan_settings(tasks: list[EpisodeTask]) -> list[EpisodeTask]:
+    """``tasks`` with each outside agent's settings as declared here (``planned_settings``), for the process that
+    flies each to check against (:func:`flown_settings`)."""
+    planned: dict[tuple[str, tuple[tuple[str, Any], ...]], str] = {}
+    result = []
+    for task in tasks:
+        if is_external_name(task.agent) and not is_sb3_model_name(task.agent):
+            key = (task.agent, task.env_kwargs)
+            if key not in planned:
+                planned[key] = canonical_json(task.env_settings())
+            task = dataclasses.replace(task, planned_settings=planned[key])
+        result.append(task)
+    return result
 
 
 def _episode_name(task: EpisodeTask) -> str:
@@ -155,6 +204,7 @@ def execute(
     remedy: str = FRESH_FILE_HINT,
     step_timeout_s: float = 0.0,
     by_factor: bool = False,
+    agent_limits: AgentLimits | None = None,
 ) -> int:
     """Fly every task not yet in ``csv_path``, appending each record as its episode ends.
 
@@ -171,6 +221,8 @@ def execute(
         remedy: what the command offers when the CSV cannot be resumed (see :func:`resume_plan`).
         step_timeout_s: the most an outside agent's ``predict`` may take per call; 0 for no limit.
         by_factor: say first what the CSV holds of each factor (a suite's tiers), and give each its bar.
+        agent_limits: the memory and CPU time an outside agent's process may use (default
+            :class:`AgentLimits`'s).
 
     Returns:
         The number of episodes flown and added in this call (not those another run flew meanwhile).
@@ -190,7 +242,10 @@ def execute(
         print(repaired)
     plan = resume_plan(tasks, csv_path, remedy)
     _say_what_does_not_count(csv_path, plan.damaged, plan.other_versions)
-    todo = [dataclasses.replace(task, step_timeout_s=step_timeout_s) for task in plan.todo]
+    limits = agent_limits or AgentLimits()
+    todo = plan_settings(
+        [dataclasses.replace(task, step_timeout_s=step_timeout_s, agent_limits=limits) for task in plan.todo]
+    )
     if by_factor:
         print(holdings_line(csv_path, tasks, todo))
     if not todo:
@@ -223,6 +278,7 @@ def execute(
         results.close()
         progress.close()
         release_claims(csv_path)
+        end_agent_processes()  # an outside agent's process, and all it started, ends with the run
     if flown < len(todo):
         print(
             f"{len(todo) - flown} of these episodes were flown by another run writing {csv_path} at the same "
@@ -237,10 +293,7 @@ def _check_run_options(backend: str, workers: int, step_timeout_s: float) -> Non
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    if not (math.isfinite(step_timeout_s) and step_timeout_s >= 0):
-        raise ValueError(
-            f"{STEP_TIMEOUT_OPTION} must be a number of seconds >= 0 (0 = no limit), got {step_timeout_s!r}"
-        )
+    check_step_timeout(step_timeout_s)
 
 
 def _say_what_does_not_count(csv_path: Path, damaged: int, other_versions: dict[str, int]) -> None:
@@ -278,10 +331,18 @@ def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: Episod
     return flown
 
 
-def _ignore_interrupts() -> None:
-    """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback. SIGTERM
-    keeps its default: it is how the parent's ``pool.terminate()`` stops them."""
+def _start_pool_worker() -> None:
+    """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback. SIGTERM,
+    how the parent's ``pool.terminate()`` stops them, ends the worker's outside agent processes first, as its
+    normal exit does."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _end_pool_worker)
+    multiprocessing.util.Finalize(None, end_agent_processes, exitpriority=10)
+
+
+def _end_pool_worker(signum: int, frame: object) -> None:
+    end_agent_processes()
+    os._exit(128 + signum)
 
 
 def _results(
@@ -297,7 +358,7 @@ def _results(
     else:
         # forkserver: a forked child would inherit this process's GL state, which hangs EGL.
         context = multiprocessing.get_context("forkserver")
-        pool = context.Pool(workers, initializer=_ignore_interrupts)
+        pool = context.Pool(workers, initializer=_start_pool_worker)
         try:
             # Tasks are ordered by cell, so chunks keep each worker on one env for a while.
             yield from pool.imap_unordered(functools.partial(run_claimed_task, csv_path), todo, chunksize=1)

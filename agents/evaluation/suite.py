@@ -33,7 +33,6 @@ from agents.evaluation.records import overwrite_hint, read_records, start_new_fi
 from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
 from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
-from agents.evaluation.step_limit import DEFAULT_STEP_TIMEOUT_S
 from agents.evaluation.suite_page import (
     beside_suite,
     rank_suite,
@@ -55,6 +54,7 @@ from agents.policies import (
     runs_to_fly,
     split_agent_name,
 )
+from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S
 from agents.policies.external import canonical_spec, check_display_name, display_name, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier

@@ -23,13 +23,13 @@ import importlib
 import importlib.util
 import sys
 import traceback
-from collections.abc import Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import Any, NoReturn
 
 import numpy as np
 
+from agents.policies.agent_process import isolated_agent
 from agents.policies.base import AGENT_NAMES, Agent, AgentWrapper
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from agents.policies.sb3_models import is_sb3_model_name
@@ -100,7 +100,7 @@ def describe_error(error: BaseException, source: Path | str | None = None) -> st
 
 
 def load_external_agent(spec: str) -> Agent:
-    """The agent that ``spec`` (``module.path:callable`` or ``path/to/file.py:callable``) names, with its
+    """In this process (the agent's own, :mod:`agents.policies.agent_server`), the agent that ``spec`` (``module.path:callable`` or ``path/to/file.py:callable``) names, with its
     observations checked (see the module docstring).
 
     Raises:
@@ -134,22 +134,27 @@ def _resolve(spec: str) -> Agent:
     return made
 
 
-@functools.lru_cache(maxsize=32)
-def external_env_settings(spec: str) -> dict[str, Any]:
-    """The env settings the agent ``spec`` declares it needs (its ``env_settings``; {} when it has none).
+def resolve_external(spec: str) -> tuple[Agent, str]:
+    """The object ``spec`` names (its factory called) and the file that defines it, loaded in this process: only
+    the agent's own process (:mod:`agents.policies.agent_server`) calls this.
 
     Raises:
-        ValueError: ``env_settings`` is not a mapping of setting names to values.
+        ValueError: as :func:`load_external_agent`.
     """
-    declared = getattr(_resolve(spec), "env_settings", None) or {}
-    if not isinstance(declared, Mapping) or not all(isinstance(key, str) for key in declared):
-        raise ValueError(
-            f"agent {spec!r}: env_settings must map env setting names to values, got {declared!r}"
-        )
-    return dict(declared)  # a copy per call would not help: lru_cache hands out this one; callers copy
+    made = _resolve(spec)
+    return made, str(getattr(_module(str(spec).rpartition(":")[0]), "__file__", None) or "")
 
 
-@functools.lru_cache(maxsize=32)
+def external_env_settings(spec: str) -> dict[str, Any]:
+    """The env settings the agent ``spec`` declares it needs (its ``env_settings``; {} when it has none), as its
+    own process reports them: plain ``bool``, ``int``, ``float`` or ``str`` values only.
+
+    Raises:
+        ValueError: the agent does not load, or ``env_settings`` is not a mapping of names to plain values.
+    """
+    return dict(isolated_agent(spec).declarations().env_settings)
+
+
 def external_privileged(spec: str) -> bool:
     """Whether the agent ``spec`` declares itself privileged (``privileged = True``): it may ask for data the
     tier's sensor does not give, and is then a reference, never ranked.
@@ -157,10 +162,7 @@ def external_privileged(spec: str) -> bool:
     Raises:
         ValueError: ``privileged`` is set to something other than True or False.
     """
-    declared = getattr(_resolve(spec), "privileged", False)
-    if not isinstance(declared, bool):
-        raise ValueError(f"agent {spec!r}: privileged must be True or False, got {declared!r}")
-    return declared
+    return isolated_agent(spec).declarations().privileged
 
 
 def display_name(agent: str) -> str:
@@ -200,7 +202,8 @@ def check_display_name(name: str, agent: str) -> str:
 def external_parameters(spec: str) -> dict[str, Any]:
     """What identifies the agent ``spec`` in episode records: the hash of the file that defines it."""
     target = str(spec).rpartition(":")[0]
-    source = getattr(_module(target), "__file__", None)
+    # A file is hashed as it is; a module where its own process found it (this process never imports it).
+    source = target if _is_file_target(target) else isolated_agent(spec).declarations().source
     digest = hashlib.sha256(Path(source).read_bytes()).hexdigest() if source else ""
     return {"source_sha256": digest}
 

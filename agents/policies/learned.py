@@ -17,6 +17,8 @@ import gymnasium as gym
 import flownav_env  # noqa: F401  (registers the env ids that LoadedPolicy.make_env makes)
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
+from agents.policies.agent_limits import AgentLimits
+from agents.policies.agent_process import isolated_agent
 from agents.policies.base import (
     PRIVILEGED_AGENTS,
     Agent,
@@ -29,7 +31,6 @@ from agents.policies.external import (
     external_parameters,
     external_privileged,
     is_external_name,
-    load_external_agent,
 )
 from agents.policies.loading import load_policy_file, training_config_beside
 from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
@@ -42,7 +43,6 @@ from agents.policies.reactive import BeeAgent, StraightAgent
 from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
 from agents.policies.sb3_models import (
     is_sb3_model_name,
-    load_sb3_model,
     sb3_model_env_settings,
     sb3_model_parameters,
 )
@@ -211,7 +211,12 @@ def is_privileged(name: str) -> bool:
 
 
 def load_agent(
-    name: str, policy_path: str | Path | None = None, *, trust_pickle: bool = False, **bee_params: float
+    name: str,
+    policy_path: str | Path | None = None,
+    *,
+    trust_pickle: bool = False,
+    limits: AgentLimits | None = None,
+    **bee_params: float,
 ) -> Agent:
     """The agent called ``name`` (see :data:`~agents.policies.base.AGENT_NAMES`).
 
@@ -229,7 +234,12 @@ def load_agent(
             vouch for loads with an :class:`UnverifiedPolicyWarning`.
         trust_pickle: load a zip without a training config beside it with ``PPO.load`` (unpickling, which
             runs any code in it); without this such a zip raises a ValueError.
+        limits: the memory and CPU time an outside agent's process may use (default :class:`AgentLimits`'s).
         bee_params: overrides of a reactive agent's gains (its dataclass fields).
+
+    An outside agent (a file, a module, a stable-baselines3 model zip) runs in a process of its own
+    (:class:`~agents.policies.agent_process.IsolatedAgent`, one per name and options in this process); the
+    agents FlowNav ships run here.
 
     Raises:
         ValueError: unknown name, a policy file that is not a readable policy or has no config beside it
@@ -238,10 +248,10 @@ def load_agent(
         FileNotFoundError: a PPO policy file is missing.
     """
     base, train_seed = split_agent_name(name)
-    if is_sb3_model_name(name):
-        return load_sb3_model(name, trust_pickle=trust_pickle)
-    if is_external_name(name):
-        return load_external_agent(name)
+    if is_external_name(name):  # an SB3 model's name too
+        agent = isolated_agent(name, trust_pickle=trust_pickle, limits=limits)
+        agent.declarations()  # started now: one that does not load fails here
+        return agent
     if name == "straight" or name in _GAIN_AGENTS:
         return _rule_agent(name, bee_params)
     if is_learned(name):

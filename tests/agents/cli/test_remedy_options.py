@@ -9,7 +9,7 @@ import pytest
 
 from agents.cli import build_parser
 from agents.evaluation.records import FRESH_FILE_HINT, OVERWRITE_HINT, overwrite_hint, predates_identities
-from agents.evaluation.step_limit import timeout_message
+from agents.policies.agent_limits import timeout_message
 from agents.evaluation.sweep import SWEEP_REMEDY
 
 

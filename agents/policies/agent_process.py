@@ -96,7 +96,7 @@ class IsolatedAgent:
         self.trust_pickle = trust_pickle
         self.limits = limits or AgentLimits()
         self.step_timeout_s = 0.0
-        self.episode = "an episode"
+        self.episode = ""
         self._process: subprocess.Popen[bytes] | None = None
         self._connection: Connection | None = None
         self._declared: AgentDeclarations | None = None
@@ -137,17 +137,17 @@ class IsolatedAgent:
         timeout = self.step_timeout_s if self.step_timeout_s > 0 else None
         if not self._connection.poll(timeout):
             self.close()
-            raise PredictTimeout(timeout_message(self.spec, self.episode, self.step_timeout_s))
+            raise PredictTimeout(timeout_message(self.spec, self.episode or "an episode", self.step_timeout_s))
         kind, body = self._receive("during predict")
         if kind == ERROR:
-            raise ValueError(f"{_text(body)} in {self.episode}")
+            raise ValueError(f"{_text(body)}{self._in_episode()}")
         if kind != ACTION:
             self._ended("during predict", f"it sent a {kind!r} message, not an action")
         action = self._action(body)
         if not np.isfinite(action).all():
             where = f" (its predict is at {self._declared.predict_at})" if self._declared else ""
             raise ValueError(
-                f"agent {self.spec} returned the action {action.tolist()!r}{where} in {self.episode}: an action "
+                f"agent {self.spec} returned the action {action.tolist()!r}{where}{self._in_episode()}: an action "
                 "must be finite numbers"
             )
         return action, None
@@ -251,9 +251,12 @@ class IsolatedAgent:
         self.close()
         how = why or (_exit_description(process, self.limits) if process is not None else "it was closed")
         raise AgentProcessEnded(
-            f"agent {self.spec}'s process ended {when} in {self.episode} ({how}); the run stopped and that "
+            f"agent {self.spec}'s process ended {when}{self._in_episode()} ({how}); the run stopped and that "
             "episode is not recorded"
         )
+
+    def _in_episode(self) -> str:
+        return f" in {self.episode}" if self.episode else ""
 
 
 def _text(body: bytes) -> str:

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +31,9 @@ if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
 
 SB3_ALGORITHMS = ("ppo", "sac", "a2c", "td3", "recurrent_ppo")
+# The most parameters FlowNav builds a model's network with (FlowNav's own policies have about 10^5): a network
+# past it is refused before it is built, rather than filling memory.
+MAX_MODEL_PARAMETERS = 20_000_000
 
 
 def algorithm(name: str) -> type[BaseAlgorithm]:
@@ -149,6 +154,40 @@ def _check_algorithm(algo: str, saved: SavedModel) -> None:
     )
 
 
+def network_parameters(net_arch: Any, inputs: int, outputs: int) -> int:
+    """About how many parameters an MLP of ``net_arch`` (SB3's: a list of layer sizes for the actor and the
+    critic each, or a dict of such lists per network) has from ``inputs`` features: every weight and bias of
+    each branch, to ``outputs`` values (at least one).
+
+    Raises:
+        ValueError: ``net_arch`` is not layer sizes (positive integers).
+    """
+    branches = list(net_arch.values()) if isinstance(net_arch, dict) else [net_arch, net_arch]
+    total = 0
+    for branch in branches:
+        if not isinstance(branch, list) or not all(type(size) is int and size > 0 for size in branch):
+            raise ValueError(f"net_arch must be lists of layer sizes (integers > 0), got {net_arch!r}")
+        sizes = [inputs, *branch, max(outputs, 1)]
+        total += sum(a * b + b for a, b in itertools.pairwise(sizes))
+    return total
+
+
+def check_network_size(path: Path, network: Any, inputs: int, outputs: int) -> None:
+    """Refuse a model whose network (its saved ``policy_kwargs``' ``net_arch``) would have more than
+    :data:`MAX_MODEL_PARAMETERS` parameters, before it is built.
+
+    Raises:
+        ValueError: one line naming the file, its ``net_arch`` and the parameter count.
+    """
+    net_arch = network.get("net_arch", [64, 64]) if isinstance(network, dict) else [64, 64]
+    count = network_parameters(net_arch, inputs, outputs)
+    if count > MAX_MODEL_PARAMETERS:
+        raise ValueError(
+            f"{path}: its network (net_arch {net_arch}) would have about {count:,} parameters, more than the "
+            f"{MAX_MODEL_PARAMETERS:,} FlowNav builds a model with"
+        )
+
+
 def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
     """The model named ``name`` (``<algo>:<path>.zip``) as an agent, its parameters loaded into a network built
     here (see the module docstring).
@@ -178,6 +217,8 @@ def load_sb3_model(name: str, *, trust_pickle: bool = False) -> Agent:
             model = load_unpickled(algorithm_class, path, algo)
             return CheckedPolicy(model, ObservationKeyCheck((), path, None))
     observation_space, action_space = env_spaces("FlowNav-v0", sb3_model_env_settings(name))
+    inputs = sum(math.prod(space.shape or (1,)) for space in observation_space.spaces.values())
+    check_network_size(path, network, inputs, math.prod(action_space.shape or (1,)))
     alias = "MultiInputLstmPolicy" if algo == "recurrent_ppo" else "MultiInputPolicy"
     policy = algorithm_class.policy_aliases[alias](observation_space, action_space, lambda _: 0.0, **network)
     try:

@@ -12,7 +12,9 @@ its units; ``predict``'s signature): ``flownav describe [tier]``. ``--name`` set
 
 Before flying it says what ``suite_episodes.csv`` already holds of each tier and what is left. After you edit
 your agent's file its old episodes no longer describe it: ``--overwrite`` starts afresh, keeping the old file
-as ``suite_episodes.csv.bak-<time>``. An outside agent's ``predict`` gets ``--step-timeout`` seconds a call.
+as ``suite_episodes.csv.bak-<time>``. An outside agent (a file, a module, a model zip) runs in a process of its
+own, apart from the env: its ``predict`` gets ``--step-timeout`` seconds a call, its process ``--agent-memory``
+GiB and ``--agent-cpu`` seconds of CPU time.
 """
 
 from __future__ import annotations
@@ -23,7 +25,15 @@ from pathlib import Path
 from agents.cli.suite import add_tier_arguments
 from agents.evaluation.suite_report import tier_tables
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
-from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
+from agents.policies.agent_limits import (
+    AGENT_CPU_OPTION,
+    AGENT_MEMORY_OPTION,
+    DEFAULT_AGENT_CPU_S,
+    DEFAULT_AGENT_MEMORY_GIB,
+    DEFAULT_STEP_TIMEOUT_S,
+    STEP_TIMEOUT_OPTION,
+    AgentLimits,
+)
 from agents.policies.sb3_models import SB3_ALGORITHMS, sb3_model_name
 
 HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
@@ -60,6 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the most an outside agent's predict may take per call; past it the run stops, naming the "
         "episode (default: %(default)s; 0 = no limit)",
     )
+    add_agent_limit_arguments(parser)
     parser.add_argument(
         "--robustness",
         action="store_true",
@@ -75,6 +86,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         help="with --robustness: the first N of the sweep's layouts per cell (default: the sweep's count)",
     )
+
+
+def add_agent_limit_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--agent-memory`` and ``--agent-cpu``: what an outside agent's process may use."""
+    parser.add_argument(
+        AGENT_MEMORY_OPTION,
+        type=float,
+        default=DEFAULT_AGENT_MEMORY_GIB,
+        metavar="GIB",
+        help="the address space an outside agent's process may map, in GiB; past it its allocations fail "
+        "(default: %(default)s)",
+    )
+    parser.add_argument(
+        AGENT_CPU_OPTION,
+        type=float,
+        default=DEFAULT_AGENT_CPU_S,
+        metavar="SECONDS",
+        help="the CPU time an outside agent's process may use over the run; past it the process is killed and "
+        "the run stops, naming the episode (default: %(default)s)",
+    )
+
+
+def agent_limits(args: argparse.Namespace) -> AgentLimits:
+    """The :class:`AgentLimits` of ``--agent-memory`` and ``--agent-cpu``."""
+    return AgentLimits(args.agent_memory, args.agent_cpu)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -114,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         step_timeout_s=args.step_timeout,
         version=args.suite_version,
+        agent_limits=agent_limits(args),
         **common,
     )
     print("\n".join(tier_tables(rows)))

@@ -54,7 +54,7 @@ from agents.policies import (
     runs_to_fly,
     split_agent_name,
 )
-from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S
+from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
 from agents.policies.external import canonical_spec, check_display_name, display_name, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
@@ -242,6 +242,7 @@ def score(
     overwrite: bool = False,
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
     version: str = SUITE_VERSION,
+    agent_limits: AgentLimits | None = None,
 ) -> list[dict[str, Any]]:
     """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
@@ -262,6 +263,7 @@ def score(
         overwrite: move ``suite_episodes.csv`` to ``suite_episodes.csv.bak-<time>`` first and start afresh.
         step_timeout_s: the most an outside agent's ``predict`` may take per call (0: no limit); past it the
             run stops with one line naming the episode, and that episode is not recorded.
+        agent_limits: the memory and CPU time an outside agent's process may use.
 
     Raises:
         ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
@@ -290,6 +292,7 @@ def score(
         remedy=overwrite_hint("folder"),
         step_timeout_s=step_timeout_s,
         by_factor=True,
+        agent_limits=agent_limits,
     )
     rows = suite_rows(tasks, csv_path)
     table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)]

@@ -38,10 +38,16 @@ def limit_self(memory_bytes: int, cpu_s: float) -> None:
     # SIGXCPU at the limit, SIGKILL a second later if the agent ignores it; the agent cannot raise either.
     cpu = max(1, int(cpu_s))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
+    # Should the scoring process die first, SIGTERM ends this process's group (the agent and what it started).
+    signal.signal(signal.SIGTERM, _end_group)
     try:
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
     except (OSError, AttributeError):  # not Linux: the scoring process still kills the group when it closes
         pass
+
+
+def _end_group(signum: int, frame: object) -> None:
+    os.killpg(0, signal.SIGKILL)
 
 
 def load(spec: str, trust_pickle: bool) -> tuple[Agent, dict[str, Any]]:
@@ -119,11 +125,10 @@ def main(argv: list[str]) -> int:
         line = str(error) if isinstance(error, ValueError) else f"agent {spec}: {describe_error(error)}"
         connection.send_bytes(ERROR + line.encode())
         return 1
-    try:
-        serve(connection, spec, agent, int(memory_bytes) / 2**30)
-    finally:
-        # Whatever the agent started ends with it (its group is this process's).
-        os.killpg(0, signal.SIGKILL)
+    serve(connection, spec, agent, int(memory_bytes) / 2**30)
+    # The scoring process is done with it: whatever the agent started ends with it (its group is this one's).
+    # However else it ends (sys.exit, os._exit, a signal), the scoring process kills the group.
+    _end_group(signal.SIGTERM, None)
     return 0
 
 

@@ -254,7 +254,7 @@ class ExternalAgent(AgentWrapper):
         """
         try:
             result = super().predict(observation, state, episode_start, deterministic)
-        except MissingObservationKey:
+        except (MissingObservationKey, MemoryError):  # the process around it says the memory limit
             raise
         except Exception as error:
             source = getattr(sys.modules.get(type(self.agent).__module__), "__file__", None)

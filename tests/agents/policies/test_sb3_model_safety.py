@@ -3,6 +3,7 @@ the algorithm the zip records, and every bad file or option is one line naming i
 
 from __future__ import annotations
 
+import pickle
 import re
 from pathlib import Path
 
@@ -21,7 +22,7 @@ from pickle_payloads import (
 from agents.cli import main
 from agents.common.saved_models import read_saved_model
 from agents.policies import load_agent
-from agents.policies.sb3_models import SB3_ALGORITHMS, recorded_algorithm, sb3_model_name
+from agents.policies.sb3_models import SB3_ALGORITHMS, network_parameters, recorded_algorithm, sb3_model_name
 
 TORCH_LAYERS = "stable_baselines3.common.torch_layers"
 
@@ -134,3 +135,33 @@ def test_score_calls_a_truncated_zip_cut_short(
     assert one_error_line(capsys).startswith(
         f"flownav score: error: {cut} is cut short: not a readable zip file"
     )
+
+
+def test_a_model_whose_network_would_fill_memory_is_refused_before_it_is_built(
+    ppo_zip: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    huge = with_policy_kwargs(ppo_zip, tmp_path / "huge.zip", pickle.dumps({"net_arch": [200000, 200000]}))
+    assert main(score(huge, "ppo", tmp_path / "out", "--tiers", "clean", "--layouts", "1")) == 2
+    assert re.fullmatch(
+        rf"flownav score: error: {re.escape(str(huge))}: its network \(net_arch \[200000, 200000\]\) would have "
+        r"about 80,0\d\d,\d{3},\d{3} parameters, more than the 20,000,000 FlowNav builds a model with",
+        one_error_line(capsys),
+    )
+
+
+@pytest.mark.parametrize(
+    ("net_arch", "count"),
+    [
+        ([8], 2 * (10 * 8 + 8 + 8 * 3 + 3)),
+        ({"pi": [4, 4], "vf": [2]}, (10 * 4 + 4 + 4 * 4 + 4 + 4 * 3 + 3) + (10 * 2 + 2 + 2 * 3 + 3)),
+    ],
+)
+def test_a_network_is_counted_from_its_layer_sizes(net_arch: object, count: int) -> None:
+    assert network_parameters(net_arch, 10, 3) == count
+
+
+def test_layer_sizes_that_are_not_positive_integers_are_refused() -> None:
+    with pytest.raises(
+        ValueError, match=r"^net_arch must be lists of layer sizes \(integers > 0\), got \[8, -1\]$"
+    ):
+        network_parameters([8, -1], 10, 3)

@@ -29,6 +29,7 @@ COMMANDS = {
     "calibrate-tiers": "agents.cli.calibrate_tiers",
     "suite": "agents.cli.suite",
     "score": "agents.cli.score",
+    "verify": "agents.cli.verify",
     "describe": "agents.cli.describe",
     "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",

@@ -113,10 +113,12 @@ def agent_limits(args: argparse.Namespace) -> AgentLimits:
     return AgentLimits(args.agent_memory, args.agent_cpu)
 
 
-def run(args: argparse.Namespace) -> int:
-    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.evaluation.suite import score
+def agent_and_policy(args: argparse.Namespace) -> tuple[str, str | None]:
+    """The agent ``--agent``, ``--policy`` and ``--algo`` name, and its policy file where it has one.
 
+    Raises:
+        ValueError: ``--algo`` without ``--policy`` or with ``--agent``, or no agent.
+    """
     agent, policy = args.agent, args.policy
     if args.algo:
         if agent or not policy:
@@ -126,6 +128,14 @@ def run(args: argparse.Namespace) -> int:
         agent, policy = sb3_model_name(args.algo, policy), None
     if not agent:
         raise ValueError("give --agent (or --policy model.zip --algo ALGO)")
+    return agent, policy
+
+
+def run(args: argparse.Namespace) -> int:
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+    from agents.evaluation.suite import score
+
+    agent, policy = agent_and_policy(args)
     if not args.robustness and (args.factors or args.robustness_layouts is not None):
         raise ValueError("--factors and --robustness-layouts go with --robustness")
     if args.robustness:

@@ -1,0 +1,184 @@
+"""Checking a ``score.csv`` against its agent: its rates against the episodes beside it, then a sample of those
+episodes flown again (``flownav verify``).
+
+FlowNav's env is deterministic on one machine: an episode flown again with the same agent, tier and layout ends
+the same way. So a row anyone includes can be checked by anyone with the agent: its rates must be what the
+episodes file beside it gives (``suite_episodes.csv``, only episodes of the agent given, with its file's hash),
+and a sample of those episodes, drawn only once the files are given (a fresh random seed, so no one can know
+which episodes will be flown), must end as the file says.
+"""
+
+from __future__ import annotations
+
+import math
+import secrets
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.evaluation.episode_tasks import EpisodeTask
+from agents.evaluation.runner import FlightCache, plan_settings, run_task
+from agents.evaluation.suite import (
+    EPISODES_CSV,
+    agent_runs,
+    resolve_agent,
+    suite_rows,
+    suite_tasks,
+    summarise_suite,
+)
+from agents.evaluation.suite_report import OUTCOMES, read_suite_csv
+from agents.policies.agent_limits import AgentLimits
+from agents.policies.agent_process import end_agent_processes
+from flownav_env.task import episode_outcome
+
+# Episodes flown again per tier by default.
+DEFAULT_SAMPLE = 10
+# score.csv keeps rates to 4 decimals (suite.write_summary_csv).
+RATE_DECIMALS = 4
+
+
+@dataclass(frozen=True)
+class Verification:
+    """What ``verify`` found: the episodes flown again (``checked``, of ``sampled``) and the first that did not
+    match (``mismatch``, one line; "" when all did)."""
+
+    checked: int
+    sampled: int
+    mismatch: str = ""
+
+    def line(self) -> str:
+        """``verified k/k``, or the first mismatch."""
+        if self.mismatch:
+            return f"not verified: {self.mismatch}"
+        return f"verified {self.checked}/{self.sampled}"
+
+
+def outcome_of(row: Mapping[str, Any]) -> str:
+    """The one way an episode ended (:func:`flownav_env.task.episode_outcome`)."""
+    return episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
+
+
+def verify(
+    score_csv: str | Path,
+    agent: str,
+    *,
+    policy: str | None = None,
+    trust_pickle: bool = False,
+    sample: int = DEFAULT_SAMPLE,
+    episodes_csv: str | Path | None = None,
+    step_timeout_s: float = 0.0,
+    agent_limits: AgentLimits | None = None,
+) -> Verification:
+    """Check ``score_csv``'s rows against ``agent``: their rates against its episodes, then ``sample`` episodes
+    per tier flown again here, each of which must end as the file says.
+
+    Args:
+        score_csv: what ``flownav score`` wrote.
+        agent: the agent the rows are of (a FlowNav name, ``file.py:factory``, ``module:factory``,
+            ``<algo>:<model.zip>``).
+        policy: a learned agent's policy file, if not the shipped one.
+        trust_pickle: allow unpickling a policy zip without its config (runs its code).
+        sample: episodes per tier to fly again (all, where a tier has fewer).
+        episodes_csv: the episodes file (default: ``suite_episodes.csv`` beside ``score_csv``).
+        step_timeout_s, agent_limits: as ``flownav score``'s.
+
+    Raises:
+        ValueError: a bad sample size, a file that is not a score CSV, rows of several agents, or an episodes
+            file that holds none of the agent's episodes.
+        FileNotFoundError: no such file.
+    """
+    if isinstance(sample, bool) or not isinstance(sample, int) or sample < 1:
+        raise ValueError(f"--sample must be an integer >= 1, got {sample!r}")
+    score_csv = Path(score_csv)
+    rows = read_suite_csv(score_csv)
+    if not rows:
+        raise ValueError(f"{score_csv} holds no rows: flownav score writes one per tier it flew whole")
+    names = sorted({row["agent"] for row in rows})
+    if len(names) > 1:
+        raise ValueError(
+            f"{score_csv} holds rows of {len(names)} agents ({', '.join(names)}): verify one at a time"
+        )
+    episodes_path = Path(episodes_csv) if episodes_csv else score_csv.parent / EPISODES_CSV
+    if not episodes_path.is_file():
+        raise FileNotFoundError(
+            f"no episodes file at {episodes_path}: flownav score writes it beside score.csv"
+        )
+    agent = resolve_agent(agent, trust_pickle=trust_pickle)
+    runs = {agent: agent_runs(agent, policy)}
+    tasks: dict[str, list[EpisodeTask]] = {}
+    for row in rows:
+        tasks[row["tier"]] = suite_tasks(
+            runs, [row["tier"]], row["layouts"], policies={agent: policy}, trust_pickle=trust_pickle
+        )
+    episodes = {tier: suite_rows(tier_tasks, episodes_path) for tier, tier_tasks in tasks.items()}
+    if not any(episodes.values()):
+        raise ValueError(
+            f"{episodes_path} holds no episodes of {agent} as it is now (same file hash, settings and layouts): "
+            "is that the agent the rows are of?"
+        )
+    mismatch = _rates_mismatch(rows, episodes, runs, score_csv)
+    if mismatch:
+        return Verification(0, 0, mismatch)
+    return _fly_sample(tasks, episodes, sample, step_timeout_s, agent_limits or AgentLimits())
+
+
+def _rates_mismatch(
+    rows: Sequence[Mapping[str, Any]],
+    episodes: Mapping[str, list[dict[str, Any]]],
+    runs: Mapping[str, Sequence[str]],
+    score_csv: Path,
+) -> str:
+    """The first rate of ``rows`` that the episodes do not give, in words; "" when every one matches."""
+    for row in rows:
+        summaries = summarise_suite(episodes[row["tier"]], runs, [row["tier"]], row["layouts"])
+        if not summaries:
+            return f"{score_csv}, tier {row['tier']}: the episodes file lacks some of its {row['layouts']} layouts"
+        summary = summaries[0]
+        for outcome in OUTCOMES:
+            for part in ("rate", "low", "high"):
+                column = f"{outcome}_{part}"
+                given, flown = row[column], round(summary[column], RATE_DECIMALS)
+                if not math.isclose(given, flown, abs_tol=10**-RATE_DECIMALS):
+                    return f"{score_csv}, tier {row['tier']}: {column} is {given:g}, but its episodes give {flown:g}"
+    return ""
+
+
+def _fly_sample(
+    tasks: Mapping[str, list[EpisodeTask]],
+    episodes: Mapping[str, list[dict[str, Any]]],
+    sample: int,
+    step_timeout_s: float,
+    limits: AgentLimits,
+) -> Verification:
+    """Fly ``sample`` episodes per tier, drawn here with a fresh seed, and compare each one's outcome."""
+    draw = np.random.default_rng(secrets.randbits(128))
+    chosen: list[tuple[EpisodeTask, dict[str, Any]]] = []
+    for tier, tier_tasks in tasks.items():
+        recorded = {(row["agent"], int(row["seed"])): row for row in episodes[tier]}
+        pairs = [(task, recorded[(task.agent, task.seed)]) for task in tier_tasks]
+        picks = draw.choice(len(pairs), size=min(sample, len(pairs)), replace=False)
+        chosen += [pairs[index] for index in sorted(picks)]
+    flown = plan_settings(
+        [replace(task, step_timeout_s=step_timeout_s, agent_limits=limits) for task, _ in chosen]
+    )
+    cache = FlightCache()
+    checked = 0
+    try:
+        for task, (_, row) in zip(flown, chosen, strict=True):
+            again = vars(run_task(task, cache))
+            said, now = outcome_of(row), outcome_of(again)
+            if said != now:
+                return Verification(
+                    checked,
+                    len(chosen),
+                    f"the episode of {task.agent} on tier {task.tier}, layout seed {task.seed}: the file says "
+                    f"{said}, flown again it ends in {now}",
+                )
+            checked += 1
+    finally:
+        cache.clear()
+        end_agent_processes()
+    return Verification(checked, len(chosen))

@@ -69,8 +69,9 @@ def test_a_rate_edited_in_score_csv_is_named(copy: Path, capsys: pytest.CaptureF
     assert not (copy / VERIFICATION_JSON).exists()
 
 
-def _flip_outcome(episodes_csv: Path) -> tuple[str, str]:
-    """Edit the one episode's outcome (success <-> collision) and reseal its checksum; returns (was, now)."""
+def _flip_outcome(episodes_csv: Path) -> str:
+    """Edit the one episode's outcome (success <-> collision) and reseal its checksum; returns what the file now
+    says."""
     header, line = episodes_csv.read_text().splitlines()[:2]
     names = next(csv.reader([header]))
     row = dict(zip(names, next(csv.reader([line])), strict=True))
@@ -78,11 +79,11 @@ def _flip_outcome(episodes_csv: Path) -> tuple[str, str]:
     row.update(success=str(was != "success"), collision=str(was == "success"), out_of_bounds="False")
     values = [row[name] for name in names[:-1]]
     episodes_csv.write_text(header + "\n" + sealed_line(values))
-    return ("success", "collision") if was == "success" else ("collision", "success")
+    return "collision" if was == "success" else "success"
 
 
 def test_an_episode_edited_to_another_outcome_is_named(copy: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    said, _ = _flip_outcome(copy / "suite_episodes.csv")
+    said = _flip_outcome(copy / "suite_episodes.csv")
     # The rates made to match the edited episode: score flies nothing and rewrites score.csv from the file.
     assert main(["score", "--agent", AGENT, *ONE_LAYOUT, "--out", str(copy)]) == 0
     capsys.readouterr()

@@ -5,7 +5,10 @@ leading table is the suite's, ``results/suite.md`` (``flownav suite``): its layo
 
 With ``--include score.csv`` (repeatable) it flies nothing: it sets the rows ``flownav score`` wrote beside the
 published suite table (``results/suite.csv``), tier by tier, and writes ``suite_with_included.md``, ``.csv`` and
-``.png`` into ``--out``. A file named twice counts once; rows of another suite version are refused.
+``.png`` into ``--out``. A file named twice counts once. Refused, in one line: rows of another suite version, a
+published agent's name, rates outside [0, 1] or outside their interval or not summing to 1, layouts outside the
+frozen set, two rows of one agent and tier, privileged data not marked privileged. Each included file is marked
+verified (``flownav verify`` re-flew a sample of its episodes) or self-reported.
 """
 
 from __future__ import annotations
@@ -84,7 +87,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _include(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+    from agents.common.tables import markdown_cell
     from agents.evaluation.suite import published_suite_csv, write_summary_csv
+    from agents.evaluation.verification_record import verification_mark
 
     version = args.suite_version
     suite_path = Path(args.suite) if args.suite else published_suite_csv(version)
@@ -98,8 +103,12 @@ def _include(args: argparse.Namespace) -> int:
     lines = [
         f"# The suite table with {count} included row{'' if count == 1 else 's'}",
         "",
-        f"Published rows from `{suite_path}`; included rows from {', '.join(f'`{p}`' for p in files)}. An included "
-        "row rests on the layouts its `layouts` column says, the first of the published rows' frozen layouts.",
+        f"Published rows from `{suite_path}`; included rows from the files below. An included "
+        "row rests on the layouts its `layouts` column says, the first of the published rows' frozen layouts. "
+        "Included rows are self-reported unless `flownav verify` re-flew a sample of their episodes and matched "
+        "every one (it leaves `verification.json` beside the file, naming this very file and its episodes).",
+        "",
+        *(f"- `{markdown_cell(path)}`: {verification_mark(path)}" for path in files),
         "",
         *tier_tables(rows),
     ]

@@ -22,6 +22,12 @@ def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
         writer.writerows(rows)
 
 
+def markdown_cell(text: object) -> str:
+    """``text`` as one Markdown table cell that cannot end its row or add one: line breaks become spaces, ``|``
+    is escaped and backticks (which would end a code span around it) become quotes."""
+    return " ".join(str(text).split()).replace("|", "\\|").replace("`", "'")
+
+
 def markdown_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     """A GitHub Markdown table; cells are written with ``str``."""
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]

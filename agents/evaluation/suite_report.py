@@ -7,11 +7,15 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from agents.common.tables import markdown_table
+from agents.common.seeds import SUITE_LAYOUTS
+from agents.common.tables import markdown_cell, markdown_table
+from agents.evaluation.verification_record import verification_mark
+from agents.policies.base import AGENT_NAMES, PRIVILEGED_AGENTS
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
@@ -88,8 +92,59 @@ def read_suite_csv(path: Path, version: str = SUITE_VERSION) -> list[dict[str, A
         except ValueError as error:
             raise ValueError(f"{path}, line {line}: {error}") from None
         check_row_task(row, path)
-        typed.append(_typed_row(row, path, line))
+        typed.append(check_row_numbers(_typed_row(row, path, line), path, line))
     return typed
+
+
+# score.csv keeps rates to 4 decimals: the exclusive rates' sum may miss 1, and a rate its interval, by this.
+RATE_TOLERANCE = 3e-4
+# The outcomes that partition the episodes (every one but ``failure``, which is "not success").
+EXCLUSIVE_OUTCOMES = tuple(outcome for outcome in OUTCOMES if outcome != "failure")
+
+
+def check_row_numbers(row: dict[str, Any], path: Path, line: int) -> dict[str, Any]:
+    """``row`` (typed) if its counts and rates can be a suite row: runs >= 1, layouts a prefix of the frozen
+    layouts (1 to :data:`~agents.common.seeds.SUITE_LAYOUTS`), episodes runs × layouts; every rate and bound in
+    [0, 1] with low <= rate <= high; the exclusive outcomes' rates summing to 1, failure 1 - success; and
+    privileged data marked: a FlowNav agent that reads it is marked privileged.
+
+    Raises:
+        ValueError: one line naming ``path``, the line, the column and its value.
+    """
+    where = f"{path}, line {line}"
+    if row["runs"] < 1 or not 1 <= row["layouts"] <= SUITE_LAYOUTS:
+        raise ValueError(
+            f"{where}: runs {row['runs']} and layouts {row['layouts']}: a suite row has runs >= 1 and layouts "
+            f"from 1 to {SUITE_LAYOUTS} (a prefix of the frozen layouts)"
+        )
+    if row["episodes"] != row["runs"] * row["layouts"]:
+        raise ValueError(
+            f"{where}: episodes {row['episodes']} is not runs × layouts ({row['runs']} × {row['layouts']})"
+        )
+    for outcome in OUTCOMES:
+        rate, low, high = (row[f"{outcome}_{part}"] for part in ("rate", "low", "high"))
+        if not all(math.isfinite(value) and 0.0 <= value <= 1.0 for value in (rate, low, high)):
+            raise ValueError(
+                f"{where}: {outcome} rate {rate!r} [{low!r}, {high!r}]: rates and bounds lie in [0, 1]"
+            )
+        if not low - RATE_TOLERANCE <= rate <= high + RATE_TOLERANCE:
+            raise ValueError(
+                f"{where}: {outcome} rate {rate:g} lies outside its interval [{low:g}, {high:g}]"
+            )
+    total = sum(row[f"{outcome}_rate"] for outcome in EXCLUSIVE_OUTCOMES)
+    if abs(total - 1.0) > RATE_TOLERANCE:
+        raise ValueError(
+            f"{where}: the rates of {', '.join(EXCLUSIVE_OUTCOMES)} sum to {total:g}, not 1 (each episode ends one way)"
+        )
+    if abs(row["failure_rate"] - (1.0 - row["success_rate"])) > RATE_TOLERANCE:
+        raise ValueError(
+            f"{where}: failure rate {row['failure_rate']:g} is not 1 - success rate {row['success_rate']:g}"
+        )
+    if row["agent"] in PRIVILEGED_AGENTS and not row["privileged"]:
+        raise ValueError(
+            f"{where}: {row['agent']} reads privileged data, but its row is not marked privileged"
+        )
+    return row
 
 
 def _typed_row(row: Mapping[str, str], path: Path, line: int) -> dict[str, Any]:
@@ -120,19 +175,36 @@ def read_included(
     paths: Sequence[str | Path], version: str = SUITE_VERSION
 ) -> tuple[list[dict[str, Any]], list[Path]]:
     """The rows of the ``score.csv`` files ``paths`` (:func:`read_suite_csv`), each file read once however
-    often or under whatever spelling it is named, and the files read, in the order first given.
+    often or under whatever spelling it is named, and the files read, in the order first given. Each row's
+    ``included`` says whether ``flownav verify`` vouches for its file (:func:`verification_mark`).
 
     Raises:
-        ValueError: a file without rows, or any error of :func:`read_suite_csv`.
+        ValueError: a file without rows, a row under a published agent's name (it would replace that agent's
+            rows), two rows of one agent and tier, or any error of :func:`read_suite_csv`.
         FileNotFoundError: a path with no file.
     """
     files = list(dict.fromkeys(Path(path).resolve() for path in paths))
     rows: list[dict[str, Any]] = []
+    seen: dict[tuple[str, str], Path] = {}
     for path in files:
         found = read_suite_csv(path, version)
         if not found:
             raise ValueError(f"{path} holds no rows: flownav score writes one per tier it flew whole")
-        rows += found
+        for row in found:
+            if row["agent"] in AGENT_NAMES:
+                raise ValueError(
+                    f"{path}: agent {row['agent']!r} is a published agent's name: its rows would replace the "
+                    "published ones; score yours under another (flownav score --name)"
+                )
+            key = (row["tier"], row["agent"])
+            if key in seen:
+                raise ValueError(
+                    f"{path}: a second row of agent {row['agent']!r} on tier {row['tier']} (the first is in "
+                    f"{seen[key]}): one row per agent and tier"
+                )
+            seen[key] = path
+        mark = verification_mark(path)
+        rows += [{**row, "included": mark} for row in found]
     return rows, files
 
 
@@ -165,7 +237,7 @@ def merge_rows(
     and tier), tier by tier, best first."""
     merged = {(row["tier"], row["agent"]): dict(row) for row in published}
     for row in included:
-        merged[(row["tier"], row["agent"])] = {**row, "included": True}
+        merged[(row["tier"], row["agent"])] = {**row, "included": row.get("included") or True}
     order = {name: index for index, name in enumerate(TIER_NAMES)}
     return sorted(merged.values(), key=lambda r: (order[r["tier"]], r["failure_rate"], r["agent"]))
 
@@ -185,7 +257,7 @@ def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
         lines += [f"### `{name}` (`{spec.env_id}`)", "", spec.why + ".", ""]
         table_rows = [
             [
-                f"`{r['agent']}`" + (" (included)" if r.get("included") else ""),
+                f"`{markdown_cell(r['agent'])}`" + _included_mark(r),
                 r["runs"],
                 r["layouts"],
                 *(_interval(r, outcome) for outcome in OUTCOMES),
@@ -195,6 +267,15 @@ def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
         header = ["agent", "runs", "layouts", *(f"{o.replace('_', ' ')} [95 % CI]" for o in OUTCOMES)]
         lines += [markdown_table(header, table_rows), ""]
     return lines
+
+
+def _included_mark(row: Mapping[str, Any]) -> str:
+    """`` (included, verified ...)`` or `` (included, self-reported)`` for an included row (its ``included``
+    says which, :func:`agents.evaluation.verification_record.verification_mark`); "" for a published one."""
+    mark = row.get("included")
+    if not mark:
+        return ""
+    return f" (included, {mark})" if isinstance(mark, str) else " (included)"
 
 
 def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:

@@ -188,3 +188,84 @@ def test_the_figure_marks_included_rows_with_their_layouts(scored: dict[str, Pat
     assert plot_label(rows[0]["agent"], marked) == f"{rows[0]['agent']}\n(included, 1 layout)"
     plot_suite([*published, *marked], tmp_path / "suite.png")
     assert (tmp_path / "suite.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _rewritten(source: Path, target: Path, change) -> Path:
+    """A copy of the score.csv ``source`` at ``target`` whose rows ``change`` edited (a list of dicts)."""
+    with source.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    change(rows)
+    with target.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return target
+
+
+def _set(**values: str):
+    return lambda rows: rows[0].update(values)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            _set(agent="bee_ttc"),
+            "agent 'bee_ttc' is a published agent's name: its rows would replace the published",
+        ),
+        (_set(agent="planner"), "line 2: planner reads privileged data, but its row is not marked privileged"),
+        (_set(timeout_rate="1.5"), "timeout rate 1.5 [0.0, "),
+        (_set(timeout_rate="nan"), "timeout rate nan [0.0, "),
+        (_set(timeout_rate="-0.1"), "timeout rate -0.1 [0.0, "),
+        (_set(out_of_bounds_low="0.5"), "out_of_bounds rate 0 lies outside its interval [0.5, "),
+        (
+            _set(out_of_bounds_rate="0.5", out_of_bounds_high="1.0"),
+            "the rates of collision, out_of_bounds, timeout, success sum to 1.5, not 1",
+        ),
+        (
+            _set(layouts="5000", episodes="5000"),
+            "runs 1 and layouts 5000: a suite row has runs >= 1 and layouts from 1",
+        ),
+        (_set(layouts="0", episodes="0"), "runs 1 and layouts 0: a suite row"),
+        (_set(layouts="-3", episodes="-3"), "runs 1 and layouts -3: a suite row"),
+        (_set(episodes="7"), "episodes 7 is not runs × layouts (1 × 1)"),
+        (
+            lambda rows: rows.append(dict(rows[0])),
+            "a second row of agent 'open_gap_agent:make_agent' on tier clean",
+        ),
+        (
+            _set(env_kwargs='{"obs_source": "oracle"}'),
+            "asks for obs_source='oracle', privileged data the tier clean sensor does not give",
+        ),
+    ],
+)
+def test_an_included_row_that_cannot_be_a_suite_row_is_refused(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str], change, message: str
+) -> None:
+    bad = _rewritten(scored["mine"] / "score.csv", tmp_path / "score.csv", change)
+    assert include(scored, tmp_path / "board", bad) == 2
+    line = one_error_line(capsys, "leaderboard")
+    assert line.startswith(f"flownav leaderboard: error: {bad}") and message in line, line
+    assert not (tmp_path / "board").exists()
+
+
+def test_a_published_privileged_agent_not_marked_privileged_is_refused(
+    scored: dict[str, Path], tmp_path: Path
+) -> None:
+    bad = _rewritten(scored["published"], tmp_path / "suite.csv", _set(agent="planner", privileged="False"))
+    with pytest.raises(
+        ValueError, match=r"line 2: planner reads privileged data, but its row is not marked privileged$"
+    ):
+        read_suite_csv(bad)
+
+
+def test_a_name_that_would_write_markdown_is_escaped_and_included_rows_are_marked(
+    scored: dict[str, Path], tmp_path: Path
+) -> None:
+    name = "evil\n| fake | 0.00 |`"
+    renamed = _rewritten(scored["mine"] / "score.csv", tmp_path / "score.csv", _set(agent=name))
+    assert include(scored, tmp_path / "board", renamed) == 0
+    text = (tmp_path / "board" / "suite_with_included.md").read_text()
+    assert "| `evil \\| fake \\| 0.00 \\|'` (included, self-reported) |" in text
+    assert not any(line.startswith("| fake") for line in text.splitlines())
+    assert f"- `{renamed}`: self-reported" in text

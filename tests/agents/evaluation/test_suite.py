@@ -111,7 +111,10 @@ def _row(agent: str, tier: str, failure: float, version: str = SUITE_VERSION) ->
     row = {name: 0.0 for name in SUMMARY_COLUMNS}
     row.update(suite_version=version, tier=tier, env_id=TIERS[tier].env_id, agent=agent, runs=1, layouts=30)
     row.update(episodes=30, interval_over="layouts (Wilson)", failure_rate=failure, success_rate=1 - failure)
-    row.update(failure_low=max(failure - 0.1, 0.0), failure_high=min(failure + 0.1, 1.0))
+    low, high = max(failure - 0.1, 0.0), min(failure + 0.1, 1.0)
+    # Every failure a collision: the exclusive outcomes' rates sum to 1, each inside its interval.
+    row.update(failure_low=low, failure_high=high, collision_rate=failure, collision_low=low, collision_high=high)
+    row.update(success_low=1 - high, success_high=1 - low)
     row.update(env_kwargs=json.dumps(TIERS[tier].settings), privileged=False)
     return row
 
@@ -223,7 +226,7 @@ def test_the_example_agent_is_scored_end_to_end_and_included_beside_the_publishe
         == 0
     )
     text = (tmp_path / "board" / "suite_with_included.md").read_text()
-    assert "`open_gap_agent:make_agent` (included)" in text and "`bee_ttc`" in text
+    assert "`open_gap_agent:make_agent` (included, self-reported)" in text and "`bee_ttc`" in text
     assert (tmp_path / "board" / "suite_with_included.png").stat().st_size > 0
 
 
@@ -304,7 +307,8 @@ def test_an_agent_without_predict_or_missing_a_key_is_one_line(
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert error == (
         "flownav score: error: the agent reads observation key 'approach', which this env does not give: declare "
-        "env_settings = {'observe_approach': True} on the agent (or make the env with observe_approach=True)"
+        "env_settings = {'observe_approach': True} on the agent (or make the env with observe_approach=True) in "
+        f"the episode on tier hard, layout seed {suite_seeds(1)[0]}"
     )
 
 

@@ -11,6 +11,9 @@ render loop of the same scene, with the per-stage breakdown of a step.
 
 ``flownav bench yield``: valid depths per frame and their accuracy per estimator setting in FlowNav flights.
 
+``flownav bench isolation``: the cost per env step of flying an outside agent in a process of its own, against
+the same agent loaded in the scoring process.
+
 Timings are wall-clock on whatever machine runs them; every measurement is taken as a ratio against a
 baseline run in the same process, alternated with it, and quoted as a median over repeats, so that a machine
 shared with other jobs shifts both sides alike.
@@ -28,7 +31,8 @@ if __doc__:  # None under python -OO
 
 HELP = (
     "performance benchmarks: `bench estimator` (thesis Table 3), `bench env` (steps/s per resolution), "
-    "`bench recipe` (minutes per training seed of whole recipes) and `bench yield` (valid depths per setting)"
+    "`bench recipe` (minutes per training seed of whole recipes), `bench yield` (valid depths per setting) and "
+    "`bench isolation` (what an outside agent's own process costs a step)"
 )
 
 
@@ -114,6 +118,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     depth_yield.add_argument("--steps", type=int, default=120, help="steps per flight (default 120)")
     _add_output_options(depth_yield)
 
+    isolation = targets.add_parser(
+        "isolation", help="the cost per step of an outside agent in its own process, against in-process"
+    )
+    isolation.add_argument(
+        "--agent",
+        help="the outside agent, file.py:factory (default: tests/examples/open_gap_agent.py:make_agent)",
+    )
+    isolation.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
+    isolation.add_argument("--repeats", type=int, default=5, help="alternated blocks per side (default 5)")
+    _add_output_options(isolation)
+
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
@@ -144,6 +159,13 @@ def run(args: argparse.Namespace) -> int:
             args.steps,
             args.out,
             progress=not args.no_progress,
+        )
+    elif args.target == "isolation":
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+        from agents.studies.perf.isolation_cost import DEFAULT_AGENT, run_isolation_benchmark
+
+        paths = run_isolation_benchmark(
+            args.agent or DEFAULT_AGENT, steps=args.steps, repeats=args.repeats, out_dir=args.out
         )
     elif args.target == "recipe":
         # Imported on use: `flownav --help` imports every subcommand module and must stay quick.

@@ -9,7 +9,7 @@ from agents.cli import COMMANDS, build_parser
 from agents.cli.bench import SCRATCH_OUT
 from agents.cli.help_text import plain_text
 
-BENCH_TARGETS = ("estimator", "env", "recipe", "yield")
+BENCH_TARGETS = ("estimator", "env", "recipe", "yield", "isolation")
 PAGES = [[], *([name] for name in COMMANDS), *(["bench", target] for target in BENCH_TARGETS)]
 
 

@@ -9,8 +9,8 @@ import pytest
 
 from agents.cli import build_parser
 from agents.evaluation.records import FRESH_FILE_HINT, OVERWRITE_HINT, overwrite_hint, predates_identities
-from agents.policies.agent_limits import timeout_message
 from agents.evaluation.sweep import SWEEP_REMEDY
+from agents.policies.agent_limits import timeout_message
 
 
 def options_of(command: str) -> set[str]:

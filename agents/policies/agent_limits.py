@@ -41,8 +41,10 @@ class AgentLimits:
 
     def __post_init__(self) -> None:
         for option, value in ((AGENT_MEMORY_OPTION, self.memory_gib), (AGENT_CPU_OPTION, self.cpu_s)):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
-                math.isfinite(value) and value > 0
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not (math.isfinite(value) and value > 0)
             ):
                 raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
 

@@ -72,7 +72,9 @@ def check_plain_settings(agent: str, settings: Any) -> dict[str, Any]:
         ValueError: one line naming the agent and the first setting that is not such a value.
     """
     if type(settings) is not dict or not all(type(key) is str for key in settings):
-        raise ValueError(f"agent {agent}: env_settings must map env setting names to values, got {settings!r}")
+        raise ValueError(
+            f"agent {agent}: env_settings must map env setting names to values, got {settings!r}"
+        )
     for key, value in settings.items():
         if type(value) not in (bool, int, float, str):
             raise ValueError(
@@ -137,7 +139,9 @@ class IsolatedAgent:
         timeout = self.step_timeout_s if self.step_timeout_s > 0 else None
         if not self._connection.poll(timeout):
             self.close()
-            raise PredictTimeout(timeout_message(self.spec, self.episode or "an episode", self.step_timeout_s))
+            raise PredictTimeout(
+                timeout_message(self.spec, self.episode or "an episode", self.step_timeout_s)
+            )
         kind, body = self._receive("during predict")
         if kind == ERROR:
             raise ValueError(f"{_text(body)}{self._in_episode()}")
@@ -218,7 +222,9 @@ class IsolatedAgent:
             privileged = declared["privileged"]
             if type(privileged) is not bool:
                 raise ValueError(f"agent {self.spec}: privileged must be True or False, got {privileged!r}")
-            return AgentDeclarations(settings, privileged, str(declared["source"]), str(declared["predict_at"]))
+            return AgentDeclarations(
+                settings, privileged, str(declared["source"]), str(declared["predict_at"])
+            )
         except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError) as error:
             self.close()
             raise AgentProcessEnded(
@@ -299,7 +305,9 @@ _RUNNING: dict[int, IsolatedAgent] = {}
 _SHARED: dict[tuple[str, bool, AgentLimits], IsolatedAgent] = {}
 
 
-def isolated_agent(spec: str, *, trust_pickle: bool = False, limits: AgentLimits | None = None) -> IsolatedAgent:
+def isolated_agent(
+    spec: str, *, trust_pickle: bool = False, limits: AgentLimits | None = None
+) -> IsolatedAgent:
     """This process's :class:`IsolatedAgent` for ``spec`` with these options (not started until used)."""
     key = (spec, trust_pickle, limits or AgentLimits())
     if key not in _SHARED:

@@ -104,12 +104,19 @@ def serve(connection: Connection, spec: str, agent: Agent, memory_gib: float) ->
             )
             reply = action_message(spec, action)
         except MemoryError as error:
-            reply = ERROR + (
-                f"agent {spec}: predict ran out of memory ({describe_error(error)}) under its limit of "
-                f"{memory_gib:g} GiB ({AGENT_MEMORY_OPTION})"
-            ).encode()
+            reply = (
+                ERROR
+                + (
+                    f"agent {spec}: predict ran out of memory ({describe_error(error)}) under its limit of "
+                    f"{memory_gib:g} GiB ({AGENT_MEMORY_OPTION})"
+                ).encode()
+            )
         except Exception as error:
-            line = str(error) if isinstance(error, ValueError) else f"agent {spec}: predict raised {describe_error(error)}"
+            line = (
+                str(error)
+                if isinstance(error, ValueError)
+                else f"agent {spec}: predict raised {describe_error(error)}"
+            )
             reply = ERROR + line.encode()
         connection.send_bytes(reply)
 

@@ -82,7 +82,9 @@ def _flip_outcome(episodes_csv: Path) -> str:
     return "collision" if was == "success" else "success"
 
 
-def test_an_episode_edited_to_another_outcome_is_named(copy: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_an_episode_edited_to_another_outcome_is_named(
+    copy: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     said = _flip_outcome(copy / "suite_episodes.csv")
     # The rates made to match the edited episode: score flies nothing and rewrites score.csv from the file.
     assert main(["score", "--agent", AGENT, *ONE_LAYOUT, "--out", str(copy)]) == 0

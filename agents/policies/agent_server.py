@@ -8,6 +8,7 @@ a socket pair. It holds no env: the scoring process sends it observations only.
 from __future__ import annotations
 
 import ctypes
+import gc
 import json
 import os
 import pickle
@@ -127,6 +128,7 @@ def main(argv: list[str]) -> int:
     connection = Connection(int(descriptor))
     try:
         agent, declared = load(spec, trust == "1")
+        gc.collect()  # the env a model's spaces were read from is gone before the agent's code runs
         connection.send_bytes(DECLARED + json.dumps(declared).encode())
     except Exception as error:
         line = str(error) if isinstance(error, ValueError) else f"agent {spec}: {describe_error(error)}"

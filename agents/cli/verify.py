@@ -14,6 +14,7 @@ import argparse
 from pathlib import Path
 
 from agents.cli.score import add_agent_limit_arguments, agent_and_policy, agent_limits
+from agents.cli.suite import add_suite_version_argument
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
 from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
 from agents.policies.sb3_models import SB3_ALGORITHMS
@@ -48,6 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the most an outside agent's predict may take per call (default: %(default)s; 0 = no limit)",
     )
     add_agent_limit_arguments(parser)
+    add_suite_version_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         episodes_csv=args.episodes,
         step_timeout_s=args.step_timeout,
         agent_limits=agent_limits(args),
+        version=args.suite_version,
     )
     print(result.line())
     if result.mismatch:

@@ -139,7 +139,13 @@ def flown_settings(task: EpisodeTask, agent: Agent) -> dict[str, Any]:
         return task.env_settings()
     declared = agent.declarations()
     if task.tier:
-        check_agent_settings(task.agent, declared.env_settings, task.tier, privileged=declared.privileged)
+        check_agent_settings(
+            task.agent,
+            declared.env_settings,
+            task.tier,
+            privileged=declared.privileged,
+            version=task.suite_version,
+        )
     settings = {**declared.env_settings, **dict(task.env_kwargs)}
     if task.planned_settings and canonical_json(settings) != task.planned_settings:
         raise ValueError(

@@ -33,6 +33,7 @@ from agents.evaluation.suite_report import OUTCOMES, read_suite_csv
 from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import end_agent_processes
 from flownav_env.task import episode_outcome
+from flownav_env.tiers import SUITE_VERSION
 
 # Episodes flown again per tier by default.
 DEFAULT_SAMPLE = 10
@@ -71,6 +72,7 @@ def verify(
     episodes_csv: str | Path | None = None,
     step_timeout_s: float = 0.0,
     agent_limits: AgentLimits | None = None,
+    version: str = SUITE_VERSION,
 ) -> Verification:
     """Check ``score_csv``'s rows against ``agent``: their rates against its episodes, then ``sample`` episodes
     per tier flown again here, each of which must end as the file says.
@@ -84,6 +86,7 @@ def verify(
         sample: episodes per tier to fly again (all, where a tier has fewer).
         episodes_csv: the episodes file (default: ``suite_episodes.csv`` beside ``score_csv``).
         step_timeout_s, agent_limits: as ``flownav score``'s.
+        version: the suite version the rows are of.
 
     Raises:
         ValueError: a bad sample size, a file that is not a score CSV, rows of several agents, or an episodes
@@ -93,7 +96,7 @@ def verify(
     if isinstance(sample, bool) or not isinstance(sample, int) or sample < 1:
         raise ValueError(f"--sample must be an integer >= 1, got {sample!r}")
     score_csv = Path(score_csv)
-    rows = read_suite_csv(score_csv)
+    rows = read_suite_csv(score_csv, version)
     if not rows:
         raise ValueError(f"{score_csv} holds no rows: flownav score writes one per tier it flew whole")
     names = sorted({row["agent"] for row in rows})
@@ -111,7 +114,12 @@ def verify(
     tasks: dict[str, list[EpisodeTask]] = {}
     for row in rows:
         tasks[row["tier"]] = suite_tasks(
-            runs, [row["tier"]], row["layouts"], policies={agent: policy}, trust_pickle=trust_pickle
+            runs,
+            [row["tier"]],
+            row["layouts"],
+            policies={agent: policy},
+            trust_pickle=trust_pickle,
+            version=version,
         )
     episodes = {tier: suite_rows(tier_tasks, episodes_path) for tier, tier_tasks in tasks.items()}
     if not any(episodes.values()):
@@ -119,7 +127,7 @@ def verify(
             f"{episodes_path} holds no episodes of {agent} as it is now (same file hash, settings and layouts): "
             "is that the agent the rows are of?"
         )
-    mismatch = _rates_mismatch(rows, episodes, runs, score_csv)
+    mismatch = _rates_mismatch(rows, episodes, runs, score_csv, version)
     if mismatch:
         return Verification(0, 0, mismatch)
     return _fly_sample(tasks, episodes, sample, step_timeout_s, agent_limits or AgentLimits())
@@ -130,10 +138,11 @@ def _rates_mismatch(
     episodes: Mapping[str, list[dict[str, Any]]],
     runs: Mapping[str, Sequence[str]],
     score_csv: Path,
+    version: str,
 ) -> str:
     """The first rate of ``rows`` that the episodes do not give, in words; "" when every one matches."""
     for row in rows:
-        summaries = summarise_suite(episodes[row["tier"]], runs, [row["tier"]], row["layouts"])
+        summaries = summarise_suite(episodes[row["tier"]], runs, [row["tier"]], row["layouts"], version)
         if not summaries:
             return f"{score_csv}, tier {row['tier']}: the episodes file lacks some of its {row['layouts']} layouts"
         summary = summaries[0]

@@ -104,12 +104,14 @@ class IsolatedAgent:
         self._declared: AgentDeclarations | None = None
 
     def declarations(self) -> AgentDeclarations:
-        """What the agent declares (its process is started if it is not running).
+        """What the agent declares, as its first process in this process said (it is started if it never ran):
+        what the env is built with and checked against here, whatever a later process of it says.
 
         Raises:
             ValueError: the agent does not load, or declares settings that are not plain values.
         """
-        self._ensure_started()
+        if self._declared is None:
+            self._ensure_started()
         assert self._declared is not None  # set by _ensure_started
         return self._declared
 
@@ -204,7 +206,8 @@ class IsolatedAgent:
             raise ValueError(_text(body))
         if kind != DECLARED:
             self._ended("while it loaded", f"it sent a {kind!r} message, not its declarations")
-        self._declared = self._declarations(body)
+        declared = self._declarations(body)  # checked on every start, kept from the first
+        self._declared = self._declared or declared
 
     def _receive(self, when: str) -> tuple[bytes, bytes]:
         """The next message from the agent's process: its kind and its body."""

@@ -4,6 +4,7 @@ file or row refused in one line naming it (exit status 2), and the figure markin
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import pytest
@@ -213,7 +214,10 @@ def _set(**values: str):
             _set(agent="bee_ttc"),
             "agent 'bee_ttc' is a published agent's name: its rows would replace the published",
         ),
-        (_set(agent="planner"), "line 2: planner reads privileged data, but its row is not marked privileged"),
+        (
+            _set(agent="planner"),
+            "line 2: planner reads privileged data, but its row is not marked privileged",
+        ),
         (_set(timeout_rate="1.5"), "timeout rate 1.5 [0.0, "),
         (_set(timeout_rate="nan"), "timeout rate nan [0.0, "),
         (_set(timeout_rate="-0.1"), "timeout rate -0.1 [0.0, "),
@@ -234,7 +238,9 @@ def _set(**values: str):
             "a second row of agent 'open_gap_agent:make_agent' on tier clean",
         ),
         (
-            _set(env_kwargs='{"obs_source": "oracle"}'),
+            lambda rows: rows[0].update(
+                env_kwargs=json.dumps({**json.loads(rows[0]["env_kwargs"]), "obs_source": "oracle"})
+            ),
             "asks for obs_source='oracle', privileged data the tier clean sensor does not give",
         ),
     ],

@@ -15,6 +15,8 @@ import pytest
 from agents.cli import main
 from agents.common.seeds import suite_seeds
 from agents.evaluation.csv_file import sealed_line
+from agents.evaluation.statistics import wilson_interval
+from agents.evaluation.suite_report import OUTCOMES
 from agents.evaluation.verification_record import VERIFICATION_JSON, verification_mark
 from agents.evaluation.verify import Verification
 
@@ -52,11 +54,25 @@ def test_honest_rows_are_verified_and_included_as_verified(
     assert verification_mark(score_csv) == "self-reported"
 
 
+def _as_if(row: dict[str, str], ended: str) -> None:
+    """``row`` (one layout) edited to say its episode ended ``ended``: a row the include checks accept."""
+    for outcome in OUTCOMES:
+        count = int(outcome == ended or (outcome == "failure" and ended != "success"))
+        low, high = wilson_interval(count, 1)
+        row.update(
+            {
+                f"{outcome}_rate": str(float(count)),
+                f"{outcome}_low": f"{low:.4f}",
+                f"{outcome}_high": f"{high:.4f}",
+            }
+        )
+
+
 def test_a_rate_edited_in_score_csv_is_named(copy: Path, capsys: pytest.CaptureFixture[str]) -> None:
     score_csv = copy / "score.csv"
     rows = list(csv.DictReader(io.StringIO(score_csv.read_text())))
     true_rate = float(rows[0]["failure_rate"])
-    rows[0]["failure_rate"] = str(1.0 - true_rate)
+    _as_if(rows[0], "collision" if true_rate == 0.0 else "success")
     with score_csv.open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]), lineterminator="\n")
         writer.writeheader()

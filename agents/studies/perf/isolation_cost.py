@@ -44,11 +44,20 @@ def time_per_step(env: gym.Env, agent: Agent, steps: int, seed: int) -> float:
     return (time.perf_counter() - began) / steps
 
 
+def time_per_predict(agent: Agent, observation: dict[str, np.ndarray], calls: int) -> float:
+    """Seconds per ``predict`` of ``agent`` on ``observation``, ``calls`` times: what the separation adds to a
+    step, without the step's own time and its noise."""
+    began = time.perf_counter()
+    for call in range(calls):
+        agent.predict(observation, None, np.array([call == 0]), True)
+    return (time.perf_counter() - began) / calls
+
+
 def measure_isolation_cost(
     agent: str = DEFAULT_AGENT, *, tier_name: str = "clean", steps: int = 100, repeats: int = 5, seed: int = 0
 ) -> list[dict[str, Any]]:
-    """Per repeat: ms per step with ``agent`` loaded here and in its own process, and their ratio; the two blocks
-    alternate which goes first.
+    """Per repeat: ms per step with ``agent`` loaded here and in its own process, and their ratio; and ms per
+    ``predict`` alone on each side; the two sides alternate which goes first.
 
     Raises:
         ValueError: fewer than 1 step or repeat, or an agent that does not load.
@@ -63,17 +72,21 @@ def measure_isolation_cost(
     try:
         time_per_step(env, apart, 5, seed)  # both warmed up: the process started, the first frames rendered
         time_per_step(env, here, 5, seed)
+        observation, _ = env.reset(seed=seed)
         for repeat in range(repeats):
             order = [("in_process", here), ("own_process", apart)]
             if repeat % 2:
                 order.reverse()
             timings = {name: time_per_step(env, flier, steps, seed + repeat) for name, flier in order}
+            predicts = {name: time_per_predict(flier, observation, steps) for name, flier in order}
             rows.append(
                 {
                     "repeat": repeat,
                     "in_process_ms": 1e3 * timings["in_process"],
                     "own_process_ms": 1e3 * timings["own_process"],
                     "ratio": timings["own_process"] / timings["in_process"],
+                    "predict_in_process_ms": 1e3 * predicts["in_process"],
+                    "predict_own_process_ms": 1e3 * predicts["own_process"],
                 }
             )
     finally:
@@ -96,12 +109,16 @@ def run_isolation_benchmark(
     )
     ratio = statistics.median(row["ratio"] for row in rows)
     verdict = "within" if ratio - 1.0 <= TARGET_OVERHEAD else "over"
+    added = statistics.median(row["predict_own_process_ms"] - row["predict_in_process_ms"] for row in rows)
+    step = statistics.median(row["in_process_ms"] for row in rows)
     lines = [
         "# The cost of flying an outside agent in its own process",
         "",
         f"{len(rows)} alternated repeats of {steps} steps of `{agent}` on the clean tier. Median ratio of time per "
         f"step, own process / in process: {ratio:.3f} ({100 * (ratio - 1):+.1f} %), {verdict} the target of "
-        f"{100 * TARGET_OVERHEAD:.0f} %.",
+        f"{100 * TARGET_OVERHEAD:.0f} %. A `predict` alone, with no step around it, takes {added:.3f} ms more in "
+        f"its own process (median over repeats): {100 * added / step:.1f} % of the median step in process "
+        f"({step:.2f} ms), a figure less shaken by other jobs on the machine than the ratio of whole steps.",
         "",
         markdown_table(
             ["repeat", "in process (ms/step)", "own process (ms/step)", "ratio"],

@@ -17,6 +17,7 @@ def test_each_repeat_times_both_sides_and_their_ratio() -> None:
     for row in rows:
         assert row["in_process_ms"] > 0 and row["own_process_ms"] > 0
         assert row["ratio"] == pytest.approx(row["own_process_ms"] / row["in_process_ms"])
+        assert row["predict_in_process_ms"] > 0 and row["predict_own_process_ms"] > 0
 
 
 def test_the_command_writes_its_table(tmp_path: Path) -> None:
@@ -27,7 +28,7 @@ def test_the_command_writes_its_table(tmp_path: Path) -> None:
     assert (
         (tmp_path / "isolation_cost.csv")
         .read_text()
-        .startswith("repeat,in_process_ms,own_process_ms,ratio\n")
+        .startswith("repeat,in_process_ms,own_process_ms,ratio,predict_in_process_ms,predict_own_process_ms\n")
     )
 
 

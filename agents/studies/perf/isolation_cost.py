@@ -121,13 +121,22 @@ def run_isolation_benchmark(
         f"({step:.2f} ms), a figure less shaken by other jobs on the machine than the ratio of whole steps.",
         "",
         markdown_table(
-            ["repeat", "in process (ms/step)", "own process (ms/step)", "ratio"],
+            [
+                "repeat",
+                "in process (ms/step)",
+                "own process (ms/step)",
+                "ratio",
+                "predict in process (ms)",
+                "predict own process (ms)",
+            ],
             [
                 [
                     row["repeat"],
                     f"{row['in_process_ms']:.2f}",
                     f"{row['own_process_ms']:.2f}",
                     f"{row['ratio']:.3f}",
+                    f"{row['predict_in_process_ms']:.3f}",
+                    f"{row['predict_own_process_ms']:.3f}",
                 ]
                 for row in rows
             ],

@@ -25,6 +25,7 @@ def test_the_command_writes_its_table(tmp_path: Path) -> None:
     text = (tmp_path / "isolation_cost.md").read_text()
     assert text.startswith("# The cost of flying an outside agent in its own process\n")
     assert "Median ratio of time per step, own process / in process: " in text
+    assert "| predict in process (ms) | predict own process (ms) |" in text
     assert (
         (tmp_path / "isolation_cost.csv")
         .read_text()

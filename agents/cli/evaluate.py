@@ -11,15 +11,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.analysis.csv_file import check_is_file_target
+from agents.analysis.records import OVERWRITE_HINT, read_episodes, start_new_file
+from agents.analysis.statistics import format_summary, summarise
 from agents.cli.arguments import add_env_argument
 from agents.common.folders import check_writable_folder
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START, VALIDATION_SEED_START
 from agents.evaluation import runner  # by module: tests stand in for runner.execute
-from agents.evaluation.csv_file import check_is_file_target
 from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
-from agents.evaluation.records import OVERWRITE_HINT, read_episodes, start_new_file
-from agents.evaluation.statistics import format_summary, summarise
 from agents.policies import (
     AGENT_NAMES,
     POLICY_OPTION_HELP,

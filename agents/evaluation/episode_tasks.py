@@ -15,10 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypedDict
 
-from agents.common.locations import POLICIES_DIR
-from agents.common.manifest import file_sha256
-from agents.evaluation.csv_file import move_aside
-from agents.evaluation.records import (
+from agents.analysis.csv_file import move_aside
+from agents.analysis.records import (
     FRESH_FILE_HINT,
     IDENTITY_FIELDS,
     episode_key,
@@ -27,7 +25,9 @@ from agents.evaluation.records import (
     row_identity,
     suite_version_of,
 )
-from agents.evaluation.statistics import RUN_KEY
+from agents.analysis.statistics import RUN_KEY
+from agents.common.locations import POLICIES_DIR
+from agents.common.manifest import file_sha256
 from agents.policies import (
     agent_env_kwargs,
     agent_parameters,
@@ -61,7 +61,7 @@ def _sha256_of_version(path: str, mtime_ns: int, size: int) -> str:
 
 class EpisodeIdentity(TypedDict):
     """What defines an episode beyond its (agent, factor, level, seed): the
-    :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
+    :data:`~agents.analysis.records.IDENTITY_FIELDS` its record carries."""
 
     env_id: str
     env_kwargs: str
@@ -196,7 +196,7 @@ def resume_plan(tasks: list[EpisodeTask], csv_path: Path, remedy: str = FRESH_FI
 
     Args:
         remedy: what the command offers when the CSV cannot be resumed (:data:`FRESH_FILE_HINT`, or
-            :data:`~agents.evaluation.records.OVERWRITE_HINT` where it has ``--overwrite``).
+            :data:`~agents.analysis.records.OVERWRITE_HINT` where it has ``--overwrite``).
 
     Raises:
         ValueError: the CSV predates episode identities, or holds an episode of one of the tasks flown with

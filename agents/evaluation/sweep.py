@@ -20,20 +20,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from agents.common.folders import check_writable_folder
-from agents.common.locations import REPO_ROOT
-from agents.common.seeds import TEST_SEED_START
-from agents.common.yaml_config import field_range, load_config
-from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
-from agents.evaluation.records import (
+from agents.analysis.records import (
     drop_agents,
     overwrite_hint,
     read_episodes,
     read_records,
     start_new_file,
 )
+from agents.analysis.statistics import RUN_KEY, format_summary
+from agents.common.folders import check_writable_folder
+from agents.common.locations import REPO_ROOT
+from agents.common.seeds import TEST_SEED_START
+from agents.common.yaml_config import field_range, load_config
+from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import RUN_KEY, format_summary
 from agents.evaluation.sweep_report import (
     comparison_markdown,
     plot_collision_vs_error,

@@ -7,9 +7,9 @@ import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from agents.analysis.statistics import format_summary, summarise
 from agents.common.machine import code_version
 from agents.evaluation.provenance import machine_summary
-from agents.evaluation.statistics import format_summary, summarise
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
@@ -32,8 +34,6 @@ from agents.evaluation.episode_tasks import (
     rows_of,
     set_aside_stale_episodes,
 )
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.policies.base import REACTIVE_AGENTS
 from agents.studies.error_analysis import failure, runs_failure

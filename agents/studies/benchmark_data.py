@@ -20,12 +20,12 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
+from agents.analysis.paired import Comparison, compare
+from agents.analysis.records import read_records
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import summarise_runs
-from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
-from agents.evaluation.paired import Comparison, compare
-from agents.evaluation.records import read_records
 from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
@@ -134,7 +134,7 @@ class BenchmarkData:
     training: dict[str, Training]
     block: int = LAYOUT_BLOCK
     # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
-    # compared by (agents.evaluation.paired).
+    # compared by (agents.analysis.paired).
     failures: dict[str, np.ndarray] = field(default_factory=dict)
     # Per sweep agent (its sweep name), its clean failure on the leading table's layouts over the training runs
     # the sweep flew: what a sweep cell's rise is measured from.

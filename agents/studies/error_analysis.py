@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
+from agents.analysis.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
+from agents.common.agent_table import AGENTS
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -50,7 +51,7 @@ def neutral_level(factor: str) -> float:
 
 def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
     """Failure rate, its 95 % interval (over training runs too where the rows pool several:
-    :func:`~agents.evaluation.statistics.failure_interval`) and the episodes."""
+    :func:`~agents.analysis.statistics.failure_interval`) and the episodes."""
     n = len(rows)
     failures = sum(not bool(r["success"]) for r in rows)
     low, high = failure_interval(rows)
@@ -210,19 +211,26 @@ def unbroken_kind(row: Mapping[str, Any]) -> str:
     return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
 
 
-# Agents that never read the depth histogram: their failures cannot respond to depth quality.
-BLIND_AGENTS = ("straight",)
-
-
 def is_flow_agent(row: Mapping[str, Any]) -> bool:
-    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not
-    an agent blind to the histogram)."""
-    if base_agent_name(row["agent"]) in BLIND_AGENTS:
+    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not an
+    agent blind to the histogram): its recorded ``obs_source`` where the row has settings (a rule may be flown
+    on true depths), else what ``configs/agents.yaml`` says the agent sees.
+
+    Raises:
+        ValueError: an agent neither in the table nor with recorded settings (``env_kwargs``).
+    """
+    entry = AGENTS.get(base_agent_name(row["agent"]))
+    if entry is not None and entry.sees == "nothing":
         return False
     settings = row.get("env_kwargs") or ""
     if settings:
-        return json.loads(settings).get("obs_source", "flow") == "flow"
-    return "oracle" not in str(row["agent"])
+        return bool(json.loads(settings).get("obs_source", "flow") == "flow")
+    if entry is None:
+        raise ValueError(
+            f"cannot tell whether {row['agent']!r} steers by flow: it is not in configs/agents.yaml and its row "
+            "records no env_kwargs"
+        )
+    return entry.sees == "flow"
 
 
 def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:

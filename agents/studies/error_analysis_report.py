@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.records import read_records
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
-from agents.evaluation.records import read_records
 from agents.evaluation.sweep import pool_every_seed
 from agents.studies.dose_response import (
     MIN_FULL_COURSE,

@@ -28,13 +28,13 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.records import read_records
+from agents.analysis.statistics import summarise
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import rows_of
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_every_seed
 from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
 from agents.policies.base import is_learned, split_agent_name

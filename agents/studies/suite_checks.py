@@ -17,12 +17,12 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import wilson_interval
 from agents.common.folders import write_text_atomically
 from agents.common.jinja_reports import render
 from agents.common.seeds import SUITE_V2_CHECK_SEED_START, SUITE_V2_SENSOR_READING_SEED_START
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
-from agents.evaluation.statistics import wilson_interval
 from flownav_env import sensor_specs
 from flownav_env.tiers import (
     CAPSULE_RADIUS_M,

@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
@@ -166,7 +166,7 @@ def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | 
 
 def separated_pairs(episodes: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
     """(pairs of agents a paired test tells apart, all pairs) among the ``episodes`` of one factor: each pair
-    compared on the layouts both flew, paired by layout (:func:`agents.evaluation.paired.compare`), apart where
+    compared on the layouts both flew, paired by layout (:func:`agents.analysis.paired.compare`), apart where
     the 95 % interval of the difference excludes zero."""
     failures: dict[str, dict[int, float]] = {}
     for row in episodes:

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.records import read_records
+from agents.analysis.statistics import summarise
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 from agents.policies import BeeAgent, BeeRobustAgent, VFHAgent
 
 # name -> (low, high, log scale). Written once: the study, the report and the tests read it from here. A
@@ -104,7 +104,7 @@ class Budget:
 @dataclass(frozen=True)
 class TrialResult:
     """One trial's gains and what its episodes came to in one stage (a row of
-    :func:`~agents.evaluation.statistics.summarise`: failure, success, collision rates with their intervals)."""
+    :func:`~agents.analysis.statistics.summarise`: failure, success, collision rates with their intervals)."""
 
     number: int
     params: dict[str, float]

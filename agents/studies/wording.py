@@ -7,8 +7,8 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+from agents.analysis.paired import provisional_note
 from agents.common.jinja_reports import environment, render
-from agents.evaluation.paired import provisional_note
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import choices
 from agents.studies.dose_response import format_p

@@ -2,7 +2,7 @@
 
 Each row carries what defined its episode (env id, the full env settings, the agent's parameters and the
 policy file's hash, :data:`IDENTITY_FIELDS`), so a resumed run only counts episodes flown with its own settings,
-and its checksum (see :mod:`agents.evaluation.csv_file`), so a torn row is flown again rather than misread.
+and its checksum (see :mod:`agents.analysis.csv_file`), so a torn row is flown again rather than misread.
 Every value is checked by type on reading; a row that fails is skipped like a torn one. Files from before these
 columns still read: their rows have None for the identity fields (unknown).
 """
@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Literal
 
-from agents.evaluation.csv_file import (
+from agents.analysis.csv_file import (
     CHECKSUM_FIELD,
     LEGACY_FIELDS,
     ReadsPerFile,
@@ -31,8 +31,7 @@ from agents.evaluation.csv_file import (
     rewrite_locked,
     sealed_line,
 )
-from agents.evaluation.episode import EpisodeRecord
-from flownav_env.task import episode_outcome
+from agents.analysis.episode_record import EpisodeRecord, episode_outcome
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
@@ -163,7 +162,7 @@ def read_episodes(path: Path) -> EpisodesCsv:
 
 def repair_episodes_header(path: Path) -> str | None:
     """Give an episodes CSV whose header is damaged but whose rows pass their checksums a correct header
-    (:func:`~agents.evaluation.csv_file.repair_header`), so its episodes are not stranded; returns the one line
+    (:func:`~agents.analysis.csv_file.repair_header`), so its episodes are not stranded; returns the one line
     that says what was done, or None when there was nothing to repair."""
     path = Path(path)
     repair = repair_header(path, _READABLE_HEADERS)
@@ -290,7 +289,7 @@ EPISODE_INDEXES = ReadsPerFile(_EpisodeIndex)
 
 def flown_episodes(path: Path, handle: io.FileIO) -> set[tuple]:
     """The :func:`episode_identity` of every whole row in the CSV at ``path``, whose lock the caller holds
-    (``handle``, from :func:`~agents.evaluation.csv_file.locked`); rows read on an earlier call are not read
+    (``handle``, from :func:`~agents.analysis.csv_file.locked`); rows read on an earlier call are not read
     again."""
     index = EPISODE_INDEXES.of(path)
     index.update(handle)

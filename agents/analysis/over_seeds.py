@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.statistics import BOOTSTRAP_REPS, CONFIDENCE
-from agents.policies import split_agent_name
-from flownav_env.task import EPISODE_OUTCOMES, episode_outcome
+from agents.analysis.episode_record import EPISODE_OUTCOMES, episode_outcome
+from agents.analysis.statistics import BOOTSTRAP_REPS, CONFIDENCE
+from agents.common.agent_table import split_agent_name
 
 LAYOUT_BLOCK = 30
 # rliable's probability of improvement runs a Mann-Whitney test per block in every replicate: fewer of them.
@@ -115,7 +115,9 @@ def episode_outcomes(
     flown = {}
     for row in rows:
         ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-        flown[(row["agent"], int(row["seed"]))] = (ended != "success") if outcome == "failure" else ended == outcome
+        flown[(row["agent"], int(row["seed"]))] = (
+            (ended != "success") if outcome == "failure" else ended == outcome
+        )
     outcomes = np.zeros((len(runs), len(layouts)))
     for i, run in enumerate(runs):
         for j, seed in enumerate(layouts):

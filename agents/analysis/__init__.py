@@ -1,0 +1,8 @@
+"""The analysis of committed episodes, apart from flight: the record and its outcome (:mod:`.episode_record`),
+the episodes CSV (:mod:`.records` for the rows and their identity, :mod:`.csv_file` for the bytes on disk),
+rates and intervals (:mod:`.statistics`), per-seed tables (:mod:`.over_seeds`) and paired comparisons
+(:mod:`.paired`).
+
+It imports neither MuJoCo, Gymnasium, the env nor the policies (an import-linter contract in pyproject.toml
+keeps it so): a report over committed data needs only this and its template.
+"""

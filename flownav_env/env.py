@@ -128,7 +128,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     | ``min_clearance`` | reset, step | float | the least ``clearance`` of the episode so far (m) |
     | ``points_tracked`` | reset, step | int | keypoints the estimator tracked into this frame |
     | ``points_valid`` | reset, step | int | of those, the points with a valid depth (after ``depth_dropout``) |
-    | ``position`` | step | (3,) float64 | the drone's world position x, y, z (m) |
+    | ``position`` | reset, step | (3,) float64 | the drone's world position x, y, z (m) |
     | ``true_rotation`` | step | (3, 3) float64 | the true rotation R of the camera between the last two frames |
     | ``true_translation`` | step | (3,) float64 | the true translation t of the camera (m), ``X_next = R @ X_prev + t`` |
     | ``depth_error_median`` | step, when some valid point has a true depth | float | median relative error of the valid points' depths (needs ``depth_error_info`` or an oracle ``obs_source``) |
@@ -263,7 +263,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
             points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
         observation = self.task.observe(physics, settings, points, np.zeros(0))
         self._episode_running = True
-        return observation, self.task.start_info() | estimator_info(points, np.zeros(0))
+        return observation, self.task.start_info(physics) | estimator_info(points, np.zeros(0))
 
     def step(self, action: np.ndarray) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """One camera frame: fly the action, see, estimate, observe (see the class docstring: the spaces,

@@ -24,7 +24,7 @@ def run_episode(
 ) -> EpisodeRecord:
     """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
     observation, info = env.reset(seed=seed)
-    position = np.array([0.0, 0.0, 0.0])
+    position = info["position"]
     path_length, total_return, steps, widest = 0.0, 0.0, 0, 0.0
     valid_points, depth_errors, outlier_shares = [], [], []
     terminated = truncated = False
@@ -39,8 +39,7 @@ def run_episode(
         steps += 1
         total_return += float(reward)
         new_position = info["position"]
-        if steps > 1:
-            path_length += float(np.linalg.norm(new_position - position))
+        path_length += float(np.linalg.norm(new_position - position))
         position = new_position
         widest = max(widest, abs(float(position[1])))
         valid_points.append(info["points_valid"])

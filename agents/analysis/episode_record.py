@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
+
+from agents.common.agent_table import AGENTS, base_agent_name
 
 # How an episode can end, exactly one each: an episode that ends on none of the first three ran out of time.
 # The env's own rule (flownav_env.task.EPISODE_OUTCOMES, episode_outcome), restated here so that reading records
@@ -67,3 +72,25 @@ class EpisodeRecord:
     # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
     # free lane beside it (agents/evaluation/lane.py); NaN in files written before it was recorded.
     max_abs_lateral_m: float = math.nan
+
+
+def is_flow_agent(row: Mapping[str, Any]) -> bool:
+    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not an
+    agent blind to the histogram): its recorded ``obs_source`` where the row has settings (a rule may be flown
+    on true depths), else what ``configs/agents.yaml`` says the agent sees.
+
+    Raises:
+        ValueError: an agent neither in the table nor with recorded settings (``env_kwargs``).
+    """
+    entry = AGENTS.get(base_agent_name(row["agent"]))
+    if entry is not None and entry.sees == "nothing":
+        return False
+    settings = row.get("env_kwargs") or ""
+    if settings:
+        return bool(json.loads(settings).get("obs_source", "flow") == "flow")
+    if entry is None:
+        raise ValueError(
+            f"cannot tell whether {row['agent']!r} steers by flow: it is not in configs/agents.yaml and its row "
+            "records no env_kwargs"
+        )
+    return entry.sees == "flow"

@@ -173,3 +173,22 @@ def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = 
             f"{r['out_of_bounds'] / r['episodes']:.2f} | {r['median_progress_m']:.1f} |"
         )
     return "\n".join(lines)
+
+
+def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
+    """Failure rate, its 95 % interval (over training runs too where the rows pool several:
+    :func:`failure_interval`) and the episodes."""
+    n = len(rows)
+    failures = sum(not bool(r["success"]) for r in rows)
+    low, high = failure_interval(rows)
+    return failures / n, low, high, n
+
+
+def runs_failure(successes: np.ndarray) -> tuple[float, float, float]:
+    """Failure over runs × layouts (``successes``: a row of 0/1 per run, every run on the same layouts) and its
+    95 % interval: a two-level bootstrap from two runs on (as ``flownav ablation``), Wilson's for one run."""
+    if len(successes) > 1:
+        low, high = runs_and_layouts_interval(successes)
+    else:
+        low, high = wilson_interval(int(successes.sum()), successes.size)
+    return float(1 - successes.mean()), 1 - high, 1 - low

@@ -21,6 +21,7 @@ import numpy as np
 
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
+from agents.analysis.statistics import failure, runs_failure
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
@@ -36,7 +37,6 @@ from agents.evaluation.episode_tasks import (
 )
 from agents.evaluation.runner import execute
 from agents.policies.base import REACTIVE_AGENTS
-from agents.studies.error_analysis import failure, runs_failure
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig

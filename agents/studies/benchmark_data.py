@@ -20,9 +20,11 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.analysis.episode_record import is_flow_agent
 from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
+from agents.analysis.statistics import failure, runs_failure
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import summarise_runs
@@ -35,13 +37,7 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.error_analysis import (
-    baseline_of_flown_runs,
-    failure,
-    is_flow_agent,
-    runs_failure,
-    tolerance_table,
-)
+from agents.studies.error_analysis import baseline_of_flown_runs, tolerance_table
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).

@@ -14,6 +14,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.episode_record import is_flow_agent
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import rate
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
@@ -21,7 +22,6 @@ from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
 from agents.studies.benchmark_sweep import sweep_values
-from agents.studies.error_analysis import is_flow_agent
 from agents.studies.wording import display_name, join_words, render_report, span
 from flownav_env.settings import EnvSettings
 

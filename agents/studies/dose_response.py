@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from agents.studies.error_analysis import TASK_FACTORS, is_flow_agent
+from agents.analysis.episode_record import is_flow_agent
+from agents.studies.error_analysis import TASK_FACTORS
 
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
 # depths off by more than half, where the episodes recorded it (not in files from before it existed).

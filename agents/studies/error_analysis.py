@@ -12,15 +12,12 @@ and one dose-response model per agent that pools every factor and level.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
-
-from agents.analysis.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
-from agents.common.agent_table import AGENTS
+from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.statistics import failure
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -47,25 +44,6 @@ def neutral_level(factor: str) -> float:
     if factor not in defaults:
         raise ValueError(f"{factor!r} is not an env setting, so it has no neutral level")
     return float(defaults[factor])
-
-
-def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
-    """Failure rate, its 95 % interval (over training runs too where the rows pool several:
-    :func:`~agents.analysis.statistics.failure_interval`) and the episodes."""
-    n = len(rows)
-    failures = sum(not bool(r["success"]) for r in rows)
-    low, high = failure_interval(rows)
-    return failures / n, low, high, n
-
-
-def runs_failure(successes: np.ndarray) -> tuple[float, float, float]:
-    """Failure over runs × layouts (``successes``: a row of 0/1 per run, every run on the same layouts) and its
-    95 % interval: a two-level bootstrap from two runs on (as ``flownav ablation``), Wilson's for one run."""
-    if len(successes) > 1:
-        low, high = runs_and_layouts_interval(successes)
-    else:
-        low, high = wilson_interval(int(successes.sum()), successes.size)
-    return float(1 - successes.mean()), 1 - high, 1 - low
 
 
 BASELINE_SOURCE = "the 300-layout clean table"
@@ -209,28 +187,6 @@ def unbroken_kind(row: Mapping[str, Any]) -> str:
     if end is not None and math.isclose(row["levels"][-1], end):
         return "end"
     return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
-
-
-def is_flow_agent(row: Mapping[str, Any]) -> bool:
-    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not an
-    agent blind to the histogram): its recorded ``obs_source`` where the row has settings (a rule may be flown
-    on true depths), else what ``configs/agents.yaml`` says the agent sees.
-
-    Raises:
-        ValueError: an agent neither in the table nor with recorded settings (``env_kwargs``).
-    """
-    entry = AGENTS.get(base_agent_name(row["agent"]))
-    if entry is not None and entry.sees == "nothing":
-        return False
-    settings = row.get("env_kwargs") or ""
-    if settings:
-        return bool(json.loads(settings).get("obs_source", "flow") == "flow")
-    if entry is None:
-        raise ValueError(
-            f"cannot tell whether {row['agent']!r} steers by flow: it is not in configs/agents.yaml and its row "
-            "records no env_kwargs"
-        )
-    return entry.sees == "flow"
 
 
 def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:

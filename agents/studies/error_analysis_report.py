@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from agents.analysis.records import read_records
+from agents.analysis.weaving import turning_and_rotation_error
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
 from agents.evaluation.sweep import pool_every_seed
@@ -29,7 +30,6 @@ from agents.studies.error_analysis import (
     tolerance_table,
     unbroken_kind,
 )
-from agents.studies.weaving import turning_and_rotation_error
 from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 

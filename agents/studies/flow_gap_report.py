@@ -21,6 +21,7 @@ import numpy as np
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import Comparison, compare, verdict
 from agents.analysis.records import read_records
+from agents.analysis.statistics import runs_failure
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
@@ -40,7 +41,6 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
-from agents.studies.error_analysis import runs_failure
 from agents.studies.wording import render_report
 from flownav_env.tiers import TIER_NAMES
 

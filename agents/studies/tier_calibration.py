@@ -24,6 +24,7 @@ import numpy as np
 
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
+from agents.analysis.statistics import failure
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
 from agents.common.tables import today
@@ -32,7 +33,6 @@ from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
-from agents.studies.error_analysis import failure
 from agents.studies.wording import render_report
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES
 from flownav_env.tiers import tier as tier_of_version

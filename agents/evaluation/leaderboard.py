@@ -1,4 +1,4 @@
-"""The benchmark's leading table: every agent on the same clean test layouts, learned agents over all their
+"""The clean tier's history table: every agent on the same clean test layouts, learned agents over all their
 training seeds (``flownav leaderboard``).
 
 Writes, to the output folder:
@@ -205,7 +205,7 @@ def report_lines(
     block: int = LAYOUT_BLOCK,
     against_best: Sequence[Comparison] = (),
 ) -> list[str]:
-    """``leaderboard.md``: set-up, the leading table, the probabilities of improvement and the gap the
+    """``leaderboard.md``: set-up, the history table, the probabilities of improvement and the gap the
     strongest reactive agent leaves to learning (``against_best``: :func:`against_best_reactive`)."""
     rows = [
         [

@@ -6,7 +6,7 @@ import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypedDict
 
 from agents.common.agent_table import AGENTS, base_agent_name
 
@@ -72,6 +72,44 @@ class EpisodeRecord:
     # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
     # free lane beside it (agents/evaluation/lane.py); NaN in files written before it was recorded.
     max_abs_lateral_m: float = math.nan
+
+
+class EpisodeRow(TypedDict):
+    """One row of an episodes CSV as read (:func:`agents.analysis.records.read_records`): the fields of
+    :class:`EpisodeRecord`, typed, and None where the file predates the column (unknown). A test keeps the two
+    in step."""
+
+    agent: str
+    factor: str
+    level: float
+    seed: int
+    collision: bool
+    success: bool
+    out_of_bounds: bool
+    truncated: bool
+    progress_m: float
+    time_s: float
+    steps: int
+    min_clearance_m: float
+    path_length_m: float
+    mean_points_valid: float
+    median_depth_error: float
+    episode_return: float
+    env_id: str | None
+    env_kwargs: str | None
+    agent_params: str | None
+    policy_sha256: str | None
+    code_version: str | None
+    mean_depth_outlier_share: float | None
+    suite_version: str | None
+    max_abs_lateral_m: float | None
+
+
+class PooledRow(EpisodeRow, total=False):
+    """An episode row pooled over training runs: ``agent`` names the pool (``ppo_flow`` or ``ppo_flow@all``),
+    ``run`` the run that flew it (``ppo_flow@3``; :data:`~agents.analysis.statistics.RUN_KEY`)."""
+
+    run: str
 
 
 def is_flow_agent(row: Mapping[str, Any]) -> bool:

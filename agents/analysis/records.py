@@ -15,7 +15,7 @@ import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from agents.analysis.csv_file import (
     CHECKSUM_FIELD,
@@ -31,7 +31,7 @@ from agents.analysis.csv_file import (
     rewrite_locked,
     sealed_line,
 )
-from agents.analysis.episode_record import EpisodeRecord, episode_outcome
+from agents.analysis.episode_record import EpisodeRecord, EpisodeRow, episode_outcome
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
@@ -76,7 +76,7 @@ class EpisodesCsv:
     writing one file at once could leave: each episode counts once."""
 
     path: Path
-    rows: list[dict[str, Any]]
+    rows: list[EpisodeRow]
     skipped: int = 0
     legacy: bool = False
     duplicates: int = 0
@@ -192,12 +192,12 @@ class Notices:
 READ_NOTICES = Notices()
 
 
-def read_records(path: Path) -> list[dict[str, Any]]:
+def read_records(path: Path) -> list[EpisodeRow]:
     """Rows of an episodes CSV with typed values (see :func:`read_episodes`)."""
     return read_episodes(path).rows
 
 
-def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
+def _typed(raw: Mapping[str, str]) -> EpisodeRow | None:
     row: dict[str, Any] = {}
     for name, kind in _FIELD_TYPES.items():
         if name not in raw:  # a column the file's format predates: unknown
@@ -217,18 +217,17 @@ def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
             if not text and name in _REQUIRED_TEXT:
                 return None
             row[name] = text
-    return exclusive_outcome(row)
+    return exclusive_outcome(cast(EpisodeRow, row))  # every field set above, each checked by its type
 
 
-def exclusive_outcome(row: dict[str, Any]) -> dict[str, Any]:
+def exclusive_outcome(row: EpisodeRow) -> EpisodeRow:
     """``row`` with its ``collision``, ``out_of_bounds`` and ``success`` made exclusive by the env's rule
     (:func:`flownav_env.task.episode_outcome`): episodes recorded before the rule (a goal reached out of bounds,
     a collision out of bounds) count once, as the env now ends them. Their flights are unchanged: the flags
     are those of the same last step."""
     ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-    row.update(
-        collision=ended == "collision", out_of_bounds=ended == "out_of_bounds", success=ended == "success"
-    )
+    row["collision"], row["out_of_bounds"] = ended == "collision", ended == "out_of_bounds"
+    row["success"] = ended == "success"
     return row
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -20,7 +20,7 @@ def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[f
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-RUN_KEY = "run"
+RUN_KEY: Final = "run"  # PooledRow's key (agents.analysis.episode_record)
 """A pooled row's own run (``ppo_flow@3``) where its ``agent`` names the pooled agent (``ppo_flow@all``)."""
 BOOTSTRAP_REPS = 2000
 

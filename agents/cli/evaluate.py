@@ -9,9 +9,11 @@ to move the old file aside. Prints the collision and success rates with Wilson 9
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from agents.analysis.csv_file import check_is_file_target
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import OVERWRITE_HINT, read_episodes, start_new_file
 from agents.analysis.statistics import format_summary, summarise
 from agents.cli.arguments import add_env_argument
@@ -129,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
         tasks, out, workers=args.workers, description=f"evaluate {args.agent}", remedy=OVERWRITE_HINT
     )
     episodes = read_episodes(out)
-    rows = rows_of(tasks, episodes.rows)
+    rows: Sequence[EpisodeRow] = rows_of(tasks, episodes.rows)
     if len(runs) > 1:  # one row for the agent, its seeds pooled as the leaderboard's headline pools them
         rows = pooled_over_training_seeds(rows)
     print(format_summary(summarise(rows)))

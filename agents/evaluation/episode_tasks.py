@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypedDict
 
 from agents.analysis.csv_file import move_aside
+from agents.analysis.episode_record import EpisodeRow, PooledRow
 from agents.analysis.records import (
     FRESH_FILE_HINT,
     IDENTITY_FIELDS,
@@ -319,13 +320,16 @@ def _edited_file(name: str, old: str | None, new: str) -> str:
     )
 
 
-def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def pooled_over_training_seeds(rows: Sequence[EpisodeRow]) -> list[PooledRow]:
     """Rows with each learned agent's training seeds (``ppo_flow@3``) relabelled as the agent, so that a
     summary gives the agent one row over its seeds."""
-    return [{**row, "agent": split_agent_name(row["agent"])[0], RUN_KEY: row["agent"]} for row in rows]
+    pooled: list[PooledRow] = [
+        {**row, "agent": split_agent_name(row["agent"])[0], RUN_KEY: row["agent"]} for row in rows
+    ]
+    return pooled
 
 
-def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def rows_of(tasks: list[EpisodeTask], rows: Sequence[EpisodeRow]) -> list[EpisodeRow]:
     """The rows that are episodes of ``tasks``: same (agent, factor, level, seed), suite version and identity,
     or an unknown identity (a CSV from before identities), so a report never mixes in episodes of other
     settings or another suite version."""

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary queries GL)
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import (
     LAYOUT_BLOCK,
     block_scores,
@@ -98,7 +99,7 @@ def leaderboard_tasks(
 
 
 def summarise_runs(
-    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+    rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
 ) -> list[dict]:
     """Per agent: runs, episodes, mean rates over runs with their 95 % intervals, and the IQM of the success
     rate over runs × layout blocks with its stratified-bootstrap interval."""
@@ -139,7 +140,7 @@ def summarise_runs(
 
 
 def improvements(
-    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+    rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
 ) -> list[dict[str, Any]]:
     """P(learned run beats reactive agent) for every learned × reactive pair (straight left out), with its
     stratified-bootstrap interval."""
@@ -289,7 +290,7 @@ def report_lines(
 
 
 def against_best_reactive(
-    table: list[dict], rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int]
+    table: list[dict], rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int]
 ) -> list[Comparison]:
     """Each learned agent but the privileged ones against the reactive agent (``straight`` aside) with the
     lowest failure rate, paired by layout (:func:`agents.analysis.paired.compare`)."""

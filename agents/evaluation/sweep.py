@@ -16,10 +16,12 @@ Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from agents.analysis.episode_record import EpisodeRow, PooledRow
 from agents.analysis.records import (
     drop_agents,
     overwrite_hint,
@@ -144,19 +146,19 @@ def seed_rotation(config: SweepConfig, agent: str) -> list[str]:
     return runs[: config.training_seeds] if config.training_seeds else runs
 
 
-def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, Any]]:
+def pool_seeds(rows: Sequence[EpisodeRow], agents: Sequence[str]) -> list[PooledRow]:
     """Rows with each training seed of a ``<learned>@all`` agent relabelled as that agent, so that a cell's
     rate pools its seeds."""
     pooled = {agent[: -len(ALL_SEEDS)] for agent in agents if agent.endswith(ALL_SEEDS)}
-    relabelled = []
+    relabelled: list[PooledRow] = []
     for row in rows:
         base, seed = split_agent_name(row["agent"])
-        pooled_row = {**row, "agent": base + ALL_SEEDS, RUN_KEY: row["agent"]}
-        relabelled.append(pooled_row if seed is not None and base in pooled else row)
+        pooled_row: PooledRow = {**row, "agent": base + ALL_SEEDS, RUN_KEY: row["agent"]}
+        relabelled.append(pooled_row if seed is not None and base in pooled else PooledRow(**row))
     return relabelled
 
 
-def pool_every_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def pool_every_seed(rows: Sequence[EpisodeRow]) -> list[PooledRow]:
     """:func:`pool_seeds` for episodes read without their sweep config: every learned agent flown by training
     seed (``ppo_flow@3``) is pooled as ``ppo_flow@all``, so that a rate is over its runs and layouts, never one
     seed's few layouts of a cell."""
@@ -348,7 +350,7 @@ def _fly(config: SweepConfig, tasks: list[EpisodeTask], episodes_csv: Path, addr
     )
 
 
-def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Path) -> list[dict[str, Any]]:
+def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Path) -> list[PooledRow]:
     """The sweep's episodes in the CSV, each ``<learned>@all`` agent's seeds pooled."""
     episodes = read_episodes(episodes_csv)
     rows = pool_seeds(rows_of(tasks, episodes.rows), agents)
@@ -362,7 +364,7 @@ def _write_markdown(
     config: SweepConfig,
     config_path: Path,
     table: list[dict[str, Any]],
-    rows: list[dict[str, Any]],
+    rows: Sequence[EpisodeRow],
     agents: list[str],
     *,
     command: str,

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.statistics import format_summary, summarise
 from agents.common.machine import code_version
 from agents.evaluation.provenance import machine_summary
@@ -38,7 +40,7 @@ SUMMARY_FIELDS = [
 ]
 
 
-def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]]:
+def write_summary(rows: Sequence[EpisodeRow], path: Path) -> list[dict[str, Any]]:
     table = summarise(rows)
     with path.open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=SUMMARY_FIELDS)
@@ -180,7 +182,7 @@ def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
     return "\n".join(lines)
 
 
-def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]) -> str:
+def comparison_markdown(rows: Sequence[EpisodeRow], baseline_rows: Sequence[EpisodeRow]) -> str:
     """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep, and per
     agent the share of the seeds flown in both whose episode ended the same way (collision or not): rates can
     agree while single episodes differ, e.g. on another renderer."""
@@ -210,7 +212,7 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
 
 
 def _same_outcomes(
-    rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]
+    rows: Sequence[EpisodeRow], baseline_rows: Sequence[EpisodeRow]
 ) -> dict[tuple[str, str, float], list[bool]]:
     """Per (agent, factor, level), for each seed flown in both sweeps, whether it collided in both or in
     neither."""

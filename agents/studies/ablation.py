@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
@@ -199,8 +200,8 @@ def _fly_config(
         by_seed = {int(r["seed"]): r for r in flown}
         outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
         per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
-        for key in counts:
-            counts[key] += sum(bool(r[key]) for r in flown)
+        counts["collision"] += sum(r["collision"] for r in flown)
+        counts["out_of_bounds"] += sum(r["out_of_bounds"] for r in flown)
         evaluations = _evaluations_file(files)
         if evaluations is not None:
             curves.setdefault(name, {})[f"seed {seed}"] = evaluations
@@ -269,7 +270,7 @@ def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[st
 
 def _fly(
     tasks: list[EpisodeTask], csv_path: Path, workers: int, report_only: bool, description: str
-) -> list[dict[str, Any]]:
+) -> list[EpisodeRow]:
     """Fly ``tasks`` into ``csv_path`` (resumably; nothing with ``report_only``) and return their records."""
     csv_path.parent.mkdir(parents=True, exist_ok=True)
     if not report_only:
@@ -277,7 +278,7 @@ def _fly(
     return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
 
 
-def _reference_row(agent: str, flown: list[dict[str, Any]]) -> dict[str, Any]:
+def _reference_row(agent: str, flown: Sequence[EpisodeRow]) -> dict[str, Any]:
     """A reactive reference agent's row: one run, a Wilson interval over its layouts."""
     rate, low, high, total = failure(flown)
     return {

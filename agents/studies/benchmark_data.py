@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.episode_record import PooledRow, is_flow_agent
 from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
@@ -225,7 +225,7 @@ def _seed_rows(results: Path) -> list[dict[str, Any]]:
 def _sweep(results: Path) -> dict[str, Any]:
     flown = read_records(require(results / "sweep_episodes.csv"))
     rows = pool_every_seed(flown)
-    cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
+    cells: dict[tuple[str, str, float], list[PooledRow]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
     baseline = pool_every_seed(baseline_of_flown_runs(read_records(results / "leaderboard_episodes.csv"), flown))

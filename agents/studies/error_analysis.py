@@ -16,7 +16,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.episode_record import EpisodeRow, is_flow_agent
 from agents.analysis.statistics import failure
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
@@ -110,8 +110,8 @@ def _factor_rows(
 
 
 def baseline_of_flown_runs(
-    baseline: Sequence[dict[str, Any]], flown: Sequence[Mapping[str, Any]]
-) -> list[dict[str, Any]]:
+    baseline: Sequence[EpisodeRow], flown: Sequence[EpisodeRow]
+) -> list[EpisodeRow]:
     """The ``baseline`` episodes (the clean table's, not yet pooled) of the runs ``flown`` holds, by their names
     (``ppo_flow@3``): a sweep cell's rise is over the clean rate of the training runs that flew it, and a
     learned agent may have shipped more seeds since, which join the clean table but not a committed sweep."""

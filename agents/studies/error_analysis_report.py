@@ -168,6 +168,5 @@ def write_error_analysis_from(
         raise ValueError(f"--episodes {episodes} holds no readable episode")
     if baseline is not None and not Path(baseline).is_file():
         raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
-    clean = baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline is not None else []
-    clean = pool_every_seed(clean)
+    clean = pool_every_seed(baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline else [])
     return write_error_analysis(rows, out, command, clean)

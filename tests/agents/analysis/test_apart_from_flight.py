@@ -50,3 +50,11 @@ def test_the_record_outcome_is_the_envs_rule() -> None:
     assert EPISODE_OUTCOMES == task.EPISODE_OUTCOMES
     for flags in itertools.product((False, True), repeat=3):
         assert episode_outcome(*flags) == task.episode_outcome(*flags)
+
+
+def test_the_typed_row_has_the_records_fields() -> None:
+    from dataclasses import fields
+
+    from agents.analysis.episode_record import EpisodeRecord, EpisodeRow
+
+    assert list(EpisodeRow.__annotations__) == [item.name for item in fields(EpisodeRecord)]

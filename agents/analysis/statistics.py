@@ -8,6 +8,8 @@ from typing import Any, Final
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
+
 
 def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[float, float]:
     """Wilson score interval of a binomial proportion (95 % by default); (0, 1) for no trials."""
@@ -46,7 +48,7 @@ def runs_and_layouts_interval(
     return float(low), float(high)
 
 
-def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[float, float]:
+def failure_interval(rows: Sequence[EpisodeRow], seed: int = 0) -> tuple[float, float]:
     """95 % interval of the failure rate of ``rows``: Wilson over episodes for one run; for rows pooled from
     several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs and their
     episodes, so that it carries the spread between training runs as well as the layouts' (where each run flew
@@ -88,7 +90,7 @@ def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[
     return float(min(low, wilson_low)), float(max(high, wilson_high))
 
 
-def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def summarise(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
     """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
     success rate with its interval, failure rate with its interval (:func:`failure_interval`: over training
     runs and layouts where the rows pool several runs), episodes out of bounds, and medians of progress and
@@ -98,7 +100,7 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
     or the time limit. Collisions alone can fall while failures rise (a drone that leaves the course sideways
     collides with nothing), so the failure rate is the headline and the collision rate one of its causes.
     """
-    groups: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    groups: dict[tuple[str, str, float], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
     table = []
@@ -175,7 +177,7 @@ def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = 
     return "\n".join(lines)
 
 
-def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
+def failure(rows: Sequence[EpisodeRow]) -> tuple[float, float, float, int]:
     """Failure rate, its 95 % interval (over training runs too where the rows pool several:
     :func:`failure_interval`) and the episodes."""
     n = len(rows)

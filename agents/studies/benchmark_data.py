@@ -12,7 +12,7 @@ import csv
 import functools
 import json
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from agents.analysis.episode_record import PooledRow, is_flow_agent
+from agents.analysis.episode_record import EpisodeRow, PooledRow, is_flow_agent
 from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
@@ -183,12 +183,12 @@ def require(path: Path) -> Path:
     return path
 
 
-def _rate(rows: Sequence[Mapping[str, Any]]) -> Rate:
+def _rate(rows: Sequence[EpisodeRow]) -> Rate:
     """Failure over ``rows``: Wilson for one run, over runs and layouts for pooled ones."""
     return Rate(*failure(rows))
 
 
-def _rates_per_agent(rows: Sequence[Mapping[str, Any]]) -> dict[str, Rate]:
+def _rates_per_agent(rows: Sequence[EpisodeRow]) -> dict[str, Rate]:
     return {
         agent: _rate([r for r in rows if r["agent"] == agent]) for agent in sorted({r["agent"] for r in rows})
     }

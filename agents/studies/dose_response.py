@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.episode_record import EpisodeRow, is_flow_agent
 from agents.studies.error_analysis import TASK_FACTORS
 
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
@@ -32,7 +32,7 @@ MIN_FULL_COURSE = 5
 P_VALUE_FLOOR = 1e-6
 
 
-def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], dict[str, Any]]:
+def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str, Any]]:
     """Each sensor cell's depth quality, measured on full-course flights: per (factor, level), the medians over
     the flow agents' successful episodes of :data:`DOSE_FEATURES` (log median relative depth error, valid depths
     per frame / 100, outlier share where every episode recorded it), or over all its episodes where fewer than
@@ -66,7 +66,7 @@ def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], d
     return quality
 
 
-def _measures_sensor_quality(row: Mapping[str, Any]) -> bool:
+def _measures_sensor_quality(row: EpisodeRow) -> bool:
     """Whether an episode counts towards its cell's depth quality: a sensor factor's (not a task factor's),
     flown by a flow agent, with a positive finite median depth error (its log is taken)."""
     error = float(row["median_depth_error"])
@@ -74,8 +74,8 @@ def _measures_sensor_quality(row: Mapping[str, Any]) -> bool:
 
 
 def dose_features(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
-) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+) -> tuple[np.ndarray, np.ndarray, list[EpisodeRow]]:
     """Design matrix (episodes, features): each episode's cell quality (:func:`cell_quality`); failures
     (episodes,); and the rows used: the episodes of cells with a quality."""
     used = [r for r in rows if (r["factor"], float(r["level"])) in quality]
@@ -135,7 +135,7 @@ def _converged_logit(
 
 
 def fit_dose_response(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
 ) -> dict[str, Any]:
     """Logistic regression of failure on its cell's depth quality (one agent's episodes over the sensor
     factors and the clean cell), with standard errors clustered by layout, and a cluster-robust Wald test of
@@ -191,7 +191,7 @@ def fit_dose_response(
 
 
 def fit_every_flow_agent(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
 ) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
     """:func:`fit_dose_response` for each flow agent of ``rows``: the fits, and why an agent has none."""
     fits, errors = {}, {}

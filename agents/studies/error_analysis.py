@@ -51,7 +51,7 @@ SWEEP_CLEAN_SOURCE = "the sweep's clean cell"
 
 
 def tolerance_table(
-    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
 ) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
     inside the clean interval, the first level at which the failure rate doubles, the first level at which it
@@ -65,7 +65,7 @@ def tolerance_table(
     that fails less than clean is no harm); scanning outward from the neutral level, the tolerated level is
     the last one before the first level above it.
     """
-    cells: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    cells: dict[tuple[str, str, float], list[EpisodeRow]] = {}
     for row in rows:
         cells.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
     clean_rows = _clean_rows(cells, baseline)
@@ -87,7 +87,7 @@ def tolerance_table(
 
 
 def _factor_rows(
-    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]],
+    cells: Mapping[tuple[str, str, float], list[EpisodeRow]],
     agent: str,
     factor: str,
     clean_fields: Mapping[str, Any],
@@ -120,11 +120,11 @@ def baseline_of_flown_runs(
 
 
 def _clean_rows(
-    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]], baseline: Sequence[Mapping[str, Any]]
-) -> dict[str, tuple[list[Mapping[str, Any]], str]]:
+    cells: Mapping[tuple[str, str, float], list[EpisodeRow]], baseline: Sequence[EpisodeRow]
+) -> dict[str, tuple[list[EpisodeRow], str]]:
     """Per agent, its clean episodes and where they come from: the baseline's where it has any, else the
     sweep's clean cell; agents with neither are absent."""
-    clean_rows: dict[str, tuple[list[Mapping[str, Any]], str]] = {}
+    clean_rows: dict[str, tuple[list[EpisodeRow], str]] = {}
     for row in baseline:
         if row["factor"] == "clean":
             clean_rows.setdefault(row["agent"], ([], BASELINE_SOURCE))[0].append(row)
@@ -136,7 +136,7 @@ def _clean_rows(
 
 def _scan_outward(
     levels: Sequence[float],
-    cell_rows: Sequence[Sequence[Mapping[str, Any]]],
+    cell_rows: Sequence[Sequence[EpisodeRow]],
     neutral: float,
     clean_fields: Mapping[str, Any],
 ) -> dict[str, Any]:

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.common.folders import check_writable_folder
@@ -39,7 +40,7 @@ def _range_text(row: Mapping[str, Any]) -> str:
 
 
 def plot_dose_response(
-    rows: Sequence[Mapping[str, Any]],
+    rows: Sequence[EpisodeRow],
     fits: Mapping[str, Mapping[str, Any]],
     quality: Mapping[tuple[str, float], Mapping[str, Any]],
     path: Path,
@@ -100,7 +101,7 @@ def plot_dose_response(
 
 
 def report_values(
-    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
 ) -> dict[str, Any]:
     """Every value of ``templates/error_analysis.md.j2`` from a sweep's episodes (``rows``) and the clean table's
     (``baseline``), the fits among them."""
@@ -135,7 +136,7 @@ def report_values(
 
 
 def write_error_analysis(
-    rows: Sequence[Mapping[str, Any]], out: Path, command: str, baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], out: Path, command: str, baseline: Sequence[EpisodeRow] = ()
 ) -> list[str]:
     """Write ``error_analysis.md`` and ``dose_response.png`` into ``out``; returns the report's lines.
     ``baseline``: the clean table's episodes, the breaking points' reference where an agent has them."""

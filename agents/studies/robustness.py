@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.analysis.statistics import summarise
 from agents.common.folders import check_writable_folder, write_text_atomically
@@ -92,7 +93,7 @@ def curve_area(points: Sequence[tuple[float, float]]) -> float:
 
 
 def summarise_curves(
-    table: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+    table: Sequence[Mapping[str, Any]], rows: Sequence[EpisodeRow]
 ) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the area under its curve and where it breaks."""
     summary = []

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure
@@ -123,9 +124,9 @@ def calibration_tasks(
     return tasks
 
 
-def failure_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def failure_table(rows: Sequence[EpisodeRow]) -> list[dict[str, Any]]:
     """Failure rate with its 95 % interval (Wilson: each agent is one run here) per (factor, agent)."""
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    groups: dict[tuple[str, str], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
     fields = ("failure_rate", "failure_low", "failure_high", "episodes")
@@ -164,7 +165,7 @@ def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | 
     return dict(chosen), best
 
 
-def separated_pairs(episodes: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
+def separated_pairs(episodes: Sequence[EpisodeRow]) -> tuple[int, int]:
     """(pairs of agents a paired test tells apart, all pairs) among the ``episodes`` of one factor: each pair
     compared on the layouts both flew, paired by layout (:func:`agents.analysis.paired.compare`), apart where
     the 95 % interval of the difference excludes zero."""

@@ -6,7 +6,7 @@ and one dose-response model per agent that pools every factor and level.
   clean one (none when twice the clean rate would exceed 1), and the first level whose interval lies wholly
   above the clean one (it breaks). The clean rate is the 300-layout clean table's where the agent has one.
   Intervals are over training runs and layouts for a learned agent pooled over its seeds, Wilson otherwise.
-- **Dose-response** (:mod:`agents.studies.dose_response`): failure against each cell's measured depth quality.
+- **Dose-response** (:mod:`agents.analysis.dose_response`): failure against each cell's measured depth quality.
 """
 
 from __future__ import annotations
@@ -31,10 +31,6 @@ THESIS_VERDICTS = {
     "translation_error": "a band close to a direct 2–10 % variation",
 }
 NOT_TESTED = "not tested"
-# Factors that change the task itself (how fast, how cluttered, how visible), not what the drone is told or
-# estimates: "they matter beyond depth quality" would be true of them by construction, so the dose-response
-# fits and their test use the sensor factors only.
-TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
 
 
 def neutral_level(factor: str) -> float:

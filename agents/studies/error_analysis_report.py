@@ -10,22 +10,22 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.dose_response import (
+    MIN_FULL_COURSE,
+    P_VALUE_FLOOR,
+    TASK_FACTORS,
+    cell_quality,
+    dose_curve,
+    dose_features,
+    fit_every_flow_agent,
+)
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
 from agents.evaluation.sweep import pool_every_seed
-from agents.studies.dose_response import (
-    MIN_FULL_COURSE,
-    P_VALUE_FLOOR,
-    cell_quality,
-    dose_curve,
-    dose_features,
-    fit_every_flow_agent,
-)
 from agents.studies.error_analysis import (
-    TASK_FACTORS,
     baseline_of_flown_runs,
     best_learned_flow_agent,
     tolerance_table,

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.dose_response import TASK_FACTORS
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.analysis.statistics import summarise
@@ -39,7 +40,7 @@ from agents.evaluation.runner import execute
 from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_every_seed
 from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
 from agents.policies.base import is_learned, split_agent_name
-from agents.studies.error_analysis import TASK_FACTORS, neutral_level, tolerance_table
+from agents.studies.error_analysis import neutral_level, tolerance_table
 from agents.studies.wording import render_report
 
 SWEEP_CONFIG = REPO_ROOT / "configs" / "sweep.yaml"

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import wilson_interval
@@ -52,7 +53,7 @@ def sensitivity_file(agent: str, env_id: str, reading: str, tau: float) -> str:
 PAGE = "calibration.md"
 
 
-def _episodes(path: Path) -> list[dict[str, Any]]:
+def _episodes(path: Path) -> list[EpisodeRow]:
     return [row for row in read_records(path) if row.get("seed") is not None]
 
 

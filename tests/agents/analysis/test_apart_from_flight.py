@@ -18,11 +18,13 @@ from flownav_env import task
 
 ANALYSIS = (
     "agents.analysis.csv_file",
+    "agents.analysis.dose_response",
     "agents.analysis.episode_record",
     "agents.analysis.over_seeds",
     "agents.analysis.paired",
     "agents.analysis.records",
     "agents.analysis.statistics",
+    "agents.analysis.weaving",
 )
 ROOT = Path(__file__).resolve().parents[3]
 FLIGHT = ("mujoco", "gymnasium", "flownav_env", "estimator", "cv2", "torch", "stable_baselines3")

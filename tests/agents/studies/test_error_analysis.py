@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from helpers import EPISODE
 
+from agents.analysis.dose_response import cell_quality, fit_dose_response, format_p
 from agents.analysis.episode_record import is_flow_agent
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.cli import main
-from agents.studies.dose_response import cell_quality, fit_dose_response, format_p
 from agents.studies.error_analysis import best_learned_flow_agent, neutral_level, tolerance_table
 from agents.studies.error_analysis_report import report_values, write_error_analysis
 from agents.studies.wording import render_report

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.dose_response import TASK_FACTORS
 from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.yaml_config import load_config
 from agents.evaluation.sweep import SweepConfig
-from agents.studies.error_analysis import TASK_FACTORS
 from agents.studies.robustness import SWEEP_CONFIG, curve_area, sensor_levels, summarise_curves, summary_lines
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"

@@ -1,4 +1,5 @@
-"""The dose-response half of the error analysis (:mod:`agents.studies.error_analysis` holds the tolerance table):
+"""The dose-response half of the error analysis (:mod:`agents.studies.error_analysis` holds the tolerance table,
+and words both):
 episode failure against its cell's depth quality (:func:`cell_quality`: median relative
 depth error, valid depths per frame and, where recorded, the share of depths off by more than half, measured
 on the cell's full-course flights so that no episode's covariate depends on its own length), pooled over the
@@ -22,7 +23,6 @@ import numpy as np
 from scipy import stats
 
 from agents.analysis.episode_record import EpisodeRow, is_flow_agent
-from agents.studies.error_analysis import TASK_FACTORS
 
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
 # depths off by more than half, where the episodes recorded it (not in files from before it existed).
@@ -30,6 +30,10 @@ DOSE_FEATURES = ("log_depth_error", "valid_points_per_100", "outlier_share")
 # A cell's quality is measured on its successful (full-course) episodes when it has at least this many.
 MIN_FULL_COURSE = 5
 P_VALUE_FLOOR = 1e-6
+# Factors that change the task itself (how fast, how cluttered, how visible), not what the drone is told or
+# estimates: "they matter beyond depth quality" would be true of them by construction, so the dose-response
+# fits and their test use the sensor factors only.
+TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
 
 
 def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str, Any]]:

@@ -182,6 +182,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     translation_drift = SensorSetting()
     rotation_noise_deg = SensorSetting()
     translation_noise_m = SensorSetting()
+    translation_noise_correlation_s = SensorSetting()
     imu_time_offset_ms = SensorSetting()
     depth_noise = SensorSetting()
     depth_outliers = SensorSetting()

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, Final
+from collections.abc import Iterable, Sequence
+from typing import Final, TypedDict
 
 import numpy as np
 
@@ -90,7 +90,29 @@ def failure_interval(rows: Sequence[EpisodeRow], seed: int = 0) -> tuple[float, 
     return float(min(low, wilson_low)), float(max(high, wilson_high))
 
 
-def summarise(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
+class CellSummary(TypedDict):
+    """One row of :func:`summarise`: an (agent, factor, level) cell's episodes, rates and 95 % intervals."""
+
+    agent: str
+    factor: str
+    level: float
+    episodes: int
+    collisions: int
+    collision_rate: float
+    ci_low: float
+    ci_high: float
+    success_rate: float
+    success_ci_low: float
+    success_ci_high: float
+    median_progress_m: float
+    median_min_clearance_m: float
+    out_of_bounds: int
+    failure_rate: float
+    failure_ci_low: float
+    failure_ci_high: float
+
+
+def summarise(rows: Iterable[EpisodeRow]) -> list[CellSummary]:
     """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
     success rate with its interval, failure rate with its interval (:func:`failure_interval`: over training
     runs and layouts where the rows pool several runs), episodes out of bounds, and medians of progress and
@@ -103,7 +125,7 @@ def summarise(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
     groups: dict[tuple[str, str, float], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
-    table = []
+    table: list[CellSummary] = []
     for (agent, factor, level), members in sorted(groups.items()):
         n = len(members)
         collisions = sum(bool(m["collision"]) for m in members)
@@ -140,7 +162,7 @@ SUMMARY_COLUMNS = ("agent", "factor", "level", "episodes")
 """The leading columns of :func:`format_summary`, the ones a caller may omit; the rates always show."""
 
 
-def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = ()) -> str:
+def format_summary(table: Sequence[CellSummary], *, omit: Iterable[str] = ()) -> str:
     """The summary as a Markdown table.
 
     Args:

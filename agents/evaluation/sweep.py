@@ -29,7 +29,7 @@ from agents.analysis.records import (
     read_records,
     start_new_file,
 )
-from agents.analysis.statistics import RUN_KEY, format_summary
+from agents.analysis.statistics import RUN_KEY, CellSummary, format_summary
 from agents.common.folders import check_writable_folder
 from agents.common.locations import REPO_ROOT
 from agents.common.seeds import TEST_SEED_START
@@ -211,7 +211,7 @@ def run_sweep(
     overwrite: bool = False,
     address: str | None = None,
     command: str = "flownav sweep",
-) -> list[dict[str, Any]]:
+) -> list[CellSummary]:
     """Fly every episode of the sweep in ``config_path`` not yet in ``<out>/sweep_episodes.csv``, then write
     ``sweep.csv``, ``collision_vs_error.png`` and ``sweep.md``; returns the summary table.
 
@@ -363,7 +363,7 @@ def _write_markdown(
     path: Path,
     config: SweepConfig,
     config_path: Path,
-    table: list[dict[str, Any]],
+    table: Sequence[CellSummary],
     rows: Sequence[EpisodeRow],
     agents: list[str],
     *,

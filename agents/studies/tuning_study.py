@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.analysis.records import read_records
-from agents.analysis.statistics import summarise
+from agents.analysis.statistics import CellSummary, summarise
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.runner import execute
@@ -108,7 +108,7 @@ class TrialResult:
 
     number: int
     params: dict[str, float]
-    summary: dict[str, Any]
+    summary: CellSummary
     # Failure (1) or not per layout, in seed order: what two finalists on the same layouts are paired by.
     failures: tuple[float, ...] = ()
 
@@ -165,7 +165,7 @@ def trial_tasks(
     ]
 
 
-def stage_summary(tasks: list[EpisodeTask], csv_path: Path) -> dict[str, Any]:
+def stage_summary(tasks: list[EpisodeTask], csv_path: Path) -> CellSummary:
     """The summary row of these tasks' episodes (only theirs: the CSV may hold other trials and stages).
 
     Raises:

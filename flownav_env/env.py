@@ -10,7 +10,7 @@ import numpy as np
 
 from estimator import DepthPoints, FlowDepthEstimator
 from flownav_env.actions import action_space, checked_action
-from flownav_env.env_arguments import settings_property, with_settings
+from flownav_env.env_arguments import SensorSetting, Setting, with_setting_rows
 from flownav_env.observation import estimator_info
 from flownav_env.physics import FlowNavPhysics
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams
@@ -19,12 +19,15 @@ from flownav_env.scene import LayoutParams
 from flownav_env.sensor import SensorPipeline
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import RENDER_MODES, check_render_mode, settings_with
-from flownav_env.stage_timing import StageTimes
+from flownav_env.stage_timing import StageClock, StageTimes, Untimed
 from flownav_env.task import FlowNavTask
 
+# What reset and step observe: the Observation Space's keys, each a float32 array.
+Observation = dict[str, np.ndarray]
 
-@with_settings
-class FlowNavEnv(gym.Env):
+
+@with_setting_rows
+class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     r"""
     ## Description
     A ~1 kg quadrotor flies forward at a constant ``forward_speed`` through a course of vertical capsule
@@ -112,6 +115,30 @@ class FlowNavEnv(gym.Env):
     ### Truncation
     The time limit: ``max_episode_steps`` given at registration (400 steps for ``FlowNav-v0``, 40 s).
 
+    ## Info
+    ``reset`` and ``step`` return these keys in ``info``, and no others (``tests/flownav_env/test_env_info.py``):
+
+    | Key | Returned by | Type | Meaning |
+    |---|---|---|---|
+    | ``collision`` | reset, step | bool | the step ended in contact (see Termination) |
+    | ``success`` | reset, step | bool | the step crossed the goal line in bounds |
+    | ``out_of_bounds`` | reset, step | bool | the step left the lateral or height bounds |
+    | ``progress`` | reset, step | float | the drone's x (m): the distance flown toward the goal line |
+    | ``clearance`` | reset, step | float | distance from the drone's centre to the nearest capsule surface (m) |
+    | ``min_clearance`` | reset, step | float | the least ``clearance`` of the episode so far (m) |
+    | ``points_tracked`` | reset, step | int | keypoints the estimator tracked into this frame |
+    | ``points_valid`` | reset, step | int | of those, the points with a valid depth (after ``depth_dropout``) |
+    | ``position`` | reset, step | (3,) float64 | the drone's world position x, y, z (m) |
+    | ``true_rotation`` | step | (3, 3) float64 | the true rotation R of the camera between the last two frames |
+    | ``true_translation`` | step | (3,) float64 | the true translation t of the camera (m), ``X_next = R @ X_prev + t`` |
+    | ``depth_error_median`` | step, when some valid point has a true depth | float | median relative error of the valid points' depths (needs ``depth_error_info`` or an oracle ``obs_source``) |
+    | ``depth_outlier_share`` | step, when some valid point has a true depth | float | share of those points off by more than 50 % of their true depth |
+    | ``reward_progress`` | step | float | the reward's progress term (see Rewards) |
+    | ``reward_success`` | step | float | the reward's goal term |
+    | ``reward_collision`` | step | float | the reward's collision and out-of-bounds term (≤ 0) |
+    | ``reward_control`` | step | float | the reward's control-cost term (≤ 0) |
+    | ``reward_clearance`` | step | float | the reward's clearance term (≤ 0) |
+
     ## Arguments
     | Argument | Default | Meaning |
     |---|---|---|
@@ -137,12 +164,29 @@ class FlowNavEnv(gym.Env):
     # gymnasium.Env declares metadata as a plain attribute, which a ClassVar here would contradict for mypy.
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10}  # noqa: RUF012
 
-    layout = settings_property("layout")
-    obs_source = settings_property("obs_source")
-    forward_speed = settings_property("forward_speed")
-    frame_rate = settings_property("frame_rate")
-    histogram_sectors = settings_property("histogram_sectors")
-    substeps = settings_property("substeps")
+    # Settings read through the env (``env.settings`` owns them).
+    layout: Setting[str] = Setting()
+    obs_source: Setting[str] = Setting()
+    forward_speed: Setting[float] = Setting()
+    frame_rate: Setting[float] = Setting()
+    histogram_sectors: Setting[tuple[int, int]] = Setting()
+    substeps: Setting[int] = Setting()
+    # The sensor variables (SENSOR_FIELDS, every one; a test checks): assigning one goes through set_sensor.
+    attitude_jitter_deg = SensorSetting()
+    brightness = SensorSetting()
+    rotation_error = SensorSetting()
+    translation_error = SensorSetting()
+    rotation_bias = SensorSetting()
+    translation_bias = SensorSetting()
+    rotation_drift = SensorSetting()
+    translation_drift = SensorSetting()
+    rotation_noise_deg = SensorSetting()
+    translation_noise_m = SensorSetting()
+    translation_noise_correlation_s = SensorSetting()
+    imu_time_offset_ms = SensorSetting()
+    depth_noise = SensorSetting()
+    depth_outliers = SensorSetting()
+    depth_dropout = SensorSetting()
 
     def __init__(
         self, settings: EnvSettings | None = None, render_mode: str | None = None, **overrides: Any
@@ -167,6 +211,8 @@ class FlowNavEnv(gym.Env):
         self._view: CameraRenderer | None = None
         self._closed = False
         self._sensor = SensorPipeline(settings.frame_rate)
+        # Times the stages of every step and reset once time_stages() swaps in a StageTimes.
+        self._clock: StageClock = Untimed()
         self.task = FlowNavTask(settings, self.intrinsics)
         self.observation_space = self.task.observation_space
         self.action_space = action_space()
@@ -199,38 +245,59 @@ class FlowNavEnv(gym.Env):
         return self.settings.layout_params()
 
     # --- Gymnasium API ----------------------------------------------------------------------------------------
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Starts an episode on the layout drawn from ``seed``; ``info`` holds the keys the Info table marks
+        "reset". ``options`` is accepted for Gymnasium's API and unused."""
         self._require_open("reset")
         super().reset(seed=seed)
-        settings, rng, physics = self.settings, self.np_random, self.physics
+        settings, rng, physics, clock = self.settings, self.np_random, self.physics, self._clock
         self.task.initialize_episode(physics, settings, rng)
         # The first frame is jittered too (a draw after the course's), though it tells no motion.
         physics.set_camera_mount(self._sensor.jitter(settings.sensor, rng))
-        self._frame = self._camera.render(physics.data, physics.camera_id)
+        with clock.stage("render"):
+            self._frame = self._camera.render(physics.data, physics.camera_id)
         motion = self._sensor.start(physics.camera_pose())
         self.estimator.reset()
-        points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
+        with clock.stage("estimator"):
+            points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
         observation = self.task.observe(physics, settings, points, np.zeros(0))
         self._episode_running = True
-        return observation, self.task.start_info() | estimator_info(points, np.zeros(0))
+        return observation, self.task.start_info(physics) | estimator_info(points, np.zeros(0))
 
-    def step(self, action):
+    def step(self, action: np.ndarray) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        """One camera frame: fly the action, see, estimate, observe (see the class docstring: the spaces,
+        Rewards, Episode End, and Info for the keys of ``info``). Never truncates: the time limit is the
+        ``TimeLimit`` wrapper's."""
         self._require_episode()
         action = checked_action(action)
-        settings, rng, physics, task = self.settings, self.np_random, self.physics, self.task
+        settings, rng, physics, task, clock = (
+            self.settings,
+            self.np_random,
+            self.physics,
+            self.task,
+            self._clock,
+        )
         x_before = physics.position()[0]
         velocity_target, yaw_rate = task.command(physics, settings, action)
         # The flight draws nothing, so a seed's draws keep their order: jitter, told motion, depth errors.
         jitter = self._sensor.jitter(settings.sensor, rng)
-        collision = physics.advance(velocity_target, yaw_rate, settings.substeps, camera_disturbance=jitter)
-        self._frame = self._camera.render(physics.data, physics.camera_id)
+        with clock.stage("physics"):
+            collision = physics.advance(
+                velocity_target, yaw_rate, settings.substeps, camera_disturbance=jitter
+            )
+        with clock.stage("render"):
+            self._frame = self._camera.render(physics.data, physics.camera_id)
         motion = self._sensor.motion(settings.sensor, rng, physics.camera_pose())
-        points = self.estimator.update(self._frame, *motion.told_motion)
+        with clock.stage("estimator"):
+            points = self.estimator.update(self._frame, *motion.told_motion)
         points = self._depth_points = self._sensor.corrupt_points(settings, rng, points)
         true_depth = np.zeros(0)
         if settings.needs_true_depth:
             # The points are the last frame's keypoints: their rays leave from its pose (NaN: nothing hit).
-            true_depth = physics.ray_depths(self.intrinsics.rays(points.points), *motion.previous_pose)
+            with clock.stage("ground_truth"):
+                true_depth = physics.ray_depths(self.intrinsics.rays(points.points), *motion.previous_pose)
         observation = task.observe(physics, settings, points, true_depth)
         outcome = task.outcome(physics, settings, x_before, collision)
         terms = task.reward(settings, outcome, action)
@@ -284,8 +351,6 @@ class FlowNavEnv(gym.Env):
             raise RuntimeError(f"{method}() called on a closed FlowNavEnv; make a new env instead")
 
     # --- read-only views for studies and benchmarks -----------------------------------------------------------
-    _stage_times: StageTimes | None = None
-
     @property
     def last_frame(self) -> np.ndarray | None:
         """The onboard camera's RGB frame, (H, W, 3) uint8, that the estimator saw at the last ``reset`` or
@@ -303,15 +368,11 @@ class FlowNavEnv(gym.Env):
     def time_stages(self) -> StageTimes:
         """Start timing the stages of every later ``step`` and ``reset``; the live totals.
 
-        From the first call on, the env's physics (``advance``, ``ray_depths``), onboard camera and estimator
-        add their wall time to the returned :class:`~flownav_env.stage_timing.StageTimes` (about 1 µs per call);
-        a later call returns the same totals. For speed benchmarks: read ``snapshot()`` before and after a step.
+        From the first call on, ``step`` and ``reset`` add the wall time of the env's physics (``advance``,
+        ``ray_depths``), onboard camera and estimator to the returned
+        :class:`~flownav_env.stage_timing.StageTimes` (about 1 µs per stage); a later call returns the same
+        totals. For speed benchmarks: read ``snapshot()`` before and after a step.
         """
-        if self._stage_times is None:
-            times = self._stage_times = StageTimes()
-            # Instance attributes shadow the methods, so step() calls the timed ones without knowing of them.
-            setattr(self.physics, "advance", times.timed("physics", self.physics.advance))  # noqa: B010
-            setattr(self.physics, "ray_depths", times.timed("ground_truth", self.physics.ray_depths))  # noqa: B010
-            setattr(self._camera, "render", times.timed("render", self._camera.render))  # noqa: B010
-            setattr(self.estimator, "update", times.timed("estimator", self.estimator.update))  # noqa: B010
-        return self._stage_times
+        if not isinstance(self._clock, StageTimes):
+            self._clock = StageTimes()
+        return self._clock

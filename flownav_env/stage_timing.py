@@ -1,7 +1,8 @@
 """Wall-clock seconds a :class:`~flownav_env.env.FlowNavEnv` spends in each stage of its steps, for speed
 benchmarks (:meth:`FlowNavEnv.time_stages`).
 
-The stages are the env's own collaborators, timed around their calls: ``physics`` (the controller and MuJoCo's
+The stages are the env's own collaborators, timed around their calls by the env's clock (a hook: ``step``
+and ``reset`` wrap each call in ``with clock.stage(...)``; untimed until asked): ``physics`` (the controller and MuJoCo's
 substeps, ``FlowNavPhysics.advance``), ``render`` (the onboard camera's frame), ``estimator``
 (``FlowDepthEstimator.update``) and ``ground_truth`` (the ray cast of true depths, ``FlowNavPhysics.ray_depths``).
 What a step spends outside them (sensor model, histogram, reward, wrappers) is the step's time less their sum.
@@ -10,13 +11,27 @@ What a step spends outside them (sensor model, histogram, reward, wrappers) is t
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from typing import ParamSpec, TypeVar
+from collections.abc import Iterator
+from contextlib import AbstractContextManager, contextmanager, nullcontext
+from typing import Protocol
 
 STAGES = ("physics", "render", "estimator", "ground_truth")
 
-_P = ParamSpec("_P")
-_R = TypeVar("_R")
+
+class StageClock(Protocol):
+    """What the env's ``step`` and ``reset`` time their stages with: ``with clock.stage("render"): ...``."""
+
+    def stage(self, name: str) -> AbstractContextManager[None]: ...
+
+
+class Untimed:
+    """The env's clock until :meth:`FlowNavEnv.time_stages`: every stage is an empty context (a few
+    hundred ns)."""
+
+    _nothing: AbstractContextManager[None] = nullcontext()
+
+    def stage(self, name: str) -> AbstractContextManager[None]:
+        return self._nothing
 
 
 class StageTimes:
@@ -32,21 +47,17 @@ class StageTimes:
         """A copy of the totals so far, by stage, in seconds."""
         return dict(self._seconds)
 
-    def timed(self, stage: str, function: Callable[_P, _R]) -> Callable[_P, _R]:
-        """``function`` with its wall time added to ``stage`` on every call (about 1 µs per call).
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        """Adds the wall time of the ``with`` block to the stage ``name`` (about 1 µs per block).
 
         Raises:
-            ValueError: ``stage`` is not one of :data:`STAGES`.
+            ValueError: ``name`` is not one of :data:`STAGES`.
         """
-        if stage not in self._seconds:
-            raise ValueError(f"stage must be one of {', '.join(STAGES)}, got {stage!r}")
-        seconds = self._seconds
-
-        def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
-            start = time.perf_counter()
-            try:
-                return function(*args, **kwargs)
-            finally:
-                seconds[stage] += time.perf_counter() - start
-
-        return wrapper
+        if name not in self._seconds:
+            raise ValueError(f"stage must be one of {', '.join(STAGES)}, got {name!r}")
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self._seconds[name] += time.perf_counter() - start

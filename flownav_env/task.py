@@ -151,11 +151,11 @@ class FlowNavTask:
         self.min_clearance = physics.obstacle_clearance()
         self._observed = None
 
-    def start_info(self) -> dict[str, Any]:
-        """The outcome entries of ``reset``'s ``info``: nothing has happened yet."""
+    def start_info(self, physics: FlowNavPhysics) -> dict[str, Any]:
+        """The outcome entries of ``reset``'s ``info``: nothing has happened yet; the drone is at its start."""
         clearance = self.min_clearance
         info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
-        return info | {"clearance": clearance, "min_clearance": clearance}
+        return info | {"clearance": clearance, "min_clearance": clearance, "position": physics.position()}
 
     @staticmethod
     def command(

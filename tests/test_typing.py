@@ -1,6 +1,7 @@
 """The three packages stay typed: ``Any`` only where no better type exists. mypy itself runs in CI
 (``.ci/run``: ``mypy``, configured in pyproject's ``[tool.mypy]``); this counts what mypy cannot refuse, the
-parameters annotated plainly ``Any``, which switch its checking off at that boundary."""
+parameters whose annotation mentions ``Any`` (plain ``Any``, or rows as ``Mapping[str, Any]``), which switch
+its checking off at that boundary: an episode row is an ``EpisodeRow`` (agents/analysis/episode_record.py)."""
 
 from __future__ import annotations
 
@@ -9,13 +10,14 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("estimator", "flownav_env", "agents")
-# The opaque recurrent ``state`` of the agent protocol and its implementations, and keyword arguments passed
-# straight on to a callee that validates them: today 17.
-MAX_ANY_PARAMETERS = 60
+# The opaque recurrent ``state`` of the agent protocol and its implementations, keyword arguments passed
+# straight on to a callee that validates them, and summary and report rows not typed yet (the goal is 60).
+MAX_ANY_PARAMETERS = 160
 
 
 def _any_parameters(path: Path, root: Path = ROOT) -> list[str]:
-    """``path:function(parameter)`` for each parameter annotated exactly ``Any`` in the module at ``path``."""
+    """``path:function(parameter)`` for each parameter whose annotation mentions ``Any`` in the module at
+    ``path``."""
     found = []
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -24,9 +26,19 @@ def _any_parameters(path: Path, root: Path = ROOT) -> list[str]:
         every = [*arguments.posonlyargs, *arguments.args, *arguments.kwonlyargs]
         every += [extra for extra in (arguments.vararg, arguments.kwarg) if extra is not None]
         for argument in every:
-            if argument.annotation is not None and ast.unparse(argument.annotation) in ("Any", "typing.Any"):
+            if argument.annotation is not None and _mentions_any(argument.annotation):
                 found.append(f"{path.relative_to(root)}:{node.name}({argument.arg})")
     return found
+
+
+def _mentions_any(annotation: ast.expr) -> bool:
+    """Whether ``Any`` appears anywhere in an annotation, quoted (a string annotation) or not."""
+    if isinstance(annotation, ast.Constant) and isinstance(annotation.value, str):
+        annotation = ast.parse(annotation.value, mode="eval").body
+    return any(
+        (isinstance(node, ast.Name) and node.id == "Any") or (isinstance(node, ast.Attribute) and node.attr == "Any")
+        for node in ast.walk(annotation)
+    )
 
 
 def test_few_parameters_are_typed_any():
@@ -37,5 +49,9 @@ def test_few_parameters_are_typed_any():
 
 def test_the_count_sees_an_any_parameter(tmp_path: Path):
     module = tmp_path / "module.py"
-    module.write_text("from typing import Any\n\ndef f(a: Any, *rest: Any, b: int = 0, **extra: Any) -> None: ...\n")
-    assert _any_parameters(module, tmp_path) == ["module.py:f(a)", "module.py:f(rest)", "module.py:f(extra)"]
+    module.write_text(
+        "from typing import Any\n\n"
+        "def f(a: Any, *rest: Any, b: int = 0, c: 'dict[str, Any]' = {}, **extra: Mapping[str, Any]) -> None: ...\n"
+    )
+    found = ["module.py:f(a)", "module.py:f(c)", "module.py:f(rest)", "module.py:f(extra)"]
+    assert sorted(_any_parameters(module, tmp_path)) == sorted(found)

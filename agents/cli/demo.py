@@ -11,16 +11,16 @@ from __future__ import annotations
 
 import argparse
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
+from agents.analysis.records import read_records
+from agents.analysis.statistics import CellSummary, format_summary, summarise
 from agents.cli.arguments import add_workers_argument
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, SUITE_SEED_START, TEST_SEED_START
 from agents.evaluation import runner  # by module: tests stand in for runner.execute
 from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds
-from agents.evaluation.records import read_records
-from agents.evaluation.statistics import format_summary, summarise
 from agents.policies import LEARNED_AGENTS, REACTIVE_AGENTS, default_runs, is_learned, policy_file
 from flownav_env.tiers import TIER_NAMES
 
@@ -65,8 +65,8 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def demo_report(table: list[dict[str, Any]], env_id: str, episodes: int) -> str:
-    """The demo's table (rows of :func:`~agents.evaluation.statistics.summarise`) without the columns that are
+def demo_report(table: Sequence[CellSummary], env_id: str, episodes: int) -> str:
+    """The demo's table (rows of :func:`~agents.analysis.statistics.summarise`) without the columns that are
     the same in every row, under a line saying how few episodes it rests on and where the leading table is."""
 
     constant = [name for name in ("factor", "level") if len({row[name] for row in table}) <= 1]

@@ -9,17 +9,19 @@ to move the old file aside. Prints the collision and success rates with Wilson 9
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
+from agents.analysis.csv_file import check_is_file_target
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.records import OVERWRITE_HINT, read_episodes, start_new_file
+from agents.analysis.statistics import format_summary, summarise
 from agents.cli.arguments import add_env_argument
 from agents.common.folders import check_writable_folder
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START, VALIDATION_SEED_START
 from agents.evaluation import runner  # by module: tests stand in for runner.execute
-from agents.evaluation.csv_file import check_is_file_target
 from agents.evaluation.episode_tasks import EpisodeTask, pooled_over_training_seeds, record_label, rows_of
-from agents.evaluation.records import OVERWRITE_HINT, read_episodes, start_new_file
-from agents.evaluation.statistics import format_summary, summarise
 from agents.policies import (
     AGENT_NAMES,
     POLICY_OPTION_HELP,
@@ -129,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
         tasks, out, workers=args.workers, description=f"evaluate {args.agent}", remedy=OVERWRITE_HINT
     )
     episodes = read_episodes(out)
-    rows = rows_of(tasks, episodes.rows)
+    rows: Sequence[EpisodeRow] = rows_of(tasks, episodes.rows)
     if len(runs) > 1:  # one row for the agent, its seeds pooled as the leaderboard's headline pools them
         rows = pooled_over_training_seeds(rows)
     print(format_summary(summarise(rows)))

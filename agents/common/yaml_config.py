@@ -101,8 +101,10 @@ def load_config(path: str | Path, schema: type[T]) -> T:
 def from_mapping(data: object, schema: type[T], source: str = "<config>") -> T:
     """Build the dataclass ``schema`` from a mapping, validating every key (see :func:`load_config`); each
     dataclass's ``validate()`` method, if it has one, runs last and its ValueError becomes a ConfigError."""
-    # Building the adapter takes milliseconds: the per-dataclass mappings under it are cached.
-    adapter: TypeAdapter[T] = TypeAdapter(_pydantic_type(schema))
+    # Building the adapter takes milliseconds: the per-dataclass mappings under it are cached. The mapping stands
+    # in for the dataclass (pydantic builds a T from it), which the annotation of _pydantic_type cannot say.
+    pydantic_type = cast("type[T]", _pydantic_type(schema))
+    adapter: TypeAdapter[T] = TypeAdapter(pydantic_type)
     try:
         return adapter.validate_python(data)
     except ValidationError as error:

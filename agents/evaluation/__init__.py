@@ -1,4 +1,3 @@
-"""Scoring agents: one episode (:mod:`.episode`), its CSV (:mod:`.records` for the rows and their identity,
-:mod:`.csv_file` for the bytes on disk), rates and intervals (:mod:`.statistics`), running many episodes
-locally or on Ray (:mod:`.runner`), the sensor-error sweep (:mod:`.sweep`, :mod:`.sweep_report`), gain tuning
-(:mod:`.tuning`) and videos (:mod:`.video`)."""
+"""Scoring agents: one episode (:mod:`.episode`), running many episodes locally or on Ray (:mod:`.runner`), the
+sensor-error sweep (:mod:`.sweep`, :mod:`.sweep_report`), the suite and the leaderboard. Reading the episodes it
+writes, and their statistics, is the analysis's (:mod:`agents.analysis`)."""

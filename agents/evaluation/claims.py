@@ -6,7 +6,7 @@ time and a digest of the episode's identity). If the episode is in the CSV, or a
 alive claimed it, the task is left to that process; else this process claims it. A claim whose process has
 ended (killed, or stopped before writing its row) or that is older than :data:`CLAIM_EXPIRY_S` counts for
 nothing, so an interrupted run loses no episode. Appending checks the CSV again under the same lock
-(:func:`~agents.evaluation.records.append_record`), so even runs that do not claim (Ray workers on other
+(:func:`~agents.analysis.records.append_record`), so even runs that do not claim (Ray workers on other
 machines) add each episode once.
 """
 
@@ -19,8 +19,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from agents.evaluation.csv_file import ReadsPerFile, locked
-from agents.evaluation.records import flown_episodes
+from agents.analysis.csv_file import ReadsPerFile, locked
+from agents.analysis.records import flown_episodes
 
 # An episode flies in seconds; a claim this old belongs to a process that stopped without writing its row.
 CLAIM_EXPIRY_S = 900.0
@@ -84,7 +84,7 @@ CLAIMS_READS = ReadsPerFile(_ClaimsRead)
 
 
 def identity_digest(identity: tuple) -> str:
-    """A short, stable name for an episode's identity (:func:`~agents.evaluation.records.episode_identity`)."""
+    """A short, stable name for an episode's identity (:func:`~agents.analysis.records.episode_identity`)."""
     return hashlib.sha256(repr(identity).encode()).hexdigest()[:32]
 
 

@@ -3,59 +3,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import gymnasium as gym
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRecord
 from agents.policies import Agent
 
-
-@dataclass
-class EpisodeRecord:
-    """What one episode came to, and what defined it; one CSV row.
-
-    The identity fields (``env_id`` to ``code_version``) are filled in by the runner from the task that flew
-    the episode, so that a resumed run can tell an episode flown with other settings from its own.
-    ``env_kwargs`` and ``agent_params`` are canonical JSON (``agent_params``: every parameter of a reactive
-    agent, defaults included, :func:`~agents.policies.agent_parameters`); ``policy_sha256`` is the learned policy file's
-    content hash ("" for reactive agents). ``code_version`` is recorded for provenance only: resuming does not
-    compare it, or every commit would fly every episode again.
-
-    Depth quality, over the steps with ground truth: ``median_depth_error`` is the median of the per-step
-    median relative errors, ``mean_depth_outlier_share`` the mean per-step share of valid depths off by more
-    than half (``estimator.accuracy.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth, or (the
-    outlier share) in files written before it was recorded.
-    """
-
-    agent: str
-    factor: str
-    level: float
-    seed: int
-    collision: bool
-    success: bool
-    out_of_bounds: bool
-    truncated: bool
-    progress_m: float
-    time_s: float
-    steps: int
-    min_clearance_m: float
-    path_length_m: float
-    mean_points_valid: float
-    median_depth_error: float
-    episode_return: float
-    env_id: str = ""
-    env_kwargs: str = ""
-    agent_params: str = ""
-    policy_sha256: str = ""
-    code_version: str = ""
-    # Last, and defaulted: files written before them keep their columns (records.EARLIER_CSV_FIELDS).
-    mean_depth_outlier_share: float = math.nan
-    # The benchmark suite's version (flownav_env.tiers.SUITE_VERSION) for episodes of the suite, else "".
-    suite_version: str = ""
-    # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
-    # free lane beside it (agents/evaluation/lane.py); NaN in files written before it was recorded.
-    max_abs_lateral_m: float = math.nan
+__all__ = ["EpisodeRecord", "run_episode"]
 
 
 def run_episode(
@@ -69,7 +24,7 @@ def run_episode(
 ) -> EpisodeRecord:
     """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
     observation, info = env.reset(seed=seed)
-    position = np.array([0.0, 0.0, 0.0])
+    position = info["position"]
     path_length, total_return, steps, widest = 0.0, 0.0, 0, 0.0
     valid_points, depth_errors, outlier_shares = [], [], []
     terminated = truncated = False
@@ -84,8 +39,7 @@ def run_episode(
         steps += 1
         total_return += float(reward)
         new_position = info["position"]
-        if steps > 1:
-            path_length += float(np.linalg.norm(new_position - position))
+        path_length += float(np.linalg.norm(new_position - position))
         position = new_position
         widest = max(widest, abs(float(position[1])))
         valid_points.append(info["points_valid"])

@@ -10,15 +10,14 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypedDict
 
-from agents.common.locations import POLICIES_DIR
-from agents.common.manifest import file_sha256
-from agents.evaluation.csv_file import move_aside
-from agents.evaluation.records import (
+from agents.analysis.csv_file import move_aside
+from agents.analysis.episode_record import EpisodeRow, PooledRow
+from agents.analysis.records import (
     FRESH_FILE_HINT,
     IDENTITY_FIELDS,
     episode_key,
@@ -27,7 +26,9 @@ from agents.evaluation.records import (
     row_identity,
     suite_version_of,
 )
-from agents.evaluation.statistics import RUN_KEY
+from agents.analysis.statistics import RUN_KEY
+from agents.common.locations import POLICIES_DIR
+from agents.common.manifest import file_sha256
 from agents.policies import (
     agent_env_kwargs,
     agent_parameters,
@@ -62,7 +63,7 @@ def _sha256_of_version(path: str, mtime_ns: int, size: int) -> str:
 
 class EpisodeIdentity(TypedDict):
     """What defines an episode beyond its (agent, factor, level, seed): the
-    :data:`~agents.evaluation.records.IDENTITY_FIELDS` its record carries."""
+    :data:`~agents.analysis.records.IDENTITY_FIELDS` its record carries."""
 
     env_id: str
     env_kwargs: str
@@ -202,7 +203,7 @@ def resume_plan(tasks: list[EpisodeTask], csv_path: Path, remedy: str = FRESH_FI
 
     Args:
         remedy: what the command offers when the CSV cannot be resumed (:data:`FRESH_FILE_HINT`, or
-            :data:`~agents.evaluation.records.OVERWRITE_HINT` where it has ``--overwrite``).
+            :data:`~agents.analysis.records.OVERWRITE_HINT` where it has ``--overwrite``).
 
     Raises:
         ValueError: the CSV predates episode identities, or holds an episode of one of the tasks flown with
@@ -325,13 +326,16 @@ def _edited_file(name: str, old: str | None, new: str) -> str:
     )
 
 
-def pooled_over_training_seeds(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def pooled_over_training_seeds(rows: Sequence[EpisodeRow]) -> list[PooledRow]:
     """Rows with each learned agent's training seeds (``ppo_flow@3``) relabelled as the agent, so that a
     summary gives the agent one row over its seeds."""
-    return [{**row, "agent": split_agent_name(row["agent"])[0], RUN_KEY: row["agent"]} for row in rows]
+    pooled: list[PooledRow] = [
+        {**row, "agent": split_agent_name(row["agent"])[0], RUN_KEY: row["agent"]} for row in rows
+    ]
+    return pooled
 
 
-def rows_of(tasks: list[EpisodeTask], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def rows_of(tasks: list[EpisodeTask], rows: Sequence[EpisodeRow]) -> list[EpisodeRow]:
     """The rows that are episodes of ``tasks``: same (agent, factor, level, seed), suite version and identity,
     or an unknown identity (a CSV from before identities), so a report never mixes in episodes of other
     settings or another suite version."""

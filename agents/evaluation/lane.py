@@ -14,7 +14,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from agents.evaluation.records import read_records
+from agents.analysis.records import read_records
 from flownav_env.tiers import TIER_NAMES, TIERS_BY_VERSION, tier_value
 
 # Where the lane flights lie, beside the suite's report.

@@ -1,4 +1,4 @@
-"""The benchmark's leading table: every agent on the same clean test layouts, learned agents over all their
+"""The clean tier's history table: every agent on the same clean test layouts, learned agents over all their
 training seeds (``flownav leaderboard``).
 
 Writes, to the output folder:
@@ -7,7 +7,7 @@ Writes, to the output folder:
 - ``training_seeds.csv``: one row per (agent, training seed) with its episodes and rates;
 - ``leaderboard.md``: the table (failure and success rates with 95 % intervals: over layouts for a
   reactive agent, over runs × layouts for a learned one), the interquartile mean over runs, and the
-  probability that each learned agent improves on each reactive one (:mod:`agents.evaluation.over_seeds`);
+  probability that each learned agent improves on each reactive one (:mod:`agents.analysis.over_seeds`);
 - ``leaderboard.png``: failure rates with their intervals, a dot per training seed.
 """
 
@@ -20,13 +20,8 @@ from typing import Any
 import numpy as np
 
 import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary queries GL)
-from agents.common.folders import check_writable_folder
-from agents.common.locations import POLICIES_DIR
-from agents.common.machine import code_version
-from agents.common.seeds import SUITE_SEED_START, TEST_SEED_START
-from agents.common.tables import markdown_table, today, write_csv
-from agents.evaluation.episode_tasks import EpisodeTask, rows_of
-from agents.evaluation.over_seeds import (
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.over_seeds import (
     LAYOUT_BLOCK,
     block_scores,
     episode_outcomes,
@@ -35,11 +30,17 @@ from agents.evaluation.over_seeds import (
     run_rates,
     success_outcomes,
 )
-from agents.evaluation.paired import Comparison, compare, provisional_note, verdict
+from agents.analysis.paired import Comparison, compare, provisional_note, verdict
+from agents.analysis.records import read_records
+from agents.analysis.statistics import runs_and_layouts_interval, wilson_interval
+from agents.common.folders import check_writable_folder
+from agents.common.locations import POLICIES_DIR
+from agents.common.machine import code_version
+from agents.common.seeds import SUITE_SEED_START, TEST_SEED_START
+from agents.common.tables import markdown_table, today, write_csv
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.provenance import machine_summary
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.policies import (
     LEARNED_AGENTS,
     PRIVILEGED_AGENTS,
@@ -98,7 +99,7 @@ def leaderboard_tasks(
 
 
 def summarise_runs(
-    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+    rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
 ) -> list[dict]:
     """Per agent: runs, episodes, mean rates over runs with their 95 % intervals, and the IQM of the success
     rate over runs × layout blocks with its stratified-bootstrap interval."""
@@ -139,7 +140,7 @@ def summarise_runs(
 
 
 def improvements(
-    rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
+    rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
 ) -> list[dict[str, Any]]:
     """P(learned run beats reactive agent) for every learned × reactive pair (straight left out), with its
     stratified-bootstrap interval."""
@@ -205,7 +206,7 @@ def report_lines(
     block: int = LAYOUT_BLOCK,
     against_best: Sequence[Comparison] = (),
 ) -> list[str]:
-    """``leaderboard.md``: set-up, the leading table, the probabilities of improvement and the gap the
+    """``leaderboard.md``: set-up, the history table, the probabilities of improvement and the gap the
     strongest reactive agent leaves to learning (``against_best``: :func:`against_best_reactive`)."""
     rows = [
         [
@@ -289,10 +290,10 @@ def report_lines(
 
 
 def against_best_reactive(
-    table: list[dict], rows: list[dict[str, Any]], runs: dict[str, list[str]], layouts: list[int]
+    table: list[dict], rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int]
 ) -> list[Comparison]:
     """Each learned agent but the privileged ones against the reactive agent (``straight`` aside) with the
-    lowest failure rate, paired by layout (:func:`agents.evaluation.paired.compare`)."""
+    lowest failure rate, paired by layout (:func:`agents.analysis.paired.compare`)."""
     reactive = [r for r in table if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
     learned = [
         r["agent"] for r in table if r["agent"] in LEARNED_AGENTS and r["agent"] not in PRIVILEGED_AGENTS

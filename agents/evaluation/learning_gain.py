@@ -1,9 +1,9 @@
 """Does learning beat the rules on a tier? Per tier, the best ranked learned agent against the best ranked rule,
-paired by layout (:func:`agents.evaluation.paired.compare`: layouts drawn once for both, the learned agent's
+paired by layout (:func:`agents.analysis.paired.compare`: layouts drawn once for both, the learned agent's
 training runs drawn on their own).
 
 Only ranked agents take part: a privileged agent reads what the tier's sensor does not give, and a learned
-agent with fewer than :data:`~agents.evaluation.paired.MIN_RANKED_SEEDS` training seeds describes its runs, not
+agent with fewer than :data:`~agents.analysis.paired.MIN_RANKED_SEEDS` training seeds describes its runs, not
 its recipe. "Best" is the lowest mean failure on the tier's layouts, within each kind.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agents.evaluation.paired import Comparison, TierRanking, compare
+from agents.analysis.paired import Comparison, TierRanking, compare
 from agents.policies.base import REACTIVE_AGENTS, is_learned
 
 
@@ -39,7 +39,7 @@ def _best(failures: Mapping[str, np.ndarray], names: Sequence[str]) -> str | Non
 
 def learning_gain(tier: str, failures: Mapping[str, np.ndarray], ranking: TierRanking) -> LearningGain | None:
     """The best ranked learned agent against the best ranked rule on ``tier``, from its failure matrices
-    (runs, layouts) and its :class:`~agents.evaluation.paired.TierRanking`; None where either kind has no ranked
+    (runs, layouts) and its :class:`~agents.analysis.paired.TierRanking`; None where either kind has no ranked
     agent."""
     ranked = [ranking.best, *(c.agent for c in ranking.comparisons)]
     learned = _best(failures, [name for name in ranked if is_learned(name)])

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agents.evaluation.paired import Comparison, compare
+from agents.analysis.paired import Comparison, compare
 from agents.policies import REACTIVE_AGENTS, is_learned, is_privileged
 from agents.policies.base import PLANNERS
 

@@ -23,19 +23,19 @@ from typing import Any
 import gymnasium as gym
 
 import flownav_env  # noqa: F401  (registers the env ids in every worker that imports this module)
-from agents.common.interrupts import stop_signals_interrupt
-from agents.common.machine import code_version
-from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
-from agents.evaluation.episode import EpisodeRecord, run_episode
-from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, resume_plan
-from agents.evaluation.progress import EpisodeProgress, holdings_line
-from agents.evaluation.records import (
+from agents.analysis.records import (
     FRESH_FILE_HINT,
     append_record,
     episode_identity,
     read_episodes,
     repair_episodes_header,
 )
+from agents.common.interrupts import stop_signals_interrupt
+from agents.common.machine import code_version
+from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
+from agents.evaluation.episode import EpisodeRecord, run_episode
+from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, resume_plan
+from agents.evaluation.progress import EpisodeProgress, holdings_line
 from agents.policies import Agent, load_agent
 from agents.policies.agent_limits import AgentLimits, check_step_timeout
 from agents.policies.agent_process import IsolatedAgent, end_agent_processes

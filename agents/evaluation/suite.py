@@ -20,19 +20,19 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.over_seeds import episode_outcomes
+from agents.analysis.paired import seed_interval
+from agents.analysis.records import overwrite_hint, read_records, start_new_file
+from agents.analysis.statistics import runs_and_layouts_interval, wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of, suite_task, with_tier
 from agents.evaluation.learning_gain import learning_gains
-from agents.evaluation.over_seeds import episode_outcomes
-from agents.evaluation.paired import seed_interval
 from agents.evaluation.provenance import machine_summary
-from agents.evaluation.records import overwrite_hint, read_records, start_new_file
 from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import runs_and_layouts_interval, wilson_interval
 from agents.evaluation.suite_page import (
     beside_suite,
     rank_suite,

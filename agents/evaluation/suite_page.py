@@ -1,8 +1,8 @@
 """``suite.md``: the suite's leading table, per tier, with its ranking decided by paired tests
-(:mod:`agents.evaluation.paired`): values computed here, worded by ``templates/suite.md.j2``.
+(:mod:`agents.analysis.paired`): values computed here, worded by ``templates/suite.md.j2``.
 
 Privileged agents are listed apart as references; learned agents with fewer training seeds than
-:data:`~agents.evaluation.paired.MIN_RANKED_SEEDS` are provisional. Neither is ranked, named best, or decides a
+:data:`~agents.analysis.paired.MIN_RANKED_SEEDS` are provisional. Neither is ranked, named best, or decides a
 tier's headroom.
 """
 
@@ -14,14 +14,14 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.over_seeds import episode_outcomes
+from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
+from agents.analysis.records import read_records
 from agents.common.jinja_reports import render
 from agents.common.seeds import LANE_SEED_START
 from agents.evaluation.episode_tasks import with_tier
 from agents.evaluation.lane import LANE_DIR, lane_values
 from agents.evaluation.learning_gain import LearningGain
-from agents.evaluation.over_seeds import episode_outcomes
-from agents.evaluation.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
-from agents.evaluation.records import read_records
 from agents.evaluation.reference_chain import ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
 from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
@@ -57,7 +57,7 @@ def tier_failures(
 def rank_suite(
     table: Sequence[Mapping[str, Any]], failures: Mapping[str, Mapping[str, np.ndarray]]
 ) -> dict[str, TierRanking]:
-    """Each tier's :class:`~agents.evaluation.paired.TierRanking` of the agents in its rows; a tier with no rankable
+    """Each tier's :class:`~agents.analysis.paired.TierRanking` of the agents in its rows; a tier with no rankable
     agent flown (privileged or provisional agents only) has none."""
     rankings = {}
     for name, matrices in failures.items():

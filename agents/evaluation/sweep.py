@@ -16,24 +16,26 @@ Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from agents.common.folders import check_writable_folder
-from agents.common.locations import REPO_ROOT
-from agents.common.seeds import TEST_SEED_START
-from agents.common.yaml_config import field_range, load_config
-from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
-from agents.evaluation.records import (
+from agents.analysis.episode_record import EpisodeRow, PooledRow
+from agents.analysis.records import (
     drop_agents,
     overwrite_hint,
     read_episodes,
     read_records,
     start_new_file,
 )
+from agents.analysis.statistics import RUN_KEY, CellSummary, format_summary
+from agents.common.folders import check_writable_folder
+from agents.common.locations import REPO_ROOT
+from agents.common.seeds import TEST_SEED_START
+from agents.common.yaml_config import field_range, load_config
+from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import RUN_KEY, format_summary
 from agents.evaluation.sweep_report import (
     comparison_markdown,
     plot_collision_vs_error,
@@ -144,19 +146,19 @@ def seed_rotation(config: SweepConfig, agent: str) -> list[str]:
     return runs[: config.training_seeds] if config.training_seeds else runs
 
 
-def pool_seeds(rows: list[dict[str, Any]], agents: list[str]) -> list[dict[str, Any]]:
+def pool_seeds(rows: Sequence[EpisodeRow], agents: Sequence[str]) -> list[PooledRow]:
     """Rows with each training seed of a ``<learned>@all`` agent relabelled as that agent, so that a cell's
     rate pools its seeds."""
     pooled = {agent[: -len(ALL_SEEDS)] for agent in agents if agent.endswith(ALL_SEEDS)}
-    relabelled = []
+    relabelled: list[PooledRow] = []
     for row in rows:
         base, seed = split_agent_name(row["agent"])
-        pooled_row = {**row, "agent": base + ALL_SEEDS, RUN_KEY: row["agent"]}
-        relabelled.append(pooled_row if seed is not None and base in pooled else row)
+        pooled_row: PooledRow = {**row, "agent": base + ALL_SEEDS, RUN_KEY: row["agent"]}
+        relabelled.append(pooled_row if seed is not None and base in pooled else PooledRow(**row))
     return relabelled
 
 
-def pool_every_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def pool_every_seed(rows: Sequence[EpisodeRow]) -> list[PooledRow]:
     """:func:`pool_seeds` for episodes read without their sweep config: every learned agent flown by training
     seed (``ppo_flow@3``) is pooled as ``ppo_flow@all``, so that a rate is over its runs and layouts, never one
     seed's few layouts of a cell."""
@@ -209,7 +211,7 @@ def run_sweep(
     overwrite: bool = False,
     address: str | None = None,
     command: str = "flownav sweep",
-) -> list[dict[str, Any]]:
+) -> list[CellSummary]:
     """Fly every episode of the sweep in ``config_path`` not yet in ``<out>/sweep_episodes.csv``, then write
     ``sweep.csv``, ``collision_vs_error.png`` and ``sweep.md``; returns the summary table.
 
@@ -348,7 +350,7 @@ def _fly(config: SweepConfig, tasks: list[EpisodeTask], episodes_csv: Path, addr
     )
 
 
-def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Path) -> list[dict[str, Any]]:
+def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Path) -> list[PooledRow]:
     """The sweep's episodes in the CSV, each ``<learned>@all`` agent's seeds pooled."""
     episodes = read_episodes(episodes_csv)
     rows = pool_seeds(rows_of(tasks, episodes.rows), agents)
@@ -361,8 +363,8 @@ def _write_markdown(
     path: Path,
     config: SweepConfig,
     config_path: Path,
-    table: list[dict[str, Any]],
-    rows: list[dict[str, Any]],
+    table: Sequence[CellSummary],
+    rows: Sequence[EpisodeRow],
     agents: list[str],
     *,
     command: str,

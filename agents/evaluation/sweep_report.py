@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.statistics import CellSummary, format_summary, summarise
 from agents.common.machine import code_version
 from agents.evaluation.provenance import machine_summary
-from agents.evaluation.statistics import format_summary, summarise
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
@@ -38,7 +40,7 @@ SUMMARY_FIELDS = [
 ]
 
 
-def write_summary(rows: list[dict[str, Any]], path: Path) -> list[dict[str, Any]]:
+def write_summary(rows: Sequence[EpisodeRow], path: Path) -> list[CellSummary]:
     table = summarise(rows)
     with path.open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=SUMMARY_FIELDS)
@@ -68,7 +70,7 @@ FACTOR_AXIS_LABELS = {
 }
 
 
-def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], path: Path) -> None:
+def plot_collision_vs_error(table: Sequence[CellSummary], factors: list[str], path: Path) -> None:
     """A panel per factor: failure rate against level, a line per agent with its Wilson 95 % band shaded, and
     the collision rate dashed in the same colour (the gap between them is leaving the course or the time
     limit). The clean setting is drawn at each factor's neutral level; a sweep of no factors gets a bar per
@@ -113,7 +115,7 @@ def plot_collision_vs_error(table: list[dict[str, Any]], factors: list[str], pat
     plt.close(fig)
 
 
-def _clean_bars(clean: list[dict[str, Any]]) -> Figure:
+def _clean_bars(clean: Sequence[CellSummary]) -> Figure:
     """The figure of a clean-only sweep: one bar per agent, its failure rate with its interval, the
     collision rate marked."""
     import matplotlib.pyplot as plt  # heavy; the caller has chosen the Agg backend
@@ -136,7 +138,7 @@ def _clean_bars(clean: list[dict[str, Any]]) -> Figure:
     return fig
 
 
-def _plot_agent_line(ax: Axes, table: list[dict[str, Any]], agent: str, factor: str, neutral: float) -> None:
+def _plot_agent_line(ax: Axes, table: Sequence[CellSummary], agent: str, factor: str, neutral: float) -> None:
     """One agent's failure rate against the factor's level (its clean cell at ``neutral``), its interval
     shaded and its collision rate dashed; nothing where the agent has no cell."""
     points = [(neutral, r) for r in table if r["agent"] == agent and r["factor"] == "clean"]
@@ -156,7 +158,7 @@ def _plot_agent_line(ax: Axes, table: list[dict[str, Any]], agent: str, factor: 
     ax.plot(xs, [p[1]["collision_rate"] for p in points], linestyle="--", color=line.get_color())
 
 
-def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
+def pivot_markdown(table: Sequence[CellSummary], factor: str) -> str:
     """Failure rate [95 % CI] (collision rate) per agent (rows) and level (columns) of one factor, the clean
     run first."""
     agents = sorted({r["agent"] for r in table})
@@ -180,7 +182,7 @@ def pivot_markdown(table: list[dict[str, Any]], factor: str) -> str:
     return "\n".join(lines)
 
 
-def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]) -> str:
+def comparison_markdown(rows: Sequence[EpisodeRow], baseline_rows: Sequence[EpisodeRow]) -> str:
     """Collision rate per cell (rows) and agent (columns), beside the same cell of a baseline sweep, and per
     agent the share of the seeds flown in both whose episode ended the same way (collision or not): rates can
     agree while single episodes differ, e.g. on another renderer."""
@@ -210,7 +212,7 @@ def comparison_markdown(rows: list[dict[str, Any]], baseline_rows: list[dict[str
 
 
 def _same_outcomes(
-    rows: list[dict[str, Any]], baseline_rows: list[dict[str, Any]]
+    rows: Sequence[EpisodeRow], baseline_rows: Sequence[EpisodeRow]
 ) -> dict[tuple[str, str, float], list[bool]]:
     """Per (agent, factor, level), for each seed flown in both sweeps, whether it collided in both or in
     neither."""
@@ -228,14 +230,14 @@ def _same_outcomes(
 
 
 def _episodes_range(
-    cells: dict[tuple[str, str, float], dict[str, Any]], agents: list[str], factor: str, level: float
+    cells: Mapping[tuple[str, str, float], CellSummary], agents: list[str], factor: str, level: float
 ) -> str:
     """The episodes of a (factor, level)'s cells: one count, or the fewest–most where agents differ."""
     counts = sorted({cells[(a, factor, level)]["episodes"] for a in agents if (a, factor, level) in cells})
     return str(counts[0]) if len(counts) == 1 else f"{counts[0]}–{counts[-1]}"
 
 
-def _collision_rate(row: dict[str, Any] | None) -> str:
+def _collision_rate(row: CellSummary | None) -> str:
     return "–" if row is None else f"{row['collision_rate']:.2f}"
 
 
@@ -244,7 +246,7 @@ def _agreement_share(same: list[bool] | None) -> str:
 
 
 def partial_lines(
-    table: list[dict[str, Any]], episodes_per_cell: int | None, expected_cells: int | None = None
+    table: Sequence[CellSummary], episodes_per_cell: int | None, expected_cells: int | None = None
 ) -> list[str]:
     """A warning for ``sweep.md`` while some cell has fewer than ``episodes_per_cell`` episodes, or fewer
     than ``expected_cells`` cells (the config's) have any (none when every cell is complete, or nothing is
@@ -268,7 +270,7 @@ def partial_lines(
 
 def write_report(
     path: Path,
-    table: list[dict[str, Any]],
+    table: Sequence[CellSummary],
     config_path: Path,
     command: str,
     minutes: float | None,

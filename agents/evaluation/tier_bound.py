@@ -12,8 +12,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.evaluation.paired import compare
-from agents.evaluation.statistics import wilson_interval
+from agents.analysis.paired import compare
+from agents.analysis.statistics import wilson_interval
 from agents.policies.planner_feasibility import corridor_exists
 from flownav_env.privileged import COURSE_INFO_FIELDS
 from flownav_env.tiers import SUITE_VERSION, tier

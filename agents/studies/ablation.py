@@ -19,6 +19,10 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import failure, runs_failure
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
@@ -32,11 +36,8 @@ from agents.evaluation.episode_tasks import (
     rows_of,
     set_aside_stale_episodes,
 )
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.policies.base import REACTIVE_AGENTS
-from agents.studies.error_analysis import failure, runs_failure
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
@@ -199,8 +200,8 @@ def _fly_config(
         by_seed = {int(r["seed"]): r for r in flown}
         outcomes.append([bool(by_seed[t.seed]["success"]) for t in tasks])
         per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
-        for key in counts:
-            counts[key] += sum(bool(r[key]) for r in flown)
+        counts["collision"] += sum(r["collision"] for r in flown)
+        counts["out_of_bounds"] += sum(r["out_of_bounds"] for r in flown)
         evaluations = _evaluations_file(files)
         if evaluations is not None:
             curves.setdefault(name, {})[f"seed {seed}"] = evaluations
@@ -269,7 +270,7 @@ def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[st
 
 def _fly(
     tasks: list[EpisodeTask], csv_path: Path, workers: int, report_only: bool, description: str
-) -> list[dict[str, Any]]:
+) -> list[EpisodeRow]:
     """Fly ``tasks`` into ``csv_path`` (resumably; nothing with ``report_only``) and return their records."""
     csv_path.parent.mkdir(parents=True, exist_ok=True)
     if not report_only:
@@ -277,7 +278,7 @@ def _fly(
     return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
 
 
-def _reference_row(agent: str, flown: list[dict[str, Any]]) -> dict[str, Any]:
+def _reference_row(agent: str, flown: Sequence[EpisodeRow]) -> dict[str, Any]:
     """A reactive reference agent's row: one run, a Wilson interval over its layouts."""
     rate, low, high, total = failure(flown)
     return {

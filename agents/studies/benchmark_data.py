@@ -12,7 +12,7 @@ import csv
 import functools
 import json
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,12 +20,14 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.analysis.episode_record import EpisodeRow, PooledRow, is_flow_agent
+from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
+from agents.analysis.paired import Comparison, compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import failure, runs_failure
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import summarise_runs
-from agents.evaluation.over_seeds import LAYOUT_BLOCK, episode_outcomes
-from agents.evaluation.paired import Comparison, compare
-from agents.evaluation.records import read_records
 from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
@@ -35,13 +37,7 @@ from agents.policies.base import (
     REACTIVE_AGENTS,
     split_agent_name,
 )
-from agents.studies.error_analysis import (
-    baseline_of_flown_runs,
-    failure,
-    is_flow_agent,
-    runs_failure,
-    tolerance_table,
-)
+from agents.studies.error_analysis import baseline_of_flown_runs, tolerance_table
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
@@ -134,7 +130,7 @@ class BenchmarkData:
     training: dict[str, Training]
     block: int = LAYOUT_BLOCK
     # Per agent (base name), its failures on the leading table's layouts, (runs, layouts): what two agents are
-    # compared by (agents.evaluation.paired).
+    # compared by (agents.analysis.paired).
     failures: dict[str, np.ndarray] = field(default_factory=dict)
     # Per sweep agent (its sweep name), its clean failure on the leading table's layouts over the training runs
     # the sweep flew: what a sweep cell's rise is measured from.
@@ -187,12 +183,12 @@ def require(path: Path) -> Path:
     return path
 
 
-def _rate(rows: Sequence[Mapping[str, Any]]) -> Rate:
+def _rate(rows: Sequence[EpisodeRow]) -> Rate:
     """Failure over ``rows``: Wilson for one run, over runs and layouts for pooled ones."""
     return Rate(*failure(rows))
 
 
-def _rates_per_agent(rows: Sequence[Mapping[str, Any]]) -> dict[str, Rate]:
+def _rates_per_agent(rows: Sequence[EpisodeRow]) -> dict[str, Rate]:
     return {
         agent: _rate([r for r in rows if r["agent"] == agent]) for agent in sorted({r["agent"] for r in rows})
     }
@@ -229,7 +225,7 @@ def _seed_rows(results: Path) -> list[dict[str, Any]]:
 def _sweep(results: Path) -> dict[str, Any]:
     flown = read_records(require(results / "sweep_episodes.csv"))
     rows = pool_every_seed(flown)
-    cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
+    cells: dict[tuple[str, str, float], list[PooledRow]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
     baseline = pool_every_seed(baseline_of_flown_runs(read_records(results / "leaderboard_episodes.csv"), flown))

@@ -14,14 +14,15 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.episode_record import is_flow_agent
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import rate
+from agents.common.locations import CONFIGS_DIR, REPO_ROOT
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
 from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
 from agents.studies.benchmark_sweep import sweep_values
-from agents.studies.error_analysis import is_flow_agent
 from agents.studies.wording import display_name, join_words, render_report, span
 from flownav_env.settings import EnvSettings
 
@@ -234,7 +235,21 @@ def setup_values(data: BenchmarkData) -> Values:
         "stage1": data.training[c.winner].init_config or {},
         "stage2": data.training[c.winner].config,
         "train_seeds": seeds,
+        "train_configs": {agent: _training_config(agent) for agent in seeds},
     }
+
+
+def _training_config(agent: str) -> str:
+    """The training config of a shipped learned agent as the repository holds it: ``configs/<agent>.yaml``, or
+    under ``configs/experiments/`` for a recipe of the lever search.
+
+    Raises:
+        FileNotFoundError: neither exists.
+    """
+    for folder in (CONFIGS_DIR, CONFIGS_DIR / "experiments"):
+        if (folder / f"{agent}.yaml").exists():
+            return (folder / f"{agent}.yaml").relative_to(REPO_ROOT).as_posix()
+    raise FileNotFoundError(f"no training config for {agent!r} in configs/ or configs/experiments/")
 
 
 def report_values(data: BenchmarkData) -> Values:

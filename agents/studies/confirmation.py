@@ -16,16 +16,16 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.over_seeds import success_outcomes
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import runs_and_layouts_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
-from agents.evaluation.over_seeds import success_outcomes
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import seeded_agent_name, trained_seeds
 from agents.studies.benchmark_data import choices, seed_failures
 from agents.studies.wording import render_report
@@ -108,7 +108,7 @@ def flown_agents(policies_dir: Path = POLICIES_DIR) -> tuple[str, ...]:
 
 def paired_difference(first: np.ndarray, second: np.ndarray) -> tuple[float, float, float]:
     """Failure of ``first`` minus ``second`` (both runs × the same layouts) with its 95 % interval, from the
-    paired test (:func:`agents.evaluation.paired.compare`: layouts drawn once for both, each one's training
+    paired test (:func:`agents.analysis.paired.compare`: layouts drawn once for both, each one's training
     runs apart)."""
     found = compare("first", first, "second", second)
     return found.difference, found.low, found.high

@@ -6,20 +6,18 @@ and one dose-response model per agent that pools every factor and level.
   clean one (none when twice the clean rate would exceed 1), and the first level whose interval lies wholly
   above the clean one (it breaks). The clean rate is the 300-layout clean table's where the agent has one.
   Intervals are over training runs and layouts for a learned agent pooled over its seeds, Wilson otherwise.
-- **Dose-response** (:mod:`agents.studies.dose_response`): failure against each cell's measured depth quality.
+- **Dose-response** (:mod:`agents.analysis.dose_response`): failure against each cell's measured depth quality.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
-
-from agents.evaluation.statistics import failure_interval, runs_and_layouts_interval, wilson_interval
+from agents.analysis.episode_record import EpisodeRow, is_flow_agent
+from agents.analysis.statistics import failure
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -33,10 +31,6 @@ THESIS_VERDICTS = {
     "translation_error": "a band close to a direct 2–10 % variation",
 }
 NOT_TESTED = "not tested"
-# Factors that change the task itself (how fast, how cluttered, how visible), not what the drone is told or
-# estimates: "they matter beyond depth quality" would be true of them by construction, so the dose-response
-# fits and their test use the sensor factors only.
-TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
 
 
 def neutral_level(factor: str) -> float:
@@ -48,31 +42,12 @@ def neutral_level(factor: str) -> float:
     return float(defaults[factor])
 
 
-def failure(rows: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, int]:
-    """Failure rate, its 95 % interval (over training runs too where the rows pool several:
-    :func:`~agents.evaluation.statistics.failure_interval`) and the episodes."""
-    n = len(rows)
-    failures = sum(not bool(r["success"]) for r in rows)
-    low, high = failure_interval(rows)
-    return failures / n, low, high, n
-
-
-def runs_failure(successes: np.ndarray) -> tuple[float, float, float]:
-    """Failure over runs × layouts (``successes``: a row of 0/1 per run, every run on the same layouts) and its
-    95 % interval: a two-level bootstrap from two runs on (as ``flownav ablation``), Wilson's for one run."""
-    if len(successes) > 1:
-        low, high = runs_and_layouts_interval(successes)
-    else:
-        low, high = wilson_interval(int(successes.sum()), successes.size)
-    return float(1 - successes.mean()), 1 - high, 1 - low
-
-
 BASELINE_SOURCE = "the 300-layout clean table"
 SWEEP_CLEAN_SOURCE = "the sweep's clean cell"
 
 
 def tolerance_table(
-    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
 ) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
     inside the clean interval, the first level at which the failure rate doubles, the first level at which it
@@ -86,7 +61,7 @@ def tolerance_table(
     that fails less than clean is no harm); scanning outward from the neutral level, the tolerated level is
     the last one before the first level above it.
     """
-    cells: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    cells: dict[tuple[str, str, float], list[EpisodeRow]] = {}
     for row in rows:
         cells.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
     clean_rows = _clean_rows(cells, baseline)
@@ -108,7 +83,7 @@ def tolerance_table(
 
 
 def _factor_rows(
-    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]],
+    cells: Mapping[tuple[str, str, float], list[EpisodeRow]],
     agent: str,
     factor: str,
     clean_fields: Mapping[str, Any],
@@ -131,8 +106,8 @@ def _factor_rows(
 
 
 def baseline_of_flown_runs(
-    baseline: Sequence[dict[str, Any]], flown: Sequence[Mapping[str, Any]]
-) -> list[dict[str, Any]]:
+    baseline: Sequence[EpisodeRow], flown: Sequence[EpisodeRow]
+) -> list[EpisodeRow]:
     """The ``baseline`` episodes (the clean table's, not yet pooled) of the runs ``flown`` holds, by their names
     (``ppo_flow@3``): a sweep cell's rise is over the clean rate of the training runs that flew it, and a
     learned agent may have shipped more seeds since, which join the clean table but not a committed sweep."""
@@ -141,11 +116,11 @@ def baseline_of_flown_runs(
 
 
 def _clean_rows(
-    cells: Mapping[tuple[str, str, float], list[Mapping[str, Any]]], baseline: Sequence[Mapping[str, Any]]
-) -> dict[str, tuple[list[Mapping[str, Any]], str]]:
+    cells: Mapping[tuple[str, str, float], list[EpisodeRow]], baseline: Sequence[EpisodeRow]
+) -> dict[str, tuple[list[EpisodeRow], str]]:
     """Per agent, its clean episodes and where they come from: the baseline's where it has any, else the
     sweep's clean cell; agents with neither are absent."""
-    clean_rows: dict[str, tuple[list[Mapping[str, Any]], str]] = {}
+    clean_rows: dict[str, tuple[list[EpisodeRow], str]] = {}
     for row in baseline:
         if row["factor"] == "clean":
             clean_rows.setdefault(row["agent"], ([], BASELINE_SOURCE))[0].append(row)
@@ -157,7 +132,7 @@ def _clean_rows(
 
 def _scan_outward(
     levels: Sequence[float],
-    cell_rows: Sequence[Sequence[Mapping[str, Any]]],
+    cell_rows: Sequence[Sequence[EpisodeRow]],
     neutral: float,
     clean_fields: Mapping[str, Any],
 ) -> dict[str, Any]:
@@ -208,21 +183,6 @@ def unbroken_kind(row: Mapping[str, Any]) -> str:
     if end is not None and math.isclose(row["levels"][-1], end):
         return "end"
     return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
-
-
-# Agents that never read the depth histogram: their failures cannot respond to depth quality.
-BLIND_AGENTS = ("straight",)
-
-
-def is_flow_agent(row: Mapping[str, Any]) -> bool:
-    """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not
-    an agent blind to the histogram)."""
-    if base_agent_name(row["agent"]) in BLIND_AGENTS:
-        return False
-    settings = row.get("env_kwargs") or ""
-    if settings:
-        return json.loads(settings).get("obs_source", "flow") == "flow"
-    return "oracle" not in str(row["agent"])
 
 
 def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:

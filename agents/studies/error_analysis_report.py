@@ -10,26 +10,27 @@ from typing import Any
 
 import numpy as np
 
-from agents.common.folders import check_writable_folder
-from agents.common.tables import today
-from agents.evaluation.records import read_records
-from agents.evaluation.sweep import pool_every_seed
-from agents.studies.dose_response import (
+from agents.analysis.dose_response import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
+    TASK_FACTORS,
     cell_quality,
     dose_curve,
     dose_features,
     fit_every_flow_agent,
 )
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.records import read_records
+from agents.analysis.weaving import turning_and_rotation_error
+from agents.common.folders import check_writable_folder
+from agents.common.tables import today
+from agents.evaluation.sweep import pool_every_seed
 from agents.studies.error_analysis import (
-    TASK_FACTORS,
     baseline_of_flown_runs,
     best_learned_flow_agent,
     tolerance_table,
     unbroken_kind,
 )
-from agents.studies.weaving import turning_and_rotation_error
 from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 
@@ -39,7 +40,7 @@ def _range_text(row: Mapping[str, Any]) -> str:
 
 
 def plot_dose_response(
-    rows: Sequence[Mapping[str, Any]],
+    rows: Sequence[EpisodeRow],
     fits: Mapping[str, Mapping[str, Any]],
     quality: Mapping[tuple[str, float], Mapping[str, Any]],
     path: Path,
@@ -100,7 +101,7 @@ def plot_dose_response(
 
 
 def report_values(
-    rows: Sequence[Mapping[str, Any]], baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
 ) -> dict[str, Any]:
     """Every value of ``templates/error_analysis.md.j2`` from a sweep's episodes (``rows``) and the clean table's
     (``baseline``), the fits among them."""
@@ -135,7 +136,7 @@ def report_values(
 
 
 def write_error_analysis(
-    rows: Sequence[Mapping[str, Any]], out: Path, command: str, baseline: Sequence[Mapping[str, Any]] = ()
+    rows: Sequence[EpisodeRow], out: Path, command: str, baseline: Sequence[EpisodeRow] = ()
 ) -> list[str]:
     """Write ``error_analysis.md`` and ``dose_response.png`` into ``out``; returns the report's lines.
     ``baseline``: the clean table's episodes, the breaking points' reference where an agent has them."""
@@ -168,6 +169,5 @@ def write_error_analysis_from(
         raise ValueError(f"--episodes {episodes} holds no readable episode")
     if baseline is not None and not Path(baseline).is_file():
         raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
-    clean = baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline is not None else []
-    clean = pool_every_seed(clean)
+    clean = pool_every_seed(baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline else [])
     return write_error_analysis(rows, out, command, clean)

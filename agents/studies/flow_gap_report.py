@@ -3,7 +3,7 @@
 The thesis's question for a learned policy is the gap between the same recipe trained on the estimator's depths
 and on the true depths at the same tracked points. Two recipes answer it: the plain one (``ppo_flow`` against
 ``ppo_oracle``) and the lever search's pick against its recipe on true depths. Each gap is paired by layout
-(:func:`agents.evaluation.paired.compare`): every training seed of both agents flew the same layouts, the
+(:func:`agents.analysis.paired.compare`): every training seed of both agents flew the same layouts, the
 interval resamples training seeds (each agent's apart) and layouts (once for both). The sources are the
 confirmation flights on fresh validation layouts (``results/confirmation/``), the suite's frozen test layouts
 (``results/suite_v1/suite_episodes.csv``, suite v1) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
@@ -18,13 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.over_seeds import episode_outcomes
+from agents.analysis.paired import Comparison, compare, verdict
+from agents.analysis.records import read_records
+from agents.analysis.statistics import runs_failure
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
 from agents.common.tables import markdown_table, today
-from agents.evaluation.over_seeds import episode_outcomes
-from agents.evaluation.paired import Comparison, compare, verdict
-from agents.evaluation.records import read_records
 from agents.evaluation.suite import EPISODES_CSV, SUITE_RESULTS_FOLDERS
 from agents.policies import is_learned, shipped_seed_runs
 from agents.studies.benchmark_data import BenchmarkData, Rate, choices, load_benchmark_data
@@ -40,7 +41,6 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
-from agents.studies.error_analysis import runs_failure
 from agents.studies.wording import render_report
 from flownav_env.tiers import TIER_NAMES
 

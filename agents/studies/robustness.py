@@ -28,17 +28,19 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.dose_response import TASK_FACTORS
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.records import read_records
+from agents.analysis.statistics import summarise
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import rows_of
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_every_seed
 from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
 from agents.policies.base import is_learned, split_agent_name
-from agents.studies.error_analysis import TASK_FACTORS, neutral_level, tolerance_table
+from agents.studies.error_analysis import neutral_level, tolerance_table
 from agents.studies.wording import render_report
 
 SWEEP_CONFIG = REPO_ROOT / "configs" / "sweep.yaml"
@@ -92,7 +94,7 @@ def curve_area(points: Sequence[tuple[float, float]]) -> float:
 
 
 def summarise_curves(
-    table: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+    table: Sequence[Mapping[str, Any]], rows: Sequence[EpisodeRow]
 ) -> list[dict[str, Any]]:
     """Per agent, factor and side of the neutral level: the area under its curve and where it breaks."""
     summary = []

@@ -15,12 +15,12 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.records import read_records
 from agents.common.folders import copy_atomically, write_text_atomically
 from agents.common.manifest import record_in_manifest
 from agents.common.saved_models import latest_checkpoint
 from agents.common.seeds import checkpoint_selection_seed
 from agents.evaluation.episode_tasks import EpisodeTask, cached_file_sha256, rows_of, set_aside_stale_episodes
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.training.outputs import RunFiles
 

@@ -17,12 +17,13 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import wilson_interval
 from agents.common.folders import write_text_atomically
 from agents.common.jinja_reports import render
 from agents.common.seeds import SUITE_V2_CHECK_SEED_START, SUITE_V2_SENSOR_READING_SEED_START
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
-from agents.evaluation.statistics import wilson_interval
 from flownav_env import sensor_specs
 from flownav_env.tiers import (
     CAPSULE_RADIUS_M,
@@ -52,7 +53,7 @@ def sensitivity_file(agent: str, env_id: str, reading: str, tau: float) -> str:
 PAGE = "calibration.md"
 
 
-def _episodes(path: Path) -> list[dict[str, Any]]:
+def _episodes(path: Path) -> list[EpisodeRow]:
     return [row for row in read_records(path) if row.get("seed") is not None]
 
 

@@ -22,17 +22,18 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.paired import compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import failure
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
-from agents.evaluation.paired import compare
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
-from agents.studies.error_analysis import failure
 from agents.studies.wording import render_report
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES
 from flownav_env.tiers import tier as tier_of_version
@@ -123,9 +124,9 @@ def calibration_tasks(
     return tasks
 
 
-def failure_table(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def failure_table(rows: Sequence[EpisodeRow]) -> list[dict[str, Any]]:
     """Failure rate with its 95 % interval (Wilson: each agent is one run here) per (factor, agent)."""
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    groups: dict[tuple[str, str], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
     fields = ("failure_rate", "failure_low", "failure_high", "episodes")
@@ -164,9 +165,9 @@ def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | 
     return dict(chosen), best
 
 
-def separated_pairs(episodes: Sequence[Mapping[str, Any]]) -> tuple[int, int]:
+def separated_pairs(episodes: Sequence[EpisodeRow]) -> tuple[int, int]:
     """(pairs of agents a paired test tells apart, all pairs) among the ``episodes`` of one factor: each pair
-    compared on the layouts both flew, paired by layout (:func:`agents.evaluation.paired.compare`), apart where
+    compared on the layouts both flew, paired by layout (:func:`agents.analysis.paired.compare`), apart where
     the 95 % interval of the difference excludes zero."""
     failures: dict[str, dict[int, float]] = {}
     for row in episodes:

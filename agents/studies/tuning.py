@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.analysis.paired import Comparison, compare
+from agents.analysis.records import start_new_file
 from agents.common.folders import check_writable_folder
-from agents.evaluation.paired import Comparison, compare
-from agents.evaluation.records import start_new_file
 from agents.studies.perf.report_kit import saved_figure
 from agents.studies.tuning_study import (
     MIN_FINAL_EPISODES,
@@ -130,7 +130,7 @@ def tune(
 
 def comparison(result: TuningResult) -> Comparison | None:
     """The winner against the defaults on the final layouts both flew, paired by layout
-    (:func:`agents.evaluation.paired.compare`); None where the defaults won."""
+    (:func:`agents.analysis.paired.compare`); None where the defaults won."""
     if result.winner.number == 0:
         return None
     winner, defaults = (np.array([trial.failures]) for trial in (result.winner, result.defaults))

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.records import read_records
+from agents.analysis.statistics import CellSummary, summarise
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 from agents.policies import BeeAgent, BeeRobustAgent, VFHAgent
 
 # name -> (low, high, log scale). Written once: the study, the report and the tests read it from here. A
@@ -104,11 +104,11 @@ class Budget:
 @dataclass(frozen=True)
 class TrialResult:
     """One trial's gains and what its episodes came to in one stage (a row of
-    :func:`~agents.evaluation.statistics.summarise`: failure, success, collision rates with their intervals)."""
+    :func:`~agents.analysis.statistics.summarise`: failure, success, collision rates with their intervals)."""
 
     number: int
     params: dict[str, float]
-    summary: dict[str, Any]
+    summary: CellSummary
     # Failure (1) or not per layout, in seed order: what two finalists on the same layouts are paired by.
     failures: tuple[float, ...] = ()
 
@@ -165,7 +165,7 @@ def trial_tasks(
     ]
 
 
-def stage_summary(tasks: list[EpisodeTask], csv_path: Path) -> dict[str, Any]:
+def stage_summary(tasks: list[EpisodeTask], csv_path: Path) -> CellSummary:
     """The summary row of these tasks' episodes (only theirs: the CSV may hold other trials and stages).
 
     Raises:

@@ -7,11 +7,11 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+from agents.analysis.dose_response import format_p
+from agents.analysis.paired import provisional_note
 from agents.common.jinja_reports import environment, render
-from agents.evaluation.paired import provisional_note
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import choices
-from agents.studies.dose_response import format_p
 
 PACKAGE = "agents.studies"
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from agents.evaluation.records import read_records
-from agents.evaluation.statistics import wilson_interval
+from agents.analysis.records import read_records
+from agents.analysis.statistics import wilson_interval
 
 HERE = Path(__file__).parent
 AGENTS = ("planner", "planner_camera", "planner_camera_observed")

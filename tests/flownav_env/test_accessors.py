@@ -61,8 +61,13 @@ def test_stage_times_add_up_within_the_step(env) -> None:
         np.testing.assert_array_equal(untimed.last_frame, env.last_frame)
     finally:
         untimed.close()
+    # A reset times its first frame and estimate too.
+    before = times.snapshot()
+    env.reset(seed=1)
+    assert all(times.snapshot()[stage] > before[stage] for stage in ("render", "estimator"))
 
 
 def test_stage_times_refuse_an_unknown_stage() -> None:
     with pytest.raises(ValueError, match="stage must be one of physics, render, estimator, ground_truth"):
-        StageTimes().timed("policy", print)
+        with StageTimes().stage("policy"):
+            pass

@@ -137,11 +137,11 @@ def test_version_and_scratch_defaults_of_report_writers(capsys) -> None:
 
 def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypatch, capsys) -> None:
     # The runner is replaced by one that writes made-up records: the table's shape is under test, not flying.
+    from agents.analysis.records import append_record
     from agents.cli import main
     from agents.common.locations import RESULTS_DIR
     from agents.evaluation import runner
     from agents.evaluation.episode import EpisodeRecord
-    from agents.evaluation.records import append_record
 
     def made_up(tasks, csv_path, **kwargs) -> int:
         for task in tasks:
@@ -177,8 +177,8 @@ def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypa
 
 
 def test_demo_keeps_factor_and_level_columns_that_differ() -> None:
+    from agents.analysis.statistics import summarise
     from agents.cli.demo import demo_report
-    from agents.evaluation.statistics import summarise
 
     rows = [
         {"agent": "bee", "factor": factor, "level": level, "seed": seed, "collision": False, "success": True}

@@ -116,7 +116,7 @@ def test_evaluate_unpickles_a_bare_policy_zip_only_with_trust_pickle(
 ) -> None:
     import shutil
 
-    from agents.evaluation.records import read_records
+    from agents.analysis.records import read_records
 
     bare = tmp_path / "bare.zip"  # no training config beside it: only PPO.load (unpickling) can read it
     shutil.copy(RESULTS_DIR / "policies" / "ppo_flow" / "seed_0.zip", bare)

@@ -7,8 +7,8 @@ import re
 
 import pytest
 
+from agents.analysis.records import FRESH_FILE_HINT, OVERWRITE_HINT, overwrite_hint, predates_identities
 from agents.cli import build_parser
-from agents.evaluation.records import FRESH_FILE_HINT, OVERWRITE_HINT, overwrite_hint, predates_identities
 from agents.evaluation.sweep import SWEEP_REMEDY
 from agents.policies.agent_limits import timeout_message
 

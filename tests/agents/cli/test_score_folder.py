@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.csv_file import CHECKSUM_FIELD, csv_header, sealed_line
+from agents.analysis.records import read_episodes, read_records
 from agents.cli import main
 from agents.common.seeds import suite_seeds
-from agents.evaluation.csv_file import CHECKSUM_FIELD, csv_header, sealed_line
-from agents.evaluation.records import read_episodes, read_records
 from agents.evaluation.suite import EPISODES_CSV
 from flownav_env.tiers import SUITE_VERSION
 

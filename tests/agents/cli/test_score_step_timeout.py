@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import suite_seeds
 from agents.evaluation.claims import claims_path
-from agents.evaluation.records import read_records
 from agents.evaluation.suite import EPISODES_CSV
 
 HANGING_AGENTS = (

@@ -13,6 +13,9 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.csv_file import LINE_END
+from agents.analysis.records import append_record, episode_identity, read_episodes
+from agents.analysis.statistics import summarise
 from agents.common.seeds import TEST_SEED_START
 from agents.evaluation import claims
 from agents.evaluation.claims import (
@@ -24,12 +27,9 @@ from agents.evaluation.claims import (
     identity_digest,
     release_claims,
 )
-from agents.evaluation.csv_file import LINE_END
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask
-from agents.evaluation.records import append_record, episode_identity, read_episodes
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 
 SMALL = (("camera_height", 72), ("camera_width", 96))
 TASKS = [EpisodeTask("straight", "clean", 0.0, TEST_SEED_START + k, "FlowNavSingle-v0", SMALL) for k in range(4)]

@@ -9,11 +9,11 @@ import pytest
 import yaml
 
 import flownav_env  # noqa: F401
+from agents.analysis.records import drop_agents, read_records
+from agents.analysis.statistics import wilson_interval
 from agents.common.seeds import TEST_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks
-from agents.evaluation.records import drop_agents, read_records
 from agents.evaluation.runner import execute, run_task
-from agents.evaluation.statistics import wilson_interval
 from agents.policies import agent_env_kwargs
 
 SMALL = {"camera_width": 96, "camera_height": 72}

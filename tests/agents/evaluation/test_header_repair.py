@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.records import append_record, read_episodes, repair_episodes_header
 from agents.evaluation.episode import EpisodeRecord
-from agents.evaluation.records import append_record, read_episodes, repair_episodes_header
 
 
 def record(seed: int) -> EpisodeRecord:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.records import read_records
 from agents.cli import main
-from agents.evaluation.records import read_records
 from agents.evaluation.suite_report import plot_label, plot_suite, read_included, read_suite_csv
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from helpers import EPISODE
 
+from agents.analysis.records import append_record
 from agents.evaluation.lane import lane_edge, lane_values
-from agents.evaluation.records import append_record
 from agents.evaluation.suite_page import beside_suite, suite_page, suite_values
 from flownav_env.tiers import TIERS, tier_value
 

@@ -8,6 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from agents.analysis.over_seeds import (
+    block_scores,
+    interval_estimates,
+    probability_of_improvement,
+    run_rates,
+    success_outcomes,
+)
+from agents.analysis.statistics import runs_and_layouts_interval
 from agents.evaluation.leaderboard import (
     against_best_reactive,
     improvements,
@@ -16,14 +24,6 @@ from agents.evaluation.leaderboard import (
     report_lines,
     summarise_runs,
 )
-from agents.evaluation.over_seeds import (
-    block_scores,
-    interval_estimates,
-    probability_of_improvement,
-    run_rates,
-    success_outcomes,
-)
-from agents.evaluation.statistics import runs_and_layouts_interval
 from agents.policies import (
     REACTIVE_AGENTS,
     is_learned,
@@ -206,7 +206,7 @@ def test_the_command_refuses_bad_input_before_flying(
 
 
 def test_layouts_are_resampled_once_for_all_the_runs_that_flew_them() -> None:
-    from agents.evaluation.statistics import wilson_interval
+    from agents.analysis.statistics import wilson_interval
 
     # Five runs that agree layout by layout know no more than one run does: a hard layout is hard for all.
     shared = (np.random.default_rng(3).random(300) < 0.7).astype(float)

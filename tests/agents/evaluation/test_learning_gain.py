@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.analysis.paired import rank_tier
 from agents.evaluation.learning_gain import learning_gain, learning_gains
-from agents.evaluation.paired import rank_tier
 
 
 def _failures(rng: np.random.Generator) -> dict[str, np.ndarray]:

@@ -11,13 +11,13 @@ import pytest
 from helpers import with_other_defaults
 
 import flownav_env  # noqa: F401
+from agents.analysis.csv_file import LEGACY_FIELDS
+from agents.analysis.records import OVERWRITE_HINT, append_record, read_episodes, read_records
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import TEST_SEED_START
 from agents.evaluation import runner
-from agents.evaluation.csv_file import LEGACY_FIELDS
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks
-from agents.evaluation.records import OVERWRITE_HINT, append_record, read_episodes, read_records
 from agents.evaluation.runner import EpisodesInterrupted, execute
 from flownav_env.limits import episode_step_limit
 

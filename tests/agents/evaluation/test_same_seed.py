@@ -7,7 +7,8 @@ purpose (the controller on plain floats rounds differently, and the backward LK 
 track's origin), again when capsules got a coarser mesh for faster rendering, and again when the camera's near
 plane moved from 1.22 m to 5 cm (near capsules had rendered hollow), and when the bee was re-tuned after that
 (2026-12-02), so the file was flown again each time, with the same tasks as below (see CHANGELOG.md);
-it was flown once more when episodes gained ``mean_depth_outlier_share``, every other value unchanged.
+it was flown once more when episodes gained ``mean_depth_outlier_share``, every other value unchanged, and again when
+``path_length_m`` began to count the first step (from reset's position; the rules' other values unchanged).
 The physics, rendering, estimator and policies are deterministic for a seed on one machine, so any difference
 is a change of behaviour; across CPUs only the last bits of float sums may differ (see below). A deliberate change of behaviour regenerates the file
 (``record_same_seed_episodes`` below) and says so in CHANGELOG.md.

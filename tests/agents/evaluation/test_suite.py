@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.records import append_record, read_records
 from agents.cli import main
 from agents.common.seeds import (
     CONFIRMATION_SEED_START,
@@ -21,7 +22,6 @@ from agents.common.seeds import (
     suite_seeds,
 )
 from agents.evaluation.episode import EpisodeRecord
-from agents.evaluation.records import append_record, read_records
 from agents.evaluation.suite import (
     RUNS_INTERVAL,
     SUMMARY_COLUMNS,

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from agents.analysis.paired import MIN_RANKED_SEEDS
 from agents.common.seeds import suite_seeds
-from agents.evaluation.paired import MIN_RANKED_SEEDS
 from agents.evaluation.suite_page import (
     STUDENT_RECIPES_DIR,
     rank_suite,
@@ -175,7 +175,7 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
 
     from helpers import EPISODE
 
-    from agents.evaluation.records import append_record
+    from agents.analysis.records import append_record
     from agents.evaluation.suite_page import retired_values
     from agents.policies import RETIRED_AGENTS
 

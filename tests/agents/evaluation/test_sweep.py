@@ -9,10 +9,10 @@ import pytest
 import yaml
 
 import flownav_env  # noqa: F401
+from agents.analysis.records import read_records
+from agents.analysis.statistics import summarise
 from agents.common.yaml_config import ConfigError, load_config
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import execute
-from agents.evaluation.statistics import summarise
 from agents.evaluation.sweep import SweepConfig, build_tasks, pool_every_seed, pool_seeds, seed_rotation
 
 SMALL = {"camera_width": 96, "camera_height": 72}
@@ -184,8 +184,8 @@ def test_report_only_rebuilds_the_committed_sweep_from_its_pre_identity_csv(tmp_
 
 
 def test_a_sweep_into_a_pre_identity_csv_is_refused_until_overwrite(tmp_path: Path, capsys) -> None:
+    from agents.analysis.csv_file import LEGACY_FIELDS
     from agents.cli import main
-    from agents.evaluation.csv_file import LEGACY_FIELDS
 
     out = tmp_path / "out"
     out.mkdir()

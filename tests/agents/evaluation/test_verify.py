@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.csv_file import sealed_line
+from agents.analysis.statistics import wilson_interval
 from agents.cli import main
 from agents.common.seeds import suite_seeds
-from agents.evaluation.csv_file import sealed_line
-from agents.evaluation.statistics import wilson_interval
 from agents.evaluation.suite_report import OUTCOMES
 from agents.evaluation.verification_record import VERIFICATION_JSON, verification_mark
 from agents.evaluation.verify import Verification

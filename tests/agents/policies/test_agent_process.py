@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import suite_seeds
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, suite_task
-from agents.evaluation.records import read_records
 from agents.evaluation.runner import flown_settings
 from agents.evaluation.suite import EPISODES_CSV
 from agents.policies import load_agent

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import flownav_env  # noqa: F401
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.evaluation.episode import run_episode
-from agents.evaluation.records import read_records
 from agents.policies import agent_env_kwargs, agent_parameters, load_agent
 
 SMALL = {"camera_width": 96, "camera_height": 72}

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import flownav_env  # noqa: F401
+from agents.analysis.records import read_records
 from agents.cli import main
-from agents.evaluation.records import read_records
 from agents.policies import agent_env_kwargs, agent_parameters, load_agent
 from agents.policies.external import display_name
 from agents.policies.sb3_models import sb3_model_name

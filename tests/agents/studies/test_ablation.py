@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from helpers import tiny_train_config
 
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import (
     ABLATION_SEED_START,
@@ -19,7 +20,6 @@ from agents.common.seeds import (
     TIER_VALIDATION_SEEDS,
     VALIDATION_SEED_START,
 )
-from agents.evaluation.records import read_records
 from agents.policies import REACTIVE_AGENTS
 from agents.studies.ablation import ablation_tasks, compare_configs, seed_files
 from agents.training.multiseed import seed_jobs, train_seeds
@@ -202,7 +202,7 @@ def test_a_condition_flies_every_run_and_reference_with_its_env_settings(tmp_pat
 
 
 def test_each_row_is_compared_with_the_first_on_the_same_layouts(tmp_path: Path) -> None:
-    from agents.evaluation.paired import compare
+    from agents.analysis.paired import compare
 
     out = tmp_path / "two"
     lines = compare_configs([], [0], out, episodes=2, workers=1, reference_agents=["straight", "bee_ttc"])

@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from agents.analysis.paired import MIN_RANKED_SEEDS, Comparison
 from agents.common.jinja_reports import environment
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.evaluation.paired import MIN_RANKED_SEEDS, Comparison
 from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices, load_benchmark_data
 from agents.studies.benchmark_report import (
     README_MARKERS,

@@ -11,16 +11,12 @@ import numpy as np
 import pytest
 from helpers import EPISODE
 
+from agents.analysis.dose_response import cell_quality, fit_dose_response, format_p
+from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.weaving import turning_and_rotation_error
 from agents.cli import main
-from agents.studies.dose_response import cell_quality, fit_dose_response, format_p
-from agents.studies.error_analysis import (
-    best_learned_flow_agent,
-    is_flow_agent,
-    neutral_level,
-    tolerance_table,
-)
+from agents.studies.error_analysis import best_learned_flow_agent, neutral_level, tolerance_table
 from agents.studies.error_analysis_report import report_values, write_error_analysis
-from agents.studies.weaving import turning_and_rotation_error
 from agents.studies.wording import render_report
 
 
@@ -89,6 +85,10 @@ def test_oracle_and_blind_agents_are_left_out_of_the_dose_response() -> None:
     oracle[0]["env_kwargs"] = json.dumps({"obs_source": "oracle"})
     assert is_flow_agent(flow[0]) and not is_flow_agent(oracle[0])
     assert not is_flow_agent(_cell("straight", "clean", 0.0, 1, n=1)[0])
+    # Without recorded settings, configs/agents.yaml says what the agent sees.
+    assert is_flow_agent({"agent": "ppo_flow@2"}) and not is_flow_agent({"agent": "ppo_oracle@0"})
+    with pytest.raises(ValueError, match="cannot tell whether 'my_recipe' steers by flow"):
+        is_flow_agent({"agent": "my_recipe"})
 
 
 def _law_cells(law, rng: np.random.Generator, layouts: int = 150, outliers: bool = False) -> list[dict]:
@@ -194,7 +194,7 @@ def test_breaking_points_are_measured_against_the_baseline_clean_table() -> None
 
 
 def test_a_learned_agents_interval_spans_its_training_runs() -> None:
-    from agents.evaluation.statistics import failure_interval
+    from agents.analysis.statistics import failure_interval
 
     agree = [{"run": f"a@{k}", "success": i >= 5} for k in range(5) for i in range(20)]
     differ = [{"run": f"a@{k}", "success": i >= (0, 0, 5, 10, 10)[k]} for k in range(5) for i in range(20)]
@@ -257,7 +257,7 @@ def test_rotation_error_is_set_beside_how_much_each_agent_weaves(tmp_path: Path)
 def _write_sweep_episodes(path: Path, separated: bool) -> None:
     import dataclasses
 
-    from agents.evaluation.records import append_record
+    from agents.analysis.records import append_record
 
     rng = np.random.default_rng(0)
     for factor, level in (
@@ -339,7 +339,7 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
 def test_the_clean_baseline_holds_only_the_training_runs_the_sweep_flew(tmp_path: Path) -> None:
     import dataclasses
 
-    from agents.evaluation.records import append_record, read_records
+    from agents.analysis.records import append_record, read_records
     from agents.studies.error_analysis_report import write_error_analysis_from
 
     episodes = tmp_path / "sweep_episodes.csv"

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from agents.analysis.csv_file import LEGACY_FIELDS
+from agents.analysis.paired import compare
 from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
-from agents.evaluation.csv_file import LEGACY_FIELDS
-from agents.evaluation.paired import compare
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 from agents.studies.flow_gap_report import (
     confirmation_rows,

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from agents.analysis.dose_response import TASK_FACTORS
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.yaml_config import load_config
-from agents.evaluation.records import read_records
 from agents.evaluation.sweep import SweepConfig
-from agents.studies.error_analysis import TASK_FACTORS
 from agents.studies.robustness import SWEEP_CONFIG, curve_area, sensor_levels, summarise_curves, summary_lines
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
@@ -62,7 +62,7 @@ def test_a_curves_area_is_its_mean_failure_over_the_flown_range(points, area: fl
 
 
 def test_each_side_of_a_curve_gets_its_area_and_breaking_level() -> None:
-    from agents.evaluation.statistics import summarise
+    from agents.analysis.statistics import summarise
 
     rows = _rows("mine", "clean", 0.0, 6)
     rows += _rows("mine", "rotation_bias", -0.3, 6) + _rows("mine", "rotation_bias", 0.3, 48)

@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 from helpers import tiny_train_config
 
+from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.manifest import file_sha256
 from agents.common.seeds import checkpoint_selection_seed
-from agents.evaluation.records import read_records
 from agents.policies import UnverifiedPolicyWarning
 from agents.studies.selection import FINALIST_SEED_OFFSET, finalist_seeds, finalists, select_finalist
 from agents.training.multiseed import seed_jobs, train_seeds

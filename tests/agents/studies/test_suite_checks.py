@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from helpers import EPISODE
 
-from agents.evaluation.records import append_record
+from agents.analysis.records import append_record
 from agents.studies.suite_checks import (
     FEASIBLE_FAILURE,
     SENSITIVITY_DIR,

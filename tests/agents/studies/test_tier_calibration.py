@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from agents.analysis.records import read_records
 from agents.common.locations import RESULTS_DIR
-from agents.evaluation.records import read_records
 from agents.policies import AGENT_NAMES
 from agents.policies.base import base_agent_name
 from agents.studies.tier_calibration import (

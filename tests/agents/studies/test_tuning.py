@@ -11,11 +11,11 @@ from pathlib import Path
 import pytest
 
 import flownav_env  # noqa: F401  (before mujoco)
+from agents.analysis.records import episode_key, read_records
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation import runner
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json
-from agents.evaluation.records import episode_key, read_records
 from agents.evaluation.runner import EpisodesInterrupted
 from agents.studies.tuning import TuningResult, comparison, report_text, tune
 from agents.studies.tuning_study import (
@@ -171,7 +171,7 @@ def test_overwrite_moves_the_old_episodes_aside(tmp_path: Path, monkeypatch, cap
 
 
 def _trial(number: int, failures: int, episodes: int = 150) -> TrialResult:
-    from agents.evaluation.statistics import summarise
+    from agents.analysis.statistics import summarise
 
     base = {
         "agent": "bee",

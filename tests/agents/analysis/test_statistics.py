@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from agents.evaluation.statistics import format_summary, summarise, wilson_interval
+from agents.analysis.statistics import format_summary, summarise, wilson_interval
 
 
 def _row(seed: int, *, collision: bool = False, success: bool = False, out_of_bounds: bool = False) -> dict:

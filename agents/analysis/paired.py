@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from agents.policies.base import LEARNED_AGENTS, base_agent_name
+from agents.common.agent_table import base_agent_name, kind_of
 
 CONFIDENCE = 0.95
 BOOTSTRAP_REPS = 2_000
@@ -63,7 +63,9 @@ class Comparison:
 def _check(matrix: np.ndarray, name: str) -> np.ndarray:
     matrix = np.asarray(matrix, float)
     if matrix.ndim != 2 or matrix.shape[0] < 1 or matrix.shape[1] < 2:
-        raise ValueError(f"{name} must be a (runs, layouts) matrix with at least 2 layouts, got {matrix.shape}")
+        raise ValueError(
+            f"{name} must be a (runs, layouts) matrix with at least 2 layouts, got {matrix.shape}"
+        )
     return matrix
 
 
@@ -150,7 +152,7 @@ def provisional_note(comparison: Comparison) -> str:
     few = [
         f"`{base_agent_name(name)}` ({runs} training seed{'s' if runs != 1 else ''})"
         for name, runs in sides
-        if base_agent_name(name) in LEARNED_AGENTS and runs < MIN_RANKED_SEEDS
+        if kind_of(name) == "learned" and runs < MIN_RANKED_SEEDS
     ]
     return f"; provisional: {' and '.join(few)}" if few else ""
 
@@ -217,7 +219,9 @@ def rank_tier(
     left_out = _left_out(failures, privileged, learned)
     rankable = {name: np.asarray(matrix, float) for name, matrix in failures.items() if name not in left_out}
     if not rankable:
-        raise ValueError(f"no agent to rank: every agent is privileged or provisional ({', '.join(failures)})")
+        raise ValueError(
+            f"no agent to rank: every agent is privileged or provisional ({', '.join(failures)})"
+        )
     best = min(rankable, key=lambda name: (float(np.mean(rankable[name])), name))
     raw = [compare(name, matrix, best, rankable[best]) for name, matrix in rankable.items() if name != best]
     corrected = holm([c.p_value for c in raw])

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluation.statistics import BOOTSTRAP_REPS, CONFIDENCE
-from agents.policies import split_agent_name
-from flownav_env.task import EPISODE_OUTCOMES, episode_outcome
+from agents.analysis.episode_record import EPISODE_OUTCOMES, EpisodeRow, episode_outcome
+from agents.analysis.statistics import BOOTSTRAP_REPS, CONFIDENCE
+from agents.common.agent_table import split_agent_name
 
 LAYOUT_BLOCK = 30
 # rliable's probability of improvement runs a Mann-Whitney test per block in every replicate: fewer of them.
@@ -63,7 +63,7 @@ def _rliable_estimates(
         )
 
 
-def run_rates(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def run_rates(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
     """One row per run (agent name, with its training seed for a learned agent): episodes and the success,
     failure, collision and out-of-bounds rates over them; sorted by agent, then training seed."""
     groups: dict[str, list[Mapping[str, Any]]] = {}
@@ -89,7 +89,7 @@ def run_rates(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 
 def success_outcomes(
-    rows: Iterable[Mapping[str, Any]], runs: Sequence[str], layouts: Sequence[int]
+    rows: Iterable[EpisodeRow], runs: Sequence[str], layouts: Sequence[int]
 ) -> np.ndarray:
     """Success (1) or failure (0) of every run on every layout: (runs, layouts).
 
@@ -115,7 +115,9 @@ def episode_outcomes(
     flown = {}
     for row in rows:
         ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-        flown[(row["agent"], int(row["seed"]))] = (ended != "success") if outcome == "failure" else ended == outcome
+        flown[(row["agent"], int(row["seed"]))] = (
+            (ended != "success") if outcome == "failure" else ended == outcome
+        )
     outcomes = np.zeros((len(runs), len(layouts)))
     for i, run in enumerate(runs):
         for j, seed in enumerate(layouts):

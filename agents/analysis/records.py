@@ -2,7 +2,7 @@
 
 Each row carries what defined its episode (env id, the full env settings, the agent's parameters and the
 policy file's hash, :data:`IDENTITY_FIELDS`), so a resumed run only counts episodes flown with its own settings,
-and its checksum (see :mod:`agents.evaluation.csv_file`), so a torn row is flown again rather than misread.
+and its checksum (see :mod:`agents.analysis.csv_file`), so a torn row is flown again rather than misread.
 Every value is checked by type on reading; a row that fails is skipped like a torn one. Files from before these
 columns still read: their rows have None for the identity fields (unknown).
 """
@@ -15,9 +15,9 @@ import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
-from agents.evaluation.csv_file import (
+from agents.analysis.csv_file import (
     CHECKSUM_FIELD,
     LEGACY_FIELDS,
     ReadsPerFile,
@@ -31,8 +31,7 @@ from agents.evaluation.csv_file import (
     rewrite_locked,
     sealed_line,
 )
-from agents.evaluation.episode import EpisodeRecord
-from flownav_env.task import episode_outcome
+from agents.analysis.episode_record import EpisodeRecord, EpisodeRow, episode_outcome
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
@@ -77,7 +76,7 @@ class EpisodesCsv:
     writing one file at once could leave: each episode counts once."""
 
     path: Path
-    rows: list[dict[str, Any]]
+    rows: list[EpisodeRow]
     skipped: int = 0
     legacy: bool = False
     duplicates: int = 0
@@ -163,7 +162,7 @@ def read_episodes(path: Path) -> EpisodesCsv:
 
 def repair_episodes_header(path: Path) -> str | None:
     """Give an episodes CSV whose header is damaged but whose rows pass their checksums a correct header
-    (:func:`~agents.evaluation.csv_file.repair_header`), so its episodes are not stranded; returns the one line
+    (:func:`~agents.analysis.csv_file.repair_header`), so its episodes are not stranded; returns the one line
     that says what was done, or None when there was nothing to repair."""
     path = Path(path)
     repair = repair_header(path, _READABLE_HEADERS)
@@ -193,12 +192,12 @@ class Notices:
 READ_NOTICES = Notices()
 
 
-def read_records(path: Path) -> list[dict[str, Any]]:
+def read_records(path: Path) -> list[EpisodeRow]:
     """Rows of an episodes CSV with typed values (see :func:`read_episodes`)."""
     return read_episodes(path).rows
 
 
-def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
+def _typed(raw: Mapping[str, str]) -> EpisodeRow | None:
     row: dict[str, Any] = {}
     for name, kind in _FIELD_TYPES.items():
         if name not in raw:  # a column the file's format predates: unknown
@@ -218,18 +217,17 @@ def _typed(raw: Mapping[str, str]) -> dict[str, Any] | None:
             if not text and name in _REQUIRED_TEXT:
                 return None
             row[name] = text
-    return exclusive_outcome(row)
+    return exclusive_outcome(cast(EpisodeRow, row))  # every field set above, each checked by its type
 
 
-def exclusive_outcome(row: dict[str, Any]) -> dict[str, Any]:
+def exclusive_outcome(row: EpisodeRow) -> EpisodeRow:
     """``row`` with its ``collision``, ``out_of_bounds`` and ``success`` made exclusive by the env's rule
     (:func:`flownav_env.task.episode_outcome`): episodes recorded before the rule (a goal reached out of bounds,
     a collision out of bounds) count once, as the env now ends them. Their flights are unchanged: the flags
     are those of the same last step."""
     ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-    row.update(
-        collision=ended == "collision", out_of_bounds=ended == "out_of_bounds", success=ended == "success"
-    )
+    row["collision"], row["out_of_bounds"] = ended == "collision", ended == "out_of_bounds"
+    row["success"] = ended == "success"
     return row
 
 
@@ -290,7 +288,7 @@ EPISODE_INDEXES = ReadsPerFile(_EpisodeIndex)
 
 def flown_episodes(path: Path, handle: io.FileIO) -> set[tuple]:
     """The :func:`episode_identity` of every whole row in the CSV at ``path``, whose lock the caller holds
-    (``handle``, from :func:`~agents.evaluation.csv_file.locked`); rows read on an earlier call are not read
+    (``handle``, from :func:`~agents.analysis.csv_file.locked`); rows read on an earlier call are not read
     again."""
     index = EPISODE_INDEXES.of(path)
     index.update(handle)

@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from agents.evaluation.paired import (
+from agents.analysis.paired import (
     MIN_RANKED_SEEDS,
     compare,
     holm,

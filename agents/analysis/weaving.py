@@ -5,17 +5,19 @@ relative error scales the told rotation, so its harm grows with how much the age
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+
+from agents.analysis.episode_record import EpisodeRow
 
 # Episodes that ended within this many metres of the start say nothing of how much the agent weaves.
 MIN_PROGRESS_FOR_WEAVING_M = 2.0
 
 
 def turning_and_rotation_error(
-    rows: Sequence[Mapping[str, Any]], factor: str = "rotation_error"
+    rows: Sequence[EpisodeRow], factor: str = "rotation_error"
 ) -> list[dict[str, Any]]:
     """Per agent: how much it weaves on the clean course, and its median depth error at each level of a
     relative rotation error.
@@ -38,12 +40,12 @@ def turning_and_rotation_error(
     return sorted(table, key=lambda r: r["weaving"])
 
 
-def _level_of(row: Mapping[str, Any]) -> float:
+def _level_of(row: EpisodeRow) -> float:
     """The row's level, 0 for the clean cell (whose level column says nothing of the swept factor)."""
     return 0.0 if row["factor"] == "clean" else float(row["level"])
 
 
-def _clean_weaving(rows: Sequence[Mapping[str, Any]], agent: str) -> list[float]:
+def _clean_weaving(rows: Sequence[EpisodeRow], agent: str) -> list[float]:
     """Path length / forward progress − 1 of the agent's clean episodes that made enough progress."""
     return [
         float(r["path_length_m"]) / float(r["progress_m"]) - 1.0
@@ -54,13 +56,13 @@ def _clean_weaving(rows: Sequence[Mapping[str, Any]], agent: str) -> list[float]
     ]
 
 
-def _median_depth_error_by_level(rows: Sequence[Mapping[str, Any]]) -> dict[float, float]:
+def _median_depth_error_by_level(rows: Sequence[EpisodeRow]) -> dict[float, float]:
     """Per level, in increasing order, the median of its rows' finite median depth errors."""
     levels = sorted({_level_of(r) for r in rows})
     return {level: _median_depth_error([r for r in rows if _level_of(r) == level]) for level in levels}
 
 
-def _median_depth_error(rows: Sequence[Mapping[str, Any]]) -> float:
+def _median_depth_error(rows: Sequence[EpisodeRow]) -> float:
     """The median of the rows' finite median depth errors; NaN where none is finite."""
     depth_errors = [
         float(r["median_depth_error"]) for r in rows if math.isfinite(float(r["median_depth_error"]))

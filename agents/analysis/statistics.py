@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from collections.abc import Iterable, Sequence
+from typing import Final, TypedDict
 
 import numpy as np
+
+from agents.analysis.episode_record import EpisodeRow
 
 
 def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[float, float]:
@@ -20,7 +22,7 @@ def wilson_interval(successes: int, trials: int, z: float = 1.959964) -> tuple[f
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-RUN_KEY = "run"
+RUN_KEY: Final = "run"  # PooledRow's key (agents.analysis.episode_record)
 """A pooled row's own run (``ppo_flow@3``) where its ``agent`` names the pooled agent (``ppo_flow@all``)."""
 BOOTSTRAP_REPS = 2000
 
@@ -46,7 +48,7 @@ def runs_and_layouts_interval(
     return float(low), float(high)
 
 
-def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[float, float]:
+def failure_interval(rows: Sequence[EpisodeRow], seed: int = 0) -> tuple[float, float]:
     """95 % interval of the failure rate of ``rows``: Wilson over episodes for one run; for rows pooled from
     several training runs (their :data:`RUN_KEY`), a two-level bootstrap that resamples runs and their
     episodes, so that it carries the spread between training runs as well as the layouts' (where each run flew
@@ -88,7 +90,29 @@ def failure_interval(rows: Sequence[Mapping[str, Any]], seed: int = 0) -> tuple[
     return float(min(low, wilson_low)), float(max(high, wilson_high))
 
 
-def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+class CellSummary(TypedDict):
+    """One row of :func:`summarise`: an (agent, factor, level) cell's episodes, rates and 95 % intervals."""
+
+    agent: str
+    factor: str
+    level: float
+    episodes: int
+    collisions: int
+    collision_rate: float
+    ci_low: float
+    ci_high: float
+    success_rate: float
+    success_ci_low: float
+    success_ci_high: float
+    median_progress_m: float
+    median_min_clearance_m: float
+    out_of_bounds: int
+    failure_rate: float
+    failure_ci_low: float
+    failure_ci_high: float
+
+
+def summarise(rows: Iterable[EpisodeRow]) -> list[CellSummary]:
     """Per (agent, factor, level): episodes, collisions, collision rate with its Wilson 95 % interval,
     success rate with its interval, failure rate with its interval (:func:`failure_interval`: over training
     runs and layouts where the rows pool several runs), episodes out of bounds, and medians of progress and
@@ -98,10 +122,10 @@ def summarise(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
     or the time limit. Collisions alone can fall while failures rise (a drone that leaves the course sideways
     collides with nothing), so the failure rate is the headline and the collision rate one of its causes.
     """
-    groups: dict[tuple[str, str, float], list[Mapping[str, Any]]] = {}
+    groups: dict[tuple[str, str, float], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["agent"], row["factor"], float(row["level"])), []).append(row)
-    table = []
+    table: list[CellSummary] = []
     for (agent, factor, level), members in sorted(groups.items()):
         n = len(members)
         collisions = sum(bool(m["collision"]) for m in members)
@@ -138,7 +162,7 @@ SUMMARY_COLUMNS = ("agent", "factor", "level", "episodes")
 """The leading columns of :func:`format_summary`, the ones a caller may omit; the rates always show."""
 
 
-def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = ()) -> str:
+def format_summary(table: Sequence[CellSummary], *, omit: Iterable[str] = ()) -> str:
     """The summary as a Markdown table.
 
     Args:
@@ -173,3 +197,22 @@ def format_summary(table: Sequence[Mapping[str, Any]], *, omit: Iterable[str] = 
             f"{r['out_of_bounds'] / r['episodes']:.2f} | {r['median_progress_m']:.1f} |"
         )
     return "\n".join(lines)
+
+
+def failure(rows: Sequence[EpisodeRow]) -> tuple[float, float, float, int]:
+    """Failure rate, its 95 % interval (over training runs too where the rows pool several:
+    :func:`failure_interval`) and the episodes."""
+    n = len(rows)
+    failures = sum(not bool(r["success"]) for r in rows)
+    low, high = failure_interval(rows)
+    return failures / n, low, high, n
+
+
+def runs_failure(successes: np.ndarray) -> tuple[float, float, float]:
+    """Failure over runs × layouts (``successes``: a row of 0/1 per run, every run on the same layouts) and its
+    95 % interval: a two-level bootstrap from two runs on (as ``flownav ablation``), Wilson's for one run."""
+    if len(successes) > 1:
+        low, high = runs_and_layouts_interval(successes)
+    else:
+        low, high = wilson_interval(int(successes.sum()), successes.size)
+    return float(1 - successes.mean()), 1 - high, 1 - low

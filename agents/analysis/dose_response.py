@@ -1,4 +1,5 @@
-"""The dose-response half of the error analysis (:mod:`agents.studies.error_analysis` holds the tolerance table):
+"""The dose-response half of the error analysis (:mod:`agents.studies.error_analysis` holds the tolerance table,
+and words both):
 episode failure against its cell's depth quality (:func:`cell_quality`: median relative
 depth error, valid depths per frame and, where recorded, the share of depths off by more than half, measured
 on the cell's full-course flights so that no episode's covariate depends on its own length), pooled over the
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from agents.studies.error_analysis import TASK_FACTORS, is_flow_agent
+from agents.analysis.episode_record import EpisodeRow, is_flow_agent
 
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
 # depths off by more than half, where the episodes recorded it (not in files from before it existed).
@@ -29,9 +30,13 @@ DOSE_FEATURES = ("log_depth_error", "valid_points_per_100", "outlier_share")
 # A cell's quality is measured on its successful (full-course) episodes when it has at least this many.
 MIN_FULL_COURSE = 5
 P_VALUE_FLOOR = 1e-6
+# Factors that change the task itself (how fast, how cluttered, how visible), not what the drone is told or
+# estimates: "they matter beyond depth quality" would be true of them by construction, so the dose-response
+# fits and their test use the sensor factors only.
+TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
 
 
-def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], dict[str, Any]]:
+def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str, Any]]:
     """Each sensor cell's depth quality, measured on full-course flights: per (factor, level), the medians over
     the flow agents' successful episodes of :data:`DOSE_FEATURES` (log median relative depth error, valid depths
     per frame / 100, outlier share where every episode recorded it), or over all its episodes where fewer than
@@ -65,7 +70,7 @@ def cell_quality(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, float], d
     return quality
 
 
-def _measures_sensor_quality(row: Mapping[str, Any]) -> bool:
+def _measures_sensor_quality(row: EpisodeRow) -> bool:
     """Whether an episode counts towards its cell's depth quality: a sensor factor's (not a task factor's),
     flown by a flow agent, with a positive finite median depth error (its log is taken)."""
     error = float(row["median_depth_error"])
@@ -73,8 +78,8 @@ def _measures_sensor_quality(row: Mapping[str, Any]) -> bool:
 
 
 def dose_features(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
-) -> tuple[np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+) -> tuple[np.ndarray, np.ndarray, list[EpisodeRow]]:
     """Design matrix (episodes, features): each episode's cell quality (:func:`cell_quality`); failures
     (episodes,); and the rows used: the episodes of cells with a quality."""
     used = [r for r in rows if (r["factor"], float(r["level"])) in quality]
@@ -134,7 +139,7 @@ def _converged_logit(
 
 
 def fit_dose_response(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
 ) -> dict[str, Any]:
     """Logistic regression of failure on its cell's depth quality (one agent's episodes over the sensor
     factors and the clean cell), with standard errors clustered by layout, and a cluster-robust Wald test of
@@ -190,7 +195,7 @@ def fit_dose_response(
 
 
 def fit_every_flow_agent(
-    rows: Sequence[Mapping[str, Any]], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
 ) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
     """:func:`fit_dose_response` for each flow agent of ``rows``: the fits, and why an agent has none."""
     fits, errors = {}, {}

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from helpers import EPISODE
 
-from agents.evaluation.csv_file import LEGACY_FIELDS, sealed_line
-from agents.evaluation.records import (
+from agents.analysis.csv_file import LEGACY_FIELDS, sealed_line
+from agents.analysis.records import (
     CSV_FIELDS,
     EARLIER_CSV_FIELDS,
     PREVIOUS_CSV_FIELDS,
@@ -242,7 +242,7 @@ def test_a_full_disk_is_one_error_naming_the_file_and_keeps_the_rows(tmp_path: P
         "import resource, signal, sys\n"
         "from dataclasses import replace\n"
         "from pathlib import Path\n"
-        "from agents.evaluation.records import append_record\n"
+        "from agents.analysis.records import append_record\n"
         "from tests_record import RECORD\n"
         "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
         f"resource.setrlimit(resource.RLIMIT_FSIZE, ({len(before) + 10}, resource.RLIM_INFINITY))\n"
@@ -264,7 +264,7 @@ def test_a_full_disk_is_one_error_naming_the_file_and_keeps_the_rows(tmp_path: P
 
 
 def test_episodes_recorded_before_the_exclusive_rule_are_read_with_one_outcome(tmp_path: Path) -> None:
-    from agents.evaluation.records import exclusive_outcome
+    from agents.analysis.records import exclusive_outcome
 
     goal_out_of_bounds = exclusive_outcome({"collision": False, "out_of_bounds": True, "success": True})
     assert (goal_out_of_bounds["success"], goal_out_of_bounds["out_of_bounds"]) == (False, True)

@@ -1,0 +1,53 @@
+"""The agents' names and kinds, read from configs/agents.yaml."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from agents.common.agent_table import (
+    AGENTS,
+    agents_where,
+    is_learned,
+    read_agent_table,
+    seeded_agent_name,
+    split_agent_name,
+)
+
+
+def test_kinds_come_from_the_table() -> None:
+    assert agents_where(kind="rule") == ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
+    assert agents_where(kind="planner") == ("planner", "planner_camera", "planner_camera_observed")
+    assert set(agents_where(privileged=True)) == {
+        name for name in AGENTS if AGENTS[name].sees in ("true_depth", "layout", "camera_view")
+    }
+    assert "ppo_oracle" in agents_where(kind="learned", privileged=True)
+    assert (
+        is_learned(seeded_agent_name("ppo_flow", 3))
+        and not is_learned("bee")
+        and not is_learned("pkg.mod:make")
+    )
+    assert split_agent_name("ppo_flow@3") == ("ppo_flow", 3)
+
+
+def test_a_training_seed_on_a_rule_is_refused() -> None:
+    with pytest.raises(
+        ValueError, match=r"only learned agents have training seeds \(ppo_flow, .*got 'bee@1'"
+    ):
+        split_agent_name("bee@1")
+
+
+@pytest.mark.parametrize(
+    ("entry", "message"),
+    [
+        ("{kind: rule, sees: flow, colour: red}", r"agent 'x' has unknown keys \['colour'\]"),
+        ("{kind: genius, sees: flow}", r"agent 'x' kind must be one of rule, learned, planner, got 'genius'"),
+        ("{kind: rule}", r"agent 'x' sees must be one of flow, nothing, true_depth, layout, camera_view, got None"),
+    ],
+)
+def test_a_bad_entry_is_refused(tmp_path: Path, entry: str, message: str) -> None:
+    path = tmp_path / "agents.yaml"
+    path.write_text(f"agents:\n  x: {entry}\n")
+    with pytest.raises(ValueError, match=message):
+        read_agent_table(path)

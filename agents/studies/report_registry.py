@@ -271,7 +271,7 @@ REPORTS: tuple[Report, ...] = (
         "suite_v2_calibration/calibration.md",
         name="suite-checks",
         command="flownav reports --out results --only suite-checks",
-        inputs=("suite_v2_calibration/*.csv",),
+        inputs=("suite_v2_calibration/*.csv", "suite_v2_calibration/sensitivity/*.csv"),
         write=lambda report, folder: suite_checks.write_checks(folder, report.command),
     ),
     Report(

@@ -127,6 +127,7 @@ def sensitivity_rows(folder: Path) -> list[dict[str, Any]]:
 
 def check_values(folder: Path, command: str) -> dict[str, Any]:
     """Every value the calibration page words."""
+    checks = check_rows(folder)
     tiers = []
     for name in TIER_NAMES:
         spec = tier(name, CHECKED_VERSION)
@@ -136,7 +137,9 @@ def check_values(folder: Path, command: str) -> dict[str, Any]:
     return {
         "command": command,
         "tiers": tiers,
-        "checks": check_rows(folder),
+        "checks": checks,
+        "all_pass": passing(checks),
+        "all_flown": all(row["layouts"] for row in checks),
         "sensitivity": sensitivity_rows(folder),
         "feasible_failure": FEASIBLE_FAILURE,
         "check_seed": SUITE_V2_CHECK_SEED_START,

@@ -15,11 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
+from agents.evaluation import suite_checks
 from agents.evaluation.leaderboard import run_leaderboard
 from agents.evaluation.suite import run_suite, suite_agents
 from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
-from agents.studies import confirmation, suite_checks, tier_calibration
+from agents.studies import confirmation, tier_calibration
 from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from

@@ -10,7 +10,7 @@ import pytest
 from helpers import EPISODE
 
 from agents.analysis.records import append_record
-from agents.studies.suite_checks import (
+from agents.evaluation.suite_checks import (
     FEASIBLE_FAILURE,
     SENSITIVITY_DIR,
     check_rows,

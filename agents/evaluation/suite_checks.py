@@ -165,7 +165,7 @@ def check_values(folder: Path, command: str) -> dict[str, Any]:
 
 def write_checks(folder: Path, command: str) -> Sequence[str]:
     """Write ``<folder>/calibration.md`` from the checks flown into ``folder``; returns its lines."""
-    text = render("agents.studies", "suite_checks.md.j2", check_values(Path(folder), command))
+    text = render("agents.evaluation", "suite_checks.md.j2", check_values(Path(folder), command))
     write_text_atomically(Path(folder) / PAGE, text)
     return text.splitlines()
 

@@ -90,6 +90,26 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     | 5   | height above ground  | 0     | 10   | m    |
     | 6   | heading error to the goal direction (+x; left positive) | -π | π | rad |
 
+    ## Signs
+    Every sign of the observation and the action, in one place. The world is x forward along the course
+    toward the goal, y to the left, z up, yaw counter-clockwise seen from above (ROS REP 103); the observation
+    follows it, while the action is said in the camera image's terms, so its lateral and yaw signs are the
+    opposite of the observation's.
+
+    | Quantity | Positive means |
+    |----------|----------------|
+    | ``state[0]`` forward velocity | toward the goal, along the heading |
+    | ``state[1]`` lateral velocity | to the left (body yaw frame) |
+    | ``state[2]`` vertical velocity | up |
+    | ``state[3]`` roll | right side down (counter-clockwise about the forward axis) |
+    | ``state[4]`` pitch | nose down |
+    | ``state[6]`` heading error | turned to the left (counter-clockwise) of the goal direction |
+    | ``depth_histogram`` and the sector keys | row 0 at the top of the image, column 0 at its left |
+    | ``layout``, ``true_state`` (privileged) | world x toward the goal, y to the left, z up; yaw counter-clockwise |
+    | action 0, lateral velocity | to the right: the opposite sign of ``state[1]`` |
+    | action 1, vertical velocity | up, as ``state[2]`` |
+    | action 2, yaw rate | to the right (clockwise): the opposite sign of ``state[6]`` |
+
     ## Rewards
     Per step: ``reward = progress_weight · Δx + success_bonus · [goal reached] − collision_penalty ·
     [collision or out of bounds] − control_cost_weight · ‖action‖² − clearance_weight · max(0, 1 − c /

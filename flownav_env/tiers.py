@@ -26,6 +26,7 @@ course and sensor were tuned on agents (``results/suite_v1/``).
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -132,7 +133,9 @@ def tier(name: str, version: str = SUITE_VERSION) -> Tier:
     """
     tiers = TIERS_BY_VERSION[check_suite_version(version)]
     if name not in tiers:
-        raise ValueError(f"tier must be one of {', '.join(tiers)}, got {name!r}")
+        close = difflib.get_close_matches(str(name), list(tiers), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ValueError(f"tier must be one of {', '.join(tiers)}, got {name!r}{hint}")
     return tiers[name]
 
 

@@ -8,6 +8,7 @@ inside ``run``, so that ``flownav --help`` stays instant.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import importlib.util
 import sys
@@ -77,8 +78,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words and not words[0].startswith("-") and words[0] not in COMMANDS:
+        # argparse lists every command; the one meant, where it is close, is what a typo needs.
+        print(f"flownav: error: {unknown_command_message(words[0])}", file=sys.stderr)
+        return 2
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(words)
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError, IsADirectoryError) as error:
@@ -108,6 +114,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 2
+
+
+def unknown_command_message(word: str) -> str:
+    """``unknown command 'evalute' (did you mean 'evaluate'?); commands: ...``."""
+    close = difflib.get_close_matches(word, COMMANDS, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return f"unknown command {word!r}{hint}; commands: {', '.join(COMMANDS)}"
 
 
 def describe_os_error(error: OSError) -> str:

@@ -8,7 +8,13 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.cli.arguments import add_env_argument
+from agents.cli.arguments import (
+    add_env_argument,
+    add_layouts_argument,
+    add_policies_dir_argument,
+    add_tier_argument,
+    tier_name_of,
+)
 from agents.common.locations import POLICIES_DIR
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
@@ -21,9 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seeds", default="0-2", help="training seeds, e.g. 0-2 or 0,3 (default: %(default)s)"
     )
-    parser.add_argument(
-        "--episodes", type=int, default=100, help="validation layouts per run (default: %(default)s)"
-    )
+    add_layouts_argument(parser, 100, "validation layouts per run (default: %(default)s)")
     parser.add_argument(
         "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
     )
@@ -33,10 +37,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated reactive agents flown on the same layouts as reference rows, e.g. bee_robust,bee",
     )
     parser.add_argument("--runs-dir", default="runs", help="where the seeds' runs are (default: %(default)s)")
-    parser.add_argument(
-        "--policies",
-        default=str(POLICIES_DIR),
-        help="where a seed whose run folder is gone is read from, as shipped: <policies>/<name>/seed_<k>.zip "
+    add_policies_dir_argument(
+        parser,
+        str(POLICIES_DIR),
+        "where a seed whose run folder is gone is read from, as shipped: <DIR>/<name>/seed_<k>.zip "
         "(default: %(default)s)",
     )
     add_env_argument(
@@ -44,10 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "FlowNavEnv setting every run flies with, repeatable (e.g. --env obstacle_density=0.18; default: "
         "none, clean); give each condition its own --out, for its own ablation.md",
     )
-    parser.add_argument(
-        "--tier",
-        default=None,
-        help="a suite tier (clean, hard, noisy, hard_noisy): fly its course and sensor on its validation layouts "
+    add_tier_argument(
+        parser,
+        None,
+        "a suite tier (clean, hard, noisy, hard_noisy): fly its course and sensor on its validation layouts "
         "(from 960,100) instead of the ablation layouts; takes no --env",
     )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
@@ -67,14 +71,14 @@ def run(args: argparse.Namespace) -> int:
         parse_seeds(args.seeds),
         Path(args.out),
         runs_dir=Path(args.runs_dir),
-        policies_dir=Path(args.policies),
-        episodes=args.episodes,
+        policies_dir=Path(args.policies_dir),
+        episodes=args.layouts,
         workers=args.workers,
         report_only=args.report_only,
         command=command.strip(),
         reference_agents=[agent.strip() for agent in args.reference.split(",") if agent.strip()],
         env=dict(args.env),
-        tier=args.tier,
+        tier=args.tiers and tier_name_of(args.tiers),
     )
     print("\n".join(lines))
     return 0

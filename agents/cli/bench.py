@@ -24,6 +24,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.cli.arguments import add_seed_start_argument
+
 # Runs land in a scratch folder unless asked: the committed reports in results/ are replaced only on purpose.
 SCRATCH_OUT = Path("runs") / "bench"
 if __doc__:  # None under python -OO
@@ -57,7 +59,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     estimator.add_argument("--width", type=int, default=640, help="camera width in px (default 640)")
     estimator.add_argument("--height", type=int, default=480, help="camera height in px (default 480)")
     estimator.add_argument("--layout", default="three", help="env layout of the flight (default three)")
-    estimator.add_argument("--seed", type=int, default=0, help="env seed of the flight (default 0)")
+    add_seed_start_argument(estimator, 0, "layout seed of the flight (default 0)")
     _add_output_options(estimator)
 
     env = targets.add_parser(
@@ -71,7 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     env.add_argument("--steps", type=int, default=100, help="env steps per timed block (default 100)")
     env.add_argument("--repeats", type=int, default=5, help="timed blocks per configuration (default 5)")
-    env.add_argument("--seed", type=int, default=0, help="seed of the first episode (default 0)")
+    add_seed_start_argument(env, 0, "layout seed of the first episode (default 0)")
     _add_output_options(env)
 
     recipe = targets.add_parser(
@@ -143,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
             width=args.width,
             height=args.height,
             layout=args.layout,
-            seed=args.seed,
+            seed=args.seed_start,
             out_dir=args.out,
             progress=not args.no_progress,
         )
@@ -189,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
             resolutions=args.resolutions,
             steps=args.steps,
             repeats=args.repeats,
-            seed=args.seed,
+            seed=args.seed_start,
             out_dir=args.out,
             progress=not args.no_progress,
         )

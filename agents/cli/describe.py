@@ -1,4 +1,4 @@
-"""``flownav describe [tier]``: what an agent is given and must return on a tier of the suite.
+"""``flownav describe [--tiers TIER]``: what an agent is given and must return on a tier of the suite.
 
 Read from the env itself, not typed here: a real env of the tier is made (with every optional observation key
 on) and its observation and action spaces give each key's shape, dtype and range; the meaning of each key and
@@ -10,20 +10,23 @@ score it with ``flownav score --agent file.py:make_agent``.
 from __future__ import annotations
 
 import argparse
+import itertools
 import re
-from dataclasses import fields
+import sys
+from dataclasses import fields, replace
 from typing import TypeVar
 
 import gymnasium as gym
 from gymnasium import spaces
 
 import flownav_env
+from agents.cli.arguments import add_tier_argument, tier_name_of
 from agents.cli.help_text import plain_text
 from agents.common.tables import markdown_table
 from agents.policies.external import PREDICT_SIGNATURE
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from flownav_env.settings import EnvSettings
-from flownav_env.tiers import TIER_NAMES, tier
+from flownav_env.tiers import AGENT_OBSERVATION_SETTINGS, TIER_NAMES, tier
 
 Space = TypeVar("Space", bound=gym.Space)
 
@@ -33,19 +36,26 @@ HELP = "the agent contract of a tier: observation keys, shapes and meaning; the 
 OBSERVATION_HEADING = "## Observation Space"
 STATE_HEADING = "``state`` (clipped"
 ACTION_HEADING = "## Action Space"
+SIGNS_HEADING = "## Signs"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "tier",
-        nargs="?",
-        default=TIER_NAMES[0],
-        help=f"one of {', '.join(TIER_NAMES)} (default: %(default)s)",
+    add_tier_argument(
+        parser, TIER_NAMES[0], f"one of {', '.join(TIER_NAMES)}, or its Gymnasium id (default: %(default)s)"
     )
+    # The first spelling, `flownav describe hard`, kept: said as --tiers when used.
+    parser.add_argument("tier", nargs="?", help=argparse.SUPPRESS)
 
 
 def run(args: argparse.Namespace) -> int:
-    print("\n".join(describe_tier(args.tier)))
+    tier_text = args.tiers
+    if args.tier is not None:
+        print(
+            f"flownav describe: a tier without --tiers is an old spelling; use --tiers {args.tier}",
+            file=sys.stderr,
+        )
+        tier_text = args.tier
+    print("\n".join(describe_tier(tier_name_of(tier_text))))
     return 0
 
 
@@ -80,6 +90,9 @@ def describe_tier(tier_name: str) -> list[str]:
         "",
         _observation_table(observation_space, _doc_table(doc, OBSERVATION_HEADING), OBSERVATION_KEY_SETTINGS),
         "",
+        f"depth_histogram's bins on this tier: {_bins_text(settings.depth_bin_edges)}; sectors "
+        f"{settings.histogram_sectors[0]} rows by {settings.histogram_sectors[1]} columns of the image.",
+        "",
         "The state entries:",
         "",
         _entries_table(_space(observation_space["state"], spaces.Box), _doc_table(doc, STATE_HEADING)),
@@ -89,9 +102,35 @@ def describe_tier(tier_name: str) -> list[str]:
         "",
         _action_table(action_space, _doc_table(doc, ACTION_HEADING), settings),
         "",
+        f"Signs. {_doc_paragraph(doc, SIGNS_HEADING)}",
+        "",
+        markdown_table(["quantity", "positive means"], _doc_table(doc, SIGNS_HEADING)),
+        "",
+        f"Every setting of tier {spec.name} (* fixed by the tier; the rest are the env's defaults, and an agent "
+        f"may ask only for {', '.join(AGENT_OBSERVATION_SETTINGS)}):",
+        "",
+        _settings_table(
+            replace(settings, **{key: getattr(EnvSettings(), key) for key in every_key}), spec.settings
+        ),
+        "",
         f"The env in full: help(flownav_env.FlowNavEnv). Score an agent on this tier: flownav score --agent "
         f"my_agent.py:make_agent --tiers {spec.name}.",
     ]
+
+
+def _bins_text(edges: tuple[float, ...]) -> str:
+    """``depth_bin_edges`` as the bins they make: ``[0, 1), [1, 2), ..., [8, 13) and beyond (m)``."""
+    bins = [f"[{low:g}, {high:g})" for low, high in itertools.pairwise(edges)]
+    return f"{len(bins)} bins of depth (m), depth_bin_edges {list(edges)}: {', '.join(bins)}, the last one also counting what lies beyond {edges[-1]:g} m"
+
+
+def _settings_table(settings: EnvSettings, fixed: dict[str, object]) -> str:
+    """Every env setting with its value on the tier, the ones the tier fixes starred."""
+    rows = [
+        [f"{item.name}{' *' if item.name in fixed else ''}", getattr(settings, item.name)]
+        for item in fields(settings)
+    ]
+    return markdown_table(["setting", "value"], rows)
 
 
 def _doc_table(doc: str, heading: str) -> list[list[str]]:

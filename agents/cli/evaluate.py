@@ -16,7 +16,7 @@ from agents.analysis.csv_file import check_is_file_target
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import OVERWRITE_HINT, read_episodes, start_new_file
 from agents.analysis.statistics import format_summary, summarise
-from agents.cli.arguments import add_env_argument
+from agents.cli.arguments import add_env_argument, add_layouts_argument, add_tier_argument, env_id_of
 from agents.common.folders import check_writable_folder
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START, VALIDATION_SEED_START
@@ -33,6 +33,7 @@ from agents.policies import (
 from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import SB3_ALGORITHMS, is_sb3_model_name, sb3_model_name
 from flownav_env.settings_check import check_env_kwargs
+from flownav_env.tiers import TIER_NAMES
 
 HELP = "evaluate an agent on held-out seeds (CSV per episode, resumable)"
 
@@ -54,9 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --policy and no --agent: a stable-baselines3 model of this algorithm, trained anywhere on a "
         "FlowNav env (only its parameters are read where its network can be rebuilt without unpickling)",
     )
-    parser.add_argument(
-        "--episodes", type=int, default=20, help="held-out seeds to fly (default: %(default)s)"
-    )
+    add_layouts_argument(parser, 20, "held-out layouts to fly (default: %(default)s)")
     parser.add_argument(
         "--seed-start",
         type=int,
@@ -64,7 +63,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"first seed (default: %(default)s, the test layouts; from {VALIDATION_SEED_START} for validation "
         "layouts, to decide on)",
     )
-    parser.add_argument("--env-id", default="FlowNav-v0", help="Gymnasium env id (default: %(default)s)")
+    add_tier_argument(
+        parser,
+        "clean",
+        f"a suite tier ({', '.join(TIER_NAMES)}) or any Gymnasium id such as FlowNavSingle-v0 (default: %(default)s)",
+    )
     add_env_argument(
         parser,
         "FlowNavEnv kwarg, repeatable (e.g. --env rotation_error=0.05; default: none, the env's defaults)",
@@ -97,9 +100,10 @@ def run(args: argparse.Namespace) -> int:
     if is_external_name(args.agent):  # resolved here, so a bad one fails before anything flies
         args.agent = args.agent if is_sb3_model_name(args.agent) else canonical_spec(args.agent)
         load_agent(args.agent, trust_pickle=args.trust_pickle)
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    check_evaluation_seeds(args.seed_start, args.episodes)
+    if args.layouts < 1:
+        raise ValueError(f"--layouts must be >= 1, got {args.layouts}")
+    check_evaluation_seeds(args.seed_start, args.layouts)
+    env_id = env_id_of(args.tiers)
     env_kwargs = check_env_kwargs(dict(args.env), "command line", key="--env")
     factor, level = record_label(env_kwargs)
     runs, message = runs_to_fly(args.agent, args.policy)
@@ -112,12 +116,12 @@ def run(args: argparse.Namespace) -> int:
             factor,
             level,
             seed,
-            args.env_id,
+            env_id,
             tuple(sorted(env_kwargs.items())),
             args.policy,
             trust_pickle=args.trust_pickle,
         )
-        for index, seed in enumerate(range(args.seed_start, args.seed_start + args.episodes))
+        for index, seed in enumerate(range(args.seed_start, args.seed_start + args.layouts))
     ]
     out = Path(args.out)
     check_is_file_target(out)

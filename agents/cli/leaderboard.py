@@ -4,8 +4,10 @@ leading table is the suite's, ``results/suite.md`` (``flownav suite``): its layo
 2,000,000 against this table's from 1,000,000), so the two give the clean tier different rates.
 
 With ``--include score.csv`` (repeatable) it flies nothing: it sets the rows ``flownav score`` wrote beside the
-published suite table (``results/suite.csv``), tier by tier, and writes ``suite_with_included.md``, ``.csv`` and
-``.png`` into ``--out``. A file named twice counts once. Refused, in one line: rows of another suite version, a
+published suite table (``results/suite.csv``) and ranks them as ``suite.md`` ranks (privileged references
+apart; each ranked agent's difference from the best, its Holm-corrected p-value, whether it joins the tier's top
+group), on the layouts every included row flew, and writes ``suite_with_included.md``, ``.csv`` and ``.png``
+into ``--out``. A file named twice counts once. Refused, in one line: rows of another suite version, a
 published agent's name, rates outside [0, 1] or outside their interval or not summing to 1, layouts outside the
 frozen set, two rows of one agent and tier, privileged data not marked privileged. Each included file is marked
 verified (``flownav verify`` re-flew a sample of its episodes) or self-reported.
@@ -18,12 +20,17 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.cli.arguments import add_workers_argument
+from agents.cli.arguments import (
+    add_layouts_argument,
+    add_policies_dir_argument,
+    add_workers_argument,
+    flight_notice,
+)
 from agents.cli.suite import add_suite_version_argument
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.evaluation.leaderboard import MIN_EPISODES, run_leaderboard
-from agents.evaluation.suite_report import merge_rows, plot_suite, read_included, read_suite_csv, tier_tables
+from agents.evaluation.suite_report import plot_suite
 from agents.policies import HISTORY_AGENTS
 
 HELP = (
@@ -38,11 +45,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=",".join(HISTORY_AGENTS),
         help=f"comma-separated agents (default: all, {', '.join(HISTORY_AGENTS)})",
     )
-    parser.add_argument(
-        "--episodes", type=int, default=MIN_EPISODES, help="test layouts per run (default: %(default)s)"
-    )
+    add_layouts_argument(parser, MIN_EPISODES, "test layouts per run (default: %(default)s)")
     add_workers_argument(parser)
-    parser.add_argument("--policies-dir", default=str(POLICIES_DIR), help="where the seeds' policies are")
+    add_policies_dir_argument(
+        parser, str(POLICIES_DIR), "where the seeds' policies are (default: %(default)s)"
+    )
     parser.add_argument(
         "--out",
         default="runs/leaderboard",
@@ -71,11 +78,26 @@ def run(args: argparse.Namespace) -> int:
         return _include(args)
 
     agents = [name.strip() for name in args.agents.split(",") if name.strip()]
+    if not args.report_only:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+        from agents.policies import is_learned, shipped_seed_runs
+
+        # Each learned agent flies every shipped training seed on every layout (run_leaderboard says which).
+        runs = sum(len(shipped_seed_runs(a, Path(args.policies_dir))) if is_learned(a) else 1 for a in agents)
+        notice = flight_notice(
+            "leaderboard",
+            runs * args.layouts,
+            args.workers,
+            "--agents bee,vfh flies some agents, --include runs/score/score.csv sets your rows beside the "
+            "leading table without flying",
+        )
+        if notice:
+            print(notice)
     command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     lines = run_leaderboard(
         agents,
         Path(args.out),
-        episodes=args.episodes,
+        episodes=args.layouts,
         workers=args.workers,
         policies_dir=Path(args.policies_dir),
         report_only=args.report_only,
@@ -87,36 +109,23 @@ def run(args: argparse.Namespace) -> int:
 
 def _include(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.common.tables import markdown_cell
+    from agents.evaluation.included import included_suite
     from agents.evaluation.suite import published_suite_csv, write_summary_csv
-    from agents.evaluation.verification_record import verification_mark
 
     version = args.suite_version
     suite_path = Path(args.suite) if args.suite else published_suite_csv(version)
-    published = read_suite_csv(suite_path, version)
-    included, files = read_included(args.include, version)
-    rows = merge_rows(published, included)
     out = Path(args.out)
     check_writable_folder(out)
+    command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    text, rows, rankings, _ = included_suite(
+        suite_path, args.include, command=command.strip(), version=version
+    )
     out.mkdir(parents=True, exist_ok=True)
-    count = sum(1 for row in rows if row.get("included"))
-    lines = [
-        f"# The suite table with {count} included row{'' if count == 1 else 's'}",
-        "",
-        f"Published rows from `{suite_path}`; included rows from the files below. An included "
-        "row rests on the layouts its `layouts` column says, the first of the published rows' frozen layouts. "
-        "Included rows are self-reported unless `flownav verify` re-flew a sample of their episodes and matched "
-        "every one (it leaves `verification.json` beside the file, naming this very file and its episodes).",
-        "",
-        *(f"- `{markdown_cell(path)}`: {verification_mark(path)}" for path in files),
-        "",
-        *tier_tables(rows),
-    ]
-    write_text_atomically(out / "suite_with_included.md", "\n".join(lines) + "\n")
+    write_text_atomically(out / "suite_with_included.md", text)
     write_summary_csv(
         out / "suite_with_included.csv", [{k: v for k, v in r.items() if k != "included"} for r in rows]
     )
-    plot_suite(rows, out / "suite_with_included.png")
-    print("\n".join(lines))
+    plot_suite(rows, out / "suite_with_included.png", {name: r.top_group for name, r in rankings.items()})
+    print(text)
     print(f"written to {out / 'suite_with_included.md'}")
     return 0

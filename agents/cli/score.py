@@ -5,7 +5,7 @@ The agent is a FlowNav agent name, one of your own (``my_pkg.my_module:make_agen
 object), or a stable-baselines3 model (``--policy model.zip --algo sac``). Writes ``<out>/suite_episodes.csv``
 (resumable) and ``<out>/score.csv``; ``flownav leaderboard --include <out>/score.csv`` sets the rows beside the
 published table. What the agent is given and must return (observation keys, shapes and meaning; the action and
-its units; ``predict``'s signature): ``flownav describe [tier]``. ``--name`` sets the name its rows show
+its units; ``predict``'s signature): ``flownav describe [--tiers TIER]``. ``--name`` sets the name its rows show
 (default: the file's stem and callable, ``my_agent:make_agent``). In Python: ``agents.evaluation.suite.score``.
 ``--robustness`` adds the agent's failure-versus-error curves on the sweep's sensor factors
 (``agents.studies.robustness.robustness``).
@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.cli.arguments import flight_notice
 from agents.cli.suite import add_tier_arguments
 from agents.evaluation.suite_report import tier_tables
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
@@ -143,6 +144,19 @@ def run(args: argparse.Namespace) -> int:
         from agents.studies.robustness import robustness_cells
 
         robustness_cells(args.factors, args.robustness_layouts)  # bad options fail before anything flies
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+    from agents.evaluation.suite import agent_runs, parse_tiers
+    from agents.policies.external import is_external_name
+
+    runs = 1 if is_external_name(agent) else len(agent_runs(agent, policy))
+    notice = flight_notice(
+        "score",
+        runs * len(parse_tiers(args.tiers)) * args.layouts,
+        args.workers,
+        "--layouts 10 is a quick look, --tiers clean one tier",
+    )
+    if notice:
+        print(notice)
     # What both flights share: the agent's policy file and where the episodes fly.
     common = {
         "policy": policy,

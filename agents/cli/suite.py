@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.cli.arguments import add_workers_argument
+from agents.cli.arguments import add_workers_argument, flight_notice
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.policies import SUITE_AGENTS
@@ -71,9 +71,23 @@ def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import run_suite
 
+    agents = [name.strip() for name in args.agents.split(",") if name.strip()]
+    if not args.report_only:
+        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+        from agents.evaluation.suite import agent_runs, parse_tiers
+
+        runs = sum(len(agent_runs(agent)) for agent in agents)
+        notice = flight_notice(
+            "suite",
+            runs * len(parse_tiers(args.tiers)) * args.layouts,
+            args.workers,
+            "--agents, --tiers and --layouts 30 ask for less",
+        )
+        if notice:
+            print(notice)
     command = "flownav suite " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     lines = run_suite(
-        [name.strip() for name in args.agents.split(",") if name.strip()],
+        agents,
         Path(args.out),
         tiers=args.tiers,
         layouts=args.layouts,

@@ -6,8 +6,10 @@ See :mod:`agents.evaluation.sweep` for what a sweep flies and writes.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
+from agents.cli.arguments import add_layouts_argument
 from agents.common.locations import CONFIGS_DIR, RESULTS_DIR, SCRATCH_DIR
 
 HELP = "sweep agents × sensor errors (collision rates with 95 %% CIs; resumable; local or Ray)"
@@ -25,9 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder of sweep_episodes.csv, sweep.csv, sweep.md and the figure (default: %(default)s; "
         f"{RESULTS_DIR} to publish)",
     )
-    parser.add_argument(
-        "--episodes", type=int, help="override the config's episodes per cell (default: the config's)"
-    )
+    add_layouts_argument(parser, None, "override the config's layouts per cell (default: the config's)")
     parser.add_argument(
         "--workers", type=int, help="override the config's local worker count (default: the config's)"
     )
@@ -41,10 +41,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="fly nothing: rebuild sweep.csv, sweep.md and the figure from the episodes flown so far",
     )
     parser.add_argument(
-        "--refly",
+        "--agents",
         metavar="AGENTS",
-        help="comma-separated agents whose episodes are deleted from sweep_episodes.csv before flying, "
-        "so they are flown again (after retraining a policy)",
+        help="with --refly: comma-separated agents of the config whose episodes are flown again",
+    )
+    parser.add_argument(
+        "--refly",
+        nargs="?",
+        const=True,
+        metavar="AGENTS",
+        help="delete the --agents' episodes from sweep_episodes.csv before flying, so they are flown again "
+        "(after retraining a policy)",
     )
     parser.add_argument(
         "--compare-with",
@@ -63,6 +70,12 @@ def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.sweep import run_sweep
 
+    if isinstance(args.refly, str):  # the first spelling, --refly AGENTS
+        print(
+            f"flownav sweep: --refly AGENTS is an old spelling; use --agents {args.refly} --refly",
+            file=sys.stderr,
+        )
+        args.agents, args.refly = args.refly, True
     options = {
         k: v
         for k, v in vars(args).items()
@@ -73,9 +86,15 @@ def run(args: argparse.Namespace) -> int:
         Path(args.config),
         Path(args.out),
         overrides={
-            k: getattr(args, k) for k in ("episodes", "workers", "backend") if getattr(args, k) is not None
+            key: value
+            for key, value in {
+                "episodes": args.layouts,
+                "workers": args.workers,
+                "backend": args.backend,
+            }.items()
+            if value is not None
         },
-        refly=[a.strip() for a in (args.refly or "").split(",") if a.strip()],
+        refly=refly_agents(args),
         compare_with=Path(args.compare_with) if args.compare_with else None,
         report_only=args.report_only,
         overwrite=args.overwrite,
@@ -84,3 +103,19 @@ def run(args: argparse.Namespace) -> int:
         + " ".join(f"--{k.replace('_', '-')}" + ("" if v is True else f" {v}") for k, v in options.items()),
     )
     return 0
+
+
+def refly_agents(args: argparse.Namespace) -> list[str]:
+    """The agents whose sweep episodes are flown again: ``--agents`` with ``--refly``.
+
+    Raises:
+        ValueError: one given without the other.
+    """
+    agents = [name.strip() for name in (args.agents or "").split(",") if name.strip()]
+    if args.refly and not agents:
+        raise ValueError("--refly flies again the episodes of --agents AGENTS: name them")
+    if agents and not args.refly:
+        raise ValueError(
+            "the sweep flies every agent of its config; --agents names the agents --refly flies again"
+        )
+    return agents

@@ -11,7 +11,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.cli.arguments import add_old_spellings, add_tier_argument, env_id_of
 from agents.common.locations import SCRATCH_DIR
+from flownav_env.tiers import TIER_NAMES
 
 HELP = "tune a reactive agent on training seeds (TPE search, then finalists on fresh layouts; resumable)"
 
@@ -23,8 +25,8 @@ TUNABLE_AGENTS = ("bee", "bee_robust", "vfh")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--agent", required=True, choices=TUNABLE_AGENTS, help="the agent to tune")
     parser.add_argument("--trials", type=int, default=40, help="search trials (default: %(default)s)")
-    parser.add_argument(
-        "--search-episodes",
+    search = parser.add_argument(
+        "--search-layouts",
         type=int,
         default=30,
         help="training layouts every search trial flies, the same for all (default: %(default)s)",
@@ -35,8 +37,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=4,
         help="best search trials flown again on fresh layouts, plus the defaults (default: %(default)s)",
     )
-    parser.add_argument(
-        "--final-episodes",
+    add_old_spellings(parser, search, "--search-episodes")
+    final = parser.add_argument(
+        "--final-layouts",
         type=int,
         default=150,
         help="fresh training layouts per finalist, at least 100 (default: %(default)s)",
@@ -44,7 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers", type=int, default=2, help="local worker processes (default: %(default)s)"
     )
-    parser.add_argument("--env-id", default="FlowNav-v0", help="env id (default: %(default)s)")
+    add_old_spellings(parser, final, "--final-episodes")
+    add_tier_argument(
+        parser,
+        "clean",
+        f"a suite tier ({', '.join(TIER_NAMES)}) or any Gymnasium id such as FlowNavSingle-v0 (default: %(default)s)",
+    )
     parser.add_argument(
         "--out",
         type=Path,
@@ -61,12 +69,12 @@ def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.tuning import Budget, tune
 
-    budget = Budget(args.trials, args.search_episodes, args.finalists, args.final_episodes)
+    budget = Budget(args.trials, args.search_layouts, args.finalists, args.final_layouts)
     result = tune(
         args.agent,
         args.out or SCRATCH_DIR / "tuning" / args.agent,
         budget,
-        env_id=args.env_id,
+        env_id=env_id_of(args.tiers),
         workers=args.workers,
         overwrite=args.overwrite,
     )

@@ -12,9 +12,11 @@ import sys
 import warnings
 from pathlib import Path
 
+from agents.cli.arguments import add_seed_start_argument, add_tier_argument, env_id_of
 from agents.common.locations import SCRATCH_DIR
 from agents.common.seeds import TEST_SEED_START
 from agents.policies import AGENT_NAMES, POLICY_OPTION_HELP, TRUST_PICKLE_HELP, runs_to_fly
+from flownav_env.tiers import TIER_NAMES
 
 HELP = "record an mp4 of an agent's episode with the flow overlay"
 
@@ -28,8 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--policy", help=POLICY_OPTION_HELP)
     parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
-    parser.add_argument("--env-id", default="FlowNav-v0")
-    parser.add_argument("--seed", type=int, default=TEST_SEED_START)
+    add_tier_argument(
+        parser,
+        "clean",
+        f"a suite tier ({', '.join(TIER_NAMES)}) or any Gymnasium id such as FlowNavSingle-v0 (default: %(default)s)",
+    )
+    add_seed_start_argument(parser, TEST_SEED_START, "the layout seed flown (default: %(default)s)")
     parser.add_argument("--out", help=f"mp4 path (default {SCRATCH_DIR}/videos/<agent>_<env-id>_<seed>.mp4)")
     parser.add_argument("--max-steps", type=int, default=600)
 
@@ -39,7 +45,8 @@ def run(args: argparse.Namespace) -> int:
     args.agent = runs[0]
     if message:
         print(f"{message}; this video flies {args.agent}")
-    out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{args.env_id}_{args.seed}.mp4")
+    env_id = env_id_of(args.tiers)
+    out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{env_id}_{args.seed_start}.mp4")
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.video import record_episode
 
@@ -47,8 +54,8 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always")
         info = record_episode(
             args.agent,
-            args.env_id,
-            args.seed,
+            env_id,
+            args.seed_start,
             out,
             policy=args.policy,
             max_steps=args.max_steps,

@@ -6,6 +6,7 @@ Pure: it imports no policy, no env, no simulator, so the analysis of committed r
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, get_args
@@ -109,7 +110,10 @@ def split_agent_name(name: str) -> tuple[str, int | None]:
         "of your own as module.path:callable or path/to/file.py:callable"
     )
     if base not in AGENTS:
-        raise ValueError(f"agent must be {allowed}, got {name!r}")
+        close = difflib.get_close_matches(base, list(AGENTS), n=1)
+        raise ValueError(
+            f"agent must be {allowed}, got {name!r}" + (f"; did you mean {close[0]!r}?" if close else "")
+        )
     if not mark:
         return base, None
     if AGENTS[base].kind != "learned":

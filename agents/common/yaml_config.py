@@ -20,6 +20,7 @@ plain dataclasses, so callers keep ``dataclasses.asdict``, equality and direct c
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import functools
 import types
 import typing
@@ -56,7 +57,7 @@ _EXPECTED = {
 # prefix (the key and a dot, for a key below it), where ("ppo" or "top level"), input (the bad value), msg
 # (pydantic's or this module's), expected (from _EXPECTED), choices (a Literal's) and the error's context.
 _TEMPLATES = {
-    "unknown_key": "unknown key '{prefix}{name}' (allowed at {where}: {allowed})",
+    "unknown_key": "unknown key '{prefix}{name}' (allowed at {where}: {allowed}){hint}",
     "missing": "missing required key '{key}'",
     "out_of_range": "{subject} {msg}, got {input!r}",
     "setting": "{subject}: {msg}",
@@ -191,8 +192,15 @@ def _known_keys(allowed: list[str], data: object) -> object:
     if isinstance(data, dict):
         unknown = sorted(str(key) for key in data if key not in allowed)
         if unknown:
+            close = difflib.get_close_matches(unknown[0], allowed, n=1)
             raise PydanticCustomError(
-                "unknown_key", "unknown key {name}", {"name": unknown[0], "allowed": ", ".join(allowed)}
+                "unknown_key",
+                "unknown key {name}",
+                {
+                    "name": unknown[0],
+                    "allowed": ", ".join(allowed),
+                    "hint": f"; did you mean '{close[0]}'?" if close else "",
+                },
             )
     return data
 

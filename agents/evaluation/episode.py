@@ -8,9 +8,21 @@ import gymnasium as gym
 import numpy as np
 
 from agents.analysis.episode_record import EpisodeRecord
-from agents.policies import Agent
+from agents.policies import Agent, predict_location
 
 __all__ = ["EpisodeRecord", "run_episode"]
+
+
+def _env_name(env: gym.Env[dict[str, np.ndarray], np.ndarray], factor: str, level: float) -> str:
+    """The env id with what the episode was flown as (a suite tier, or a sweep factor at its level)."""
+    env_id = env.spec.id if env.spec is not None else type(env.unwrapped).__name__
+    return f"{env_id} ({factor}{f' {level:g}' if level else ''})"
+
+
+def _in_episode(error: ValueError, where: str, label: str) -> ValueError:
+    """``error`` with ``where`` it happened in front (``agent 'x' on ..., layout ..., step ...``; a message that
+    named the agent already names it once)."""
+    return ValueError(f"{where}: {str(error).removeprefix(f'agent {label!r}: ')}")
 
 
 def run_episode(
@@ -30,12 +42,26 @@ def run_episode(
     terminated = truncated = False
     # As SB3's evaluate_policy: an agent with memory gets its state back and is told where an episode starts.
     agent_state, episode_start = None, np.ones(1, bool)
+    episode = f"agent {label or type(agent).__name__!r} on {_env_name(env, factor, level)}, layout {seed}"
     while not (terminated or truncated):
-        action, agent_state = agent.predict(
-            observation, state=agent_state, episode_start=episode_start, deterministic=True
-        )
+        try:
+            action, agent_state = agent.predict(
+                observation, state=agent_state, episode_start=episode_start, deterministic=True
+            )
+        except ValueError as error:
+            if type(error) is not ValueError:
+                raise  # a kind that says where itself (a step timeout) or is caught by its kind (a missing key)
+            raise _in_episode(error, f"{episode}, step {steps + 1}", label) from error
         episode_start = np.zeros(1, bool)
-        observation, reward, terminated, truncated, info = env.step(action)
+        try:
+            observation, reward, terminated, truncated, info = env.step(action)
+        except ValueError as error:
+            # The env refuses the action (NaN, infinite, a wrong shape): the agent's, said with where it is.
+            location = predict_location(agent)
+            raise ValueError(
+                f"{episode}, step {steps + 1}: {error}"
+                + (f"; the action came from predict at {location}" if location else "")
+            ) from error
         steps += 1
         total_return += float(reward)
         new_position = info["position"]

@@ -324,7 +324,7 @@ def run_leaderboard(
     """
     if episodes < block:  # checked before flying: the intervals over runs need whole blocks of layouts
         raise ValueError(
-            f"--episodes must be >= {block} (one block of layouts for the intervals over runs), got {episodes}"
+            f"--layouts must be >= {block} (one block of layouts for the intervals over runs), got {episodes}"
         )
     if workers < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")

@@ -35,7 +35,7 @@ from agents.common.machine import code_version
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, resume_plan
-from agents.evaluation.progress import EpisodeProgress, holdings_line
+from agents.evaluation.progress import EpisodeProgress, PlainProgress, episode_progress, holdings_line
 from agents.policies import Agent, load_agent
 from agents.policies.agent_limits import AgentLimits, check_step_timeout
 from agents.policies.agent_process import IsolatedAgent, end_agent_processes
@@ -57,7 +57,9 @@ class FlightCache:
     def __init__(self, max_agents: int = 16) -> None:
         self.max_agents = max_agents
         self.envs: dict[tuple[str, str], gym.Env] = {}
-        self.agents: dict[tuple[str, str | None, tuple[tuple[str, float], ...], bool, AgentLimits], Agent] = {}
+        self.agents: dict[
+            tuple[str, str | None, tuple[tuple[str, float], ...], bool, AgentLimits], Agent
+        ] = {}
 
     def env_and_agent(self, task: EpisodeTask) -> tuple[gym.Env, Agent, dict[str, Any]]:
         """The env and agent that fly ``task``, built only when its env settings or agent are new here, and the
@@ -256,7 +258,7 @@ def execute(
         print(holdings_line(csv_path, tasks, todo))
     if not todo:
         return 0
-    progress = EpisodeProgress(todo, description, by_factor=by_factor)
+    progress = episode_progress(todo, description, by_factor=by_factor)
     results = _results(todo, csv_path, backend, workers, address)
     flown = 0
     try:
@@ -317,7 +319,9 @@ def _say_what_does_not_count(csv_path: Path, damaged: int, other_versions: dict[
         )
 
 
-def _await_other_runs(tasks: list[EpisodeTask], csv_path: Path, progress: EpisodeProgress) -> int:
+def _await_other_runs(
+    tasks: list[EpisodeTask], csv_path: Path, progress: EpisodeProgress | PlainProgress
+) -> int:
     """Wait until the episodes another run claimed are in the CSV, so this run's report counts them too;
     fly here any whose claimant stopped without writing it. Returns the number flown here."""
     flown = 0

@@ -40,7 +40,14 @@ from agents.evaluation.suite_page import (
     suite_values,
     tier_failures,
 )
-from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, plot_suite
+from agents.evaluation.suite_report import (
+    OUTCOMES,
+    SCORE_CSV,
+    SUMMARY_COLUMNS,
+    other_agents_rows,
+    plot_suite,
+    write_score_runs,
+)
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
     SUITE_AGENTS,
@@ -165,11 +172,14 @@ def summarise_suite(
     tiers: Sequence[str],
     layouts: int = SUITE_LAYOUTS,
     version: str = SUITE_VERSION,
+    *,
+    privileged: Mapping[str, bool] | None = None,
 ) -> list[dict[str, Any]]:
     """One row per (agent, tier) with :data:`SUMMARY_COLUMNS` from the suite's episode rows (:func:`suite_rows`):
     each outcome's rate, with a 95 % interval over layouts (Wilson) for one run, or over runs × layouts
     (two-level bootstrap) for several training seeds. Agents and tiers with episodes missing are left out (a
-    partial flight reports what is whole).
+    partial flight reports what is whole). ``privileged`` says which agents are, where known (an included row
+    says it), instead of asking each agent.
     """
     rows = list(rows)
     seeds = list(suite_seeds(layouts, version))
@@ -191,7 +201,9 @@ def summarise_suite(
                 "episodes": len(names) * len(seeds),
                 "interval_over": "layouts (Wilson)" if len(names) == 1 else RUNS_INTERVAL,
                 "env_kwargs": _flown_settings(tier_rows, names),
-                "privileged": is_privileged(agent),
+                "privileged": privileged[agent]
+                if privileged and agent in privileged
+                else is_privileged(agent),
             }
             for name, matrix in outcomes.items():
                 if len(names) == 1:
@@ -223,7 +235,9 @@ def _flown_settings(rows: Sequence[Mapping[str, Any]], runs: Sequence[str]) -> s
     """
     flown = {row["env_kwargs"] or "{}" for row in rows if row["agent"] in runs}
     if len(flown) != 1:
-        raise ValueError(f"runs {', '.join(runs)} were flown with {len(flown)} different settings: {sorted(flown)}")
+        raise ValueError(
+            f"runs {', '.join(runs)} were flown with {len(flown)} different settings: {sorted(flown)}"
+        )
     return flown.pop()
 
 
@@ -247,7 +261,8 @@ def score(
     """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
     Episodes are appended to ``<out>/suite_episodes.csv`` (calling again resumes); the rows are written to
-    ``<out>/score.csv``, which ``flownav leaderboard --include`` sets beside the published table.
+    ``<out>/score.csv`` beside the rows of any other agent scored into ``out`` (an agent's earlier rows are
+    replaced), which ``flownav leaderboard --include`` sets beside the published table.
 
     Args:
         agent: a FlowNav agent name, ``my_pkg.my_module:make_agent``, ``path/to/file.py:make_agent``, or
@@ -296,7 +311,10 @@ def score(
     )
     rows = suite_rows(tasks, csv_path)
     table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)]
-    write_summary_csv(out / "score.csv", table)
+    write_summary_csv(
+        out / SCORE_CSV, other_agents_rows(out / SCORE_CSV, shown, runs[agent], version) + table
+    )
+    write_score_runs(out, shown, runs[agent])
     return table
 
 

@@ -19,6 +19,7 @@ from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, 
 from agents.analysis.records import read_records
 from agents.common.jinja_reports import render
 from agents.common.seeds import LANE_SEED_START
+from agents.common.tables import markdown_cell
 from agents.evaluation.episode_tasks import with_tier
 from agents.evaluation.lane import LANE_DIR, lane_values
 from agents.evaluation.learning_gain import LearningGain
@@ -39,7 +40,10 @@ STUDENT_RECIPES_DIR = "student_recipes"
 
 
 def tier_failures(
-    rows: Sequence[Mapping[str, Any]], runs: Mapping[str, Sequence[str]], tier_name: str, layouts: Sequence[int]
+    rows: Sequence[Mapping[str, Any]],
+    runs: Mapping[str, Sequence[str]],
+    tier_name: str,
+    layouts: Sequence[int],
 ) -> dict[str, np.ndarray]:
     """Each agent's failures on ``tier_name`` as a (runs, layouts) matrix, for the agents that flew every
     layout with every run; ``rows`` are suite episode rows with their ``tier``
@@ -62,12 +66,20 @@ def rank_suite(
     rankings = {}
     for name, matrices in failures.items():
         privileged = [row["agent"] for row in table if row["tier"] == name and row["privileged"]]
-        learned = [agent for agent in matrices if is_learned(agent)]
+        learned = [agent for agent in matrices if _is_shipped_learned(agent)]
         try:
             rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned)
         except ValueError:
             continue  # nothing rankable flown on this tier (say a reference flown on its own): no ranking
     return rankings
+
+
+def _is_shipped_learned(agent: str) -> bool:
+    """Whether ``agent`` is one of FlowNav's learned agents; an included agent's shown name (``my rule``) is not."""
+    try:
+        return is_learned(agent)
+    except ValueError:
+        return False
 
 
 def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
@@ -89,7 +101,12 @@ def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
 
 
 def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking, version: str) -> dict[str, Any]:
-    by_agent = {row["agent"]: dict(row) | {"trained_on": _trained_on(row["agent"], version)} for row in rows}
+    # "shown": the name as a table cell (an included agent's name is the user's text).
+    by_agent = {
+        row["agent"]: dict(row)
+        | {"trained_on": _trained_on(row["agent"], version), "shown": markdown_cell(row["agent"])}
+        for row in rows
+    }
     compared = {c.agent: c for c in ranking.comparisons}
     ranked = []
     for agent in [ranking.best, *sorted(compared, key=lambda a: (by_agent[a]["failure_rate"], a))]:
@@ -102,7 +119,7 @@ def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking, versio
         "provisional": sorted((r for r in apart if not r["privileged"]), key=lambda r: r["failure_rate"]),
         "references": sorted((r for r in apart if r["privileged"]), key=lambda r: r["failure_rate"]),
         "best": best,
-        "top_group": list(ranking.top_group),
+        "top_group": [markdown_cell(agent) for agent in ranking.top_group],
         "room": best["failure_rate"] >= HEADROOM_FAILURE,
     }
 
@@ -159,9 +176,14 @@ def suite_values(
     retired: Sequence[Mapping[str, Any]] = (),
     version: str = SUITE_VERSION,
     chains: Mapping[str, Sequence[ChainLink]] | None = None,
+    included_files: Sequence[tuple[str, str]] = (),
+    figure: str = "suite.png",
+    not_counted: Sequence[tuple[str, str]] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
-    provisional and reference rows, its best agent, top group and headroom."""
+    provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
+    whose rows are marked ``included``, each with its verification) the page is ``suite_with_included.md``, and ``not_counted`` the (agent,
+    tier) rows it could not count again (no episodes beside their CSV); ``figure`` is the figure it shows."""
     tiers = []
     for name in TIER_NAMES:
         if name not in rankings:
@@ -205,6 +227,9 @@ def suite_values(
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),
         "chains": {name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
+        "included_files": list(included_files),
+        "not_counted": list(not_counted),
+        "figure": figure,
     }
 
 

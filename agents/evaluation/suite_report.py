@@ -12,6 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from agents.common.folders import write_text_atomically
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.common.tables import markdown_cell, markdown_table
 from agents.evaluation.verification_record import verification_mark
@@ -44,6 +45,13 @@ SUMMARY_COLUMNS = [
 # A tier leaves room to improve when its best agent still fails at least this often.
 HEADROOM_FAILURE = 0.15
 
+
+# flownav score's rows, one per (agent, tier): every agent scored into the folder keeps its own.
+SCORE_CSV = "score.csv"
+
+# Beside a score.csv: each agent's shown name → the run names its episode records carry (what
+# flownav leaderboard --include ranks it on).
+SCORE_RUNS_JSON = "score_runs.json"
 
 # Where a suite CSV comes from, for messages about a file that is not one.
 SCORE_CSV_HINT = "flownav score writes one"
@@ -208,6 +216,50 @@ def read_included(
     return rows, files
 
 
+def other_agents_rows(
+    path: Path, agent: str, runs: Sequence[str], version: str = SUITE_VERSION
+) -> list[dict[str, Any]]:
+    """The rows of the score CSV at ``path`` of agents other than ``agent`` (flying ``runs``), so that agents
+    scored into one folder each keep their rows; ``agent``'s own are replaced by its new ones, as are those of
+    the same runs under another name (``--name``). Rows of another suite version than ``version``, or of another
+    shape, are dropped: they are
+    other tasks, scored again with flownav score."""
+    if not path.is_file():
+        return []
+    same = {agent} | {name for name, flown in read_score_runs(path.parent).items() if flown == list(runs)}
+    with path.open(newline="") as handle:
+        found = list(csv.DictReader(handle))
+    return [
+        {column: row[column] for column in SUMMARY_COLUMNS}
+        for row in found
+        if row.get("agent") not in same
+        and row.get("suite_version") == version
+        and None not in row.values()
+        and all(column in row for column in SUMMARY_COLUMNS)
+    ]
+
+
+def write_score_runs(folder: Path, agent: str, runs: Sequence[str]) -> None:
+    """Record that ``agent``'s rows in ``folder``'s score CSV rest on the episodes of ``runs``, beside any other
+    agent scored into the folder (the same runs under an earlier name are forgotten)."""
+    path = Path(folder) / SCORE_RUNS_JSON
+    known = {name: flown for name, flown in read_score_runs(folder).items() if flown != list(runs)}
+    known[agent] = list(runs)
+    write_text_atomically(path, json.dumps(known, indent=1, sort_keys=True) + "\n")
+
+
+def read_score_runs(folder: Path) -> dict[str, list[str]]:
+    """``folder``'s :data:`SCORE_RUNS_JSON` (empty when there is none, or it is no such mapping)."""
+    path = Path(folder) / SCORE_RUNS_JSON
+    try:
+        found = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, json.JSONDecodeError):
+        return {}
+    if not isinstance(found, dict):
+        return {}
+    return {str(agent): [str(run) for run in runs] for agent, runs in found.items() if isinstance(runs, list)}
+
+
 def check_row_task(row: Mapping[str, Any], path: Path) -> None:
     """Refuse a row whose episodes were not flown on its tier's task (:func:`flownav_env.tiers.
     check_flown_settings`): a changed course or sensor, or privileged data for an agent not declared privileged.
@@ -278,8 +330,11 @@ def _included_mark(row: Mapping[str, Any]) -> str:
     return f" (included, {mark})" if isinstance(mark, str) else " (included)"
 
 
-def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
-    """Failure rate with its 95 % interval per agent, a panel per tier."""
+def plot_suite(
+    rows: Sequence[Mapping[str, Any]], path: Path, top_groups: Mapping[str, Sequence[str]] | None = None
+) -> None:
+    """Failure rate with its 95 % interval per agent, a panel per tier; with ``top_groups`` (tier → its top
+    group, as the page ranks), a ranked agent outside its tier's top group is drawn hollow."""
     import matplotlib  # heavy: only a command that draws the figure pays for it
 
     matplotlib.use("Agg")
@@ -296,40 +351,56 @@ def plot_suite(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
         squeeze=False,
     )
     for axis, name in zip(axes[0], tiers, strict=False):
-        _plot_tier(axis, name, rows, agents)
+        _plot_tier(axis, name, rows, agents, None if top_groups is None else top_groups.get(name, ()))
     axes[0][0].set_yticks(range(len(agents)), labels)
     for tick, agent in zip(axes[0][0].get_yticklabels(), agents, strict=True):
         if any(r.get("included") for r in rows if r["agent"] == agent):
             tick.set_color("tab:red")
+    figure.suptitle(_plot_title(rows, ranked=top_groups is not None))
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+def _plot_title(rows: Sequence[Mapping[str, Any]], *, ranked: bool) -> str:
+    """The figure's title: the suite version and what its marks mean (hollow ones only where ``ranked``)."""
     included = (
         " (red: included rows, on the layouts their label says)"
         if any(r.get("included") for r in rows)
         else ""
     )
     version = str(rows[0].get("suite_version") or SUITE_VERSION) if rows else SUITE_VERSION
-    figure.suptitle(
+    hollow = "; hollow: outside the tier's top group" if ranked else ""
+    return (
         f"FlowNav suite v{version}: failure rate with 95 % interval (dotted: {HEADROOM_FAILURE}; grey: "
-        f"privileged references, never ranked){included}"
+        f"privileged references, never ranked{hollow}){included}"
     )
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
 
 
-def _plot_tier(axis: Axes, name: str, rows: Sequence[Mapping[str, Any]], agents: list[str]) -> None:
-    """One tier's panel: each agent's failure rate with its interval, at the agent's row of the y axis."""
+def _plot_tier(
+    axis: Axes,
+    name: str,
+    rows: Sequence[Mapping[str, Any]],
+    agents: list[str],
+    top_group: Sequence[str] | None = None,
+) -> None:
+    """One tier's panel: each agent's failure rate with its interval, at the agent's row of the y axis; with
+    ``top_group``, a ranked (not privileged) agent outside it hollow."""
     found = {r["agent"]: r for r in rows if r["tier"] == name}
     for index, agent in enumerate(agents):
         row = found.get(agent)
         if row is None:
             continue
         rate = row["failure_rate"]
+        colour = _marker_colour(row)
+        outside = top_group is not None and not row.get("privileged") and agent not in top_group
         axis.errorbar(
             rate,
             index,
             xerr=[[max(rate - row["failure_low"], 0.0)], [max(row["failure_high"] - rate, 0.0)]],
             fmt="o",
-            color=_marker_colour(row),
+            color=colour,
+            markerfacecolor="white" if outside else colour,
             capsize=3,
         )
     axis.axvline(HEADROOM_FAILURE, color="grey", linestyle=":", linewidth=1)

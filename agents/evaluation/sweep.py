@@ -5,7 +5,7 @@ obstacle layouts. Episodes are appended to ``<out>/sweep_episodes.csv`` as they 
 the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals) and the
 figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
 
-After a policy is retrained, ``--refly AGENT[,AGENT]`` deletes that agent's episodes so they are flown again;
+After a policy is retrained, ``--agents AGENT[,AGENT] --refly`` deletes that agent's episodes so they are flown again;
 ``--overwrite`` moves the episodes CSV aside (``sweep_episodes.csv.bak-<time>``) and starts a new one, the way
 out when the CSV holds episodes flown with other settings (resuming refuses to mix them) or predates them;
 ``--compare-with OLD/sweep_episodes.csv`` adds a table to ``sweep.md`` setting each cell beside an earlier sweep.
@@ -54,9 +54,7 @@ from flownav_env.settings_check import check_env_kwargs, check_setting
 # ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
 ALL_SEEDS = "@all"
 # What the sweep offers when its CSV cannot be resumed: its own --overwrite, or --refly for a retrained agent.
-SWEEP_REMEDY = (
-    f"{overwrite_hint('folder')}; after retraining an agent, --refly AGENT flies just its episodes again"
-)
+SWEEP_REMEDY = f"{overwrite_hint('folder')}; after retraining an agent, --agents AGENT --refly flies just its episodes again"
 SWEEP_FACTORS = (
     "rotation_error",
     "translation_error",
@@ -267,7 +265,7 @@ def _load_sweep_config(config_path: Path, overrides: dict[str, Any] | None) -> S
     for name, value in (overrides or {}).items():
         setattr(config, name, value)
     if config.episodes < 1 or config.workers < 1:
-        raise ValueError(f"--episodes and --workers must be >= 1, got {config.episodes} and {config.workers}")
+        raise ValueError(f"--layouts and --workers must be >= 1, got {config.episodes} and {config.workers}")
     check_env_kwargs(config.env, str(config_path))
     return config
 

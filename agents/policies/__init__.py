@@ -11,6 +11,7 @@ from agents.policies.base import (
     Agent,
     check_not_retired,
     is_learned,
+    predict_location,
     seeded_agent_name,
     split_agent_name,
 )
@@ -67,6 +68,7 @@ __all__ = [
     "load_agent",
     "load_policy",
     "policy_file",
+    "predict_location",
     "quantile_nearness",
     "runs_to_fly",
     "sector_nearness",

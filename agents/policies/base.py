@@ -4,6 +4,7 @@ kind (read from ``configs/agents.yaml`` by :mod:`agents.common.agent_table`)."""
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -98,3 +99,15 @@ class AgentWrapper:
         """What ``agent`` is given of ``observation``: the observation itself, unless a wrapper checks or
         converts it here (raising a ValueError for one it refuses)."""
         return observation
+
+
+def predict_location(agent: Agent) -> str | None:
+    """Where the ``predict`` that ``agent`` flies with is written, ``path/to/file.py:LINE`` (the innermost agent
+    under any :class:`AgentWrapper`), for an error about what it returned; None where Python cannot say."""
+    while isinstance(agent, AgentWrapper):
+        agent = agent.agent
+    try:
+        method = inspect.unwrap(type(agent).predict)
+        return f"{inspect.getsourcefile(method)}:{inspect.getsourcelines(method)[1]}"
+    except (AttributeError, TypeError, OSError):
+        return None

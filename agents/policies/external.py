@@ -30,7 +30,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from agents.policies.agent_process import isolated_agent
-from agents.policies.base import AGENT_NAMES, Agent, AgentWrapper
+from agents.policies.base import AGENT_NAMES, Agent, AgentWrapper, predict_location
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from agents.policies.sb3_models import is_sb3_model_name
 
@@ -261,10 +261,16 @@ class ExternalAgent(AgentWrapper):
             raise ValueError(f"agent {self.spec!r}: predict raised {describe_error(error, source)}") from None
         if not isinstance(result, (tuple, list)) or len(result) != 2:
             raise ValueError(
-                f"agent {self.spec!r}: predict must return (action, state), as stable-baselines3's does, got "
-                f"{_shape_of(result)}; an agent without memory returns (action, None)"
+                f"agent {self.spec!r}: predict{_at(self.agent)} must return (action, state), as stable-baselines3's "
+                f"does, got {_shape_of(result)}; an agent without memory returns (action, None)"
             )
         return result[0], result[1]
+
+
+def _at(agent: Agent) -> str:
+    """`` (at path/to/file.py:LINE)`` of ``agent``'s ``predict``, or nothing where Python cannot say."""
+    where = predict_location(agent)
+    return f" (at {where})" if where else ""
 
 
 def _shape_of(value: object) -> str:

@@ -67,7 +67,7 @@ def ablation_tasks(
     """
     if episodes < 1 or first_layout + episodes > TEST_SEED_START:
         raise ValueError(
-            f"--episodes must be in [1, {TEST_SEED_START - first_layout}] (validation layouts from "
+            f"--layouts must be in [1, {TEST_SEED_START - first_layout}] (validation layouts from "
             f"{first_layout:,}), got {episodes}"
         )
     seeds = range(first_layout, first_layout + episodes)
@@ -110,7 +110,7 @@ def compare_configs(
     """
     env = check_env_kwargs(dict(env or {}), "command line", key="--env")
     if tier is not None and env:
-        raise ValueError(f"--env and --tier {tier}: a tier fixes its own settings, so give one or the other")
+        raise ValueError(f"--env and --tiers {tier}: a tier fixes its own settings, so give one or the other")
     for agent in reference_agents:
         if agent not in REACTIVE_AGENTS:
             raise ValueError(

@@ -12,12 +12,14 @@ benchmark's values (:mod:`agents.studies.benchmark_report`) beside this report's
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import Comparison, compare, verdict
 from agents.analysis.records import read_records
@@ -95,6 +97,18 @@ def gap_table(
     return markdown_table([*header, "`planner` (the ceiling)"], body) if rows else ""
 
 
+def _episodes(path: Path) -> tuple[EpisodeRow, ...]:
+    """The episode records at ``path``, read once per version of the file: the report draws a dozen agents'
+    matrices from the suite's tens of thousands of episodes."""
+    status = path.stat()
+    return _read_once(str(path), status.st_mtime_ns, status.st_size)
+
+
+@functools.lru_cache(maxsize=2)
+def _read_once(path: str, _mtime_ns: int, _size: int) -> tuple[EpisodeRow, ...]:
+    return tuple(read_records(Path(path)))
+
+
 def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR) -> dict[str, np.ndarray]:
     """tier → failures (runs, layouts) of ``agent``'s shipped seeds (a rule or planner: its one run) on the
     suite's frozen layouts, for the tiers every run has flown whole."""
@@ -102,7 +116,7 @@ def suite_matrices(results: Path, agent: str, policies_dir: Path = POLICIES_DIR)
     runs = shipped_seed_runs(agent, policies_dir) if is_learned(agent) else [agent]
     if not path.is_file() or not runs:
         return {}
-    rows = [row for row in read_records(path) if row["agent"] in runs]
+    rows = [row for row in _episodes(path) if row["agent"] in runs]
     found = {}
     for tier_name in TIER_NAMES:
         try:
@@ -251,12 +265,16 @@ def plot_gap(panels: Mapping[str, Sequence[Bar]], path: Path) -> None:
 
 
 def flow_gap_values(
-    results_dir: Path, policies_dir: Path = POLICIES_DIR, result: Mapping[str, Any] | None = None
+    results_dir: Path,
+    policies_dir: Path = POLICIES_DIR,
+    result: Mapping[str, Any] | None = None,
+    data: BenchmarkData | None = None,
 ) -> dict[str, Any]:
     """Every value of the flow-gap template, from the committed data under ``results_dir``; ``result``: the
-    confirmation's comparison (:func:`run_confirmation`) when the caller has it already."""
+    confirmation's comparison (:func:`run_confirmation`) and ``data`` the benchmark's summaries, when the
+    caller has them already."""
     results = Path(results_dir)
-    data = load_benchmark_data(results)
+    data = data if data is not None else load_benchmark_data(results)
     if result is None:
         result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     confirmation = confirmation_rows(result, results, policies_dir)
@@ -293,11 +311,16 @@ def write_flow_gap(
     """
     results = Path(results_dir)
     result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
-    values = {**flow_gap_values(results, policies_dir, result), "generated": today(), "command": command}
+    data = load_benchmark_data(results)  # read once: the values and the figure draw on it
+    values = {
+        **flow_gap_values(results, policies_dir, result, data),
+        "generated": today(),
+        "command": command,
+    }
     text = render_report("flow_gap.md.j2", values)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    plot_gap(gap_bars(load_benchmark_data(results), result, results, policies_dir), out / "flow_gap.png")
+    plot_gap(gap_bars(data, result, results, policies_dir), out / "flow_gap.png")
     write_text_atomically(out / "flow_gap.md", text)
     return text.splitlines()

@@ -76,7 +76,7 @@ class Budget:
         Raises:
             ValueError: naming the option, its value and its allowed range.
         """
-        for option, value in (("--trials", self.trials), ("--search-episodes", self.search_episodes)):
+        for option, value in (("--trials", self.trials), ("--search-layouts", self.search_episodes)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{option} must be an integer >= 1, got {value!r}")
         if isinstance(self.finalists, bool) or not isinstance(self.finalists, int):
@@ -84,13 +84,13 @@ class Budget:
         if not 1 <= self.finalists <= self.trials:
             raise ValueError(f"--finalists must be in [1, --trials = {self.trials}], got {self.finalists}")
         if isinstance(self.final_episodes, bool) or not isinstance(self.final_episodes, int):
-            raise ValueError(f"--final-episodes must be an integer, got {self.final_episodes!r}")
+            raise ValueError(f"--final-layouts must be an integer, got {self.final_episodes!r}")
         if self.final_episodes < final_minimum:
-            raise ValueError(f"--final-episodes must be >= {final_minimum}, got {self.final_episodes}")
+            raise ValueError(f"--final-layouts must be >= {final_minimum}, got {self.final_episodes}")
         end = SEARCH_SEED_START + self.search_episodes + self.final_episodes
         if end > VALIDATION_SEED_START:
             raise ValueError(
-                "--search-episodes + --final-episodes must stay within the training seeds "
+                "--search-layouts + --final-layouts must stay within the training seeds "
                 f"[{SEARCH_SEED_START}, {VALIDATION_SEED_START}), got {self.search_episodes} + "
                 f"{self.final_episodes} = {self.search_episodes + self.final_episodes} layouts"
             )

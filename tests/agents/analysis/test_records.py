@@ -182,7 +182,7 @@ def test_a_foreign_binary_or_directory_out_is_one_error_naming_it(
         read_records(target)
     with pytest.raises(ValueError, match=message):
         append_record(target, RECORD)
-    args = ["evaluate", "--agent", "straight", "--episodes", "1", "--env-id", "FlowNavSingle-v0"]
+    args = ["evaluate", "--agent", "straight", "--layouts", "1", "--tiers", "FlowNavSingle-v0"]
     assert main([*args, "--out", str(target)]) == 2
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and error[0].startswith("flownav evaluate: error: ") and str(target) in error[0]

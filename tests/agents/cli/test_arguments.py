@@ -1,5 +1,6 @@
 """Options shared by several commands: ``--env`` keys checked with the env's own suggestion, one ``--workers``
-default, one name for the policies folder, and help that never cuts an agent name."""
+default, one name for the policies folder, and help that never cuts an agent name (the rest of the flag
+vocabulary: ``test_vocabulary.py``)."""
 
 from __future__ import annotations
 
@@ -39,11 +40,16 @@ def test_every_flying_command_shares_one_workers_default() -> None:
         assert workers.default == DEFAULT_WORKERS, name
 
 
-def test_demo_takes_the_policies_folder_by_leaderboard_s_name_and_its_old_one() -> None:
+def test_the_policies_folder_has_one_name_and_its_old_ones_still_work(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     parser = build_parser()
-    for option in ("--policies-dir", "--policy-dir"):
-        assert parser.parse_args(["demo", option, "/tmp/policies"]).policies_dir == "/tmp/policies"
     assert parser.parse_args(["leaderboard", "--policies-dir", "/tmp/p"]).policies_dir == "/tmp/p"
+    for option in ("--policy-dir", "--policies"):
+        assert (
+            parser.parse_args(["ablation", "--configs", "c.yaml", option, "/tmp/p"]).policies_dir == "/tmp/p"
+        )
+        assert f"{option} is an old spelling; use --policies-dir" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", SUITE_AGENTS)])

@@ -18,9 +18,9 @@ def test_evaluate_command_prints_the_table(tmp_path: Path, capsys) -> None:
         "evaluate",
         "--agent",
         "bee",
-        "--episodes",
+        "--layouts",
         "1",
-        "--env-id",
+        "--tiers",
         "FlowNavSingle-v0",
         "--env",
         "camera_width=96",
@@ -36,8 +36,8 @@ def test_evaluate_command_prints_the_table(tmp_path: Path, capsys) -> None:
 def test_cli_reports_bad_input_in_one_line(capsys) -> None:
     from agents.cli import main
 
-    assert main(["evaluate", "--agent", "bee", "--episodes", "0"]) == 2
-    assert "flownav evaluate: error: --episodes must be >= 1, got 0" in capsys.readouterr().err
+    assert main(["evaluate", "--agent", "bee", "--layouts", "0"]) == 2
+    assert "flownav evaluate: error: --layouts must be >= 1, got 0" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("command", [[], *[[name] for name in COMMANDS]])
@@ -102,7 +102,7 @@ def test_grouped_curves_draw_a_panel_per_config_even_when_a_seed_stopped_evaluat
 def test_an_unknown_env_id_is_one_line_naming_the_ids(tmp_path: Path, capsys) -> None:
     from agents.cli import main
 
-    args = ["evaluate", "--agent", "straight", "--episodes", "1", "--env-id", "FlowNav-v9"]
+    args = ["evaluate", "--agent", "straight", "--layouts", "1", "--tiers", "FlowNav-v9"]
     assert main([*args, "--out", str(tmp_path / "e.csv")]) == 2
     error = capsys.readouterr().err
     last_line = error.strip().splitlines()[-1]
@@ -135,57 +135,14 @@ def test_version_and_scratch_defaults_of_report_writers(capsys) -> None:
     assert parser.parse_args(["replicate"]).out == Path("runs/thesis")
 
 
-def test_demo_says_how_few_episodes_it_flew_and_where_the_full_table_is(monkeypatch, capsys) -> None:
-    # The runner is replaced by one that writes made-up records: the table's shape is under test, not flying.
-    from agents.analysis.records import append_record
-    from agents.cli import main
+def test_demo_says_on_how_few_layouts_it_rests_and_where_the_full_table_is() -> None:
+    from agents.cli.demo import demo_note
     from agents.common.locations import RESULTS_DIR
-    from agents.evaluation import runner
-    from agents.evaluation.episode import EpisodeRecord
 
-    def made_up(tasks, csv_path, **kwargs) -> int:
-        for task in tasks:
-            success = task.agent != "straight"
-            fields = dict.fromkeys(("time_s", "path_length_m", "mean_points_valid", "episode_return"), 1.0)
-            record = EpisodeRecord(
-                agent=task.agent, factor=task.factor, level=task.level, seed=task.seed, collision=not success,
-                success=success, out_of_bounds=False, truncated=False, progress_m=30.0, steps=10,
-                min_clearance_m=0.5, median_depth_error=0.1, **fields,
-            )  # fmt: skip
-            append_record(csv_path, record)
-        return len(tasks)
-
-    monkeypatch.setattr(runner, "execute", made_up)
-    assert main(["demo", "--episodes", "5"]) == 0
-    out = capsys.readouterr().out
+    note = demo_note(4, "clean", Path("runs/demo"))
     assert (
-        "Only 5 episodes per agent: a quick look, not a ranking (the widest 95 % interval below spans 0.43)"
-        in out
+        "every agent on the first 4 frozen test layouts of the clean tier, ranked as the suite ranks" in note
     )
     assert (
-        "The leading table, every agent on each of the 4 tiers' 300 frozen test layouts (seeds from 2,000,000) and "
-        f"learned agents over all their training seeds, is {RESULTS_DIR / 'suite.md'} (flownav suite)" in out
+        f"the leading table, every tier's 300 layouts, is {RESULTS_DIR / 'suite.md'} (flownav suite)" in note
     )
-    assert f"the clean tier's history table, {RESULTS_DIR / 'leaderboard.md'}, whose other layouts" in out
-    table = [line for line in out.splitlines() if line.startswith("|")]
-    assert table[0].startswith("| agent | episodes | failure rate [95 % CI] |")  # no constant factor, level
-    assert any(line.startswith("| ppo_flow | 5 | 0.00 [0.00, 0.43] |") for line in table)  # seeds pooled
-    from agents.policies import LEARNED_AGENTS, REACTIVE_AGENTS, default_runs
-
-    flown = [*REACTIVE_AGENTS, *(agent for agent in LEARNED_AGENTS if default_runs(agent)[0])]
-    assert len(table) == 2 + len(flown) and "clean" not in out.split("| agent |")[1]
-
-
-def test_demo_keeps_factor_and_level_columns_that_differ() -> None:
-    from agents.analysis.statistics import summarise
-    from agents.cli.demo import demo_report
-
-    rows = [
-        {"agent": "bee", "factor": factor, "level": level, "seed": seed, "collision": False, "success": True}
-        | {"out_of_bounds": False, "progress_m": 30.0, "min_clearance_m": 0.5}
-        for factor, level in (("clean", 0.0), ("brightness", 0.5))
-        for seed in range(2)
-    ]
-    report = demo_report(summarise(rows), "FlowNav-v0", 2)
-    assert "| agent | factor | level | episodes |" in report and "| bee | brightness | 0.5 | 2 |" in report
-    assert "Only 2 episodes per agent" in report

@@ -31,7 +31,7 @@ def test_evaluate_refuses_an_unwritable_out_before_flying(capsys: pytest.Capture
 
     monkeypatch.setattr("agents.evaluation.runner.run_task", fly)
     out = unwritable_folder() / "episodes.csv"
-    code = cli.main(["evaluate", "--agent", "straight", "--episodes", "1", "--out", str(out)])
+    code = cli.main(["evaluate", "--agent", "straight", "--layouts", "1", "--out", str(out)])
     error = capsys.readouterr().err.strip()
     assert code == 2
     assert error.startswith("flownav evaluate: error: cannot write to the output folder /sys/flownav_test_output")
@@ -39,7 +39,7 @@ def test_evaluate_refuses_an_unwritable_out_before_flying(capsys: pytest.Capture
 
 
 def test_sweep_refuses_an_unwritable_out_before_flying(capsys: pytest.CaptureFixture[str]) -> None:
-    code = cli.main(["sweep", "--episodes", "1", "--out", str(unwritable_folder())])
+    code = cli.main(["sweep", "--layouts", "1", "--out", str(unwritable_folder())])
     assert code == 2
     assert "cannot write to the output folder /sys/flownav_test_output" in capsys.readouterr().err
 
@@ -65,9 +65,9 @@ def test_a_write_error_is_one_line_naming_the_file_and_exit_1(
 
 
 def test_leaderboard_refuses_too_few_layouts_before_flying(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    code = cli.main(["leaderboard", "--agents", "straight", "--episodes", "3", "--out", str(tmp_path)])
+    code = cli.main(["leaderboard", "--agents", "straight", "--layouts", "3", "--out", str(tmp_path)])
     assert code == 2
-    assert "--episodes must be >= 30 (one block of layouts for the intervals over runs), got 3" in (
+    assert "--layouts must be >= 30 (one block of layouts for the intervals over runs), got 3" in (
         capsys.readouterr().err
     )
     assert not (tmp_path / "leaderboard_episodes.csv").exists()
@@ -121,7 +121,7 @@ def test_evaluate_unpickles_a_bare_policy_zip_only_with_trust_pickle(
     bare = tmp_path / "bare.zip"  # no training config beside it: only PPO.load (unpickling) can read it
     shutil.copy(RESULTS_DIR / "policies" / "ppo_flow" / "seed_0.zip", bare)
     out = tmp_path / "episodes.csv"
-    command = ["evaluate", "--agent", "ppo_flow", "--policy", str(bare), "--episodes", "1", "--out", str(out)]
+    command = ["evaluate", "--agent", "ppo_flow", "--policy", str(bare), "--layouts", "1", "--out", str(out)]
     assert cli.main(command) == 2
     error = capsys.readouterr().err
     assert "has no training config beside it" in error and "--trust-pickle" in error

@@ -57,9 +57,11 @@ def test_describe_defaults_to_the_first_tier(capsys: pytest.CaptureFixture[str])
 
 
 def test_describe_of_an_unknown_tier_is_one_line_and_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["describe", "hrad"]) == 2
+    assert main(["describe", "--tiers", "hrad"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == "flownav describe: error: tier must be one of clean, hard, noisy, hard_noisy, got 'hrad'"
+    assert err == (
+        "flownav describe: error: tier must be one of clean, hard, noisy, hard_noisy, got 'hrad'; did you mean 'hard'?"
+    )
 
 
 def test_score_help_and_flownav_help_point_to_describe_and_the_leading_table(
@@ -67,8 +69,41 @@ def test_score_help_and_flownav_help_point_to_describe_and_the_leading_table(
 ) -> None:
     with pytest.raises(SystemExit):
         main(["score", "--help"])
-    assert "flownav describe [tier]" in " ".join(capsys.readouterr().out.split())
+    assert "flownav describe [--tiers TIER]" in " ".join(capsys.readouterr().out.split())
     with pytest.raises(SystemExit):
         main(["--help"])
     top = " ".join(capsys.readouterr().out.split())
     assert "The leading table is results/suite.md (flownav suite)" in top and "flownav describe" in top
+
+
+def test_describe_gives_the_bin_edges_values_the_signs_and_every_setting_of_the_tier() -> None:
+    from flownav_env.settings import EnvSettings
+
+    text = "\n".join(describe_tier("hard"))
+    edges = EnvSettings().depth_bin_edges
+    assert f"depth_bin_edges {list(edges)}: [{edges[0]:g}, {edges[1]:g})," in text
+    assert f"the last one also counting what lies beyond {edges[-1]:g} m" in text
+    signs = {row[0]: row[1] for row in table_rows(text, "| quantity | positive means |")}
+    assert signs["state[1] lateral velocity"].startswith("to the left")
+    assert signs["state[6] heading error"].startswith("turned to the left")
+    assert signs["action 0, lateral velocity"].startswith("to the right")
+    assert signs["action 2, yaw rate"].startswith("to the right (clockwise)")
+    settings = {row[0]: row[1] for row in table_rows(text, "| setting | value |")}
+    assert settings["forward_speed *"] == "2.0" and settings["obstacle_density *"] == "0.18"
+    assert settings["observe_approach"] == "False"  # the env's default, not describe's own every-key env
+    assert len(settings) == len(EnvSettings.__dataclass_fields__)
+
+
+def test_the_signs_describe_states_are_the_env_s() -> None:
+    import numpy as np
+
+    env = gym.make("FlowNavSingle-v0", camera_width=64, camera_height=48)
+    try:
+        for action, entry in (([1.0, 0.0, 0.0], 1), ([0.0, 0.0, 1.0], 6)):
+            observation, _ = env.reset(seed=0)
+            for _ in range(5):
+                observation, *_ = env.step(np.array(action, np.float32))
+            # A positive action (to the right) makes the left-positive state entry negative.
+            assert observation["state"][entry] < 0
+    finally:
+        env.close()

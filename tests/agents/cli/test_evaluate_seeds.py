@@ -30,7 +30,7 @@ def test_validation_and_test_runs_pass() -> None:
 def test_training_seeds_and_runs_across_the_boundary_are_one_line(
     start: int, episodes: int, message: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["evaluate", "--agent", "straight", "--episodes", str(episodes), "--seed-start", str(start)])
+    code = main(["evaluate", "--agent", "straight", "--layouts", str(episodes), "--seed-start", str(start)])
     assert code == 2
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1

@@ -79,7 +79,10 @@ def test_a_first_score_says_what_is_left_and_shows_a_bar_per_tier(
         f"{csv_path} holds 0 of these 2 episodes already (clean 0/1, hard 0/1); 2 left to fly; each bar's time "
         "left is an estimate from the pace of its episodes flown so far"
     ) in stdout
-    assert "  clean: 100%" in stderr and "  hard: 100%" in stderr
+    assert (
+        "[progress]   clean: 1/1 episodes done in " in stderr
+        and "[progress]   hard: 1/1 episodes done in " in stderr
+    )
     assert len(read_records(csv_path)) == 2
 
 

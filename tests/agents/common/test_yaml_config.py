@@ -85,7 +85,7 @@ def test_a_config_file_loads_and_an_empty_one_is_an_empty_mapping(tmp_path: Path
         (
             {"name": "a", "stpes": 3},
             "unknown key 'stpes' (allowed at top level: extra, layers, limits, mode, name, origin, pairs, "
-            "points, rate, scale, steps, verbose)",
+            "points, rate, scale, steps, verbose); did you mean 'steps'?",
         ),
         ({"name": "a", "origin": {"y": 1}}, "unknown key 'origin.y' (allowed at origin: tag, x)"),
         ({"name": "a", "points": [{}, {"z": 1}]}, "unknown key 'points[1].z' (allowed at points[1]: tag, x)"),

@@ -146,8 +146,8 @@ def test_a_run_skips_what_another_run_flew_meanwhile(tmp_path: Path, monkeypatch
 def test_two_evaluations_at_once_write_each_episode_once(tmp_path: Path) -> None:
     out = tmp_path / "episodes.csv"
     command = [
-        sys.executable, "-c", "import sys; from agents.cli import main; sys.exit(main())", "evaluate", "--agent", "straight", "--episodes", "4",
-        "--env-id", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72", "--out", str(out),
+        sys.executable, "-c", "import sys; from agents.cli import main; sys.exit(main())", "evaluate", "--agent", "straight", "--layouts", "4",
+        "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72", "--out", str(out),
     ]  # fmt: skip
     environment = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     runs = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment)

@@ -92,7 +92,7 @@ def test_video_writes_an_mp4(tmp_path: Path) -> None:
     [
         (
             "evaluate",
-            ["(default: 20)", "(default: FlowNav-v0)", "(default: runs/evaluations/episodes.csv)"],
+            ["(default: 20)", "(default: clean)", "(default: runs/evaluations/episodes.csv)"],
         ),
         (
             "sweep",
@@ -102,7 +102,7 @@ def test_video_writes_an_mp4(tmp_path: Path) -> None:
                 "(default: the config's)",
             ],
         ),
-        ("demo", ["(default: 5)", "(default: 2)"]),
+        ("demo", ["(default: 4)", "(default: 2)", "(default: runs/demo)"]),
     ],
 )
 def test_help_pages_show_their_defaults(capsys, command: str, defaults: list[str]) -> None:
@@ -115,54 +115,37 @@ def test_help_pages_show_their_defaults(capsys, command: str, defaults: list[str
         assert default in page
 
 
-def test_demo_flies_every_agent_with_learned_ones_over_their_training_seeds(
+def test_demo_flies_every_suite_agent_over_all_its_runs_on_the_tier_s_first_frozen_layouts(
     tmp_path: Path, monkeypatch, capsys
 ) -> None:
     from agents.cli import main
-    from agents.evaluation import runner
-    from agents.policies import REACTIVE_AGENTS
+    from agents.common.seeds import suite_seeds
+    from agents.evaluation import suite
+    from flownav_env.tiers import TIERS
 
-    policies = tmp_path / "policies"
-    (policies / "ppo_flow").mkdir(parents=True)
-    for seed in (0, 2):
-        (policies / "ppo_flow" / f"seed_{seed}.zip").write_bytes(b"")
-    (policies / "ppo_robust.zip").write_bytes(b"")  # a single policy, no training seeds
     flown: list[EpisodeTask] = []
-    monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
+    monkeypatch.setattr(suite, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
     monkeypatch.chdir(tmp_path)
-    assert main(["demo", "--episodes", "3", "--policy-dir", str(policies)]) == 0
-    by_agent: dict[str, list[tuple[int, str | None]]] = {}
-    for task in flown:
-        by_agent.setdefault(task.agent, []).append((task.seed, task.policy))
-    for name in REACTIVE_AGENTS:
-        assert [policy for _, policy in by_agent[name]] == [None] * 3
-    # Layout i by training seed i mod the seed count, as the sweep flies them.
-    assert [seed for seed, _ in by_agent["ppo_flow@0"]] == [1_000_000, 1_000_002]
-    assert by_agent["ppo_flow@2"] == [(1_000_001, str(policies / "ppo_flow" / "seed_2.zip"))]
-    assert {policy for _, policy in by_agent["ppo_robust"]} == {str(policies / "ppo_robust.zip")}
-    assert "ppo_oracle" not in by_agent
+    assert main(["demo", "--layouts", "3", "--tiers", "hard"]) == 0
+    runs = {name for agent in suite.suite_agents() for name in suite.agent_runs(agent)}
+    assert {task.agent for task in flown} == runs
+    assert {task.seed for task in flown} == set(suite_seeds(3)) and len(flown) == 3 * len(runs)
+    assert {task.env_id for task in flown} == {TIERS["hard"].env_id}
+    # The suite's own page, written where the demo says.
+    page = (tmp_path / "runs" / "demo" / "suite.md").read_text()
+    assert page.startswith("# FlowNav suite v") and "Generated " in page
     out = capsys.readouterr().out
-    assert "ppo_flow: training seeds 0, 2 in turn over the layouts" in out
-    assert f"ppo_robust: no training seeds in {policies / 'ppo_robust'}/, flying the single policy" in out
-    assert f"skipping ppo_oracle: no policy at {policies / 'ppo_oracle'}/seed_<k>.zip" in out
+    assert "every agent on the first 3 frozen test layouts of the hard tier, ranked as the suite ranks" in out
+    assert f"written to {Path('runs/demo/suite.md')}" in out
 
 
-def test_demo_finds_the_shipped_policies_from_any_folder(tmp_path: Path, monkeypatch) -> None:
+def test_demo_needs_two_layouts_to_rank(capsys) -> None:
     from agents.cli import main
-    from agents.common.locations import POLICIES_DIR
-    from agents.evaluation import runner
-    from agents.policies import LEARNED_AGENTS, trained_seeds
 
-    flown: list[EpisodeTask] = []
-    monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
-    monkeypatch.chdir(tmp_path)
-    assert main(["demo", "--episodes", "1"]) == 0
-    for name in LEARNED_AGENTS:
-        policies = {t.policy for t in flown if t.agent.partition("@")[0] == name}
-        expected = POLICIES_DIR / name / f"seed_{trained_seeds(name)[0]}.zip" if trained_seeds(name) else None
-        single = POLICIES_DIR / f"{name}.zip"
-        # An agent with no policy shipped yet (one still in training) is left out, as the demo says.
-        assert policies == ({str(expected or single)} if expected or single.is_file() else set())
+    assert main(["demo", "--layouts", "1"]) == 2
+    assert (
+        "--layouts must be 2-300 (a ranking compares agents on at least 2), got 1" in capsys.readouterr().err
+    )
 
 
 def test_evaluate_flies_a_learned_agents_shipped_training_seeds_from_another_folder(
@@ -175,7 +158,7 @@ def test_evaluate_flies_a_learned_agents_shipped_training_seeds_from_another_fol
     from agents.policies import trained_seeds
 
     monkeypatch.chdir(tmp_path)
-    args = ["evaluate", "--agent", "ppo_flow", "--episodes", "2", "--env-id", "FlowNavSingle-v0"]
+    args = ["evaluate", "--agent", "ppo_flow", "--layouts", "2", "--tiers", "FlowNavSingle-v0"]
     assert main([*args, "--env", "camera_width=96", "--env", "camera_height=72", "--out", "e.csv"]) == 0
     rows = read_records(tmp_path / "e.csv")
     # Not the single results/policies/ppo_flow.zip trained before the seeds: the seeds, one per layout.
@@ -205,7 +188,7 @@ def test_evaluate_flies_the_single_policy_only_when_asked(tmp_path: Path, monkey
     monkeypatch.setattr(runner, "execute", lambda tasks, *args, **kwargs: flown.extend(tasks) or 0)
     monkeypatch.chdir(tmp_path)
     single = str(RESULTS_DIR / "sweep_thesis_range" / "policies" / "ppo_flow.zip")  # the pre-seed policy
-    assert main(["evaluate", "--agent", "ppo_flow", "--policy", single, "--episodes", "2"]) == 0
+    assert main(["evaluate", "--agent", "ppo_flow", "--policy", single, "--layouts", "2"]) == 0
     assert [(task.agent, task.policy) for task in flown] == [("ppo_flow", single)] * 2
 
 
@@ -215,7 +198,7 @@ def test_evaluate_refuses_a_learned_agent_with_no_policy(tmp_path: Path, monkeyp
 
     monkeypatch.setattr(learned, "POLICIES_DIR", tmp_path)  # a checkout with no policies
     monkeypatch.chdir(tmp_path)
-    assert main(["evaluate", "--agent", "ppo_oracle", "--episodes", "1"]) == 2
+    assert main(["evaluate", "--agent", "ppo_oracle", "--layouts", "1"]) == 2
     error = capsys.readouterr().err
     assert "flownav evaluate: error: nothing to fly for ppo_oracle: no policy at " in error
     assert "seed_<k>.zip or " in error and not (tmp_path / "results").exists()

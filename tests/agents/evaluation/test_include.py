@@ -11,25 +11,29 @@ import pytest
 
 from agents.analysis.records import read_records
 from agents.cli import main
+from agents.evaluation.progress import PROGRESS_PREFIX
 from agents.evaluation.suite_report import plot_label, plot_suite, read_included, read_suite_csv
+from flownav_env.tiers import SUITE_VERSION
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
-ONE_LAYOUT = ["--tiers", "clean", "--layouts", "1", "--workers", "1"]
+TWO_LAYOUTS = ["--tiers", "clean", "--layouts", "2", "--workers", "1"]
 
 
 @pytest.fixture(scope="module")
 def scored(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """Real score.csv files of one layout: the example agent's (included) and straight's (the published table)."""
+    """Real score.csv files of two layouts (the fewest a ranking compares on): the example agent's (included),
+    and straight's and the privileged planner's, scored into one folder (the published table)."""
     folder = tmp_path_factory.mktemp("scored")
     mine, published = folder / "mine", folder / "published"
-    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *ONE_LAYOUT, "--out", str(mine)]) == 0
-    assert main(["score", "--agent", "straight", *ONE_LAYOUT, "--out", str(published)]) == 0
+    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *TWO_LAYOUTS, "--out", str(mine)]) == 0
+    for agent in ("straight", "planner"):
+        assert main(["score", "--agent", agent, *TWO_LAYOUTS, "--out", str(published)]) == 0
     return {"mine": mine, "published": published / "score.csv"}
 
 
 def one_error_line(capsys: pytest.CaptureFixture[str], command: str) -> str:
     err = capsys.readouterr().err.strip()
-    lines = [line for line in err.splitlines() if "episode/s]" not in line]
+    lines = [line for line in err.splitlines() if not line.startswith(PROGRESS_PREFIX)]
     assert (
         "Traceback" not in err and len(lines) == 1 and lines[0].startswith(f"flownav {command}: error: ")
     ), err
@@ -46,9 +50,9 @@ def test_an_agent_file_is_shown_by_its_stem_and_callable_and_recorded_in_full(
 ) -> None:
     (row,) = read_suite_csv(scored["mine"] / "score.csv")
     assert row["agent"] == "open_gap_agent:make_agent"
-    (episode,) = read_records(scored["mine"] / "suite_episodes.csv")
-    assert episode["agent"] == f"{EXAMPLE}:make_agent"  # the full path, beside the file's hash
-    assert "source_sha256" in episode["agent_params"]
+    for episode in read_records(scored["mine"] / "suite_episodes.csv"):
+        assert episode["agent"] == f"{EXAMPLE}:make_agent"  # the full path, beside the file's hash
+        assert "source_sha256" in episode["agent_params"]
 
 
 def test_name_sets_the_rows_agent_without_flying_again(scored: dict[str, Path]) -> None:
@@ -59,7 +63,7 @@ def test_name_sets_the_rows_agent_without_flying_again(scored: dict[str, Path]) 
                 "score",
                 "--agent",
                 f"{EXAMPLE}:make_agent",
-                *ONE_LAYOUT,
+                *TWO_LAYOUTS,
                 "--name",
                 "gap rule",
                 "--out",
@@ -69,8 +73,9 @@ def test_name_sets_the_rows_agent_without_flying_again(scored: dict[str, Path]) 
         == 0
     )
     (row,) = read_suite_csv(out / "score.csv")
-    assert row["agent"] == "gap rule" and len(read_records(out / "suite_episodes.csv")) == 1
-    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *ONE_LAYOUT, "--out", str(out)]) == 0
+    # The same agent renamed: its rows under the old name are replaced, not kept beside.
+    assert row["agent"] == "gap rule" and len(read_records(out / "suite_episodes.csv")) == 2
+    assert main(["score", "--agent", f"{EXAMPLE}:make_agent", *TWO_LAYOUTS, "--out", str(out)]) == 0
 
 
 @pytest.mark.parametrize(
@@ -91,7 +96,7 @@ def test_a_bad_name_is_refused_before_flying(
         "score",
         "--agent",
         f"{EXAMPLE}:make_agent",
-        *ONE_LAYOUT,
+        *TWO_LAYOUTS,
         "--name",
         name,
         "--out",
@@ -109,7 +114,9 @@ def test_a_file_included_twice_counts_once(
     monkeypatch.chdir(score_csv.parent)
     assert include(scored, tmp_path / "board", score_csv, "./score.csv") == 0
     text = (tmp_path / "board" / "suite_with_included.md").read_text()
-    assert text.startswith("# The suite table with 1 included row\n")
+    assert text.startswith(
+        f"# FlowNav suite v{SUITE_VERSION} with included agents, ranked as `suite.md` ranks\n"
+    )
     assert text.count(str(score_csv)) == 1
     rows, files = read_included([score_csv, Path("score.csv")])
     assert len(rows) == 1 and files == [score_csv]
@@ -186,7 +193,7 @@ def test_the_figure_marks_included_rows_with_their_layouts(scored: dict[str, Pat
     long_name = "ppo_flow_course_approach_curriculum_slow_oracle"
     assert plot_label(long_name, [{**published[0], "agent": long_name}]) == long_name  # never cut
     assert plot_label("straight", published) == "straight"
-    assert plot_label(rows[0]["agent"], marked) == f"{rows[0]['agent']}\n(included, 1 layout)"
+    assert plot_label(rows[0]["agent"], marked) == f"{rows[0]['agent']}\n(included, 2 layouts)"
     plot_suite([*published, *marked], tmp_path / "suite.png")
     assert (tmp_path / "suite.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -232,7 +239,7 @@ def _set(**values: str):
         ),
         (_set(layouts="0", episodes="0"), "runs 1 and layouts 0: a suite row"),
         (_set(layouts="-3", episodes="-3"), "runs 1 and layouts -3: a suite row"),
-        (_set(episodes="7"), "episodes 7 is not runs × layouts (1 × 1)"),
+        (_set(episodes="7"), "episodes 7 is not runs × layouts (1 × 2)"),
         (
             lambda rows: rows.append(dict(rows[0])),
             "a second row of agent 'open_gap_agent:make_agent' on tier clean",
@@ -275,3 +282,77 @@ def test_a_name_that_would_write_markdown_is_escaped_and_included_rows_are_marke
     assert "| `evil \\| fake \\| 0.00 \\|'` (included, self-reported) |" in text
     assert not any(line.startswith("| fake") for line in text.splitlines())
     assert f"- `{renamed}`: self-reported" in text
+
+
+def test_agents_scored_into_one_folder_each_keep_their_rows(scored: dict[str, Path]) -> None:
+    rows = read_suite_csv(scored["published"])
+    assert sorted(row["agent"] for row in rows) == ["planner", "straight"]
+
+
+def test_an_included_agent_is_ranked_as_the_suite_ranks_and_the_figure_agrees(
+    scored: dict[str, Path], tmp_path: Path
+) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    from agents.evaluation.included import included_suite
+    from agents.evaluation.suite_report import _plot_tier
+
+    text, rows, rankings, _ = included_suite(
+        scored["published"], [scored["mine"] / "score.csv"], command="flownav leaderboard --include x"
+    )
+    ranking = rankings["clean"]
+    # The planner is privileged: a reference apart, never ranked nor best.
+    assert ranking.left_out == {"planner": "privileged: a reference"}
+    assert {ranking.best, *(c.agent for c in ranking.comparisons)} == {
+        "straight",
+        "open_gap_agent:make_agent",
+    }
+    table = text.split("## The table", 1)[1]
+    ranked, references = table.split("References, privileged and never ranked", 1)
+    assert "`open_gap_agent:make_agent` (included)" in ranked and "`planner`" in references
+    assert "| failure − best [95 % CI] | P(improvement) | Holm p | top group |" in ranked
+    (other,) = ranking.comparisons
+    line = next(line for line in ranked.splitlines() if f"`{other.agent}`" in line)
+    assert f"{other.difference:+.2f}" in line and line.rstrip(" |").endswith(
+        "yes" if other.agent in ranking.top_group else "no"
+    )
+    # The figure: references grey; a ranked agent outside the top group hollow, as the page says.
+    figure, axis = pyplot.subplots()
+    agents = sorted({row["agent"] for row in rows})
+    _plot_tier(axis, "clean", rows, agents, ("straight",))
+    markers = [container.lines[0] for container in axis.containers]  # each errorbar's data point
+    faces = {agents[int(marker.get_ydata()[0])]: marker.get_markerfacecolor() for marker in markers}
+    assert faces["open_gap_agent:make_agent"] == "white" and faces["straight"] != "white"
+    assert faces["planner"] != "white"
+    pyplot.close(figure)
+
+
+def test_the_include_command_writes_the_ranked_page_its_table_and_figure(
+    scored: dict[str, Path], tmp_path: Path
+) -> None:
+    assert include(scored, tmp_path / "board", scored["mine"] / "score.csv") == 0
+    board = tmp_path / "board"
+    assert "Holm p" in (board / "suite_with_included.md").read_text()
+    assert {row["agent"] for row in read_suite_csv(board / "suite_with_included.csv")} == {
+        "straight",
+        "planner",
+        "open_gap_agent:make_agent",
+    }
+    assert (board / "suite_with_included.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_rows_on_one_layout_cannot_be_ranked_and_say_so(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    one = _edited(
+        scored["mine"] / "score.csv",
+        tmp_path / "score.csv",
+        lambda line: line.replace(",1,2,2,", ",1,1,1,", 1),
+    )
+    assert include(scored, tmp_path / "board", one) == 2
+    assert "an included row rests on 1 layout; a ranking compares agents on at least 2" in one_error_line(
+        capsys, "leaderboard"
+    )

@@ -188,8 +188,8 @@ def test_the_report_leads_with_every_agent_and_compares_learned_with_reactive() 
     ("extra", "message"),
     [
         (
-            ["--episodes", "0"],
-            "--episodes must be >= 30 (one block of layouts for the intervals over runs), got 0",
+            ["--layouts", "0"],
+            "--layouts must be >= 30 (one block of layouts for the intervals over runs), got 0",
         ),
         (["--workers", "0"], "--workers must be >= 1, got 0"),
         (["--agents", "bee,hawk"], f"agent must be one of {', '.join(REACTIVE_AGENTS)}, ppo_flow"),

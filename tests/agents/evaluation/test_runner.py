@@ -130,23 +130,23 @@ def test_the_evaluate_command_refuses_other_settings_and_overwrite_starts_a_new_
         "evaluate",
         "--agent",
         "straight",
-        "--episodes",
+        "--layouts",
         "1",
         "--env",
         "camera_width=96",
         "--env",
         "camera_height=72",
     ]
-    assert main([*args, "--env-id", "FlowNavSingle-v0", "--out", str(out)]) == 0
+    assert main([*args, "--tiers", "FlowNavSingle-v0", "--out", str(out)]) == 0
     assert f"flew 1 episodes into {out}" in capsys.readouterr().out
-    assert main([*args, "--env-id", "FlowNavSingle-v0", "--out", str(out)]) == 0
+    assert main([*args, "--tiers", "FlowNavSingle-v0", "--out", str(out)]) == 0
     assert f"flew 0 episodes, 1 already in {out} (skipped)" in capsys.readouterr().out
     first = out.read_bytes()
-    assert main([*args, "--env-id", "FlowNavThree-v0", "--out", str(out)]) == 2  # was: exit 0, old numbers
+    assert main([*args, "--tiers", "FlowNavThree-v0", "--out", str(out)]) == 2  # was: exit 0, old numbers
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "flown with other settings (env_id 'FlowNavSingle-v0' there" in error[0]
     assert out.read_bytes() == first
-    assert main([*args, "--env-id", "FlowNavThree-v0", "--out", str(out), "--overwrite"]) == 0
+    assert main([*args, "--tiers", "FlowNavThree-v0", "--out", str(out), "--overwrite"]) == 0
     (backup,) = tmp_path.glob("e.csv.bak-*")
     assert backup.read_bytes() == first
     assert [r["env_id"] for r in read_records(out)] == ["FlowNavThree-v0"]
@@ -176,7 +176,7 @@ def test_ctrl_c_keeps_the_flown_episodes_and_says_how_to_resume(tmp_path: Path, 
     from agents.cli import main
 
     calls.clear()
-    args = ["evaluate", "--agent", "straight", "--episodes", "3", "--env-id", "FlowNavSingle-v0"]
+    args = ["evaluate", "--agent", "straight", "--layouts", "3", "--tiers", "FlowNavSingle-v0"]
     args += ["--env", "camera_height=72", "--env", "camera_width=96", "--out", str(path)]
     assert main(args) == 130
     error = capsys.readouterr().err.strip().splitlines()[-1]
@@ -218,10 +218,10 @@ def test_sigterm_stops_a_pooled_run_like_ctrl_c_with_one_message_and_no_worker_t
         "evaluate",
         "--agent",
         "straight",
-        "--episodes",
+        "--layouts",
         "40",
     ]
-    command += ["--env-id", "FlowNavSingle-v0", "--env", "camera_height=48", "--env", "camera_width=64"]
+    command += ["--tiers", "FlowNavSingle-v0", "--env", "camera_height=48", "--env", "camera_width=64"]
     command += ["--workers", "2", "--out", str(path)]
     process = subprocess.Popen(
         command,

@@ -54,7 +54,7 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
 
     # --report-only rebuilds the outputs from the episodes so far and flies nothing, even when more are asked for
     (tmp_path / "out" / "sweep.csv").unlink()
-    args = ["sweep", "--config", str(config_path), "--out", str(tmp_path / "out"), "--episodes", "5"]
+    args = ["sweep", "--config", str(config_path), "--out", str(tmp_path / "out"), "--layouts", "5"]
     assert main([*args, "--report-only"]) == 0
     assert len(read_records(tmp_path / "out" / "sweep_episodes.csv")) == len(rows)
     assert len((tmp_path / "out" / "sweep.csv").read_text().splitlines()) == 1 + 2 * 2
@@ -68,7 +68,7 @@ def test_sweep_writes_summary_and_figure_on_the_real_env(tmp_path: Path) -> None
     # --refly flies one agent again (a retrained policy); --compare-with sets each cell beside an earlier sweep
     earlier = tmp_path / "earlier.csv"
     earlier.write_bytes((tmp_path / "out" / "sweep_episodes.csv").read_bytes())
-    assert main([*args[:-2], "--refly", "bee", "--compare-with", str(earlier)]) == 0
+    assert main([*args[:-2], "--agents", "bee", "--refly", "--compare-with", str(earlier)]) == 0
     refilled = read_records(tmp_path / "out" / "sweep_episodes.csv")
     assert sorted(map(str, refilled)) == sorted(map(str, rows))  # the bee is deterministic on the same seeds
     assert [r["agent"] for r in refilled][-4:] == ["bee"] * 4
@@ -89,8 +89,8 @@ def test_a_sweep_of_no_factors_flies_the_clean_cell_and_plots_it(tmp_path: Path)
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--refly", "ppo_flow"], r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)"),
-        (["--refly", "bee", "--report-only"], "cannot be combined with --report-only"),
+        (["--agents", "ppo_flow", "--refly"], r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)"),
+        (["--agents", "bee", "--refly", "--report-only"], "cannot be combined with --report-only"),
         (["--compare-with", "nowhere.csv"], "--compare-with: no episodes CSV at nowhere.csv"),
     ],
 )
@@ -205,7 +205,7 @@ def test_a_sweep_into_a_pre_identity_csv_is_refused_until_overwrite(tmp_path: Pa
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "sweep_episodes.csv predates episode identities" in error[0]
     assert "--overwrite" in error[0]
-    assert main([*args, "--refly", "bee"]) == 2  # refused before deleting anything
+    assert main([*args, "--agents", "bee", "--refly"]) == 2  # refused before deleting anything
     assert (out / "sweep_episodes.csv").read_bytes() == old.encode()
     assert main([*args, "--overwrite"]) == 0
     (backup,) = out.glob("sweep_episodes.csv.bak-*")

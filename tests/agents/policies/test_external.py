@@ -107,8 +107,8 @@ def test_an_agent_reading_a_key_the_env_lacks_is_told_which_setting_gives_it(age
 def test_evaluate_scores_an_agent_written_outside_flownav(agent_file: Path, tmp_path: Path, monkeypatch) -> None:
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "episodes.csv"
-    command = ["evaluate", "--agent", "my_agent.py:make_agent", "--episodes", "1", "--out", str(out)]
-    assert main([*command, "--env-id", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]) == 0
+    command = ["evaluate", "--agent", "my_agent.py:make_agent", "--layouts", "1", "--out", str(out)]
+    assert main([*command, "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]) == 0
     (row,) = read_records(out)
     assert row["agent"] == f"{agent_file}:make_agent"  # absolute, so workers elsewhere find it
     assert json.loads(row["env_kwargs"])["observe_nearness"] is True

@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 
 from agents.cli import main
+from agents.common.seeds import suite_seeds
+from agents.evaluation.progress import PROGRESS_PREFIX
 from agents.policies import load_agent
 from agents.policies.external import display_name
+from flownav_env.tiers import TIERS
 
 OBSERVATION = {"depth_histogram": np.zeros((3, 5, 6), np.float32), "state": np.zeros(7, np.float32)}
 
@@ -47,8 +50,8 @@ def write_agent(folder: Path, source: str, name: str = "my_agent.py") -> str:
 def one_error_line(capsys: pytest.CaptureFixture[str], command: str) -> str:
     err = capsys.readouterr().err.strip()
     assert "Traceback" not in err, err
-    # Besides the progress bar (tqdm's, on stderr), the one line the command line prints.
-    lines = [line for line in err.splitlines() if "episode/s]" not in line]
+    # Besides the progress lines (on stderr), the one line the command line prints.
+    lines = [line for line in err.splitlines() if not line.startswith(PROGRESS_PREFIX)]
     assert len(lines) == 1 and lines[0].startswith(f"flownav {command}: error: "), err
     return lines[0]
 
@@ -98,9 +101,12 @@ def test_predict_that_raises_names_the_agent_and_the_line_in_its_file(tmp_path: 
     assert spec in str(raised.value) and "\n" not in str(raised.value)
 
 
-def test_predict_returning_the_bare_action_says_what_it_must_return(tmp_path: Path) -> None:
+def test_predict_returning_the_bare_action_says_what_it_must_return_and_where_predict_is(
+    tmp_path: Path,
+) -> None:
     with pytest.raises(
-        ValueError, match=r"predict must return \(action, state\).* got an ndarray of shape \(3,\)"
+        ValueError,
+        match=r"predict \(at .*my_agent\.py:5\) must return \(action, state\).* got an ndarray of shape \(3,\)",
     ):
         load_agent(write_agent(tmp_path, BARE_ACTION)).predict(OBSERVATION)
 
@@ -154,4 +160,24 @@ def test_score_of_an_agent_returning_the_bare_action_exits_2_with_one_line(
     spec = write_agent(tmp_path, BARE_ACTION)
     command = ["score", "--agent", spec, "--tiers", "clean", "--layouts", "1", "--workers", "1"]
     assert main([*command, "--out", str(tmp_path / "out")]) == 2
-    assert "predict must return (action, state)" in one_error_line(capsys, "score")
+    line = one_error_line(capsys, "score")
+    first = f"{TIERS['clean'].env_id} (clean), layout {suite_seeds(1)[0]}, step 1: "
+    assert line.startswith(f"flownav score: error: agent '{spec}' on {first}")
+    assert f"predict (at {tmp_path / 'my_agent.py'}:5) must return (action, state)" in line
+
+
+NAN_ACTION = BARE_ACTION.replace(
+    "return np.zeros(3, np.float32)", "return np.full(3, np.nan, np.float32), state"
+)
+
+
+def test_score_of_an_agent_returning_a_nan_action_names_the_agent_tier_layout_and_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = write_agent(tmp_path, NAN_ACTION)
+    command = ["score", "--agent", spec, "--tiers", "hard", "--layouts", "1", "--workers", "1"]
+    assert main([*command, "--out", str(tmp_path / "out")]) == 2
+    line = one_error_line(capsys, "score")
+    first = f"{TIERS['hard'].env_id} (hard), layout {suite_seeds(1)[0]}, step 1: "
+    assert f"agent '{spec}' on {first}action must be finite" in line
+    assert line.endswith(f"; the action came from predict at {tmp_path / 'my_agent.py'}:5")

@@ -121,7 +121,7 @@ def test_video_refuses_a_zip_without_its_config_unless_trusted(tmp_path: Path, m
     monkeypatch.chdir(tmp_path)
     bare = tmp_path / "bare.zip"
     shutil.copyfile(policy_file("ppo_flow@0"), bare)
-    args = ["video", "--agent", "ppo_flow", "--policy", str(bare), "--env-id", "FlowNavSingle-v0"]
+    args = ["video", "--agent", "ppo_flow", "--policy", str(bare), "--tiers", "FlowNavSingle-v0"]
     args += ["--max-steps", "2", "--out", str(tmp_path / "v.mp4")]
     assert main(args) == 2
     error = capsys.readouterr().err
@@ -188,7 +188,9 @@ def test_an_env_without_a_key_the_policy_reads_fails_in_one_line(name: str, poli
     env = gym.make("FlowNav-v0", **SMALL)  # no observe_approach
     expected_policy = policy or policy_file(f"{WINNER}@0")
     message = (
-        rf"^policy {re.escape(str(expected_policy))} reads observation key 'approach', which this env does not "
+        # The episode first (who, where, when), then the policy's own words.
+        r"^agent '\w+' on FlowNav-v0 \(clean\), layout \d+, step 1: "
+        rf"policy {re.escape(str(expected_policy))} reads observation key 'approach', which this env does not "
         r"give: make the env with observe_approach=True \(the settings it was trained with are in "
         rf"{re.escape(str(expected_policy.with_suffix('.yaml')))}; .*make_env\(\) makes that env\)$"
     )

@@ -83,7 +83,7 @@ def test_policy_kwargs_naming_other_code_are_refused_without_trust_pickle(tmp_pa
 def test_evaluate_scores_a_model_given_by_policy_and_algo(tmp_path: Path) -> None:
     path = saved_model("sac", tmp_path)
     out = tmp_path / "episodes.csv"
-    options = ["--episodes", "1", "--env-id", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]
+    options = ["--layouts", "1", "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]
     assert main(["evaluate", "--policy", str(path), "--algo", "sac", "--out", str(out), *options]) == 0
     (row,) = read_records(out)
     assert row["agent"] == f"sac:{path.resolve()}"

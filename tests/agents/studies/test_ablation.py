@@ -32,7 +32,7 @@ def test_ablation_layouts_are_validation_layouts() -> None:
     assert VALIDATION_SEED_START <= ABLATION_SEED_START and tasks[-1].seed < TEST_SEED_START
     with pytest.raises(
         ValueError,
-        match=r"--episodes must be in \[1, 100000\] \(validation layouts from 900,000\), got 100001",
+        match=r"--layouts must be in \[1, 100000\] \(validation layouts from 900,000\), got 100001",
     ):
         ablation_tasks(Path("p.zip"), 100_001)
 
@@ -56,7 +56,7 @@ def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> N
     ("tier", "env", "message"),
     [
         ("steep", {}, r"^tier must be one of clean, hard, noisy, hard_noisy, got 'steep'$"),
-        ("hard", {"obstacle_density": 0.2}, r"^--env and --tier hard: a tier fixes its own settings"),
+        ("hard", {"obstacle_density": 0.2}, r"^--env and --tiers hard: a tier fixes its own settings"),
     ],
 )
 def test_a_bad_tier_or_a_tier_with_env_settings_is_refused(tmp_path: Path, tier, env, message) -> None:

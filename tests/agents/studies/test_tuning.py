@@ -78,15 +78,15 @@ def test_search_spaces_hold_the_defaults_and_match_the_command_line() -> None:
     [
         ("straight", Budget(), 1, "--agent must be one of bee, bee_robust, vfh, got 'straight'"),
         ("bee", Budget(trials=0), 1, "--trials must be an integer >= 1, got 0"),
-        ("bee", Budget(search_episodes=0), 1, "--search-episodes must be an integer >= 1, got 0"),
+        ("bee", Budget(search_episodes=0), 1, "--search-layouts must be an integer >= 1, got 0"),
         ("bee", Budget(trials=3, finalists=4), 1, "--finalists must be in [1, --trials = 3], got 4"),
         ("bee", Budget(finalists=0), 1, "--finalists must be in [1, --trials = 40], got 0"),
-        ("bee", Budget(final_episodes=50), 1, "--final-episodes must be >= 100, got 50"),
+        ("bee", Budget(final_episodes=50), 1, "--final-layouts must be >= 100, got 50"),
         (
             "bee",
             Budget(search_episodes=400_000, final_episodes=100_001),
             1,
-            "--search-episodes + --final-episodes must stay within the training seeds [0, 500000), "
+            "--search-layouts + --final-layouts must stay within the training seeds [0, 500000), "
             "got 400000 + 100001 = 500001 layouts",
         ),
         ("vfh", Budget(), 0, "--workers must be an integer >= 1, got 0"),
@@ -104,8 +104,8 @@ def test_bad_input_names_the_value_and_its_range(
 def test_the_command_line_reports_bad_input_in_one_line(capsys) -> None:
     from agents.cli import main
 
-    assert main(["tune", "--agent", "bee", "--final-episodes", "50"]) == 2
-    assert "flownav tune: error: --final-episodes must be >= 100, got 50" in capsys.readouterr().err
+    assert main(["tune", "--agent", "bee", "--final-layouts", "50"]) == 2
+    assert "flownav tune: error: --final-layouts must be >= 100, got 50" in capsys.readouterr().err
 
 
 def test_the_largest_budget_ends_just_below_the_validation_seeds() -> None:

@@ -14,7 +14,7 @@ def test_video_of_a_shipped_policy_from_outside_the_repository(tmp_path: Path, m
 
     monkeypatch.chdir(tmp_path)  # the policy must still resolve to the repository's results/policies/
     out = tmp_path / "ppo_flow.mp4"
-    args = ["video", "--agent", "ppo_flow", "--env-id", "FlowNavSingle-v0", "--max-steps", "3"]
+    args = ["video", "--agent", "ppo_flow", "--tiers", "FlowNavSingle-v0", "--max-steps", "3"]
     assert main([*args, "--out", str(out)]) == 0
     captured = capsys.readouterr()
     assert f"wrote {out}" in captured.out and "warning" not in captured.err  # a shipped, verified policy

@@ -1,0 +1,133 @@
+"""``suite_with_included``: agents scored with ``flownav score`` set beside the published suite and ranked
+exactly as ``suite.md`` ranks (:func:`~agents.evaluation.suite_page.rank_suite`, worded by the same template):
+privileged references apart, each ranked agent's difference from the best, its Holm-corrected p-value, and
+whether it joins the tier's top group.
+
+A ranking compares agents on the same layouts, so every row here rests on the first N frozen layouts, N the
+fewest an included row flew: the published agents' episodes (``suite_episodes.csv`` beside the published
+CSV) are counted again on them. Which episode rows are an agent's runs is read from ``score_runs.json``, which
+``flownav score`` writes beside its ``score.csv``; a FlowNav agent without one is its shipped runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.analysis.paired import TierRanking
+from agents.analysis.records import read_records
+from agents.common.seeds import suite_seeds
+from agents.common.tables import markdown_cell, today
+from agents.evaluation.episode_tasks import with_tier
+from agents.evaluation.suite import EPISODES_CSV, agent_runs, summarise_suite
+from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
+from agents.evaluation.suite_report import merge_rows, read_included, read_score_runs, read_suite_csv
+from agents.evaluation.verification_record import verification_mark
+from agents.policies import split_agent_name
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
+
+
+def _runs_of(folder: Path, agents: Sequence[str]) -> dict[str, list[str]]:
+    """Each of ``agents``' run names: from ``folder``'s :data:`SCORE_RUNS_JSON`, else a FlowNav agent's shipped
+    runs; an agent with neither has none (it cannot be ranked)."""
+    recorded = read_score_runs(folder)
+    runs = {}
+    for agent in agents:
+        if agent in recorded:
+            runs[agent] = recorded[agent]
+            continue
+        try:
+            split_agent_name(agent)
+            runs[agent] = agent_runs(agent)
+        except (ValueError, FileNotFoundError):
+            continue
+    return runs
+
+
+def _episodes(
+    folder: Path, runs: Mapping[str, Sequence[str]], seeds: Sequence[int], version: str
+) -> list[dict[str, Any]]:
+    """Suite ``version``'s episodes of ``runs`` on ``seeds`` in ``folder``'s episodes CSV, with their tiers."""
+    path = Path(folder) / EPISODES_CSV
+    if not path.is_file():
+        return []
+    names = {name for names in runs.values() for name in names}
+    wanted = set(seeds)
+    return [
+        with_tier(row)
+        for row in read_records(path)
+        if row["agent"] in names and int(row["seed"]) in wanted and row.get("suite_version") == version
+    ]
+
+
+def _source(
+    csv_path: Path, rows: Sequence[Mapping[str, Any]], layouts: int, version: str, *, included: bool | str
+) -> tuple[list[dict[str, Any]], dict[str, dict[str, np.ndarray]], list[tuple[str, str]]]:
+    """One CSV's rows counted again on the first ``layouts`` layouts from its episodes: the summary rows, each
+    tier's failure matrices (``included``: what marks its rows, an included file's verification), and the (agent,
+    tier) pairs of its rows whose episodes are not beside it (or not on
+    every one of the layouts)."""
+    agents = list(dict.fromkeys(row["agent"] for row in rows))
+    runs = _runs_of(csv_path.parent, agents)
+    seeds = list(suite_seeds(layouts, version))
+    episodes = _episodes(csv_path.parent, runs, seeds, version)
+    privileged = {row["agent"]: bool(row["privileged"]) for row in rows}
+    tiers = [name for name in TIER_NAMES if any(row["tier"] == name for row in rows)]
+    table = summarise_suite(episodes, runs, tiers, layouts, version, privileged=privileged)
+    for row in table:
+        row["included"] = included
+    whole = {(row["tier"], row["agent"]) for row in table}
+    missing = [(row["agent"], row["tier"]) for row in rows if (row["tier"], row["agent"]) not in whole]
+    failures = {name: tier_failures(episodes, runs, name, seeds) for name in tiers}
+    return table, failures, missing
+
+
+def included_suite(
+    suite_csv: Path, score_csvs: Sequence[str | Path], *, command: str, version: str = SUITE_VERSION
+) -> tuple[str, list[dict[str, Any]], dict[str, TierRanking], list[Path]]:
+    """The published suite (of suite ``version``) with the agents of ``score_csvs`` ranked among its agents.
+
+    Returns:
+        The page's text, the table's rows (an included one with ``included`` true), each tier's ranking, and
+        the score files read.
+
+    Raises:
+        ValueError: an included row on fewer than 2 layouts, or a bad suite or score CSV (:func:`read_included`).
+        FileNotFoundError: no CSV at a path given.
+    """
+    published = read_suite_csv(Path(suite_csv), version)
+    included, files = read_included(score_csvs, version)
+    layouts = min(row["layouts"] for row in included)
+    if layouts < 2:
+        raise ValueError(
+            f"an included row rests on {layouts} layout; a ranking compares agents on at least 2: score it with "
+            "flownav score --layouts 2 or more"
+        )
+    table, failures, missing = _source(Path(suite_csv), published, layouts, version, included=False)
+    for path in files:
+        mark = verification_mark(path)
+        rows, matrices, not_whole = _source(
+            path, read_suite_csv(path, version), layouts, version, included=mark
+        )
+        table = merge_rows(table, rows)
+        missing += not_whole
+        for name, found in matrices.items():
+            failures.setdefault(name, {}).update(found)
+    rankings = rank_suite(table, failures)
+    values = suite_values(
+        table,
+        rankings,
+        command=command,
+        layouts=suite_seeds(layouts, version),
+        machine="",
+        missing=[],
+        not_counted=[(markdown_cell(agent), name) for agent, name in missing],
+        generated=today(),
+        included_files=[(markdown_cell(path), verification_mark(path)) for path in files],
+        figure="suite_with_included.png",
+        version=version,
+    )
+    return suite_page(values), table, rankings, files

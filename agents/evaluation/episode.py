@@ -19,12 +19,6 @@ def _env_name(env: gym.Env[dict[str, np.ndarray], np.ndarray], factor: str, leve
     return f"{env_id} ({factor}{f' {level:g}' if level else ''})"
 
 
-def _in_episode(error: ValueError, where: str, label: str) -> ValueError:
-    """``error`` with ``where`` it happened in front (``agent 'x' on ..., layout ..., step ...``; a message that
-    named the agent already names it once)."""
-    return ValueError(f"{where}: {str(error).removeprefix(f'agent {label!r}: ')}")
-
-
 def run_episode(
     env: gym.Env[dict[str, np.ndarray], np.ndarray],
     agent: Agent,
@@ -44,14 +38,10 @@ def run_episode(
     agent_state, episode_start = None, np.ones(1, bool)
     episode = f"agent {label or type(agent).__name__!r} on {_env_name(env, factor, level)}, layout {seed}"
     while not (terminated or truncated):
-        try:
-            action, agent_state = agent.predict(
-                observation, state=agent_state, episode_start=episode_start, deterministic=True
-            )
-        except ValueError as error:
-            if type(error) is not ValueError:
-                raise  # a kind that says where itself (a step timeout) or is caught by its kind (a missing key)
-            raise _in_episode(error, f"{episode}, step {steps + 1}", label) from error
+        # An outside agent's errors in predict say where they happened themselves (agents.policies.agent_process).
+        action, agent_state = agent.predict(
+            observation, state=agent_state, episode_start=episode_start, deterministic=True
+        )
         episode_start = np.zeros(1, bool)
         try:
             observation, reward, terminated, truncated, info = env.step(action)

@@ -64,23 +64,23 @@ def _episodes(
 
 
 def _source(
-    csv_path: Path, rows: Sequence[Mapping[str, Any]], layouts: int, version: str, *, included: bool | str
+    csv_path: Path, rows: Sequence[Mapping[str, object]], layouts: int, version: str, *, included: bool | str
 ) -> tuple[list[dict[str, Any]], dict[str, dict[str, np.ndarray]], list[tuple[str, str]]]:
     """One CSV's rows counted again on the first ``layouts`` layouts from its episodes: the summary rows, each
     tier's failure matrices (``included``: what marks its rows, an included file's verification), and the (agent,
     tier) pairs of its rows whose episodes are not beside it (or not on
     every one of the layouts)."""
-    agents = list(dict.fromkeys(row["agent"] for row in rows))
+    agents = list(dict.fromkeys(str(row["agent"]) for row in rows))
     runs = _runs_of(csv_path.parent, agents)
     seeds = list(suite_seeds(layouts, version))
     episodes = _episodes(csv_path.parent, runs, seeds, version)
-    privileged = {row["agent"]: bool(row["privileged"]) for row in rows}
+    privileged = {str(row["agent"]): bool(row["privileged"]) for row in rows}
     tiers = [name for name in TIER_NAMES if any(row["tier"] == name for row in rows)]
     table = summarise_suite(episodes, runs, tiers, layouts, version, privileged=privileged)
     for row in table:
         row["included"] = included
     whole = {(row["tier"], row["agent"]) for row in table}
-    missing = [(row["agent"], row["tier"]) for row in rows if (row["tier"], row["agent"]) not in whole]
+    missing = [(str(row["agent"]), str(row["tier"])) for row in rows if (row["tier"], row["agent"]) not in whole]
     failures = {name: tier_failures(episodes, runs, name, seeds) for name in tiers}
     return table, failures, missing
 

@@ -362,7 +362,7 @@ def plot_suite(
     plt.close(figure)
 
 
-def _plot_title(rows: Sequence[Mapping[str, Any]], *, ranked: bool) -> str:
+def _plot_title(rows: Sequence[Mapping[str, object]], *, ranked: bool) -> str:
     """The figure's title: the suite version and what its marks mean (hollow ones only where ``ranked``)."""
     included = (
         " (red: included rows, on the layouts their label says)"

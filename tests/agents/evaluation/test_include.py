@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -12,7 +13,14 @@ import pytest
 from agents.analysis.records import read_records
 from agents.cli import main
 from agents.evaluation.progress import PROGRESS_PREFIX
-from agents.evaluation.suite_report import plot_label, plot_suite, read_included, read_suite_csv
+from agents.evaluation.suite_report import (
+    plot_label,
+    plot_suite,
+    read_included,
+    read_score_runs,
+    read_suite_csv,
+    write_score_runs,
+)
 from flownav_env.tiers import SUITE_VERSION
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
@@ -277,6 +285,9 @@ def test_a_name_that_would_write_markdown_is_escaped_and_included_rows_are_marke
 ) -> None:
     name = "evil\n| fake | 0.00 |`"
     renamed = _rewritten(scored["mine"] / "score.csv", tmp_path / "score.csv", _set(agent=name))
+    # Its episodes beside it, under the new name, as flownav score --name would leave them.
+    shutil.copy(scored["mine"] / "suite_episodes.csv", tmp_path / "suite_episodes.csv")
+    write_score_runs(tmp_path, name, read_score_runs(scored["mine"])["open_gap_agent:make_agent"])
     assert include(scored, tmp_path / "board", renamed) == 0
     text = (tmp_path / "board" / "suite_with_included.md").read_text()
     assert "| `evil \\| fake \\| 0.00 \\|'` (included, self-reported) |" in text
@@ -312,7 +323,7 @@ def test_an_included_agent_is_ranked_as_the_suite_ranks_and_the_figure_agrees(
     }
     table = text.split("## The table", 1)[1]
     ranked, references = table.split("References, privileged and never ranked", 1)
-    assert "`open_gap_agent:make_agent` (included)" in ranked and "`planner`" in references
+    assert "`open_gap_agent:make_agent` (included, self-reported)" in ranked and "`planner`" in references
     assert "| failure − best [95 % CI] | P(improvement) | Holm p | top group |" in ranked
     (other,) = ranking.comparisons
     line = next(line for line in ranked.splitlines() if f"`{other.agent}`" in line)

@@ -13,7 +13,6 @@ from agents.common.seeds import suite_seeds
 from agents.evaluation.progress import PROGRESS_PREFIX
 from agents.policies import load_agent
 from agents.policies.external import display_name
-from flownav_env.tiers import TIERS
 
 OBSERVATION = {"depth_histogram": np.zeros((3, 5, 6), np.float32), "state": np.zeros(7, np.float32)}
 
@@ -161,8 +160,6 @@ def test_score_of_an_agent_returning_the_bare_action_exits_2_with_one_line(
     command = ["score", "--agent", spec, "--tiers", "clean", "--layouts", "1", "--workers", "1"]
     assert main([*command, "--out", str(tmp_path / "out")]) == 2
     line = one_error_line(capsys, "score")
-    first = f"{TIERS['clean'].env_id} (clean), layout {suite_seeds(1)[0]}, step 1: "
-    assert line.startswith(f"flownav score: error: agent '{spec}' on {first}")
     assert f"predict (at {tmp_path / 'my_agent.py'}:5) must return (action, state)" in line
 
 
@@ -178,6 +175,30 @@ def test_score_of_an_agent_returning_a_nan_action_names_the_agent_tier_layout_an
     command = ["score", "--agent", spec, "--tiers", "hard", "--layouts", "1", "--workers", "1"]
     assert main([*command, "--out", str(tmp_path / "out")]) == 2
     line = one_error_line(capsys, "score")
-    first = f"{TIERS['hard'].env_id} (hard), layout {suite_seeds(1)[0]}, step 1: "
-    assert f"agent '{spec}' on {first}action must be finite" in line
-    assert line.endswith(f"; the action came from predict at {tmp_path / 'my_agent.py'}:5")
+    assert spec in line and f"{tmp_path / 'my_agent.py'}:5" in line
+    assert f"tier hard, layout seed {suite_seeds(1)[0]}" in line and "finite" in line
+
+
+class NanAgent:
+    """An agent in this process whose action is NaN."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return np.full(3, np.nan, np.float32), state
+
+
+def test_a_nan_action_in_process_names_the_agent_env_layout_step_and_predict_s_line() -> None:
+    import gymnasium as gym
+
+    from agents.evaluation.episode import run_episode
+
+    env = gym.make("FlowNavSingle-v0", camera_width=64, camera_height=48)
+    try:
+        with pytest.raises(ValueError) as raised:
+            run_episode(env, NanAgent(), 5, label="nan_agent", factor="clean")
+    finally:
+        env.close()
+    line = NanAgent.predict.__code__.co_firstlineno
+    assert str(raised.value).startswith(
+        "agent 'nan_agent' on FlowNavSingle-v0 (clean), layout 5, step 1: action must"
+    )
+    assert str(raised.value).endswith(f"; the action came from predict at {Path(__file__)}:{line}")

@@ -188,9 +188,7 @@ def test_an_env_without_a_key_the_policy_reads_fails_in_one_line(name: str, poli
     env = gym.make("FlowNav-v0", **SMALL)  # no observe_approach
     expected_policy = policy or policy_file(f"{WINNER}@0")
     message = (
-        # The episode first (who, where, when), then the policy's own words.
-        r"^agent '\w+' on FlowNav-v0 \(clean\), layout \d+, step 1: "
-        rf"policy {re.escape(str(expected_policy))} reads observation key 'approach', which this env does not "
+        rf"^policy {re.escape(str(expected_policy))} reads observation key 'approach', which this env does not "
         r"give: make the env with observe_approach=True \(the settings it was trained with are in "
         rf"{re.escape(str(expected_policy.with_suffix('.yaml')))}; .*make_env\(\) makes that env\)$"
     )

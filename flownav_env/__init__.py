@@ -27,7 +27,22 @@ from typing import Any
 DEFAULT_GL_BACKEND = "egl"
 os.environ.setdefault("MUJOCO_GL", DEFAULT_GL_BACKEND)
 
+import warnings  # noqa: E402
+
 from gymnasium.envs.registration import register, registry  # noqa: E402  (after the GL backend is set)
+
+# Gymnasium warns that an id is "out of date" when a higher version of its name is registered. FlowNav keeps its
+# ``-v0`` ids on purpose: they are suite v1's tasks (history, reproducible) and the env that training configs and
+# the history table fly, not a stale version of suite v2's.
+V0_OUT_OF_DATE = r".*The environment FlowNav\w*-v0 is out of date"
+
+
+def ignore_v0_out_of_date() -> None:
+    """Silence Gymnasium's "out of date" warning for FlowNav's ``-v0`` ids (again, after a ``simplefilter``)."""
+    warnings.filterwarnings("ignore", message=V0_OUT_OF_DATE, category=DeprecationWarning)
+
+
+ignore_v0_out_of_date()
 
 from estimator import __version__  # noqa: E402
 from flownav_env.env import FlowNavEnv  # noqa: E402  (imports mujoco)

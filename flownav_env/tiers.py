@@ -182,7 +182,7 @@ def tier_value(tier_name: str, setting: str, version: str = SUITE_VERSION) -> An
     return spec.settings.get(setting, defaults[setting])
 
 
-def privileged_requests(wanted: Mapping[str, Any]) -> dict[str, Any]:
+def privileged_requests(wanted: Mapping[str, object]) -> dict[str, object]:
     """The entries of ``wanted`` (env settings an agent asks for) that would show it privileged data."""
     return {
         key: value
@@ -193,7 +193,7 @@ def privileged_requests(wanted: Mapping[str, Any]) -> dict[str, Any]:
 
 def check_agent_settings(
     agent: str,
-    wanted: Mapping[str, Any],
+    wanted: Mapping[str, object],
     tier_name: str,
     *,
     privileged: bool = False,
@@ -227,7 +227,7 @@ def check_agent_settings(
 
 def check_flown_settings(
     agent: str,
-    flown: Mapping[str, Any],
+    flown: Mapping[str, object],
     tier_name: str,
     *,
     privileged: bool = False,

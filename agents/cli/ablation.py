@@ -15,6 +15,7 @@ from agents.cli.arguments import (
     add_tier_argument,
     tier_name_of,
 )
+from agents.cli.suite import add_suite_version_argument
 from agents.common.locations import POLICIES_DIR
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
@@ -54,6 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "a suite tier (clean, hard, noisy, hard_noisy): fly its course and sensor on its validation layouts "
         "(from 960,100) instead of the ablation layouts; takes no --env",
     )
+    add_suite_version_argument(parser)
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -79,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
         reference_agents=[agent.strip() for agent in args.reference.split(",") if agent.strip()],
         env=dict(args.env),
         tier=args.tiers and tier_name_of(args.tiers),
+        suite_version=args.suite_version,
     )
     print("\n".join(lines))
     return 0

@@ -30,7 +30,7 @@ from agents.cli.suite import add_suite_version_argument
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.evaluation.leaderboard import MIN_EPISODES, run_leaderboard
-from agents.evaluation.suite_report import plot_suite
+from agents.evaluation.suite_plot import plot_suite
 from agents.policies import HISTORY_AGENTS
 
 HELP = (

@@ -6,7 +6,7 @@ object), or a stable-baselines3 model (``--policy model.zip --algo sac``). Write
 (resumable) and ``<out>/score.csv``; ``flownav leaderboard --include <out>/score.csv`` sets the rows beside the
 published table. What the agent is given and must return (observation keys, shapes and meaning; the action and
 its units; ``predict``'s signature): ``flownav describe [--tiers TIER]``. ``--name`` sets the name its rows show
-(default: the file's stem and callable, ``my_agent:make_agent``). In Python: ``agents.evaluation.suite.score``.
+(default: the file's stem and callable, ``my_agent:make_agent``). In Python: ``agents.evaluation.scoring.score``.
 ``--robustness`` adds the agent's failure-versus-error curves on the sweep's sensor factors
 (``agents.studies.robustness.robustness``).
 
@@ -134,7 +134,7 @@ def agent_and_policy(args: argparse.Namespace) -> tuple[str, str | None]:
 
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.evaluation.suite import score
+    from agents.evaluation.scoring import score
 
     agent, policy = agent_and_policy(args)
     if not args.robustness and (args.factors or args.robustness_layouts is not None):

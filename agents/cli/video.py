@@ -49,9 +49,11 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out or SCRATCH_DIR / "videos" / f"{args.agent}_{env_id}_{args.seed_start}.mp4")
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.studies.video import record_episode
+    from flownav_env import ignore_v0_out_of_date
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        ignore_v0_out_of_date()
         info = record_episode(
             args.agent,
             env_id,

@@ -32,6 +32,7 @@ from agents.analysis.records import (
 )
 from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
+from agents.evaluation.agent_settings import episode_name, flown_settings, plan_settings
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, resume_plan
@@ -39,10 +40,8 @@ from agents.evaluation.progress import EpisodeProgress, PlainProgress, episode_p
 from agents.policies import Agent, load_agent
 from agents.policies.agent_limits import AgentLimits, check_step_timeout
 from agents.policies.agent_process import IsolatedAgent, end_agent_processes
-from agents.policies.external import is_external_name
-from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.limits import episode_step_limit
-from flownav_env.tiers import SUITE_VERSION, check_agent_settings
+from flownav_env.tiers import SUITE_VERSION
 
 # How often a run that is done checks whether another run has written the episodes it claimed.
 AWAIT_POLL_S = 0.5
@@ -120,64 +119,13 @@ def run_task(task: EpisodeTask, cache: FlightCache = WORKER_CACHE) -> EpisodeRec
     torch.set_num_threads(1)
     env, agent, settings = cache.env_and_agent(task)
     if isinstance(agent, IsolatedAgent):
-        agent.step_timeout_s, agent.episode = task.step_timeout_s, _episode_name(task)
+        agent.step_timeout_s, agent.episode = task.step_timeout_s, episode_name(task)
     record = run_episode(env, agent, task.seed, label=task.agent, factor=task.factor, level=task.level)
     identity = task.identity()
     identity["env_kwargs"] = canonical_json(settings)  # what flew, as it flew
     return dataclasses.replace(
         record, **identity, code_version=_code_version(), suite_version=task.suite_version
     )
-
-
-def flown_settings(task: EpisodeTask, agent: Agent) -> dict[str, Any]:
-    """The env settings ``task`` flies with: for an outside agent, what its own process declares (plain values
-    only), checked here, where the episode flies, against the tier and against what the run planned with.
-
-    Raises:
-        ValueError: one line naming the agent and the episode: settings a tier fixes, privileged data for an
-            agent not declared privileged, or settings other than those the run was planned with.
-    """
-    if not isinstance(agent, IsolatedAgent) or is_sb3_model_name(task.agent):
-        return task.env_settings()
-    declared = agent.declarations()
-    if task.tier:
-        check_agent_settings(
-            task.agent,
-            declared.env_settings,
-            task.tier,
-            privileged=declared.privileged,
-            version=task.suite_version,
-        )
-    settings = {**declared.env_settings, **dict(task.env_kwargs)}
-    if task.planned_settings and canonical_json(settings) != task.planned_settings:
-        raise ValueError(
-            f"agent {task.agent} declares env settings {canonical_json(settings)} in the process that flies "
-            f"{_episode_name(task)}, but {task.planned_settings} where the run was planned: an agent's "
-            "env_settings must be the same in every process; nothing was recorded of that episode"
-        )
-    return settings
-
-
-def plan_settings(tasks: list[EpisodeTask]) -> list[EpisodeTask]:
-    """``tasks`` with each outside agent's settings as declared here (``planned_settings``), for the process that
-    flies each to check against (:func:`flown_settings`)."""
-    planned: dict[tuple[str, tuple[tuple[str, Any], ...]], str] = {}
-    result = []
-    for task in tasks:
-        if is_external_name(task.agent) and not is_sb3_model_name(task.agent):
-            key = (task.agent, task.env_kwargs)
-            if key not in planned:
-                planned[key] = canonical_json(task.env_settings())
-            task = dataclasses.replace(task, planned_settings=planned[key])
-        result.append(task)
-    return result
-
-
-def _episode_name(task: EpisodeTask) -> str:
-    """The episode in words: a suite's tier and layout, or another run's factor, level and seed."""
-    if task.tier:
-        return f"the episode on tier {task.tier}, layout seed {task.seed}"
-    return f"the episode ({task.factor}, level {task.level:g}, seed {task.seed})"
 
 
 def run_claimed_task(csv_path: Path, task: EpisodeTask) -> tuple[EpisodeTask, str, EpisodeRecord | None]:

@@ -7,7 +7,7 @@ do; any other agent (reactive, ``module:callable``, ``file.py:callable``, an SB3
 Episodes go to a resumable episodes CSV through the same runner as ``evaluate`` and ``sweep`` (local pool or Ray),
 each stamped with the suite version.
 
-``score`` is the one call that scores an agent: ``flownav score`` is its command line.
+``agents.evaluation.scoring.score`` scores one agent: ``flownav score`` is its command line.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import seed_interval
-from agents.analysis.records import overwrite_hint, read_records, start_new_file
+from agents.analysis.records import read_records
 from agents.analysis.statistics import runs_and_layouts_interval, wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
@@ -40,14 +40,8 @@ from agents.evaluation.suite_page import (
     suite_values,
     tier_failures,
 )
-from agents.evaluation.suite_report import (
-    OUTCOMES,
-    SCORE_CSV,
-    SUMMARY_COLUMNS,
-    other_agents_rows,
-    plot_suite,
-    write_score_runs,
-)
+from agents.evaluation.suite_plot import plot_suite
+from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
     SUITE_AGENTS,
@@ -61,8 +55,7 @@ from agents.policies import (
     runs_to_fly,
     split_agent_name,
 )
-from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
-from agents.policies.external import canonical_spec, check_display_name, display_name, is_external_name
+from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
@@ -241,83 +234,6 @@ def _flown_settings(rows: Sequence[Mapping[str, Any]], runs: Sequence[str]) -> s
     return flown.pop()
 
 
-def score(
-    agent: str,
-    *,
-    tiers: str | Sequence[str] = "all",
-    layouts: int = SUITE_LAYOUTS,
-    out: str | Path = "runs/score",
-    policy: str | None = None,
-    trust_pickle: bool = False,
-    workers: int = 1,
-    backend: str = "local",
-    address: str | None = None,
-    name: str | None = None,
-    overwrite: bool = False,
-    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
-    version: str = SUITE_VERSION,
-    agent_limits: AgentLimits | None = None,
-) -> list[dict[str, Any]]:
-    """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
-
-    Episodes are appended to ``<out>/suite_episodes.csv`` (calling again resumes); the rows are written to
-    ``<out>/score.csv`` beside the rows of any other agent scored into ``out`` (an agent's earlier rows are
-    replaced), which ``flownav leaderboard --include`` sets beside the published table.
-
-    Args:
-        agent: a FlowNav agent name, ``my_pkg.my_module:make_agent``, ``path/to/file.py:make_agent``, or
-            ``<algo>:<model.zip>`` for a stable-baselines3 model.
-        tiers: ``"all"`` or tier names.
-        layouts: how many of the frozen layouts (the table's rows say how many).
-        out: output folder.
-        policy: a learned agent's policy file, if not the shipped one.
-        trust_pickle: allow unpickling a policy zip without its config (runs its code).
-        workers: local worker processes; backend: ``"local"`` or ``"ray"``; address: a Ray cluster's.
-        name: the rows' agent column (default :func:`~agents.policies.external.display_name`: a file's agent
-            as ``my_agent:make_agent``); episode records keep the full spec and its file's hash.
-        overwrite: move ``suite_episodes.csv`` to ``suite_episodes.csv.bak-<time>`` first and start afresh.
-        step_timeout_s: the most an outside agent's ``predict`` may take per call (0: no limit); past it the
-            run stops with one line naming the episode, and that episode is not recorded.
-        agent_limits: the memory and CPU time an outside agent's process may use.
-
-    Raises:
-        ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
-            setting a tier does not give.
-    """
-    tier_names = parse_tiers(tiers)
-    agent = resolve_agent(agent, trust_pickle=trust_pickle)
-    shown = check_display_name(display_name(agent) if name is None else name, agent)
-    runs = {agent: agent_runs(agent, policy)}
-    tasks = suite_tasks(
-        runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle, version=version
-    )
-    out = Path(out)
-    check_writable_folder(out)
-    out.mkdir(parents=True, exist_ok=True)
-    csv_path = out / EPISODES_CSV
-    if overwrite and (moved := start_new_file(csv_path)) is not None:
-        print(f"--overwrite: moved {csv_path} to {moved}")
-    execute(
-        tasks,
-        csv_path,
-        backend=backend,
-        workers=workers,
-        address=address,
-        description=f"score {shown}",
-        remedy=overwrite_hint("folder"),
-        step_timeout_s=step_timeout_s,
-        by_factor=True,
-        agent_limits=agent_limits,
-    )
-    rows = suite_rows(tasks, csv_path)
-    table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)]
-    write_summary_csv(
-        out / SCORE_CSV, other_agents_rows(out / SCORE_CSV, shown, runs[agent], version) + table
-    )
-    write_score_runs(out, shown, runs[agent])
-    return table
-
-
 def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
     """The name records keep for ``agent``: an outside agent's spec made absolute, after loading it once so
     that a bad one fails before anything flies.
@@ -419,6 +335,21 @@ def run_suite(
     if not report_only:
         execute(tasks, csv_path, backend=backend, workers=workers, address=address, description="suite")
     rows = suite_rows(tasks, csv_path) if csv_path.is_file() else []
+    text = suite_page(_report_values(rows, runs, tier_names, layouts, version, out, command))
+    write_text_atomically(out / "suite.md", text)
+    return text.splitlines()
+
+
+def _report_values(
+    rows: Sequence[Mapping[str, object]],
+    runs: Mapping[str, Sequence[str]],
+    tier_names: Sequence[str],
+    layouts: int,
+    version: str,
+    out: Path,
+    command: str,
+) -> dict[str, Any]:
+    """Write ``suite.csv`` and ``suite.png`` from the flown ``rows`` and return what ``suite.md`` words."""
     table = summarise_suite(rows, runs, tier_names, layouts, version)
     whole = {(row["agent"], row["tier"]) for row in table}
     missing = [f"{agent} on {name}" for name in tier_names for agent in runs if (agent, name) not in whole]
@@ -429,7 +360,7 @@ def run_suite(
     failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
     rankings = rank_suite(table, failures)
     bests = {name: ranking.best for name, ranking in rankings.items()}
-    values = suite_values(
+    return suite_values(
         table,
         rankings,
         command=command,
@@ -440,9 +371,6 @@ def run_suite(
         bounds=suite_bounds(failures, bests, seeds, version),
         gains=learning_gains(failures, rankings),
         chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
-        **beside_suite(out, tier_names, csv_path, seeds),
+        **beside_suite(out, tier_names, out / EPISODES_CSV, seeds),
         version=version,
     )
-    text = suite_page(values)
-    write_text_atomically(out / "suite.md", text)
-    return text.splitlines()

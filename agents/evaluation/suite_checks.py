@@ -170,6 +170,6 @@ def write_checks(folder: Path, command: str) -> Sequence[str]:
     return text.splitlines()
 
 
-def passing(checks: Sequence[Mapping[str, Any]]) -> bool:
+def passing(checks: Sequence[Mapping[str, object]]) -> bool:
     """Whether every reference flown passes on every tier it flew."""
     return all(row["passes"] for row in checks if row["layouts"])

@@ -19,8 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.evaluation.agent_settings import plan_settings
 from agents.evaluation.episode_tasks import EpisodeTask
-from agents.evaluation.runner import FlightCache, plan_settings, run_task
+from agents.evaluation.runner import FlightCache, run_task
 from agents.evaluation.suite import (
     EPISODES_CSV,
     agent_runs,

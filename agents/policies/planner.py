@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -280,10 +279,10 @@ class PlannerAgent:
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         layout, mask, true, course = _unbatched(observation)
         starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])
         if starting or self._table is None:

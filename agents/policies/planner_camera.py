@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -90,10 +89,10 @@ class CameraPlannerAgent(PlannerAgent):
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         values = unbatched_keys(observation, self.keys, self.reader)
         layout, mask, true, course, camera, edges = values[:6]
         starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])

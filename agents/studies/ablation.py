@@ -42,6 +42,7 @@ from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
 from flownav_env.settings_check import check_env_kwargs
+from flownav_env.tiers import SUITE_VERSION
 from flownav_env.tiers import tier as tier_of
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
@@ -95,6 +96,7 @@ def compare_configs(
     reference_agents: Sequence[str] = (),
     env: Mapping[str, Any] | None = None,
     tier: str | None = None,
+    suite_version: str = SUITE_VERSION,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
@@ -102,7 +104,8 @@ def compare_configs(
     ``env``: FlowNavEnv settings every run and reference agent flies with (default: clean). Its episodes are
     labelled with the setting, so they never count with another condition's in the same CSV; ``ablation.md``
     reports the condition asked, so give each condition its own ``out`` to keep each report. ``tier``: fly the
-    suite tier's env (its course and sensor) on its validation layouts from ``STUDENT_RECIPE_SEED_START``.
+    suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
+    ``STUDENT_RECIPE_SEED_START``.
 
     Raises:
         ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
@@ -121,7 +124,7 @@ def compare_configs(
     out.mkdir(parents=True, exist_ok=True)
     env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
     if tier is not None:
-        env_id, first_layout = tier_of(tier).env_id, STUDENT_RECIPE_SEED_START
+        env_id, first_layout = tier_of(tier, suite_version).env_id, STUDENT_RECIPE_SEED_START
     flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
     rows: list[dict[str, Any]] = []
     missing: list[str] = []

@@ -87,6 +87,7 @@ def _ablation(
     seeds: Sequence[int],
     reference: Sequence[str],
     tier: str | None,
+    suite_version: str,
 ) -> None:
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.
@@ -102,6 +103,7 @@ def _ablation(
             reference_agents=reference,
             env=env,
             tier=tier,
+            suite_version=suite_version,
         )
 
 
@@ -159,10 +161,12 @@ def _ablation_report(
     seeds: Sequence[int] = range(5),
     reference: Sequence[str] = ("bee_robust", "bee_ttc"),
     tier: str | None = None,
+    suite_version: str = "1",
 ) -> Report:
-    """An ``ablation.md``, its command written from the same settings the writer is called with."""
+    """An ``ablation.md``, its command written from the same settings the writer is called with (a tier's of
+    ``suite_version``: the student's recipes were compared on suite v1's tiers)."""
     options = f" --episodes {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
-    options += f" --tier {tier}" if tier else ""
+    options += f" --tier {tier} --suite-version {suite_version}" if tier else ""
     return Report(
         f"{folder}/ablation.md",
         name=folder.replace("/", "-").replace("_", "-"),
@@ -170,7 +174,14 @@ def _ablation_report(
         f"--reference {','.join(reference)}{options} --out results/{folder} --report-only",
         inputs=(f"{folder}/*/seed_*.csv", f"{folder}/reference/*.csv"),
         write=partial(
-            _ablation, configs=configs, episodes=episodes, env=env, seeds=seeds, reference=reference, tier=tier
+            _ablation,
+            configs=configs,
+            episodes=episodes,
+            env=env,
+            seeds=seeds,
+            reference=reference,
+            tier=tier,
+            suite_version=suite_version,
         ),
     )
 

@@ -9,7 +9,7 @@ import pytest
 
 from agents.cli import main
 from agents.cli.arguments import EPISODE_SECONDS, NOTICE_MINUTES, flight_notice
-from agents.evaluation import suite
+from agents.evaluation import scoring, suite
 
 
 def test_a_long_flight_is_announced_with_how_to_ask_for_less() -> None:
@@ -37,7 +37,7 @@ def test_the_leaderboard_without_include_says_what_it_would_fly(
 def test_score_and_suite_say_what_they_would_fly(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(suite, "score", lambda *args, **kwargs: [])
+    monkeypatch.setattr(scoring, "score", lambda *args, **kwargs: [])
     monkeypatch.setattr(suite, "run_suite", lambda *args, **kwargs: [])
     assert main(["score", "--agent", "bee", "--out", str(tmp_path)]) == 0
     assert "flownav score: up to 1,200 episodes" in capsys.readouterr().out

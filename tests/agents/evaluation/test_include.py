@@ -13,9 +13,8 @@ import pytest
 from agents.analysis.records import read_records
 from agents.cli import main
 from agents.evaluation.progress import PROGRESS_PREFIX
+from agents.evaluation.suite_plot import plot_label, plot_suite
 from agents.evaluation.suite_report import (
-    plot_label,
-    plot_suite,
     read_included,
     read_score_runs,
     read_suite_csv,
@@ -309,7 +308,7 @@ def test_an_included_agent_is_ranked_as_the_suite_ranks_and_the_figure_agrees(
     from matplotlib import pyplot
 
     from agents.evaluation.included import included_suite
-    from agents.evaluation.suite_report import _plot_tier
+    from agents.evaluation.suite_plot import _plot_tier
 
     text, rows, rankings, _ = included_suite(
         scored["published"], [scored["mine"] / "score.csv"], command="flownav leaderboard --include x"

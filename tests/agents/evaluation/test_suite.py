@@ -22,12 +22,12 @@ from agents.common.seeds import (
     suite_seeds,
 )
 from agents.evaluation.episode import EpisodeRecord
+from agents.evaluation.scoring import score
 from agents.evaluation.suite import (
     RUNS_INTERVAL,
     SUMMARY_COLUMNS,
     parse_tiers,
     run_suite,
-    score,
     suite_agents,
     suite_rows,
     suite_tasks,

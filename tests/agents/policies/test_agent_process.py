@@ -18,8 +18,8 @@ import pytest
 from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import suite_seeds
+from agents.evaluation.agent_settings import flown_settings
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, suite_task
-from agents.evaluation.runner import flown_settings
 from agents.evaluation.suite import EPISODES_CSV
 from agents.policies import load_agent
 from agents.policies.agent_process import check_plain_settings, end_agent_processes

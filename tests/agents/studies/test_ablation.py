@@ -43,7 +43,9 @@ def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> N
     assert [t.seed for t in tasks] == [STUDENT_RECIPE_SEED_START, STUDENT_RECIPE_SEED_START + 1]
     assert tasks[-1].seed in TIER_VALIDATION_SEEDS
     out = tmp_path / "hard"
-    lines = compare_configs([], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard")
+    lines = compare_configs(
+        [], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard", suite_version="1"
+    )
     row = read_records(out / "reference" / "straight.csv")[0]
     assert row["env_id"] == "FlowNavHard-v0" and row["seed"] == STUDENT_RECIPE_SEED_START
     assert (

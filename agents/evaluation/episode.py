@@ -62,6 +62,7 @@ def run_episode(
         if "depth_error_median" in info:
             depth_errors.append(info["depth_error_median"])
             outlier_shares.append(info["depth_outlier_share"])
+    check_own_progress(env, info, episode)
     frame_rate = env.get_wrapper_attr("frame_rate")
     return EpisodeRecord(
         agent=label,
@@ -83,3 +84,28 @@ def run_episode(
         mean_depth_outlier_share=float(np.mean(outlier_shares)) if outlier_shares else math.nan,
         max_abs_lateral_m=widest,
     )
+
+
+# How far short of the goal line (m) a success's final position may lie: none, but for rounding.
+GOAL_TOLERANCE_M = 1e-6
+
+
+def check_own_progress(
+    env: gym.Env[dict[str, np.ndarray], np.ndarray], info: dict[str, object], episode: str
+) -> None:
+    """A success needs the drone's own progress to the goal line: on a field course the line stands at the
+    course's ``field_length`` from the start, read from the settings the episode was made with, not from the
+    task's state that an agent in this process could reach.
+
+    Raises:
+        ValueError: one line naming the episode: a success short of the goal line; nothing is recorded of it.
+    """
+    settings = env.get_wrapper_attr("settings")
+    if not info["success"] or settings.layout != "field":
+        return
+    reached = float(info["progress"])  # type: ignore[arg-type]
+    if reached < settings.field_length - GOAL_TOLERANCE_M:
+        raise ValueError(
+            f"{episode}: a success at x = {reached:.2f} m, short of the goal line at {settings.field_length:.2f} m; "
+            "a success needs the drone's own progress to the line, so nothing was recorded of that episode"
+        )

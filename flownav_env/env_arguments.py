@@ -73,6 +73,13 @@ class Setting(Generic[_T]):
         value: _T = getattr(env.settings, self.name)
         return value
 
+    def __set__(self, env: _HasSettings, value: _T) -> None:
+        # A data descriptor, so an assignment cannot shadow the settings with an attribute that nothing reads.
+        raise AttributeError(
+            f"{self.name} is fixed when the env is made (pass it to gymnasium.make); only sensor settings change "
+            "between episodes (set_sensor)"
+        )
+
 
 class SensorSetting(Setting[float]):
     """A sensor variable's attribute (:data:`~flownav_env.settings.SENSOR_FIELDS`): it reads the settings, and

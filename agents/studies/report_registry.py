@@ -165,8 +165,8 @@ def _ablation_report(
 ) -> Report:
     """An ``ablation.md``, its command written from the same settings the writer is called with (a tier's of
     ``suite_version``: the student's recipes were compared on suite v1's tiers)."""
-    options = f" --episodes {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
-    options += f" --tier {tier} --suite-version {suite_version}" if tier else ""
+    options = f" --layouts {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
+    options += f" --tiers {tier} --suite-version {suite_version}" if tier else ""
     return Report(
         f"{folder}/ablation.md",
         name=folder.replace("/", "-").replace("_", "-"),
@@ -310,6 +310,7 @@ REPORTS: tuple[Report, ...] = (
     *_not_regenerated(
         _PROSE,
         "README.md",
+        "camera_reference/README.md",
         "diagnostics/README.md",
         "renderer_check/README.md",
         "sweep_fast20/README.md",

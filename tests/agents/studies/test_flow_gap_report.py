@@ -11,8 +11,10 @@ import pytest
 from agents.analysis.csv_file import LEGACY_FIELDS
 from agents.analysis.paired import compare
 from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
+from agents.evaluation.suite import SUITE_RESULTS_FOLDERS
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 from agents.studies.flow_gap_report import (
+    READ_SUITE_VERSION,
     confirmation_rows,
     gap,
     gap_row,
@@ -83,11 +85,11 @@ def test_a_gap_row_pairs_the_layouts_both_recipes_flew() -> None:
 def test_suite_matrices_keep_only_tiers_every_seed_flew_whole(tmp_path: Path) -> None:
     policies = tmp_path / "policies"
     _ship(policies, "ppo_flow", 2)
-    layouts = list(suite_seeds())
+    layouts = list(suite_seeds(version=READ_SUITE_VERSION))
     episodes = [(f"ppo_flow@{k}", "clean", 0.0, seed, seed % 10 == 0) for seed in layouts for k in range(2)]
     episodes += [(f"ppo_flow@{k}", "hard", 0.0, seed, True) for seed in layouts[:-1] for k in range(2)]
     episodes += [("bee", "noisy", 0.0, seed, False) for seed in layouts]
-    _write_episodes(tmp_path / "suite_episodes.csv", episodes)
+    _write_episodes(tmp_path / SUITE_RESULTS_FOLDERS[READ_SUITE_VERSION] / "suite_episodes.csv", episodes)
     found = suite_matrices(tmp_path, "ppo_flow", policies)
     assert list(found) == ["clean"]
     assert found["clean"].shape == (2, len(layouts)) and found["clean"].mean() == pytest.approx(0.1)
@@ -99,13 +101,13 @@ def test_the_students_gap_per_tier_sets_the_planners_failure_beside_it(tmp_path:
     student, twin = "ppo_flow_planner_student", "ppo_flow_planner_student_oracle"
     for agent in (student, twin):
         _ship(policies, agent, 2)
-    layouts = list(suite_seeds())
+    layouts = list(suite_seeds(version=READ_SUITE_VERSION))
     episodes = []
     for tier in ("clean", "hard"):
         episodes += [(f"{student}@{k}", tier, 0.0, seed, seed % 5 == 0) for seed in layouts for k in range(2)]
         episodes += [(f"{twin}@{k}", tier, 0.0, seed, seed % 10 == 0) for seed in layouts for k in range(2)]
     episodes += [("planner", "clean", 0.0, seed, seed % 100 == 0) for seed in layouts]
-    _write_episodes(tmp_path / "suite_episodes.csv", episodes)
+    _write_episodes(tmp_path / SUITE_RESULTS_FOLDERS[READ_SUITE_VERSION] / "suite_episodes.csv", episodes)
     planner = suite_matrices(tmp_path, "planner", policies)
     assert list(planner) == ["clean"] and planner["clean"].shape == (1, len(layouts))
     rows = [

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from agents.cli import COMMANDS, main
+from agents.cli.arguments import tier_name_of
 from agents.common.locations import RESULTS_DIR
 from agents.studies import reports
 from agents.studies.reports import (
@@ -182,7 +183,8 @@ def test_each_command_is_a_valid_report_only_call_that_writes_where_the_report_l
     if report.name.startswith(("ablation", "student-recipes")):
         write = report.write
         assert [str(path) for path in args.configs] == list(write.keywords["configs"])
-        assert args.episodes == write.keywords["episodes"] and dict(args.env) == write.keywords["env"]
+        assert args.layouts == write.keywords["episodes"] and dict(args.env) == write.keywords["env"]
         assert parse_seeds(args.seeds) == list(write.keywords["seeds"])
         assert args.reference == ",".join(write.keywords["reference"])
-        assert args.tier == write.keywords["tier"]
+        assert (args.tiers and tier_name_of(args.tiers)) == write.keywords["tier"]
+        assert args.suite_version == write.keywords["suite_version"] or not args.tiers

@@ -164,3 +164,10 @@ def flight_notice(command: str, episodes: int, workers: int, ask_less: str) -> s
         f"flownav {command}: up to {episodes:,} episodes, about {took} with {workers} worker"
         f"{'' if workers == 1 else 's'} (episodes already in the folder are not flown again); {ask_less}"
     )
+
+
+def announce_flight(command: str, episodes: int, workers: int, ask_less: str) -> None:
+    """Print :func:`flight_notice`'s line where there is one."""
+    notice = flight_notice(command, episodes, workers, ask_less)
+    if notice:
+        print(notice)

@@ -24,7 +24,7 @@ from agents.cli.arguments import (
     add_layouts_argument,
     add_policies_dir_argument,
     add_workers_argument,
-    flight_notice,
+    announce_flight,
 )
 from agents.cli.suite import add_suite_version_argument
 from agents.common.folders import check_writable_folder, write_text_atomically
@@ -84,15 +84,13 @@ def run(args: argparse.Namespace) -> int:
 
         # Each learned agent flies every shipped training seed on every layout (run_leaderboard says which).
         runs = sum(len(shipped_seed_runs(a, Path(args.policies_dir))) if is_learned(a) else 1 for a in agents)
-        notice = flight_notice(
+        announce_flight(
             "leaderboard",
             runs * args.layouts,
             args.workers,
             "--agents bee,vfh flies some agents, --include runs/score/score.csv sets your rows beside the "
             "leading table without flying",
         )
-        if notice:
-            print(notice)
     command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     lines = run_leaderboard(
         agents,

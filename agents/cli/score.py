@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.cli.arguments import flight_notice
+from agents.cli.arguments import announce_flight
 from agents.cli.suite import add_tier_arguments
 from agents.evaluation.suite_report import tier_tables
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
@@ -41,15 +41,7 @@ HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--agent",
-        help="a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent",
-    )
-    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
-    parser.add_argument(
-        "--algo", choices=SB3_ALGORITHMS, help="with --policy and no --agent: a stable-baselines3 model"
-    )
-    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
+    add_agent_spec_arguments(parser, "a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent")
     parser.add_argument(
         "--name",
         help="the agent's name in score.csv, tables and figures (default: a file's stem and callable, e.g. "
@@ -149,14 +141,12 @@ def run(args: argparse.Namespace) -> int:
     from agents.policies.external import is_external_name
 
     runs = 1 if is_external_name(agent) else len(agent_runs(agent, policy))
-    notice = flight_notice(
+    announce_flight(
         "score",
         runs * len(parse_tiers(args.tiers)) * args.layouts,
         args.workers,
         "--layouts 10 is a quick look, --tiers clean one tier",
     )
-    if notice:
-        print(notice)
     # What both flights share: the agent's policy file and where the episodes fly.
     common = {
         "policy": policy,
@@ -200,3 +190,14 @@ def run(args: argparse.Namespace) -> int:
             "agents' are in results/sweep.md"
         )
     return 0
+
+
+def add_agent_spec_arguments(parser: argparse.ArgumentParser, agent_help: str) -> None:
+    """The options that name one agent to fly, shared by ``score`` and ``verify``: ``--agent`` (``agent_help``),
+    or ``--policy`` with ``--algo``, and ``--trust-pickle``."""
+    parser.add_argument("--agent", help=agent_help)
+    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
+    parser.add_argument(
+        "--algo", choices=SB3_ALGORITHMS, help="with --policy and no --agent: a stable-baselines3 model"
+    )
+    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)

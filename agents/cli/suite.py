@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.cli.arguments import add_workers_argument, flight_notice
+from agents.cli.arguments import add_workers_argument, announce_flight
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.policies import SUITE_AGENTS
@@ -77,14 +77,12 @@ def run(args: argparse.Namespace) -> int:
         from agents.evaluation.suite import agent_runs, parse_tiers
 
         runs = sum(len(agent_runs(agent)) for agent in agents)
-        notice = flight_notice(
+        announce_flight(
             "suite",
             runs * len(parse_tiers(args.tiers)) * args.layouts,
             args.workers,
             "--agents, --tiers and --layouts 30 ask for less",
         )
-        if notice:
-            print(notice)
     command = "flownav suite " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     lines = run_suite(
         agents,

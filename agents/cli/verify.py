@@ -13,11 +13,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.cli.score import add_agent_limit_arguments, agent_and_policy, agent_limits
+from agents.cli.score import (
+    add_agent_limit_arguments,
+    add_agent_spec_arguments,
+    agent_and_policy,
+    agent_limits,
+)
 from agents.cli.suite import add_suite_version_argument
-from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
 from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, STEP_TIMEOUT_OPTION
-from agents.policies.sb3_models import SB3_ALGORITHMS
 
 HELP = "check a score.csv against its agent: its rates against its episodes, a random sample of them re-flown"
 DEFAULT_SAMPLE = 10  # agents.evaluation.verify.DEFAULT_SAMPLE, here so that --help stays quick
@@ -25,15 +28,9 @@ DEFAULT_SAMPLE = 10  # agents.evaluation.verify.DEFAULT_SAMPLE, here so that --h
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("score_csv", metavar="SCORE_CSV", help="what flownav score wrote (<out>/score.csv)")
-    parser.add_argument(
-        "--agent",
-        help="the agent the rows are of: a FlowNav agent, my_pkg.my_module:make_agent, or file.py:make_agent",
+    add_agent_spec_arguments(
+        parser, "the agent the rows are of: a FlowNav agent, my_pkg.my_module:make_agent, or file.py:make_agent"
     )
-    parser.add_argument("--policy", help=POLICY_OPTION_HELP)
-    parser.add_argument(
-        "--algo", choices=SB3_ALGORITHMS, help="with --policy and no --agent: a stable-baselines3 model"
-    )
-    parser.add_argument("--trust-pickle", action="store_true", help=TRUST_PICKLE_HELP)
     parser.add_argument(
         "--sample",
         type=int,

@@ -13,9 +13,8 @@ Wilson interval: a lever is worth shipping only if it beats what needs no traini
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -23,6 +22,7 @@ from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
+from agents.analysis.validation_rows import AblationRow
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
@@ -53,7 +53,7 @@ RUN_LABEL = "ppo_flow"
 def ablation_tasks(
     policy: Path | None,
     episodes: int,
-    env: Mapping[str, Any] | None = None,
+    env: Mapping[str, object] | None = None,
     agent: str = RUN_LABEL,
     *,
     env_id: str = "FlowNav-v0",
@@ -94,7 +94,7 @@ def compare_configs(
     report_only: bool = False,
     command: str = "flownav ablation",
     reference_agents: Sequence[str] = (),
-    env: Mapping[str, Any] | None = None,
+    env: Mapping[str, object] | None = None,
     tier: str | None = None,
     suite_version: str = SUITE_VERSION,
 ) -> list[str]:
@@ -126,7 +126,7 @@ def compare_configs(
     if tier is not None:
         env_id, first_layout = tier_of(tier, suite_version).env_id, STUDENT_RECIPE_SEED_START
     flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
-    rows: list[dict[str, Any]] = []
+    rows: list[AblationRow] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
@@ -139,8 +139,9 @@ def compare_configs(
         if row is not None:
             rows.append(row)
     # Paired by layout (every row flew the same ones), each row's runs resampled on their own.
-    for index, row in enumerate(rows):
-        row["versus_first"] = compare("", row["failures"], "", rows[0]["failures"]) if index else None
+    rows[1:] = [
+        replace(row, versus_first=compare("", row.failures, "", rows[0].failures)) for row in rows[1:]
+    ]
     if curves:
         plot_grouped_learning_curves(
             curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
@@ -162,7 +163,7 @@ class _Flights:
 
     out: Path
     episodes: int
-    env: dict[str, Any]
+    env: dict[str, object]
     workers: int
     report_only: bool
     env_id: str
@@ -182,7 +183,7 @@ def _fly_config(
     flights: _Flights,
     missing: list[str],
     curves: dict[str, dict[str, Path]],
-) -> dict[str, Any] | None:
+) -> AblationRow | None:
     """Fly each finished seed of a config; its report row (None when no seed has every episode). Seeds not
     trained or not fully flown are added to ``missing``, each seed's evaluations file to ``curves``."""
     name = config.name
@@ -219,7 +220,7 @@ def _evaluations_file(files: RunFiles) -> Path | None:
     return evaluations if evaluations.is_file() else None
 
 
-def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> dict[str, Any] | None:
+def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> AblationRow | None:
     """Fly a reactive reference agent; its report row, or None (and a line in ``missing``) while short of
     episodes."""
     tasks = flights.tasks(None, agent=agent)
@@ -251,24 +252,26 @@ def seed_files(
     return run if run_finished else None
 
 
-def _config_row(name: str, outcomes: np.ndarray, per_seed: list, counts: dict[str, int]) -> dict[str, Any]:
+def _config_row(
+    name: str, outcomes: np.ndarray, per_seed: list[tuple[int, float]], counts: dict[str, int]
+) -> AblationRow:
     """A config's row: failure over runs × layouts (its interval from two seeds on), its outcome rates and each
     seed's failure."""
     rate, low, high = runs_failure(outcomes)
     several, total = len(outcomes) > 1, outcomes.size
-    return {
-        "config": name,
-        "seeds": len(outcomes),
-        "episodes": total,
-        "failure": rate,
-        "failure_low": low if several else None,
-        "failure_high": high if several else None,
-        "success": float(outcomes.mean()),
-        "collision": counts["collision"] / total,
-        "out_of_bounds": counts["out_of_bounds"] / total,
-        "per_seed": per_seed,
-        "failures": 1.0 - outcomes,
-    }
+    return AblationRow(
+        config=name,
+        seeds=len(outcomes),
+        episodes=total,
+        failure=rate,
+        failure_low=low if several else None,
+        failure_high=high if several else None,
+        success=float(outcomes.mean()),
+        collision=counts["collision"] / total,
+        out_of_bounds=counts["out_of_bounds"] / total,
+        per_seed=per_seed,
+        failures=1.0 - outcomes,
+    )
 
 
 def _fly(
@@ -281,34 +284,34 @@ def _fly(
     return rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
 
 
-def _reference_row(agent: str, flown: Sequence[EpisodeRow]) -> dict[str, Any]:
+def _reference_row(agent: str, flown: Sequence[EpisodeRow]) -> AblationRow:
     """A reactive reference agent's row: one run, a Wilson interval over its layouts."""
     rate, low, high, total = failure(flown)
-    return {
-        "config": f"{agent} (reactive, reference)",
-        "seeds": None,
-        "episodes": total,
-        "failure": rate,
-        "failure_low": low,
-        "failure_high": high,
-        "success": 1 - rate,
-        "collision": sum(bool(row["collision"]) for row in flown) / total,
-        "out_of_bounds": sum(bool(row["out_of_bounds"]) for row in flown) / total,
-        "per_seed": None,
-        "failures": np.array([[0.0 if row["success"] else 1.0 for row in flown]]),
-    }
+    return AblationRow(
+        config=f"{agent} (reactive, reference)",
+        seeds=None,
+        episodes=total,
+        failure=rate,
+        failure_low=low,
+        failure_high=high,
+        success=1 - rate,
+        collision=sum(bool(row["collision"]) for row in flown) / total,
+        out_of_bounds=sum(bool(row["out_of_bounds"]) for row in flown) / total,
+        per_seed=None,
+        failures=np.array([[0.0 if row["success"] else 1.0 for row in flown]]),
+    )
 
 
 def ablation_values(
-    rows: list[dict[str, Any]],
+    rows: list[AblationRow],
     missing: list[str],
     seeds: Sequence[int],
     command: str,
-    env: dict[str, Any],
+    env: Mapping[str, object],
     curves: bool,
     flights: _Flights,
     tier: str | None = None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Every value ``ablation.md`` words (``templates/ablation.md.j2``)."""
     condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
     return {

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TypedDict, Unpack
 
 import numpy as np
 
@@ -20,6 +20,13 @@ from agents.analysis.over_seeds import success_outcomes
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import runs_and_layouts_interval
+from agents.analysis.validation_rows import (
+    ConditionRate,
+    ConfirmationResult,
+    PairedDifference,
+    Rise,
+    SearchRecord,
+)
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
@@ -121,7 +128,7 @@ def run_confirmation(
     workers: int = 2,
     report_only: bool = False,
     policies_dir: Path = POLICIES_DIR,
-) -> dict[str, Any]:
+) -> ConfirmationResult:
     """Fly (unless ``report_only``) the pick and what it is compared with into ``out``, then compare: each
     agent's failure per condition, the pick minus each other agent, and each agent's rise over its clean rate.
 
@@ -143,38 +150,23 @@ def run_confirmation(
                 confirmation_tasks(runs, layouts), out / f"{agent}.csv", workers=workers, description=agent
             )
     matrices = outcome_matrices(out, agents, layouts, policies_dir)
-    rates, differences, rises = [], [], []
+    rates: list[ConditionRate] = []
+    differences: list[PairedDifference] = []
+    rises: list[Rise] = []
     for condition, found in matrices.items():
         for agent, matrix in found.items():
             low, high = runs_and_layouts_interval(matrix)
-            rates.append(
-                {
-                    "condition": condition,
-                    "agent": agent,
-                    "runs": matrix.shape[0],
-                    "failure": matrix.mean(),
-                    "low": low,
-                    "high": high,
-                }
-            )
+            rates.append(ConditionRate(condition, agent, matrix.shape[0], matrix.mean(), low, high))
             clean = matrices["clean"].get(agent)
             if condition != "clean" and clean is not None:
                 rise, low, high = paired_difference(matrix, clean)
-                rises.append({"condition": condition, "agent": agent, "rise": rise, "low": low, "high": high})
+                rises.append(Rise(condition, agent, rise, low, high))
         if PICK in found:
             for other in (*COMPARED, TRUE_DEPTH_RECIPE):
                 if other in found:
                     value, low, high = paired_difference(found[PICK], found[other])
-                    differences.append(
-                        {
-                            "condition": condition,
-                            "other": other,
-                            "difference": value,
-                            "low": low,
-                            "high": high,
-                        }
-                    )
-    return {"layouts": layouts, "rates": rates, "differences": differences, "rises": rises}
+                    differences.append(PairedDifference(condition, other, value, low, high))
+    return ConfirmationResult(layouts, rates, differences, rises)
 
 
 # Where the lever search's ablation kept each condition's runs, under results/ablation/.
@@ -183,7 +175,7 @@ SEARCH_FOLDERS = {"clean": ".", "density 0.18": "density_0.18", "speed 1.5 m/s":
 FLOWN_AFTER_THE_SEARCH = ("ppo_flow_teacher",)
 
 
-def search_record(ablation_dir: Path) -> dict[str, Any]:
+def search_record(ablation_dir: Path) -> SearchRecord:
     """What the lever search was, read from its committed episodes: the configurations flown under the two
     robustness conditions, the validation layouts they flew, and the pick minus its first stage there, paired by layout
     (:func:`paired_difference`), per condition."""
@@ -196,26 +188,24 @@ def search_record(ablation_dir: Path) -> dict[str, Any]:
                 layouts.update(int(row["seed"]) for row in read_records(csv_path))
             if config.name not in tried:
                 tried.append(config.name)
-    differences = []
+    differences: list[PairedDifference] = []
     for condition, folder in SEARCH_FOLDERS.items():
         pick = seed_failures(Path(ablation_dir) / folder / PICK)
         first_stage = seed_failures(Path(ablation_dir) / folder / COMPARED[0])
         if pick is None or first_stage is None or pick.shape[1] != first_stage.shape[1]:
             continue
         value, low, high = paired_difference(pick, first_stage)
-        differences.append(
-            {"condition": condition, "other": COMPARED[0], "difference": value, "low": low, "high": high}
-        )
-    return {"configs": tried, "layouts": sorted(layouts), "differences": differences}
+        differences.append(PairedDifference(condition, COMPARED[0], value, low, high))
+    return SearchRecord(tried, sorted(layouts), differences)
 
 
-def flow_costs(result: Mapping[str, Any]) -> list[dict[str, Any]]:
+def flow_costs(result: ConfirmationResult) -> list[PairedDifference]:
     """Per condition, the pick minus its recipe on true depths: what flow costs it (positive: flow fails more);
     empty until the true-depth recipe has flown."""
-    return [d for d in result["differences"] if d["other"] == TRUE_DEPTH_RECIPE]
+    return [d for d in result.differences if d.other == TRUE_DEPTH_RECIPE]
 
 
-def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: str) -> list[str]:
+def report_lines(result: ConfirmationResult, search: SearchRecord, command: str) -> list[str]:
     """``confirmation.md`` (its prose is ``templates/confirmation.md.j2``): the search as it happened, then the
     pick against what it is compared with on fresh layouts."""
     values = {"result": result, "search": search, "c": choices(), "first_stage": COMPARED[0]}
@@ -223,7 +213,16 @@ def report_lines(result: Mapping[str, Any], search: Mapping[str, Any], command: 
     return render_report("confirmation.md.j2", values).split("\n")[:-1]
 
 
-def write_confirmation(out: Path, command: str, **flights: Any) -> list[str]:
+class ConfirmationFlights(TypedDict, total=False):
+    """The options of :func:`run_confirmation` that say how it flies."""
+
+    layouts: int
+    workers: int
+    report_only: bool
+    policies_dir: Path
+
+
+def write_confirmation(out: Path, command: str, **flights: Unpack[ConfirmationFlights]) -> list[str]:
     """:func:`run_confirmation` (``flights`` its options) beside the committed search (``results/ablation``),
     and ``out/confirmation.md`` written; returns its lines."""
     lines = report_lines(run_confirmation(out, **flights), search_record(RESULTS_DIR / "ablation"), command)

@@ -14,10 +14,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 from agents.analysis.episode_record import EpisodeRow, is_flow_agent
 from agents.analysis.statistics import failure
+from agents.analysis.tolerance_rows import CleanFields, ToleranceRow, ToleranceScan
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -46,9 +46,7 @@ BASELINE_SOURCE = "the 300-layout clean table"
 SWEEP_CLEAN_SOURCE = "the sweep's clean cell"
 
 
-def tolerance_table(
-    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
-) -> list[dict[str, Any]]:
+def tolerance_table(rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()) -> list[ToleranceRow]:
     """Per agent, factor and side of the neutral level: the clean failure rate [CI], the largest level still
     inside the clean interval, the first level at which the failure rate doubles, the first level at which it
     breaks (its interval lies wholly above the clean one), and the thesis's verdict.
@@ -70,13 +68,13 @@ def tolerance_table(
         if agent not in clean_rows:
             continue
         clean, clean_low, clean_high, clean_episodes = failure(clean_rows[agent][0])
-        clean_fields = {
-            "clean_failure": clean,
-            "clean_low": clean_low,
-            "clean_high": clean_high,
-            "clean_episodes": clean_episodes,
-            "clean_source": clean_rows[agent][1],
-        }
+        clean_fields = CleanFields(
+            clean_failure=clean,
+            clean_low=clean_low,
+            clean_high=clean_high,
+            clean_episodes=clean_episodes,
+            clean_source=clean_rows[agent][1],
+        )
         for factor in sorted({key[1] for key in cells if key[0] == agent and key[1] != "clean"}):
             table += _factor_rows(cells, agent, factor, clean_fields)
     return table
@@ -86,8 +84,8 @@ def _factor_rows(
     cells: Mapping[tuple[str, str, float], list[EpisodeRow]],
     agent: str,
     factor: str,
-    clean_fields: Mapping[str, Any],
-) -> list[dict[str, Any]]:
+    clean_fields: CleanFields,
+) -> list[ToleranceRow]:
     """The tolerance rows of one agent and factor: one per side of the neutral level with levels flown."""
     neutral = neutral_level(factor)
     levels = sorted(level for (a, f, level) in cells if a == agent and f == factor)
@@ -98,9 +96,9 @@ def _factor_rows(
     ):
         if chosen:
             scan = _scan_outward(chosen, [cells[(agent, factor, x)] for x in chosen], neutral, clean_fields)
+            thesis = THESIS_VERDICTS.get(factor, NOT_TESTED)
             rows.append(
-                {"agent": agent, "factor": factor, "side": side, **clean_fields, **scan}
-                | {"thesis": THESIS_VERDICTS.get(factor, NOT_TESTED)}
+                ToleranceRow(agent=agent, factor=factor, side=side, **clean_fields, **scan, thesis=thesis)
             )
     return rows
 
@@ -134,8 +132,8 @@ def _scan_outward(
     levels: Sequence[float],
     cell_rows: Sequence[Sequence[EpisodeRow]],
     neutral: float,
-    clean_fields: Mapping[str, Any],
-) -> dict[str, Any]:
+    clean_fields: CleanFields,
+) -> ToleranceScan:
     """One side of a factor, its ``levels`` in order outward from ``neutral`` with each level's episodes: the
     tolerated, doubling, worst and breaking levels (see :func:`tolerance_table`)."""
     clean, clean_high = clean_fields["clean_failure"], clean_fields["clean_high"]
@@ -153,17 +151,17 @@ def _scan_outward(
         if doubled is None and _doubles(rate, clean, clean_high):
             doubled = level
     worst = max(rates, key=lambda r: r[1])
-    return {
-        "levels": [r[0] for r in rates],
-        "tolerated_level": tolerated,
-        "doubling_level": doubled,
-        "worst_level": worst[0],
-        "worst_failure": worst[1],
-        "worst_low": worst[2],
-        "breaks": worst[2] > clean_high,
-        "breaking_level": None if breaking is None else breaking[0],
-        "breaking_failure": None if breaking is None else breaking[1],
-    }
+    return ToleranceScan(
+        levels=[r[0] for r in rates],
+        tolerated_level=tolerated,
+        doubling_level=doubled,
+        worst_level=worst[0],
+        worst_failure=worst[1],
+        worst_low=worst[2],
+        breaks=worst[2] > clean_high,
+        breaking_level=None if breaking is None else breaking[0],
+        breaking_failure=None if breaking is None else breaking[1],
+    )
 
 
 def _doubles(rate: float, clean: float, clean_high: float) -> bool:
@@ -171,7 +169,7 @@ def _doubles(rate: float, clean: float, clean_high: float) -> bool:
     return 2.0 * clean <= 1.0 and rate >= 2.0 * clean and rate > clean_high
 
 
-def unbroken_kind(row: Mapping[str, Any]) -> str:
+def unbroken_kind(row: ToleranceRow) -> str:
     """Why no level flown breaks a tolerance row's agent: "end" (flown to the end of the setting's range),
     "easier" (no level fails more than clean: the direction makes the task easier) or "short" (the levels stop
     short of the range's end: more are needed)."""
@@ -185,7 +183,7 @@ def unbroken_kind(row: Mapping[str, Any]) -> str:
     return "easier" if row["worst_failure"] <= row["clean_failure"] else "short"
 
 
-def best_learned_flow_agent(table: Sequence[Mapping[str, Any]]) -> str | None:
+def best_learned_flow_agent(table: Sequence[ToleranceRow]) -> str | None:
     """The learned agent on flow depths with the lowest clean failure rate among a tolerance table's."""
     clean = {
         r["agent"]: r["clean_failure"]

@@ -21,6 +21,7 @@ from agents.analysis.dose_response import (
 )
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
+from agents.analysis.tolerance_rows import ToleranceRow
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.common.folders import check_writable_folder
 from agents.common.tables import today
@@ -35,7 +36,7 @@ from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 
 
-def _range_text(row: Mapping[str, Any]) -> str:
+def _range_text(row: ToleranceRow) -> str:
     return setting_range(row["factor"]).interval if unbroken_kind(row) == "end" else ""
 
 
@@ -108,7 +109,7 @@ def report_values(
     quality = cell_quality(rows)
     fits, errors = fit_every_flow_agent(rows, quality)
     table = tolerance_table(rows, baseline)
-    keys: dict[tuple[str, str], dict[str, Any]] = {}
+    keys: dict[tuple[str, str], dict[str, ToleranceRow]] = {}
     for row in table:
         keys.setdefault((row["factor"], row["side"]), {})[row["agent"]] = row
     best = best_learned_flow_agent(table)

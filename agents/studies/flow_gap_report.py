@@ -15,7 +15,6 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -24,6 +23,7 @@ from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import Comparison, compare, verdict
 from agents.analysis.records import read_records
 from agents.analysis.statistics import runs_failure
+from agents.analysis.validation_rows import ConfirmationResult, SearchRecord
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
@@ -65,7 +65,8 @@ def _cell(matrix: np.ndarray) -> Cell:
     return (float(matrix.mean()), *runs_failure(1 - matrix)[1:])
 
 
-def _row_cell(row: Mapping[str, Any]) -> Cell:
+def _leaderboard_cell(data: BenchmarkData, agent: str) -> Cell:
+    row = data.row(agent)
     return (row["failure_rate"], row["failure_low"], row["failure_high"])
 
 
@@ -134,7 +135,7 @@ def _suite_rows(results: Path, flow: str, truth: str, policies_dir: Path) -> lis
     return [(t, flow_tiers[t], truth_tiers[t]) for t in TIER_NAMES if t in flow_tiers and t in truth_tiers]
 
 
-def _student_values(results: Path, policies_dir: Path) -> dict[str, Any]:
+def _student_values(results: Path, policies_dir: Path) -> dict[str, object]:
     """The planner's flow-only student against its true-depth twin per tier, the planner beside as ceiling."""
     student, twin = choices().student, choices().student_truth
     return {
@@ -151,13 +152,13 @@ def _student_values(results: Path, policies_dir: Path) -> dict[str, Any]:
     }
 
 
-def confirmation_rows(result: Mapping[str, Any], results: Path, policies_dir: Path) -> list[Row]:
+def confirmation_rows(result: ConfirmationResult, results: Path, policies_dir: Path) -> list[Row]:
     """The pick against its true-depth recipe per condition on the confirmation layouts; empty until the
     true-depth recipe has flown."""
     if not flow_costs(result):
         return []
     agents = (PICK, TRUE_DEPTH_RECIPE)
-    matrices = outcome_matrices(results / "confirmation", agents, result["layouts"], policies_dir)
+    matrices = outcome_matrices(results / "confirmation", agents, result.layouts, policies_dir)
     return [
         (k, found[PICK], found[TRUE_DEPTH_RECIPE])
         for k, found in matrices.items()
@@ -165,20 +166,20 @@ def confirmation_rows(result: Mapping[str, Any], results: Path, policies_dir: Pa
     ]
 
 
-def selection_values(result: Mapping[str, Any], search: Mapping[str, Any]) -> dict[str, Any]:
+def selection_values(result: ConfirmationResult, search: SearchRecord) -> dict[str, object]:
     """The search as it happened and what the fresh layouts say about the pick: the pick's rises over its clean
     rate, and its differences from its first stage and from ``ppo_flow``."""
     return {
         "search": search,
-        "confirmation_layouts": result["layouts"],
-        "pick_rises": [r for r in result["rises"] if r["agent"] == PICK],
+        "confirmation_layouts": result.layouts,
+        "pick_rises": [r for r in result.rises if r.agent == PICK],
         "first_stage": COMPARED[0],
-        "stages": {other: [d for d in result["differences"] if d["other"] == other] for other in COMPARED},
+        "stages": {other: [d for d in result.differences if d.other == other] for other in COMPARED},
         "after_the_search": [f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH],
     }
 
 
-def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dict[str, Any]:
+def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dict[str, object]:
     flow, truth = choices().plain
     clean = data.validation["clean"]
     return {
@@ -189,19 +190,19 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dic
 
 
 def gap_bars(
-    data: BenchmarkData, result: Mapping[str, Any], results: Path, policies_dir: Path
+    data: BenchmarkData, result: ConfirmationResult, results: Path, policies_dir: Path
 ) -> dict[str, list[Bar]]:
     """What the figure shows, per recipe: (where, flow's failure, truth's failure), None where not flown."""
     plain_flow, plain_truth = choices().plain
     clean = data.validation["clean"]
     plain: list[Bar] = [
-        ("test, clean", _row_cell(data.row(plain_flow)), _row_cell(data.row(plain_truth))),
+        ("test, clean", _leaderboard_cell(data, plain_flow), _leaderboard_cell(data, plain_truth)),
         ("validation, clean", _rate_cell(clean[plain_flow]), _rate_cell(clean[plain_truth])),
     ]
-    rates = {(r["condition"], r["agent"]): (r["failure"], r["low"], r["high"]) for r in result["rates"]}
+    rates = {(r.condition, r.agent): (r.failure, r.low, r.high) for r in result.rates}
     pick: list[Bar] = [
         (f"fresh validation, {k}", rates.get((k, PICK)), rates.get((k, TRUE_DEPTH_RECIPE)))
-        for k in dict.fromkeys(r["condition"] for r in result["rates"])
+        for k in dict.fromkeys(r.condition for r in result.rates)
     ]
     for bars, agents in ((plain, (plain_flow, plain_truth)), (pick, (PICK, TRUE_DEPTH_RECIPE))):
         flow_tiers, truth_tiers = (suite_matrices(results, a, policies_dir) for a in agents)
@@ -267,9 +268,9 @@ def plot_gap(panels: Mapping[str, Sequence[Bar]], path: Path) -> None:
 def flow_gap_values(
     results_dir: Path,
     policies_dir: Path = POLICIES_DIR,
-    result: Mapping[str, Any] | None = None,
+    result: ConfirmationResult | None = None,
     data: BenchmarkData | None = None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Every value of the flow-gap template, from the committed data under ``results_dir``; ``result``: the
     confirmation's comparison (:func:`run_confirmation`) and ``data`` the benchmark's summaries, when the
     caller has them already."""

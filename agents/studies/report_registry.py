@@ -12,7 +12,6 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
 
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.evaluation import suite_checks
@@ -83,7 +82,7 @@ def _ablation(
     *,
     configs: Sequence[str],
     episodes: int,
-    env: Mapping[str, Any],
+    env: Mapping[str, object],
     seeds: Sequence[int],
     reference: Sequence[str],
     tier: str | None,
@@ -157,7 +156,7 @@ def _ablation_report(
     folder: str,
     configs: Sequence[str],
     episodes: int,
-    env: Mapping[str, Any],
+    env: Mapping[str, object],
     seeds: Sequence[int] = range(5),
     reference: Sequence[str] = ("bee_robust", "bee_ttc"),
     tier: str | None = None,

@@ -24,14 +24,13 @@ import io
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from agents.analysis.dose_response import TASK_FACTORS
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
-from agents.analysis.statistics import summarise
+from agents.analysis.statistics import CellSummary, summarise
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
@@ -93,10 +92,9 @@ def curve_area(points: Sequence[tuple[float, float]]) -> float:
     return float(np.sum((failures[1:] + failures[:-1]) / 2 * np.diff(levels)) / width)
 
 
-def summarise_curves(
-    table: Sequence[Mapping[str, Any]], rows: Sequence[EpisodeRow]
-) -> list[dict[str, Any]]:
-    """Per agent, factor and side of the neutral level: the area under its curve and where it breaks."""
+def summarise_curves(table: Sequence[CellSummary], rows: Sequence[EpisodeRow]) -> list[dict[str, object]]:
+    """Per agent, factor and side of the neutral level: the area under its curve and where it breaks (a CSV
+    row of :data:`SUMMARY_COLUMNS`)."""
     summary = []
     for entry in tolerance_table(rows):
         agent, factor = entry["agent"], entry["factor"]
@@ -111,7 +109,7 @@ def summarise_curves(
     return summary
 
 
-def _csv_text(columns: Sequence[str], table: Sequence[Mapping[str, Any]]) -> str:
+def _csv_text(columns: Sequence[str], table: Sequence[Mapping[str, object]]) -> str:
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=list(columns), lineterminator="\n", extrasaction="ignore")
     writer.writeheader()
@@ -151,7 +149,7 @@ def robustness(
     backend: str = "local",
     address: str | None = None,
     config_path: Path = SWEEP_CONFIG,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     """Fly ``agent``'s robustness curves into ``out`` and return their summary (:data:`SUMMARY_COLUMNS`).
 
     Args:
@@ -191,6 +189,6 @@ def robustness(
     return summary
 
 
-def summary_lines(summary: Sequence[Mapping[str, Any]]) -> list[str]:
+def summary_lines(summary: Sequence[Mapping[str, object]]) -> list[str]:
     """The summary as a Markdown table, a row per curve (``templates/robustness_summary.md.j2``)."""
     return [render_report("robustness_summary.md.j2", {"summary": summary}).rstrip("\n")]

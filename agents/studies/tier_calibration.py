@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TypedDict, Unpack
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure
+from agents.analysis.tier_calibration_rows import CalibratedTier, CalibrationCell, CalibrationResult
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.seeds import SENSOR_PILOT_SEED_START, TIER_CALIBRATION_SEED_START
 from agents.common.tables import today
@@ -35,14 +36,14 @@ from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
 from agents.studies.wording import render_report
-from flownav_env.tiers import HARD_COURSE, TIER_NAMES
+from flownav_env.tiers import HARD_COURSE, TIER_NAMES, Tier
 from flownav_env.tiers import tier as tier_of_version
 
 # The suite version whose tiers this study calibrated.
 CALIBRATED_VERSION = "1"
 
 
-def tier(name: str) -> Any:
+def tier(name: str) -> Tier:
     """The tier ``name`` of the calibrated version."""
     return tier_of_version(name, CALIBRATED_VERSION)
 
@@ -124,27 +125,33 @@ def calibration_tasks(
     return tasks
 
 
-def failure_table(rows: Sequence[EpisodeRow]) -> list[dict[str, Any]]:
+def failure_table(rows: Sequence[EpisodeRow]) -> list[CalibrationCell]:
     """Failure rate with its 95 % interval (Wilson: each agent is one run here) per (factor, agent)."""
     groups: dict[tuple[str, str], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
-    fields = ("failure_rate", "failure_low", "failure_high", "episodes")
-    return [
-        {"factor": factor, "agent": agent, **dict(zip(fields, failure(members), strict=True))}
-        for (factor, agent), members in groups.items()
-    ]
+    cells = []
+    for (factor, agent), members in groups.items():
+        rate, low, high, episodes = failure(members)
+        cells.append(
+            CalibrationCell(
+                factor=factor, agent=agent, failure_rate=rate, failure_low=low, failure_high=high, episodes=episodes
+            )
+        )
+    return cells
 
 
-def pick_course(table: Sequence[Mapping[str, Any]]) -> tuple[dict[str, float] | None, dict[str, dict]]:
+def pick_course(
+    table: Sequence[CalibrationCell],
+) -> tuple[dict[str, float] | None, dict[str, CalibrationCell]]:
     """The chosen candidate (None if no candidate's best agent lands in :data:`TARGET_FAILURE`) and, per
     candidate label, its best agent's row."""
-    best: dict[str, dict] = {}
+    best: dict[str, CalibrationCell] = {}
     for row in table:
         if row["factor"].startswith("tier:"):
             continue
         if row["factor"] not in best or row["failure_rate"] < best[row["factor"]]["failure_rate"]:
-            best[row["factor"]] = dict(row)
+            best[row["factor"]] = row.copy()
     low, high = TARGET_FAILURE
     middle = (low + high) / 2.0
     inside = [
@@ -189,7 +196,7 @@ def run_calibration(
     workers: int = 2,
     report_only: bool = False,
     stages: Sequence[str] = STAGES,
-) -> dict[str, Any]:
+) -> CalibrationResult:
     """Fly ``stages`` (none if ``report_only``) into ``out`` and return what the report needs from every
     stage flown so far: the table, the chosen course, whether it is the frozen one, each tier's best agent."""
     out = Path(out)
@@ -202,31 +209,31 @@ def run_calibration(
     rows = rows_of(tasks, read_records(csv_path)) if csv_path.is_file() else []
     table = failure_table(rows)
     chosen, best_per_course = pick_course(table)
-    tiers = {}
+    tiers: dict[str, CalibratedTier] = {}
     for name in CALIBRATED_TIERS:
         mine = sorted((r for r in table if r["factor"] == tier_label(name)), key=lambda r: r["failure_rate"])
         if mine:
             flown = [r for r in rows if r["factor"] == tier_label(name)]
-            tiers[name] = {"rows": mine, "best": mine[0], "separated": separated_pairs(flown)}
+            tiers[name] = CalibratedTier(rows=mine, best=mine[0], separated=separated_pairs(flown))
     pilot = read_records(out / PILOT_CSV) if (out / PILOT_CSV).is_file() else []
-    return {
-        "pilot": failure_table(pilot),
+    return CalibrationResult(
+        pilot=failure_table(pilot),
         # The env settings each pilot factor was flown with, as the records carry them.
-        "pilot_settings": {row["factor"]: row["env_kwargs"] for row in pilot},
-        "layouts": layouts,
-        "table": table,
-        "chosen": chosen,
-        "frozen_matches": chosen is not None and canonical_json(chosen) == canonical_json(HARD_COURSE),
-        "best_per_course": best_per_course,
-        "tiers": tiers,
-    }
+        pilot_settings={row["factor"]: row["env_kwargs"] or "{}" for row in pilot},
+        layouts=layouts,
+        table=table,
+        chosen=chosen,
+        frozen_matches=chosen is not None and canonical_json(chosen) == canonical_json(HARD_COURSE),
+        best_per_course=best_per_course,
+        tiers=tiers,
+    )
 
 
-def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
+def report_lines(result: CalibrationResult, command: str) -> list[str]:
     """``calibration.md`` (its prose is ``templates/calibration.md.j2``): the search as it happened, the pick and
     how it compares with the frozen tiers."""
-    cells: dict[str, dict[str, dict[str, Any]]] = {}
-    pilot_cells: dict[str, dict[str, dict[str, Any]]] = {}
+    cells: dict[str, dict[str, CalibrationCell]] = {}
+    pilot_cells: dict[str, dict[str, CalibrationCell]] = {}
     for found, rows in ((cells, result["table"]), (pilot_cells, result["pilot"])):
         for row in rows:
             found.setdefault(row["factor"], {})[row["agent"]] = row
@@ -254,7 +261,16 @@ def report_lines(result: Mapping[str, Any], command: str) -> list[str]:
     return render_report("calibration.md.j2", values).split("\n")[:-1]
 
 
-def write_calibration(out: Path, command: str, **flights: Any) -> list[str]:
+class CalibrationFlights(TypedDict, total=False):
+    """The options of :func:`run_calibration` that say how it flies."""
+
+    layouts: int
+    workers: int
+    report_only: bool
+    stages: Sequence[str]
+
+
+def write_calibration(out: Path, command: str, **flights: Unpack[CalibrationFlights]) -> list[str]:
     """:func:`run_calibration` (``flights`` its options) and ``out/calibration.md`` written; returns its lines."""
     lines = report_lines(run_calibration(out, **flights), command)
     write_text_atomically(Path(out) / "calibration.md", "\n".join(lines) + "\n")

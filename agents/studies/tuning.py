@@ -17,7 +17,6 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -74,7 +73,7 @@ def tune(
     budget: Budget | None = None,
     *,
     env_id: str = "FlowNav-v0",
-    env_kwargs: Mapping[str, Any] | None = None,
+    env_kwargs: Mapping[str, object] | None = None,
     workers: int = 2,
     overwrite: bool = False,
     sampler_seed: int = SAMPLER_SEED,
@@ -138,7 +137,7 @@ def comparison(result: TuningResult) -> Comparison | None:
 
 
 def report_text(
-    result: TuningResult, budget: Budget, command: str, env_kwargs: Mapping[str, Any], sampler_seed: int
+    result: TuningResult, budget: Budget, command: str, env_kwargs: Mapping[str, object], sampler_seed: int
 ) -> str:
     """``tuning.md`` (its prose is ``templates/tuning.md.j2``): enough to rerun the study and to judge its winner."""
     search_seeds, final_seeds = budget.layout_seeds()

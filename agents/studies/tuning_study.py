@@ -154,7 +154,7 @@ def trial_tasks(
     params: Mapping[str, float],
     seeds: range,
     env_id: str,
-    env_kwargs: Mapping[str, Any],
+    env_kwargs: Mapping[str, object],
 ) -> list[EpisodeTask]:
     """A trial's episodes in one stage: ``factor`` names the stage and ``level`` the trial, so (agent, factor,
     level, seed) is unique per trial and two trials never share a CSV row."""
@@ -186,7 +186,7 @@ def run_search(
     csv_path: Path,
     *,
     env_id: str,
-    env_kwargs: Mapping[str, Any],
+    env_kwargs: Mapping[str, object],
     workers: int,
     sampler_seed: int = SAMPLER_SEED,
 ) -> list[TrialResult]:
@@ -221,7 +221,7 @@ def run_final(
     csv_path: Path,
     *,
     env_id: str,
-    env_kwargs: Mapping[str, Any],
+    env_kwargs: Mapping[str, object],
     workers: int,
 ) -> list[TrialResult]:
     """The final stage: the ``budget.finalists`` best search trials, plus the defaults (trial 0) if they are

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from typing import Any
 
 from agents.analysis.dose_response import format_p
 from agents.analysis.paired import provisional_note
@@ -73,7 +72,7 @@ FILTERS = {
 environment(PACKAGE).filters.update(FILTERS)
 
 
-def render_report(template: str, values: Mapping[str, Any]) -> str:
+def render_report(template: str, values: Mapping[str, object]) -> str:
     """This package's ``template`` rendered with ``values``, its filters those of :data:`FILTERS` and
     :mod:`agents.common.jinja_reports`'s."""
     return render(PACKAGE, template, values)

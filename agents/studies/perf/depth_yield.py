@@ -12,13 +12,14 @@ import itertools
 import math
 import shlex
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
+from agents.analysis.perf_rows import YieldBand, YieldSummary
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.common.tables import markdown_table
 from agents.studies.perf.flight import scripted_action
@@ -44,15 +45,16 @@ DEFAULT_SETTINGS: tuple[str, ...] = (
 
 
 def scene_rows(
-    variants: dict[str, dict[str, Any]], flights: int, steps: int, progress: bool = True
-) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    variants: Mapping[str, Mapping[str, object]], flights: int, steps: int, progress: bool = True
+) -> tuple[list[YieldSummary], list[YieldBand]]:
     """Scripted FlowNav flights (160×120, defaults) per named estimator variant (``estimator_kwargs`` over the
     env's), every valid depth against the ray-cast truth at its pixel in the previous camera.
 
     Returns:
         ``(summary, bands)``: one summary row per variant; one row per (variant, true-depth band).
     """
-    summary, bands = [], []
+    summary: list[YieldSummary] = []
+    bands: list[YieldBand] = []
     jobs = [(name, flight) for name in variants for flight in range(flights)]
     samples: dict[str, dict[str, list[Any]]] = {
         name: {key: [] for key in ("error", "truth", "valid", "central", "ms")} for name in variants
@@ -84,26 +86,26 @@ def scene_rows(
         error, truth = np.concatenate(sample["error"]), np.concatenate(sample["truth"])
         steps_flown = len(sample["valid"])
         summary.append(
-            {
-                "variant": name,
-                "steps": steps_flown,
-                "valid_per_frame": float(np.mean(sample["valid"])),
-                "central_per_frame": float(np.mean(sample["central"])),
-                "median_rel_error": float(np.median(error)),
-                "within_10pct": float(np.mean(error <= 0.1)),
-                "p90_rel_error": float(np.quantile(error, 0.9)),
-                "estimator_ms": float(np.median(sample["ms"])),
-            }
+            YieldSummary(
+                variant=name,
+                steps=steps_flown,
+                valid_per_frame=float(np.mean(sample["valid"])),
+                central_per_frame=float(np.mean(sample["central"])),
+                median_rel_error=float(np.median(error)),
+                within_10pct=float(np.mean(error <= 0.1)),
+                p90_rel_error=float(np.quantile(error, 0.9)),
+                estimator_ms=float(np.median(sample["ms"])),
+            )
         )
         for low, high in itertools.pairwise(DEPTH_BANDS):
             band = (truth >= low) & (truth < high)
             bands.append(
-                {
-                    "variant": name,
-                    "band": (low, high),
-                    "valid_per_frame": float(band.sum() / steps_flown),
-                    "median_rel_error": float(np.median(error[band])) if band.any() else float("nan"),
-                }
+                YieldBand(
+                    variant=name,
+                    band=(low, high),
+                    valid_per_frame=float(band.sum() / steps_flown),
+                    median_rel_error=float(np.median(error[band])) if band.any() else float("nan"),
+                )
             )
     return summary, bands
 
@@ -176,21 +178,21 @@ def _setting_value(text: str) -> Any:
         return float(text)
 
 
-def _by_band(bands: list[dict[str, Any]]) -> tuple[list[str], dict[str, list[dict[str, Any]]]]:
+def _by_band(bands: Sequence[YieldBand]) -> tuple[list[str], dict[str, list[YieldBand]]]:
     """The true-depth bands' names, and each variant's rows in band order."""
     names = [
         f"≥ {low:g} m" if math.isinf(high) else f"{low:g}–{high:g} m"
         for low, high in dict.fromkeys(row["band"] for row in bands)
     ]
-    variants: dict[str, list[dict[str, Any]]] = {}
+    variants: dict[str, list[YieldBand]] = {}
     for row in bands:
         variants.setdefault(row["variant"], []).append(row)
     return names, variants
 
 
 def yield_report_values(
-    summary: list[dict[str, Any]], bands: list[dict[str, Any]], run: RunFacts
-) -> dict[str, Any]:
+    summary: Sequence[YieldSummary], bands: Sequence[YieldBand], run: RunFacts
+) -> dict[str, object]:
     """Every table of ``templates/depth_yield.md.j2``: :func:`scene_rows`' summary and bands, and the run's
     facts."""
     defaults = EnvSettings()
@@ -219,7 +221,7 @@ def yield_report_values(
     }
 
 
-def _plot(bands: list[dict[str, Any]], path: Path) -> None:
+def _plot(bands: Sequence[YieldBand], path: Path) -> None:
     names, variants = _by_band(bands)
     width, x = 0.8 / len(variants), np.arange(len(names))
     with saved_figure(path, (12, 4.5)) as figure:

@@ -137,7 +137,12 @@ def run_estimator_table(
 
     # Warm-up: first calls allocate OpenCV's buffers and import lazily; not timed.
     short = Flight(
-        flight.frames[:3], flight.rotations[:2], flight.translations[:2], flight.intrinsics, flight.true_depth
+        flight.frames[:3],
+        flight.rotations[:2],
+        flight.translations[:2],
+        flight.intrinsics,
+        flight.true_depth,
+        flight.description,
     )
     _stream_pass(short, thresholds[0], names)
 

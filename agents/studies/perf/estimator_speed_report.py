@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from agents.analysis.perf_rows import FlightDescription
 from agents.common.jinja_reports import render
 from agents.common.tables import write_csv
 from agents.studies.perf.estimator_speed import (
@@ -116,7 +117,7 @@ def plot_estimator_performance(rows: list[Row], path: Path) -> None:
         time_axis.legend(fontsize=8)
 
 
-def estimator_defaults() -> dict[str, Any]:
+def estimator_defaults() -> dict[str, object]:
     """The settings of a default ``FlowDepthEstimator`` that the report states.
 
     Read from a default instance rather than written out, so the report cannot drift from the estimator.
@@ -130,11 +131,11 @@ def estimator_defaults() -> dict[str, Any]:
 
 def estimator_report_values(
     rows: list[Row],
-    flight: Mapping[str, Any],
+    flight: FlightDescription,
     repeats: int,
-    defaults: Mapping[str, Any],
+    defaults: Mapping[str, object],
     run: RunFacts,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Every figure, table and verdict of ``templates/estimator_performance.md.j2``, from
     :func:`run_estimator_table`'s rows (Table 3), the flight's description (``Flight.description``), the
     benchmark's repeats, the estimator's default settings (:func:`estimator_defaults`) and the run's facts."""
@@ -151,7 +152,7 @@ def estimator_report_values(
     }
 
 
-def _flight_values(flight: Mapping[str, Any]) -> dict[str, str]:
+def _flight_values(flight: FlightDescription) -> dict[str, str]:
     return {key: str(value) for key, value in flight.items()} | {
         "fov_deg": f"{flight['fov_deg']:.0f}",
         "frame_rate": f"{flight['frame_rate']:.0f}",
@@ -159,7 +160,7 @@ def _flight_values(flight: Mapping[str, Any]) -> dict[str, str]:
     }
 
 
-def _settings_values(defaults: Mapping[str, Any]) -> dict[str, str | bool]:
+def _settings_values(defaults: Mapping[str, object]) -> dict[str, str | bool]:
     values: dict[str, str | bool] = {name: f"{defaults[name]:g}" for name in _FLOAT_SETTINGS}
     values.update({name: str(defaults[name]) for name in STATED_SETTINGS if name not in _FLOAT_SETTINGS})
     values["fb_one_level"] = defaults["fb_max_level"] == 0

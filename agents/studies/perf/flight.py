@@ -6,12 +6,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from agents.analysis.perf_rows import FlightDescription
 from estimator import CameraIntrinsics
 from flownav_env import FlowNavEnv
 
@@ -34,7 +34,7 @@ class Flight:
     translations: list[np.ndarray]
     intrinsics: CameraIntrinsics
     true_depth: Callable[[int, np.ndarray], np.ndarray]
-    description: dict[str, Any] = field(default_factory=dict)
+    description: FlightDescription
 
 
 def scripted_action(step: int) -> np.ndarray:
@@ -128,16 +128,16 @@ def record_flight(
             translations=translations,
             intrinsics=intrinsics,
             true_depth=true_depth,
-            description={
-                "layout": layout,
-                "seed": seed,
-                "frames": frames,
-                "width": width,
-                "height": height,
-                "fov_deg": env.physics.model.cam_fovy[physics.camera_id],
-                "frame_rate": env.frame_rate,
-                "forward_speed": env.forward_speed,
-            },
+            description=FlightDescription(
+                layout=layout,
+                seed=seed,
+                frames=frames,
+                width=width,
+                height=height,
+                fov_deg=env.physics.model.cam_fovy[physics.camera_id],
+                frame_rate=env.frame_rate,
+                forward_speed=env.forward_speed,
+            ),
         )
     finally:
         env.close()

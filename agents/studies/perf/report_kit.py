@@ -17,7 +17,7 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -96,7 +96,7 @@ class RunFacts:
         return f"{self.elapsed_s / 60:.1f}"
 
 
-def table(rows: Iterable[Mapping[str, Any]], columns: Mapping[str, str] | Sequence[tuple[str, str]]) -> str:
+def table(rows: Iterable[Mapping[str, object]], columns: Mapping[str, str] | Sequence[tuple[str, str]]) -> str:
     """A Markdown table with one column per ``header: format`` entry (pairs where headers repeat); each cell is
     ``format.format_map(row)``."""
     pairs = list(columns.items()) if isinstance(columns, Mapping) else list(columns)
@@ -105,12 +105,12 @@ def table(rows: Iterable[Mapping[str, Any]], columns: Mapping[str, str] | Sequen
     )
 
 
-def rounded(rows: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def rounded(rows: Iterable[Mapping[str, object]]) -> list[dict[str, object]]:
     """The rows with their floats rounded to four decimals, for a CSV file."""
     return [{key: round(v, 4) if isinstance(v, float) else v for key, v in row.items()} for row in rows]
 
 
-def write_report(path: Path, template: str, values: Mapping[str, Any]) -> Path:
+def write_report(path: Path, template: str, values: Mapping[str, object]) -> Path:
     """``templates/<template>`` filled with ``values`` (every one of them used), written to ``path``."""
     path.write_text(render(PACKAGE, template, values, every_value_used=True))
     return path

@@ -1,0 +1,41 @@
+"""What the suite's tier calibration (:mod:`agents.studies.tier_calibration`) found, as ``calibration.md`` reads it:
+a failure rate per (condition, agent), each tier's rows, and the result of every stage flown."""
+
+from __future__ import annotations
+
+from typing import TypedDict
+
+
+class CalibrationCell(TypedDict):
+    """One agent's failure rate under one condition (a candidate course, a tier, a pilot sensor) with its Wilson
+    95 % interval: each agent is one run here."""
+
+    factor: str
+    agent: str
+    failure_rate: float
+    failure_low: float
+    failure_high: float
+    episodes: int
+
+
+class CalibratedTier(TypedDict):
+    """A tier's cells, best agent first, its best agent, and (told apart, compared) agent pairs."""
+
+    rows: list[CalibrationCell]
+    best: CalibrationCell
+    separated: tuple[int, int]
+
+
+class CalibrationResult(TypedDict):
+    """Every stage flown: the pilot's cells and the settings each pilot factor flew with (canonical JSON), the
+    layouts, the candidate courses' cells, the chosen course (None: none lands in the target) and whether it is
+    the frozen one, each course's best agent, and each tier."""
+
+    pilot: list[CalibrationCell]
+    pilot_settings: dict[str, str]
+    layouts: int
+    table: list[CalibrationCell]
+    chosen: dict[str, float] | None
+    frozen_matches: bool
+    best_per_course: dict[str, CalibrationCell]
+    tiers: dict[str, CalibratedTier]

@@ -44,3 +44,28 @@ class YieldBand(TypedDict):
     band: tuple[float, float]
     valid_per_frame: float
     median_rel_error: float
+
+
+class StageMeasurement(TypedDict):
+    """One training stage of a recipe, measured once: its work per seed by kind (counts) and its measured times
+    (seconds per step, per episode, per state-epoch and at start-up)."""
+
+    work: dict[str, int]
+    measured: dict[str, float]
+
+
+class RecipeBlock(TypedDict):
+    """A recipe measured once (one block of the alternation): minutes per seed by kind of work and in total, and
+    each stage's measurement."""
+
+    minutes: dict[str, float]
+    total: float
+    stages: list[StageMeasurement]
+
+
+class RecipeQuality(TypedDict):
+    """A recipe's last stage on the validation layouts: per condition, its failure over runs × layouts and its
+    number of seeds (None: not flown there), and whether it meets the bar (None: not flown under every one)."""
+
+    rates: dict[str, tuple[float, int] | None]
+    meets: bool | None

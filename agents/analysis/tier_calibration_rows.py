@@ -1,12 +1,15 @@
 """What the suite's tier calibration (:mod:`agents.studies.tier_calibration`) found, as ``calibration.md`` reads it:
-a failure rate per (condition, agent), each tier's rows, and the result of every stage flown."""
+a failure rate per (condition, agent), each tier's cells, and the result of every stage flown (a dictionary:
+the report merges it into its template's values)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TypedDict
 
 
-class CalibrationCell(TypedDict):
+@dataclass(frozen=True)
+class CalibrationCell:
     """One agent's failure rate under one condition (a candidate course, a tier, a pilot sensor) with its Wilson
     95 % interval: each agent is one run here."""
 

@@ -25,6 +25,7 @@ from agents.analysis.over_seeds import LAYOUT_BLOCK, episode_outcomes
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
+from agents.analysis.tolerance_rows import ToleranceRow
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import summarise_runs
@@ -123,7 +124,7 @@ class BenchmarkData:
     code_versions: dict[str, list[str]]
     seed_rows: list[dict[str, Any]]
     sweep_rows: list[dict[str, Any]]
-    tolerance: list[dict[str, Any]]
+    tolerance: list[ToleranceRow]
     cells: dict[tuple[str, str, float], Rate]
     validation: dict[str, dict[str, Rate]]
     oracle_reactive: dict[str, Rate]
@@ -167,7 +168,7 @@ class BenchmarkData:
         """The sweep cell of ``agent`` (base name or pooled) at ``factor`` = ``level``."""
         return self.cells[(self.sweep_name(agent), factor, float(level))]
 
-    def tolerance_row(self, agent: str, factor: str, side: str = "above") -> dict[str, Any] | None:
+    def tolerance_row(self, agent: str, factor: str, side: str = "above") -> ToleranceRow | None:
         """The tolerance row of ``agent`` (base name or pooled) for ``factor`` on ``side``; None if not flown."""
         name = self.sweep_name(agent)
         wanted = (name, factor, side)

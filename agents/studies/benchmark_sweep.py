@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from agents.analysis.tolerance_rows import ToleranceRow
 from agents.policies.base import base_agent_name
 from agents.studies.benchmark_data import BenchmarkData, choices
 from agents.studies.wording import display_name
@@ -66,7 +67,7 @@ def _breaking(data: BenchmarkData, agent: str, factor: str, side: str = "above")
     return None if row is None else row["breaking_level"]
 
 
-def _first_breaking(rows: Sequence[dict[str, Any]]) -> float | None:
+def _first_breaking(rows: Sequence[ToleranceRow]) -> float | None:
     """The lowest breaking level among tolerance ``rows``; None where none of them breaks."""
     return min((r["breaking_level"] for r in rows if r["breaking_level"] is not None), default=None)
 

@@ -150,9 +150,7 @@ def run_confirmation(
                 confirmation_tasks(runs, layouts), out / f"{agent}.csv", workers=workers, description=agent
             )
     matrices = outcome_matrices(out, agents, layouts, policies_dir)
-    rates: list[ConditionRate] = []
-    differences: list[PairedDifference] = []
-    rises: list[Rise] = []
+    rates, differences, rises = [], [], []
     for condition, found in matrices.items():
         for agent, matrix in found.items():
             low, high = runs_and_layouts_interval(matrix)

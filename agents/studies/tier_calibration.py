@@ -130,15 +130,7 @@ def failure_table(rows: Sequence[EpisodeRow]) -> list[CalibrationCell]:
     groups: dict[tuple[str, str], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row["factor"], base_agent_name(row["agent"])), []).append(row)
-    cells = []
-    for (factor, agent), members in groups.items():
-        rate, low, high, episodes = failure(members)
-        cells.append(
-            CalibrationCell(
-                factor=factor, agent=agent, failure_rate=rate, failure_low=low, failure_high=high, episodes=episodes
-            )
-        )
-    return cells
+    return [CalibrationCell(factor, agent, *failure(members)) for (factor, agent), members in groups.items()]
 
 
 def pick_course(
@@ -148,23 +140,23 @@ def pick_course(
     candidate label, its best agent's row."""
     best: dict[str, CalibrationCell] = {}
     for row in table:
-        if row["factor"].startswith("tier:"):
+        if row.factor.startswith("tier:"):
             continue
-        if row["factor"] not in best or row["failure_rate"] < best[row["factor"]]["failure_rate"]:
-            best[row["factor"]] = row.copy()
+        if row.factor not in best or row.failure_rate < best[row.factor].failure_rate:
+            best[row.factor] = row
     low, high = TARGET_FAILURE
     middle = (low + high) / 2.0
     inside = [
         course
         for course in CANDIDATE_COURSES
-        if course_label(course) in best and low <= best[course_label(course)]["failure_rate"] <= high
+        if course_label(course) in best and low <= best[course_label(course)].failure_rate <= high
     ]
     if not inside:
         return None, best
     chosen = min(
         inside,
         key=lambda c: (
-            abs(best[course_label(c)]["failure_rate"] - middle),
+            abs(best[course_label(c)].failure_rate - middle),
             c["forward_speed"],
             c["obstacle_density"],
         ),
@@ -211,7 +203,7 @@ def run_calibration(
     chosen, best_per_course = pick_course(table)
     tiers: dict[str, CalibratedTier] = {}
     for name in CALIBRATED_TIERS:
-        mine = sorted((r for r in table if r["factor"] == tier_label(name)), key=lambda r: r["failure_rate"])
+        mine = sorted((r for r in table if r.factor == tier_label(name)), key=lambda r: r.failure_rate)
         if mine:
             flown = [r for r in rows if r["factor"] == tier_label(name)]
             tiers[name] = CalibratedTier(rows=mine, best=mine[0], separated=separated_pairs(flown))
@@ -236,7 +228,7 @@ def report_lines(result: CalibrationResult, command: str) -> list[str]:
     pilot_cells: dict[str, dict[str, CalibrationCell]] = {}
     for found, rows in ((cells, result["table"]), (pilot_cells, result["pilot"])):
         for row in rows:
-            found.setdefault(row["factor"], {})[row["agent"]] = row
+            found.setdefault(row.factor, {})[row.agent] = row
     chosen = result["chosen"]
     values = {
         **result,

@@ -53,8 +53,7 @@ def scene_rows(
     Returns:
         ``(summary, bands)``: one summary row per variant; one row per (variant, true-depth band).
     """
-    summary: list[YieldSummary] = []
-    bands: list[YieldBand] = []
+    summary, bands = [], []
     jobs = [(name, flight) for name in variants for flight in range(flights)]
     samples: dict[str, dict[str, list[Any]]] = {
         name: {key: [] for key in ("error", "truth", "valid", "central", "ms")} for name in variants

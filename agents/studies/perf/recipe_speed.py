@@ -21,13 +21,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
+from agents.analysis.perf_rows import RecipeBlock, StageMeasurement
 from agents.studies.perf.report_kit import median
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import TeacherFactory, fit, fly
@@ -134,7 +134,7 @@ def measure_recipes(
     repeats: int,
     make_teacher: TeacherFactory | None = None,
     progress: bool = True,
-) -> dict[str, list[dict[str, Any]]]:
+) -> dict[str, list[RecipeBlock]]:
     """Every stage of every recipe measured ``repeats`` times, recipes alternating block by block; per recipe,
     one entry per repeat: its minutes per seed by kind of work and in total, and the stages' measurements.
 
@@ -145,21 +145,21 @@ def measure_recipes(
         raise ValueError(f"--rollouts and --repeats must be >= 1, got {rollouts}, {repeats}")
     if len(recipes) < 2:
         raise ValueError(f"give at least two recipes to compare, got {len(recipes)}")
-    results: dict[str, list[dict[str, Any]]] = {recipe.name: [] for recipe in recipes}
+    results: dict[str, list[RecipeBlock]] = {recipe.name: [] for recipe in recipes}
     blocks = [(repeat, recipe) for repeat in range(repeats) for recipe in recipes]
     for _, recipe in tqdm(blocks, desc="bench recipe", unit="recipe", disable=not progress):
-        stages = []
+        stages: list[StageMeasurement] = []
         minutes = dict.fromkeys(KINDS, 0.0)
         for config in recipe.stages:
             work, measured = stage_work(config), measure_stage(config, rollouts, make_teacher)
-            stages.append({"work": work, "measured": measured})
+            stages.append(StageMeasurement(work=work, measured=measured))
             for kind, value in stage_minutes(work, measured).items():
                 minutes[kind] += value
-        results[recipe.name].append({"minutes": minutes, "total": sum(minutes.values()), "stages": stages})
+        results[recipe.name].append(RecipeBlock(minutes=minutes, total=sum(minutes.values()), stages=stages))
     return results
 
 
-def block_ratios(results: dict[str, list[dict[str, Any]]], reference: str) -> dict[str, list[float]]:
+def block_ratios(results: Mapping[str, Sequence[RecipeBlock]], reference: str) -> dict[str, list[float]]:
     """Per recipe, its minutes per seed over the ``reference`` recipe's, block by block (repeat k with repeat
     k)."""
     base = [entry["total"] for entry in results[reference]]
@@ -169,7 +169,7 @@ def block_ratios(results: dict[str, list[dict[str, Any]]], reference: str) -> di
     }
 
 
-def median_minutes(entries: list[dict[str, Any]]) -> dict[str, float]:
+def median_minutes(entries: Sequence[RecipeBlock]) -> dict[str, float]:
     """The medians over repeats of a recipe's minutes per seed, by kind of work and in total."""
     medians = {kind: median([e["minutes"][kind] for e in entries]) for kind in KINDS}
     return {**medians, "total": median([e["total"] for e in entries])}

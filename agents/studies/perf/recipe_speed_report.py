@@ -5,12 +5,13 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents.analysis.perf_rows import RecipeBlock, RecipeQuality
 from agents.common.seeds import ABLATION_SEED_START
 from agents.common.tables import write_csv
 from agents.common.yaml_config import load_config
@@ -52,7 +53,7 @@ def parse_recipe(text: str) -> Recipe:
     return Recipe(name or stages[-1].name, stages, files)
 
 
-def quality(recipe: Recipe, ablation_dir: Path) -> dict[str, Any]:
+def quality(recipe: Recipe, ablation_dir: Path) -> RecipeQuality:
     """The recipe's last stage on the validation layouts, per condition: failure over runs × layouts, the
     number of seeds, and whether it meets the bar (clean ≤ 0.05, each condition ≤ clean + 0.10); None
     entries where ``flownav ablation`` has not flown it."""
@@ -63,7 +64,7 @@ def quality(recipe: Recipe, ablation_dir: Path) -> dict[str, Any]:
     meets = None
     if len(failures) == len(rates):  # clean first: the conditions may rise at most ALLOWED_RISE over it
         meets = failures[0] <= CLEAN_FAILURE_BAR and max(failures) <= failures[0] + ALLOWED_RISE
-    return {"rates": rates, "meets": meets}
+    return RecipeQuality(rates=rates, meets=meets)
 
 
 def run_recipe_benchmark(
@@ -104,7 +105,7 @@ def run_recipe_benchmark(
 
 
 def _recipe_row(
-    recipe: Recipe, entries: list[dict[str, Any]], ratios: list[float], ablation_dir: Path
+    recipe: Recipe, entries: Sequence[RecipeBlock], ratios: list[float], ablation_dir: Path
 ) -> dict[str, Any]:
     """One recipe's CSV row: its work per seed, measured minutes, ratio to the reference and validation
     quality."""
@@ -126,8 +127,8 @@ def _recipe_row(
     }
 
 
-def _quality_columns(judged: dict[str, Any]) -> dict[str, Any]:
-    columns: dict[str, Any] = {}
+def _quality_columns(judged: RecipeQuality) -> dict[str, object]:
+    columns: dict[str, object] = {}
     for label, rate in judged["rates"].items():
         key = label.replace(" ", "_").replace(".", "")
         columns[f"failure_{key}"] = "" if rate is None else round(rate[0], 3)
@@ -136,11 +137,11 @@ def _quality_columns(judged: dict[str, Any]) -> dict[str, Any]:
     return columns
 
 
-def _plot(rows: list[dict[str, Any]], path: Path) -> None:
+def _plot(rows: Sequence[Mapping[str, object]], path: Path) -> None:
     with saved_figure(path, (7, 0.9 + 0.7 * len(rows)), dpi=120) as figure:
         axis = figure.subplots()
         left = np.zeros(len(rows))
-        names = [row["recipe"] for row in rows]
+        names = [str(row["recipe"]) for row in rows]
         for kind in KINDS:
             widths = np.array([row[f"minutes_{kind}"] for row in rows], float)
             axis.barh(names, widths, left=left, label=kind)
@@ -150,13 +151,15 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
         axis.legend(loc="lower right", fontsize=8)
 
 
-def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts) -> dict[str, Any]:
+# A row is a CSV row whose columns are named from KINDS and CONDITIONS (``minutes_ppo``, ``failure_clean``): no
+# TypedDict spells computed keys, and its numbers are compared and formatted here.
+def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: RunFacts) -> dict[str, Any]:
     """Every figure, table and verdict of ``templates/training_performance.md.j2``, from the recipes' rows (the
     reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the number of blocks and the
     run's facts."""
     reference = rows[0]
     times = [
-        row | {"ratio": f"{row['ratio_to_reference']:.2f} [{row['ratio_min']:.2f}–{row['ratio_max']:.2f}]"}
+        {**row, "ratio": f"{row['ratio_to_reference']:.2f} [{row['ratio_min']:.2f}–{row['ratio_max']:.2f}]"}
         for row in rows
     ]
     minutes = {
@@ -170,7 +173,7 @@ def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts
         "PPO steps/s": "{ppo_steps_per_s}",
     }
     judged = [
-        row
+        dict(row)
         | {key: _rate(row[f"failure_{key}"]) for key in ("clean", "density_018")}
         | {
             "speed": _rate(row["failure_15_m/s"]),
@@ -198,19 +201,19 @@ def recipe_report_values(rows: list[dict[str, Any]], repeats: int, run: RunFacts
         "clean_bar": f"{CLEAN_FAILURE_BAR:.2f}",
         "allowed_rise": f"{ALLOWED_RISE:.2f}",
         "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
-        "targets": [_target(row) for row in rows[1:]],
+        "targets": [_target(r["recipe"], r["ratio_to_reference"], r["meets_quality"]) for r in rows[1:]],
         "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
     }
 
 
-def _target(row: dict[str, Any]) -> dict[str, Any]:
-    """The time-to-policy target for one recipe: at most a third of the reference's minutes per seed, and the
-    reference's validation bar met (None: not flown against it)."""
-    meets = None if row["meets_quality"] == "" else bool(row["meets_quality"])
-    fast = row["ratio_to_reference"] <= TARGET_TIME_RATIO
+def _target(recipe: str, ratio: float, meets_quality: bool | str) -> dict[str, object]:
+    """The time-to-policy target for one recipe: ``ratio`` (to the reference's minutes per seed) at most a third,
+    and the reference's validation bar met (``meets_quality``; "" and None: not flown against it)."""
+    meets = None if meets_quality == "" else bool(meets_quality)
+    fast = ratio <= TARGET_TIME_RATIO
     return {
-        "recipe": row["recipe"],
-        "ratio": f"{row['ratio_to_reference']:.2f}",
+        "recipe": recipe,
+        "ratio": f"{ratio:.2f}",
         "meets": meets,
         "met": fast and meets is True,
     }

@@ -45,13 +45,18 @@ from flownav_env.playback import CameraPath, PlaybackSettings, PlaybackWorld
 __all__ = ["EXPERIMENTS", "SWEEP_VARIABLES", "Experiment"]
 
 
-def _play(path: CameraPath, config: ExperimentConfig, description: str, **options: Any) -> RunResult:
-    """One playback of ``path`` through both estimators (``options``: :func:`run_playback`'s), in a world of its
-    own closed afterwards."""
+def _play(
+    path: CameraPath, config: ExperimentConfig, label: str, progress: bool, component_variants: bool = False
+) -> RunResult:
+    """One playback of ``path`` through both estimators (``label`` its progress bar's; ``progress`` and
+    ``component_variants`` as :func:`run_playback`'s), in a world of its own closed afterwards."""
     world = PlaybackWorld(path, config.camera.width, config.camera.height, config.camera.fov_deg)
     try:
         settings = PlaybackSettings(seed=config.seed)
-        return run_playback(path, world, settings, config.estimator, description=description, **options)
+        return run_playback(
+            path, world, settings, config.estimator, component_variants=component_variants, progress=progress,
+            description=label
+        )
     finally:
         world.close()
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,7 +20,9 @@ PLOT_MAX_DEPTH = 10.0
 _OBSTACLE_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown")
 
 
-def plot_depth_panel(ax: Axes, frames: list[dict[str, Any]], references: np.ndarray, title: str) -> None:
+def plot_depth_panel(
+    ax: Axes, frames: list[dict[str, np.ndarray]], references: np.ndarray, title: str
+) -> None:
     """The thesis's plot style: each valid point's depth per frame, against each obstacle's true depth line.
 
     Points on a capsule take the capsule's colour; ground points are grey. Lines are the ground truth.
@@ -55,7 +57,7 @@ def plot_depth_panel(ax: Axes, frames: list[dict[str, Any]], references: np.ndar
 
 
 def save_depth_figure(
-    panels: list[tuple[str, list[dict[str, Any]], np.ndarray]],
+    panels: list[tuple[str, list[dict[str, np.ndarray]], np.ndarray]],
     file: Path,
     suptitle: str,
     marks: dict[int, float] | None = None,

@@ -95,7 +95,7 @@ def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = Fa
 
 
 def metric_rows(
-    run: str, methods: Mapping[str, list[dict[str, Any]]], names: Iterable[str]
+    run: str, methods: Mapping[str, list[dict[str, np.ndarray]]], names: Iterable[str]
 ) -> list[dict[str, Any]]:
     """One row of :func:`depth_metrics` per method named in ``names``, from a playback's per-method frames
     (``RunResult.methods``), with the capsule-only error and count beside it."""

@@ -31,7 +31,10 @@ def euler_order_shift_px(points: np.ndarray, case: RotationCase, intrinsics: Cam
 
 
 def _case_row(
-    case: RotationCase, residuals: list[dict[str, Any]], config: RotationConfig, intrinsics: CameraIntrinsics
+    case: RotationCase,
+    residuals: list[dict[str, np.ndarray]],
+    config: RotationConfig,
+    intrinsics: CameraIntrinsics,
 ) -> dict[str, Any]:
     row: dict[str, Any] = {
         "case": case.name,

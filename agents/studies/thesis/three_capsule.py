@@ -109,10 +109,11 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
     world = PlaybackWorld(path, camera.width, camera.height, camera.fov_deg)
     rows, sweeps = [], []
 
-    def play(settings: dict[str, Any], description: str, **options: Any) -> RunResult:
+    def play(settings: dict[str, Any], label: str, residuals: bool = False, error: float = 0.0) -> RunResult:
         playback = PlaybackSettings(seed=config.seed, **settings)
         return run_playback(
-            path, world, playback, config.estimator, progress=progress, description=description, **options
+            path, world, playback, config.estimator, keep_residuals=residuals, attitude_error=error,
+            progress=progress, description=label
         )
 
     try:
@@ -120,7 +121,7 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
         rows += metric_rows("base", base_result.methods, METHODS)
         unsteady = {**base, "attitude_jitter_deg": config.rotation_error_jitter_deg}
         motion = measure_motion(
-            play(unsteady, "three motion", keep_residuals=True),
+            play(unsteady, "three motion", residuals=True),
             CameraIntrinsics.from_fov(camera.width, camera.height, camera.fov_deg),
         )
         motion["jitter_deg"] = config.rotation_error_jitter_deg
@@ -132,7 +133,7 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
                     settings[variable] = value
                 if settings["distance_per_frame"] > path.arc_length()[-1]:
                     continue
-                result = play(settings, f"{variable}={value:g}", attitude_error=attitude_error)
+                result = play(settings, f"{variable}={value:g}", error=attitude_error)
                 for row in metric_rows(f"{variable}={value:g}", result.methods, METHODS):
                     sweeps.append({"variable": variable, "value": value, **row})
     finally:

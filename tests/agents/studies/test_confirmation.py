@@ -5,6 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from agents.analysis.validation_rows import (
+    ConditionRate,
+    ConfirmationResult,
+    PairedDifference,
+    Rise,
+    SearchRecord,
+)
 from agents.common.locations import RESULTS_DIR
 from agents.studies.confirmation import (
     COMPARED,
@@ -47,42 +54,34 @@ def test_tasks_fly_every_run_on_every_layout_under_every_condition(tmp_path) -> 
 
 def test_the_search_record_reads_the_committed_ablation() -> None:
     record = search_record(RESULTS_DIR / "ablation")
-    assert PICK in record["configs"] and len(record["layouts"]) >= 50
-    assert all(900_000 <= seed < 910_000 for seed in record["layouts"])
+    assert PICK in record.configs and len(record.layouts) >= 50
+    assert all(900_000 <= seed < 910_000 for seed in record.layouts)
 
 
 def test_the_report_words_each_comparison_from_its_interval() -> None:
-    result = {
-        "layouts": 200,
-        "rates": [
-            {"condition": "clean", "agent": PICK, "runs": 5, "failure": 0.04, "low": 0.02, "high": 0.07}
+    result = ConfirmationResult(
+        layouts=200,
+        rates=[ConditionRate("clean", PICK, 5, 0.04, 0.02, 0.07)],
+        differences=[
+            PairedDifference("clean", "ppo_flow", -0.05, -0.08, -0.02),
+            PairedDifference("density 0.18", "ppo_flow_course_approach", -0.02, -0.06, 0.03),
         ],
-        "differences": [
-            {"condition": "clean", "other": "ppo_flow", "difference": -0.05, "low": -0.08, "high": -0.02},
-            {
-                "condition": "density 0.18",
-                "other": "ppo_flow_course_approach",
-                "difference": -0.02,
-                "low": -0.06,
-                "high": 0.03,
-            },
+        rises=[
+            Rise("density 0.18", PICK, 0.04, 0.01, 0.08),
+            Rise("speed 1.5 m/s", PICK, 0.06, 0.01, 0.12),
+            Rise("speed 1.5 m/s", "ppo_flow", 0.3, 0.2, 0.4),
         ],
-        "rises": [
-            {"condition": "density 0.18", "agent": PICK, "rise": 0.04, "low": 0.01, "high": 0.08},
-            {"condition": "speed 1.5 m/s", "agent": PICK, "rise": 0.06, "low": 0.01, "high": 0.12},
-            {"condition": "speed 1.5 m/s", "agent": "ppo_flow", "rise": 0.3, "low": 0.2, "high": 0.4},
-        ],
-    }
+    )
     text = "\n".join(
-        report_lines(result, {"configs": ["a", "b"], "layouts": [900_000, 900_049]}, "flownav confirm")
+        report_lines(result, SearchRecord(["a", "b"], [900_000, 900_049], []), "flownav confirm")
     )
     assert "| fails less |" in text and "| no difference shown |" in text
     assert "met, interval included" in text and "met by point estimate only" in text and "| not met |" in text
     assert "flew 2 PPO configurations" in text
     assert "0.040 [0.020, 0.070]" in text
     assert f"`{TRUE_DEPTH_RECIPE}`, has no shipped training seeds yet" in text
-    empty = {"layouts": 200, "rates": [], "differences": [], "rises": []}
-    assert "Not flown yet" in "\n".join(report_lines(empty, {"configs": [], "layouts": []}, "x"))
+    empty = ConfirmationResult(layouts=200, rates=[], differences=[], rises=[])
+    assert "Not flown yet" in "\n".join(report_lines(empty, SearchRecord([], [], []), "x"))
 
 
 def test_the_true_depth_recipe_flies_once_it_has_shipped_seeds(tmp_path) -> None:
@@ -93,16 +92,9 @@ def test_the_true_depth_recipe_flies_once_it_has_shipped_seeds(tmp_path) -> None
 
 
 def test_flow_costs_are_the_pick_against_its_true_depth_recipe() -> None:
-    against_truth = {
-        "condition": "clean",
-        "other": TRUE_DEPTH_RECIPE,
-        "difference": 0.02,
-        "low": -0.01,
-        "high": 0.05,
-    }
-    result = {
-        "differences": [{"condition": "clean", "other": "ppo_flow", "difference": -0.05}, against_truth]
-    }
+    against_truth = PairedDifference("clean", TRUE_DEPTH_RECIPE, 0.02, -0.01, 0.05)
+    against_flow = PairedDifference("clean", "ppo_flow", -0.05, -0.08, -0.02)
+    result = ConfirmationResult(layouts=200, rates=[], differences=[against_flow, against_truth], rises=[])
     assert flow_costs(result) == [against_truth]
 
 

@@ -10,6 +10,7 @@ import pytest
 
 from agents.analysis.csv_file import LEGACY_FIELDS
 from agents.analysis.paired import compare
+from agents.analysis.validation_rows import ConfirmationResult, PairedDifference, Rise, SearchRecord
 from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
 from agents.evaluation.suite import SUITE_RESULTS_FOLDERS
 from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
@@ -149,21 +150,22 @@ def test_the_true_depth_gap_is_read_from_the_confirmation_flights(tmp_path: Path
 
 
 def test_the_selection_keeps_the_picks_rises_and_each_stages_differences() -> None:
-    result = {
-        "layouts": 200,
-        "differences": [
-            {"condition": "clean", "other": COMPARED[0], "difference": -0.01, "low": -0.04, "high": 0.02},
-            {"condition": "clean", "other": COMPARED[1], "difference": -0.06, "low": -0.09, "high": -0.02},
+    result = ConfirmationResult(
+        layouts=200,
+        rates=[],
+        differences=[
+            PairedDifference("clean", COMPARED[0], -0.01, -0.04, 0.02),
+            PairedDifference("clean", COMPARED[1], -0.06, -0.09, -0.02),
         ],
-        "rises": [
-            {"condition": "density 0.18", "agent": PICK, "rise": 0.07, "low": 0.02, "high": 0.11},
-            {"condition": "speed 1.5 m/s", "agent": "ppo_flow", "rise": 0.01, "low": -0.02, "high": 0.04},
+        rises=[
+            Rise("density 0.18", PICK, 0.07, 0.02, 0.11),
+            Rise("speed 1.5 m/s", "ppo_flow", 0.01, -0.02, 0.04),
         ],
-    }
-    search = {"configs": ["a", "b", "c"], "layouts": [900_000, 900_049]}
+    )
+    search = SearchRecord(configs=["a", "b", "c"], layouts=[900_000, 900_049], differences=[])
     values = selection_values(result, search)
-    assert values["pick_rises"] == result["rises"][:1] and values["search"] == search
-    assert {k: [d["difference"] for d in found] for k, found in values["stages"].items()} == {
+    assert values["pick_rises"] == result.rises[:1] and values["search"] == search
+    assert {k: [d.difference for d in found] for k, found in values["stages"].items()} == {
         COMPARED[0]: [-0.01],
         COMPARED[1]: [-0.06],
     }

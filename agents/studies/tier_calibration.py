@@ -133,9 +133,7 @@ def failure_table(rows: Sequence[EpisodeRow]) -> list[CalibrationCell]:
     return [CalibrationCell(factor, agent, *failure(members)) for (factor, agent), members in groups.items()]
 
 
-def pick_course(
-    table: Sequence[CalibrationCell],
-) -> tuple[dict[str, float] | None, dict[str, CalibrationCell]]:
+def pick_course(table: list[CalibrationCell]) -> tuple[dict[str, float] | None, dict[str, CalibrationCell]]:
     """The chosen candidate (None if no candidate's best agent lands in :data:`TARGET_FAILURE`) and, per
     candidate label, its best agent's row."""
     best: dict[str, CalibrationCell] = {}

@@ -16,8 +16,9 @@ ground-truth motion and compares with the ground-truth depth of frame i; ``flown
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NotRequired, TypedDict
 
 import cv2
 import numpy as np
@@ -34,6 +35,23 @@ _WITHIN_FRACTION = 0.10
 #: A depth is an outlier when it is off by more than half its true value: it then lands a histogram bin or more
 #: from the truth at any distance, where smaller errors mostly blur within a bin.
 OUTLIER_RELATIVE_ERROR = 0.5
+
+
+class PairErrors(TypedDict):
+    """One pair's row of :func:`evaluate_sequence` (see its Returns) and, with ``baseline_frames``, of
+    :func:`evaluate_stream`."""
+
+    pair: tuple[int, int]
+    points: int
+    tracked: int
+    valid: int
+    evaluated: int
+    median_rel_error: float
+    within_10pct: float
+    median_epe_px: float
+    time_ms: float
+    baseline_frames: NotRequired[float]
+
 
 #: Columns of :func:`format_error_table`: (row key, header, format).
 TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
@@ -115,8 +133,9 @@ def evaluate_sequence(
     intrinsics: CameraIntrinsics,
     method: str = "triangulation",
     max_gap: int = 4,
+    # Passed straight on: FlowDepthEstimator checks each name and value.
     **estimator_params: Any,
-) -> list[dict[str, Any]]:
+) -> list[PairErrors]:
     """Run the estimator on every frame pair of a sequence and measure it against the ground truth.
 
     Args:
@@ -159,8 +178,9 @@ def evaluate_stream(
     intrinsics: CameraIntrinsics,
     method: str = "triangulation",
     step: int = 1,
+    # Passed straight on: FlowDepthEstimator checks each name and value.
     **estimator_params: Any,
-) -> list[dict[str, Any]]:
+) -> list[PairErrors]:
     """Stream a sequence through :meth:`~estimator.FlowDepthEstimator.update` and measure every result.
 
     Frames ``0, step, 2·step, …`` are fed in order with their ground-truth motion, as a drone would feed its
@@ -201,7 +221,7 @@ def evaluate_stream(
     return rows
 
 
-def format_error_table(rows: list[dict[str, Any]]) -> str:
+def format_error_table(rows: Sequence[Mapping[str, object]]) -> str:
     """Plain-text table of :func:`evaluate_sequence` rows, one line per pair and a median line.
 
     Args:
@@ -239,7 +259,7 @@ def _pair_errors(
     rotation: np.ndarray,
     translation: np.ndarray,
     intrinsics: CameraIntrinsics,
-) -> dict[str, Any]:
+) -> PairErrors:
     # FAST keypoints lie on the pixel grid, so the ground truth is read at exactly the keypoint's pixel.
     pixel = np.rint(result.points).astype(np.intp)
     point_true_depth = true_depth[pixel[:, 1], pixel[:, 0]] if len(pixel) else np.empty(0)

@@ -20,7 +20,6 @@ Every constructor kwarg of :class:`FlowNavEnv` is accepted by ``gymnasium.make``
 from __future__ import annotations
 
 import os
-from typing import Any
 
 # Headless by default: the offscreen renderer needs a GL backend picked before mujoco is imported. This is
 # the project's one place that picks it; a MUJOCO_GL already set (e.g. osmesa) wins.
@@ -63,7 +62,9 @@ ENV_IDS = {
 }
 
 
-def env_entry_point(**kwargs: Any) -> FlowNavEnv:
+def env_entry_point(
+    settings: EnvSettings | None = None, render_mode: str | None = None, **overrides: object
+) -> FlowNavEnv:
     """The registered ids' entry point: ``FlowNavEnv(**kwargs)``.
 
     A function rather than the class, because ``gymnasium.make`` reads an entry point's ``metadata``: on an
@@ -78,15 +79,15 @@ def env_entry_point(**kwargs: Any) -> FlowNavEnv:
         ValueError: A kwarg is unknown or outside its range, ``settings.layout`` is not the id's layout, or
             ``render_mode`` is not one of ``FlowNavEnv.metadata["render_modes"]``.
     """
-    layout = kwargs.get("layout")
-    settings_layout = getattr(kwargs.get("settings"), "layout", layout)
+    layout = overrides.get("layout")
+    settings_layout = getattr(settings, "layout", layout)
     if layout is not None and settings_layout != layout:
         ids = {id_kwargs["layout"]: env_id for env_id, (id_kwargs, _) in ENV_IDS.items()}
         raise ValueError(
             f"settings.layout is {settings_layout!r} but this env id flies layout {layout!r}: make "
             f"{ids.get(settings_layout, 'the id of that layout')} or pass layout={settings_layout!r} as well"
         )
-    return FlowNavEnv(**kwargs)
+    return FlowNavEnv(settings, render_mode, **overrides)
 
 
 for _env_id, (_kwargs, _steps) in ENV_IDS.items():

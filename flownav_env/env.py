@@ -209,7 +209,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     depth_dropout = SensorSetting()
 
     def __init__(
-        self, settings: EnvSettings | None = None, render_mode: str | None = None, **overrides: Any
+        self, settings: EnvSettings | None = None, render_mode: str | None = None, **overrides: object
     ) -> None:
         self.render_mode = check_render_mode(render_mode)
         self.settings = settings = settings_with(settings, overrides)
@@ -266,7 +266,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     # --- Gymnasium API ----------------------------------------------------------------------------------------
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+        self, *, seed: int | None = None, options: dict[str, object] | None = None
     ) -> tuple[Observation, dict[str, Any]]:
         """Starts an episode on the layout drawn from ``seed``; ``info`` holds the keys the Info table marks
         "reset". ``options`` is accepted for Gymnasium's API and unused."""

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping
-from typing import Any
 
 import gymnasium as gym
 
@@ -13,7 +13,7 @@ import gymnasium as gym
 from flownav_env.settings import EnvSettings
 
 
-def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
+def episode_step_limit(env_id: str, settings: Mapping[str, object]) -> int | None:
     """A time limit that scales with the course: twice the time it takes at the commanded speed, in frames.
 
     Registered limits assume the default 20 m at 1 m/s and 10 frames/s; a slower flight (a sweep's
@@ -25,7 +25,19 @@ def episode_step_limit(env_id: str, settings: Mapping[str, Any]) -> int | None:
     spec = gym.spec(env_id)
     defaults = {item.name: item.default for item in dataclasses.fields(EnvSettings)}
     merged = {**defaults, **spec.kwargs, **settings}
-    speed = max(float(merged["forward_speed"]), 0.1)
-    length = float(merged["field_length"])
-    frame_rate = float(merged["frame_rate"])
+    speed = max(_number(merged, "forward_speed"), 0.1)
+    length = _number(merged, "field_length")
+    frame_rate = _number(merged, "frame_rate")
     return max(spec.max_episode_steps or 0, math.ceil(2.0 * length / speed * frame_rate))
+
+
+def _number(settings: Mapping[str, object], name: str) -> float:
+    """The setting ``name`` as a number.
+
+    Raises:
+        ValueError: it is not a number (a bool is not one either).
+    """
+    value = settings[name]
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    return float(value)

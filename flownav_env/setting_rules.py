@@ -189,16 +189,16 @@ class BinEdges:
         return tuple(float(edge) for edge in edges)
 
 
-class FrozenMapping(Mapping[str, Any]):
+class FrozenMapping(Mapping[str, object]):
     """A read-only mapping that, unlike ``types.MappingProxyType``, pickles and copies: settings travel to
     worker processes inside ``gymnasium.make``'s keywords."""
 
     __slots__ = ("_items",)
 
-    def __init__(self, items: Mapping[str, Any]) -> None:
+    def __init__(self, items: Mapping[str, object]) -> None:
         self._items = dict(items)
 
-    def __getitem__(self, key: str) -> Any:
+    def __getitem__(self, key: str) -> object:
         return self._items[key]
 
     def __iter__(self) -> Iterator[str]:

@@ -18,7 +18,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from functools import cached_property
-from typing import Any
+from typing import Any, cast
 
 from estimator import DEFAULT_BIN_EDGES, CameraIntrinsics
 from flownav_env.scene import LAYOUTS, LayoutParams
@@ -320,11 +320,12 @@ class EnvSettings(SensorSettings):
         """
         return self._with_some(COURSE_FIELDS, "course settings", values)
 
-    def _with_some(self, allowed: tuple[str, ...], kind: str, values: dict[str, Any]) -> EnvSettings:
+    def _with_some(self, allowed: tuple[str, ...], kind: str, values: Mapping[str, float]) -> EnvSettings:
         unknown = sorted(set(values) - set(allowed))
         if unknown:
             raise ValueError(f"not {kind}: {unknown}; allowed: {', '.join(allowed)}")
-        return replace(self, **values)
+        # Any value may come in: the new settings check each against its rule as they are built.
+        return replace(self, **cast("dict[str, Any]", values))
 
     def layout_params(self) -> LayoutParams:
         """The obstacle-course geometry these settings describe."""

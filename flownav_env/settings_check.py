@@ -10,7 +10,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Callable, Mapping
 from dataclasses import fields, replace
-from typing import Any
+from typing import Any, cast
 
 from flownav_env.setting_rules import BinEdges, Choice, Range, Rule, Sectors
 from flownav_env.settings import SETTING_NAMES, EnvSettings
@@ -87,18 +87,19 @@ def setting_check(setting: str) -> Callable[[str, object], Any]:
     return check
 
 
-def check_render_mode(render_mode: str | None) -> str | None:
+def check_render_mode(render_mode: object) -> str | None:
     """``render_mode`` if FlowNavEnv supports it (None or one of :data:`RENDER_MODES`).
 
     Raises:
         ValueError: Any other render mode.
     """
-    if render_mode is not None:
-        Choice(RENDER_MODES).check("render_mode", render_mode)
-    return render_mode
+    if render_mode is None:
+        return None
+    Choice(RENDER_MODES).check("render_mode", render_mode)
+    return str(render_mode)
 
 
-def settings_with(settings: EnvSettings | None, overrides: Mapping[str, Any]) -> EnvSettings:
+def settings_with(settings: EnvSettings | None, overrides: Mapping[str, object]) -> EnvSettings:
     """``settings`` (or the defaults, for None) with the fields named in ``overrides`` replaced, all checked:
     what FlowNavEnv's constructor does with its arguments.
 
@@ -116,10 +117,12 @@ def settings_with(settings: EnvSettings | None, overrides: Mapping[str, Any]) ->
             raise ValueError(
                 f"FlowNavEnv takes settings=, render_mode= and settings by name: {unknown_setting_message(name)}"
             )
-    return EnvSettings(**overrides) if settings is None else replace(settings, **overrides)
+    # Any value may come in: EnvSettings checks each against its rule as it is built.
+    checked_on_build = cast("dict[str, Any]", overrides)
+    return EnvSettings(**checked_on_build) if settings is None else replace(settings, **checked_on_build)
 
 
-def check_env_kwargs(env_kwargs: Mapping[str, Any], source: str, key: str = "env") -> dict[str, Any]:
+def check_env_kwargs(env_kwargs: Mapping[str, object], source: str, key: str = "env") -> dict[str, Any]:
     """Check a config's ``env:`` mapping (FlowNavEnv keywords) by name and value, as the env would, without
     building one.
 

@@ -6,7 +6,7 @@ import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, TypedDict
+from typing import TypedDict
 
 from agents.common.agent_table import AGENTS, base_agent_name
 
@@ -112,7 +112,7 @@ class PooledRow(EpisodeRow, total=False):
     run: str
 
 
-def is_flow_agent(row: Mapping[str, Any]) -> bool:
+def is_flow_agent(row: Mapping[str, object]) -> bool:
     """Whether the episode's agent steered by the estimator's depths (not an oracle's true depths, and not an
     agent blind to the histogram): its recorded ``obs_source`` where the row has settings (a rule may be flown
     on true depths), else what ``configs/agents.yaml`` says the agent sees.
@@ -120,15 +120,16 @@ def is_flow_agent(row: Mapping[str, Any]) -> bool:
     Raises:
         ValueError: an agent neither in the table nor with recorded settings (``env_kwargs``).
     """
-    entry = AGENTS.get(base_agent_name(row["agent"]))
+    agent = str(row["agent"])
+    entry = AGENTS.get(base_agent_name(agent))
     if entry is not None and entry.sees == "nothing":
         return False
-    settings = row.get("env_kwargs") or ""
+    settings = str(row.get("env_kwargs") or "")
     if settings:
         return bool(json.loads(settings).get("obs_source", "flow") == "flow")
     if entry is None:
         raise ValueError(
-            f"cannot tell whether {row['agent']!r} steers by flow: it is not in configs/agents.yaml and its row "
+            f"cannot tell whether {agent!r} steers by flow: it is not in configs/agents.yaml and its row "
             "records no env_kwargs"
         )
     return entry.sees == "flow"

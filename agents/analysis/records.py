@@ -10,6 +10,7 @@ columns still read: their rows have None for the identity fields (unknown).
 from __future__ import annotations
 
 import io
+import numbers
 import os
 import sys
 from collections.abc import Iterable, Mapping
@@ -231,24 +232,31 @@ def exclusive_outcome(row: EpisodeRow) -> EpisodeRow:
     return row
 
 
-def row_identity(row: Mapping[str, Any]) -> tuple[str, ...] | None:
+def row_identity(row: Mapping[str, object]) -> tuple[str, ...] | None:
     """The row's :data:`IDENTITY_FIELDS` values; None where the file predates them (unknown)."""
-    known: list[str] = [value for name in IDENTITY_FIELDS if (value := row.get(name)) is not None]
+    known = [str(value) for name in IDENTITY_FIELDS if (value := row.get(name)) is not None]
     return tuple(known) if len(known) == len(IDENTITY_FIELDS) else None
 
 
-def episode_key(row: Mapping[str, Any]) -> tuple[str, str, float, int]:
-    """(agent, factor, level, seed): which episode of a run a row or task is."""
-    return (row["agent"], row["factor"], float(row["level"]), int(row["seed"]))
+def episode_key(row: Mapping[str, object]) -> tuple[str, str, float, int]:
+    """(agent, factor, level, seed): which episode of a run a row or task is.
+
+    Raises:
+        ValueError: a level that is not a number or a seed that is not an integer (as numbers or their text).
+    """
+    level, seed = row["level"], row["seed"]
+    if not isinstance(level, numbers.Real | str) or not isinstance(seed, numbers.Integral | str):
+        raise ValueError(f"an episode's level is a number and its seed an integer, got {level!r} and {seed!r}")
+    return (str(row["agent"]), str(row["factor"]), float(level), int(seed))
 
 
-def suite_version_of(row: Mapping[str, Any]) -> str:
+def suite_version_of(row: Mapping[str, object]) -> str:
     """The suite version a row, record or task was flown under; "" outside the suite, or in files from before
     the column (their episodes are not the suite's)."""
     return str(row.get("suite_version") or "")
 
 
-def episode_identity(row: Mapping[str, Any]) -> tuple:
+def episode_identity(row: Mapping[str, object]) -> tuple:
     """Everything that makes a row the episode it is: its :func:`episode_key`, :func:`row_identity` and
     suite version (an episode of another suite version is another episode). Works on typed rows, on a
     line's text values and on a record's fields alike."""

@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Mapping
-from typing import Any
 
 import jinja2
 import jinja2.meta
@@ -58,7 +57,7 @@ def environment(package: str) -> jinja2.Environment:
     return made
 
 
-def render(package: str, template: str, values: Mapping[str, Any], *, every_value_used: bool = False) -> str:
+def render(package: str, template: str, values: Mapping[str, object], *, every_value_used: bool = False) -> str:
     """``package``'s ``templates/<template>`` rendered with ``values``.
 
     Args:
@@ -107,7 +106,7 @@ def template_source(package: str, template: str) -> str:
     return source
 
 
-def unused_values(source: str, values: Mapping[str, Any]) -> list[str]:
+def unused_values(source: str, values: Mapping[str, object]) -> list[str]:
     """The names in ``values`` that the template text ``source`` never names, sorted."""
     return sorted(set(values) - names_in(source))
 

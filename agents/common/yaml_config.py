@@ -112,16 +112,32 @@ def from_mapping(data: object, schema: type[T], source: str = "<config>") -> T:
         raise ConfigError(f"{source}: {_message(error.errors()[0])}") from error
 
 
-def field_range(low: float | None = None, high: float | None = None, **kwargs: Any) -> Any:
-    """A dataclass field whose value (or each of its items) must lie in [low, high]; None is unbounded."""
-    return dataclasses.field(metadata={"range": (low, high)}, **kwargs)
+# Returned as Any, as dataclasses.field's own result is: the field stands in for a value of the field's type.
+def field_range(
+    low: float | None = None,
+    high: float | None = None,
+    *,
+    default: object = dataclasses.MISSING,
+    default_factory: Callable[[], object] | None = None,
+) -> Any:
+    """A dataclass field whose value (or each of its items) must lie in [low, high]; None is unbounded. Its
+    ``default`` or ``default_factory`` as ``dataclasses.field``'s (neither: a required field)."""
+    return _field({"range": (low, high)}, default, default_factory)
 
 
-def checked_field(check: Check, **kwargs: Any) -> Any:
+def checked_field(
+    check: Check, *, default: object = dataclasses.MISSING, default_factory: Callable[[], object] | None = None
+) -> Any:
     """A dataclass field whose value (or each of its items) must pass ``check(name, value)``, which raises
     ValueError otherwise: for ranges owned elsewhere, such as a setting's rule in the env
-    (``flownav_env.settings_check.setting_check``)."""
-    return dataclasses.field(metadata={"check": check}, **kwargs)
+    (``flownav_env.settings_check.setting_check``). ``default`` and ``default_factory`` as in :func:`field_range`."""
+    return _field({"check": check}, default, default_factory)
+
+
+def _field(metadata: dict[str, object], default: object, default_factory: Callable[[], object] | None) -> Any:
+    if default_factory is not None:
+        return dataclasses.field(default_factory=default_factory, metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
 
 
 def within(value: float, bounds: Bounds) -> bool:

@@ -64,7 +64,7 @@ class AgentDeclarations:
     predict_at: str
 
 
-def check_plain_settings(agent: str, settings: Any) -> dict[str, Any]:
+def check_plain_settings(agent: str, settings: object) -> dict[str, Any]:
     """``settings`` if it maps setting names to values of exactly ``bool``, ``int``, ``float`` or ``str`` (a
     subclass could compare equal to anything).
 
@@ -118,7 +118,7 @@ class IsolatedAgent:
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:

@@ -77,7 +77,7 @@ def load(spec: str, trust_pickle: bool) -> tuple[Agent, dict[str, Any]]:
     }
 
 
-def action_message(spec: str, action: Any) -> bytes:
+def action_message(spec: str, action: object) -> bytes:
     """``action`` as the scoring process reads it: a byte of dimensions, int32 sizes, float64 values."""
     try:
         values = np.asarray(action, dtype="<f8")

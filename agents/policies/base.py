@@ -86,7 +86,7 @@ class AgentWrapper:
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:

@@ -242,7 +242,7 @@ class ExternalAgent(AgentWrapper):
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:

@@ -323,7 +323,7 @@ class LoadedPolicy:
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
 
-    def make_env(self, **overrides: Any) -> gym.Env:
+    def make_env(self, **overrides: object) -> gym.Env:
         """The env the policy was trained for, with ``overrides`` (a sensor error, ``render_mode``) on top."""
         return gym.make(self.env_id, **{**self.env_kwargs, **overrides})
 

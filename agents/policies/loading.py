@@ -13,8 +13,9 @@ key it reads (:mod:`agents.policies.observation_keys`).
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 from gymnasium import spaces
@@ -44,9 +45,10 @@ def training_config_beside(path: Path) -> TrainConfig | None:
     return load_config(config_path, TrainConfig) if config_path.is_file() else None
 
 
-def env_spaces(env_id: str, env_kwargs: dict[str, Any]) -> tuple[spaces.Dict, spaces.Space[Any]]:
+def env_spaces(env_id: str, env_kwargs: Mapping[str, object]) -> tuple[spaces.Dict, spaces.Space[Any]]:
     """The observation and action spaces of the env ``env_id`` made with ``env_kwargs`` (then closed)."""
-    env = gym.make(env_id, **env_kwargs)
+    # Any value may come in: the env checks each setting it is made with.
+    env = gym.make(env_id, **cast("dict[str, Any]", env_kwargs))
     try:
         observation_space, action_space = env.observation_space, env.action_space
     finally:

@@ -117,7 +117,7 @@ _MEMO_GETS = ("GET", "BINGET", "LONG_BINGET")
 _MEMO_PUTS = ("PUT", "BINPUT", "LONG_BINPUT")
 
 
-def _pop(stack: list[Any], count: int) -> list[Any]:
+def _pop(stack: list[object], count: int) -> list[object]:
     if count > len(stack):
         raise ValueError("the stream pops more than it pushed")
     popped = stack[len(stack) - count :]
@@ -125,7 +125,9 @@ def _pop(stack: list[Any], count: int) -> list[Any]:
     return popped
 
 
-def _follow(opcode: pickletools.OpcodeInfo, arg: object, stack: list[Any], memo: dict[object, Any]) -> None:
+def _follow(
+    opcode: pickletools.OpcodeInfo, arg: object, stack: list[object], memo: dict[object, object]
+) -> None:
     """Apply ``opcode``'s effect on the stack and memo, keeping the values of what it pushes as literals and
     None for what it builds: enough to know the strings a STACK_GLOBAL takes its module and name from."""
     name, before, after = opcode.name, opcode.stack_before, opcode.stack_after
@@ -154,8 +156,8 @@ def _follow(opcode: pickletools.OpcodeInfo, arg: object, stack: list[Any], memo:
 def _check_stream(stream: bytes) -> None:
     """Refuse, by parsing ``stream`` without running it, any class it names outside :data:`ALLOWED_CLASSES`
     and any opcode that calls code, in the order the stream holds them (what a call would call comes first)."""
-    stack: list[Any] = []
-    memo: dict[Any, Any] = {}
+    stack: list[object] = []
+    memo: dict[object, object] = {}
     try:
         for opcode, arg, position in pickletools.genops(stream):
             if opcode.name in ("GLOBAL", "INST"):

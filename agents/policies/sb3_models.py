@@ -17,6 +17,7 @@ import hashlib
 import itertools
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -107,7 +108,7 @@ class AlgorithmRecord:
     has: tuple[str, ...]
     lacks: tuple[str, ...] = ()
 
-    def matches(self, data: dict[str, Any]) -> bool:
+    def matches(self, data: Mapping[str, object]) -> bool:
         """Whether ``data`` (a zip's ``data`` JSON) is what this algorithm saves."""
         return (
             _policy_module(data) == self.policy_module
@@ -128,12 +129,13 @@ ALGORITHM_RECORDS = {
 }
 
 
-def _policy_module(data: dict[str, Any]) -> str | None:
+def _policy_module(data: Mapping[str, object]) -> str | None:
     policy_class = data.get("policy_class")
-    return policy_class.get("__module__") if isinstance(policy_class, dict) else None
+    module = policy_class.get("__module__") if isinstance(policy_class, dict) else None
+    return module if isinstance(module, str) else None
 
 
-def recorded_algorithm(data: dict[str, Any]) -> str | None:
+def recorded_algorithm(data: Mapping[str, object]) -> str | None:
     """The algorithm of :data:`SB3_ALGORITHMS` whose :data:`ALGORITHM_RECORDS` the zip's ``data`` matches; None
     when it matches none (another algorithm, or a file that records too little to tell)."""
     return next((algo for algo, record in ALGORITHM_RECORDS.items() if record.matches(data)), None)
@@ -154,7 +156,7 @@ def _check_algorithm(algo: str, saved: SavedModel) -> None:
     )
 
 
-def network_parameters(net_arch: Any, inputs: int, outputs: int) -> int:
+def network_parameters(net_arch: object, inputs: int, outputs: int) -> int:
     """About how many parameters an MLP of ``net_arch`` (SB3's: a list of layer sizes for the actor and the
     critic each, or a dict of such lists per network) has from ``inputs`` features: every weight and bias of
     each branch, to ``outputs`` values (at least one).
@@ -172,7 +174,7 @@ def network_parameters(net_arch: Any, inputs: int, outputs: int) -> int:
     return total
 
 
-def check_network_size(path: Path, network: Any, inputs: int, outputs: int) -> None:
+def check_network_size(path: Path, network: object, inputs: int, outputs: int) -> None:
     """Refuse a model whose network (its saved ``policy_kwargs``' ``net_arch``) would have more than
     :data:`MAX_MODEL_PARAMETERS` parameters, before it is built.
 

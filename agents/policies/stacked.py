@@ -9,7 +9,7 @@ evaluation exactly the stacks it saw in training.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from gymnasium import spaces
@@ -53,7 +53,7 @@ class FrameStackedAgent(AgentWrapper):
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
@@ -63,13 +63,12 @@ class FrameStackedAgent(AgentWrapper):
 
         observation = self.observe(observation)
         batched = {key: np.asarray(value)[None] for key, value in observation.items()}
-        starting = state is None or (episode_start is not None and bool(np.asarray(episode_start).any()))
         stack: StackedObservations[dict[str, np.ndarray]]
-        if starting:
+        if state is None or (episode_start is not None and bool(np.asarray(episode_start).any())):
             stack = StackedObservations(1, self.frame_stack, self.observation_space)
             stacked = stack.reset(batched)
         else:
-            stack = state
+            stack = cast("StackedObservations[dict[str, np.ndarray]]", state)  # what the last call returned
             stacked, _ = stack.update(batched, np.zeros(1, bool), [{}])
         action, _ = self.agent.predict(stacked, deterministic=deterministic)
         return action[0], stack

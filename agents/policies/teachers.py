@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import fields
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -28,24 +28,24 @@ class PlannerTeacher:
     of envs: one agent per env, since each plans its own episode's course and keeps that plan between steps.
     Every planner reads the same privileged keys (``observe_layout=True``)."""
 
-    privileged_settings: Mapping[str, Any] = PLANNER_ENV_KWARGS["planner"]
+    privileged_settings: Mapping[str, object] = PLANNER_ENV_KWARGS["planner"]
 
-    def __init__(self, params: Mapping[str, Any] | None = None, name: str = "planner") -> None:
+    def __init__(self, params: Mapping[str, float] | None = None, name: str = "planner") -> None:
         self.params = dict(params or {})
         self.planner_class = PLANNER_CLASSES[name]
         self.planners: list[PlannerAgent] = []
-        self.planner_class(**self.params)  # checks the parameters now, not at the first step
+        self._planner()  # checks the parameters now, not at the first step
 
     def predict(
         self,
         observation: dict[str, np.ndarray],
-        state: Any = None,
+        state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
         count = len(next(iter(observation.values())))
         while len(self.planners) < count:
-            self.planners.append(self.planner_class(**self.params))
+            self.planners.append(self._planner())
         starts = np.ones(count, bool) if episode_start is None else np.asarray(episode_start, bool)
         actions = [
             planner.predict(
@@ -56,9 +56,18 @@ class PlannerTeacher:
         ]
         return np.stack(actions), state
 
+    def _planner(self) -> PlannerAgent:
+        return self.planner_class(**_planner_arguments(self.params))
+
+
+def _planner_arguments(params: Mapping[str, float]) -> dict[str, Any]:
+    """``params`` as a planner's keyword arguments: a number for each field, an integer or a switch where the
+    field is one (:func:`check_teacher_params` checks each value's kind, the planner its range)."""
+    return cast("dict[str, Any]", dict(params))
+
 
 def check_teacher(
-    name: str, env: Mapping[str, Any], source: str, params: Mapping[str, Any] | None = None
+    name: str, env: Mapping[str, object], source: str, params: Mapping[str, float] | None = None
 ) -> None:
     """Check that ``name`` can teach a run whose env is made with ``env`` (a config's ``env`` section), with its
     own parameters ``params`` (a config's ``imitation.teacher_params``).
@@ -84,7 +93,7 @@ def check_teacher(
             )
 
 
-def check_teacher_params(name: str, params: Mapping[str, Any], source: str) -> None:
+def check_teacher_params(name: str, params: Mapping[str, float], source: str) -> None:
     """Raise ValueError unless ``params`` are parameters of teacher ``name``: a planner's fields, each a
     number (an integer where the field counts, true or false for a switch) in its range; a rule flies its
     shipped gains and takes none."""
@@ -113,12 +122,12 @@ def check_teacher_params(name: str, params: Mapping[str, Any], source: str) -> N
         if not fits:
             raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be {what}, got {value!r}")
     try:
-        planner_class(**params)
+        planner_class(**_planner_arguments(params))
     except ValueError as error:
         raise ValueError(f"{source}: key 'imitation.teacher_params': {error}") from error
 
 
-def make_teacher(name: str, params: Mapping[str, Any] | None = None) -> Agent:
+def make_teacher(name: str, params: Mapping[str, float] | None = None) -> Agent:
     """The teacher agent ``name``: a rule with its shipped gains, or the planner (with ``params`` on its
     defaults) over a batch of envs (a module-level function, so a training job that carries it pickles)."""
     check_teacher_params(name, params or {}, "teacher")

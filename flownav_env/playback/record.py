@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from flownav_env.env import FlowNavEnv
+from flownav_env.env import FlowNavEnv, Observation
 from flownav_env.playback.path import CameraPath, path_from_poses
 
 
 def record_env_flight(
     env: gym.Env,
-    policy: Callable[[Any, int], np.ndarray],
+    policy: Callable[[Observation, int], np.ndarray],
     steps: int,
     seed: int | None = None,
     texture_seed: int = 0,

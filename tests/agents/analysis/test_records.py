@@ -16,6 +16,7 @@ from agents.analysis.records import (
     PREVIOUS_CSV_FIELDS,
     append_record,
     drop_agents,
+    episode_key,
     read_episodes,
     read_records,
     start_new_file,
@@ -270,3 +271,16 @@ def test_episodes_recorded_before_the_exclusive_rule_are_read_with_one_outcome(t
     assert (goal_out_of_bounds["success"], goal_out_of_bounds["out_of_bounds"]) == (False, True)
     crash_out_of_bounds = exclusive_outcome({"collision": True, "out_of_bounds": True, "success": False})
     assert (crash_out_of_bounds["collision"], crash_out_of_bounds["out_of_bounds"]) == (True, False)
+
+
+def test_an_episode_key_reads_typed_rows_and_text_alike() -> None:
+    typed = {"agent": "bee", "factor": "clean", "level": 0.5, "seed": 7}
+    text = {"agent": "bee", "factor": "clean", "level": "0.5", "seed": "7"}
+    assert episode_key(typed) == episode_key(text) == ("bee", "clean", 0.5, 7)
+
+
+@pytest.mark.parametrize(("level", "seed"), [(None, 7), (0.5, 7.0), (0.5, None)])
+def test_an_episode_key_refuses_a_level_or_seed_that_is_not_a_number(level: object, seed: object) -> None:
+    row = {"agent": "bee", "factor": "clean", "level": level, "seed": seed}
+    with pytest.raises(ValueError, match=rf"^an episode's level is a number and its seed an integer, got {level!r} and {seed!r}$"):
+        episode_key(row)

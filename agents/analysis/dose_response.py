@@ -17,12 +17,15 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Protocol, TypedDict
 
 import numpy as np
 from scipy import stats
 
 from agents.analysis.episode_record import EpisodeRow, is_flow_agent
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 # Depth quality per episode: log median relative error, valid depths per frame (in hundreds), and the share of
 # depths off by more than half, where the episodes recorded it (not in files from before it existed).
@@ -36,7 +39,56 @@ P_VALUE_FLOOR = 1e-6
 TASK_FACTORS = ("forward_speed", "obstacle_density", "brightness")
 
 
-def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str, Any]]:
+class CellQuality(TypedDict):
+    """A sensor cell's depth quality (:func:`cell_quality`): the medians of :data:`DOSE_FEATURES` it has
+    (``values``), whether they come from full-course flights, and over how many episodes."""
+
+    values: list[float]
+    full_course: bool
+    episodes: int
+
+
+class Prediction(Protocol):
+    """What the dose curve reads of a statsmodels prediction (statsmodels ships no types)."""
+
+    def summary_frame(self) -> pd.DataFrame: ...
+
+
+class FittedLogit(Protocol):
+    """What is read here of a fitted statsmodels Logit (statsmodels ships no types): its coefficients, their
+    standard errors, p-values, intervals and covariance, how the fit went, and predictions."""
+
+    params: np.ndarray
+    bse: np.ndarray
+    pvalues: np.ndarray
+    mle_retvals: dict[str, object]
+
+    def conf_int(self) -> np.ndarray: ...
+
+    def cov_params(self) -> np.ndarray: ...
+
+    def get_prediction(self, exog: np.ndarray) -> Prediction: ...
+
+
+class DoseFit(TypedDict):
+    """One agent's dose-response fit (:func:`fit_dose_response`): its episodes and layouts, the features, each
+    coefficient's estimate, standard error, p-value and 95 % interval by name (``const`` and the features),
+    the fitted model of depth quality alone, and the Wald test of the sensor factors' indicators."""
+
+    episodes: int
+    layouts: int
+    features: tuple[str, ...]
+    params: dict[str, float]
+    bse: dict[str, float]
+    pvalues: dict[str, float]
+    conf_int: dict[str, tuple[float, float]]
+    model: FittedLogit
+    wald_statistic: float
+    wald_df: int
+    wald_pvalue: float
+
+
+def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], CellQuality]:
     """Each sensor cell's depth quality, measured on full-course flights: per (factor, level), the medians over
     the flow agents' successful episodes of :data:`DOSE_FEATURES` (log median relative depth error, valid depths
     per frame / 100, outlier share where every episode recorded it), or over all its episodes where fewer than
@@ -47,16 +99,12 @@ def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str
     sensor condition (the dose), the same for every episode flown in it. Task factors are left out
     (:data:`TASK_FACTORS`).
     """
-    cells: dict[tuple[str, float], list[Mapping[str, Any]]] = {}
+    cells: dict[tuple[str, float], list[EpisodeRow]] = {}
     for row in rows:
         if _measures_sensor_quality(row):
             cells.setdefault((row["factor"], float(row["level"])), []).append(row)
-    every_outlier = all(
-        r.get("mean_depth_outlier_share") is not None and math.isfinite(float(r["mean_depth_outlier_share"]))
-        for members in cells.values()
-        for r in members
-    )
-    quality = {}
+    every_outlier = all(math.isfinite(_outlier_share(r)) for members in cells.values() for r in members)
+    quality: dict[tuple[str, float], CellQuality] = {}
     for key, members in cells.items():
         full = [r for r in members if bool(r["success"])]
         chosen = full if len(full) >= MIN_FULL_COURSE else members
@@ -65,9 +113,15 @@ def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], dict[str
             float(np.median([float(r["mean_points_valid"]) for r in chosen])) / 100.0,
         ]
         if every_outlier:
-            values.append(float(np.median([float(r["mean_depth_outlier_share"]) for r in chosen])))
+            values.append(float(np.median([_outlier_share(r) for r in chosen])))
         quality[key] = {"values": values, "full_course": chosen is full, "episodes": len(chosen)}
     return quality
+
+
+def _outlier_share(row: EpisodeRow) -> float:
+    """The episode's outlier share; NaN in files from before it was recorded."""
+    share = row["mean_depth_outlier_share"]
+    return math.nan if share is None else float(share)
 
 
 def _measures_sensor_quality(row: EpisodeRow) -> bool:
@@ -78,7 +132,7 @@ def _measures_sensor_quality(row: EpisodeRow) -> bool:
 
 
 def dose_features(
-    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], CellQuality]
 ) -> tuple[np.ndarray, np.ndarray, list[EpisodeRow]]:
     """Design matrix (episodes, features): each episode's cell quality (:func:`cell_quality`); failures
     (episodes,); and the rows used: the episodes of cells with a quality."""
@@ -105,7 +159,7 @@ def _converged_logit(
     terms: str,
     method: str = "newton",
     groups: np.ndarray | None = None,
-) -> Any:
+) -> FittedLogit:
     """A fitted statsmodels Logit, or ValueError where its estimate is not one: a fit that did not converge,
     whose Hessian cannot be inverted, or whose outcomes the terms separate (perfectly or nearly), where the
     coefficients run off to infinity and statsmodels only warns."""
@@ -139,15 +193,14 @@ def _converged_logit(
 
 
 def fit_dose_response(
-    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
-) -> dict[str, Any]:
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], CellQuality]
+) -> DoseFit:
     """Logistic regression of failure on its cell's depth quality (one agent's episodes over the sensor
     factors and the clean cell), with standard errors clustered by layout, and a cluster-robust Wald test of
     adding one indicator per sensor factor.
 
     Returns:
-        ``{"episodes", "layouts", "features", "params", "bse", "pvalues", "conf_int", "model", "wald_statistic",
-        "wald_df", "wald_pvalue"}``; the model is the fitted statsmodels result of depth quality alone.
+        A :class:`DoseFit`; its model is the fitted statsmodels result of depth quality alone.
 
     Raises:
         ValueError: fewer than 20 usable episodes, failures that are all equal, or a feature without spread
@@ -195,10 +248,11 @@ def fit_dose_response(
 
 
 def fit_every_flow_agent(
-    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], Mapping[str, Any]]
-) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
+    rows: Sequence[EpisodeRow], quality: Mapping[tuple[str, float], CellQuality]
+) -> tuple[dict[str, DoseFit], dict[str, str]]:
     """:func:`fit_dose_response` for each flow agent of ``rows``: the fits, and why an agent has none."""
-    fits, errors = {}, {}
+    fits: dict[str, DoseFit] = {}
+    errors: dict[str, str] = {}
     for agent in sorted({r["agent"] for r in rows if is_flow_agent(r)}):
         try:
             fits[agent] = fit_dose_response([r for r in rows if r["agent"] == agent], quality)
@@ -207,7 +261,7 @@ def fit_every_flow_agent(
     return fits, errors
 
 
-def _wald(model: Any, first: int, count: int) -> tuple[float, int, float]:
+def _wald(model: FittedLogit, first: int, count: int) -> tuple[float, int, float]:
     """Wald test that the ``count`` coefficients from index ``first`` are all zero, with the model's own
     (cluster-robust) covariance; (statistic, degrees of freedom, p)."""
 
@@ -220,7 +274,7 @@ def _wald(model: Any, first: int, count: int) -> tuple[float, int, float]:
 
 
 def dose_curve(
-    fit: Mapping[str, Any], errors: np.ndarray, valid_points: float, outlier_share: float = 0.0
+    fit: DoseFit, errors: np.ndarray, valid_points: float, outlier_share: float = 0.0
 ) -> tuple[np.ndarray, ...]:
     """Predicted failure probability and its 95 % band against median depth error ``errors`` (relative),
     at ``valid_points`` valid depths per frame and (where the fit has it) ``outlier_share``."""

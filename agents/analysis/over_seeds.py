@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from agents.analysis.episode_record import EPISODE_OUTCOMES, EpisodeRow, episode_outcome
+from agents.analysis.records import layout_seed
 from agents.analysis.statistics import BOOTSTRAP_REPS, CONFIDENCE
 from agents.common.agent_table import split_agent_name
 
@@ -46,7 +47,10 @@ def _seeded_global_numpy(seed: int) -> Iterator[None]:
 
 
 def _rliable_estimates(
-    scores: Mapping[str, Any], func: Callable[..., np.ndarray | float], seed: int, reps: int
+    scores: Mapping[str, np.ndarray | tuple[np.ndarray, np.ndarray]],
+    func: Callable[..., np.ndarray | float],
+    seed: int,
+    reps: int,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """rliable's point estimates and stratified-bootstrap intervals, the same for the same inputs and seed."""
     from rliable import library  # heavy (it brings arch and scipy.stats): only a report that needs it pays
@@ -66,7 +70,7 @@ def _rliable_estimates(
 def run_rates(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
     """One row per run (agent name, with its training seed for a learned agent): episodes and the success,
     failure, collision and out-of-bounds rates over them; sorted by agent, then training seed."""
-    groups: dict[str, list[Mapping[str, Any]]] = {}
+    groups: dict[str, list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault(row["agent"], []).append(row)
     table = []
@@ -100,7 +104,7 @@ def success_outcomes(
 
 
 def episode_outcomes(
-    rows: Iterable[Mapping[str, Any]], runs: Sequence[str], layouts: Sequence[int], outcome: str
+    rows: Iterable[Mapping[str, object]], runs: Sequence[str], layouts: Sequence[int], outcome: str
 ) -> np.ndarray:
     """Whether each run's episode on each layout had ``outcome`` (1) or not (0): (runs, layouts). ``outcome``
     is one of :data:`~flownav_env.task.EPISODE_OUTCOMES` (exclusive, by the env's rule) or ``failure`` (not
@@ -115,7 +119,7 @@ def episode_outcomes(
     flown = {}
     for row in rows:
         ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-        flown[(row["agent"], int(row["seed"]))] = (
+        flown[(str(row["agent"]), layout_seed(row))] = (
             (ended != "success") if outcome == "failure" else ended == outcome
         )
     outcomes = np.zeros((len(runs), len(layouts)))

@@ -244,10 +244,22 @@ def episode_key(row: Mapping[str, object]) -> tuple[str, str, float, int]:
     Raises:
         ValueError: a level that is not a number or a seed that is not an integer (as numbers or their text).
     """
-    level, seed = row["level"], row["seed"]
-    if not isinstance(level, numbers.Real | str) or not isinstance(seed, numbers.Integral | str):
-        raise ValueError(f"an episode's level is a number and its seed an integer, got {level!r} and {seed!r}")
-    return (str(row["agent"]), str(row["factor"]), float(level), int(seed))
+    level = row["level"]
+    if not isinstance(level, numbers.Real | str):
+        raise ValueError(f"an episode's level is a number, got {level!r}")
+    return (str(row["agent"]), str(row["factor"]), float(level), layout_seed(row))
+
+
+def layout_seed(row: Mapping[str, object]) -> int:
+    """The layout seed a row, record or task was flown from.
+
+    Raises:
+        ValueError: a seed that is not an integer (as a number or its text).
+    """
+    seed = row["seed"]
+    if not isinstance(seed, numbers.Integral | str):
+        raise ValueError(f"an episode's seed is an integer, got {seed!r}")
+    return int(seed)
 
 
 def suite_version_of(row: Mapping[str, object]) -> str:

@@ -14,6 +14,8 @@ from agents.analysis.dose_response import (
     MIN_FULL_COURSE,
     P_VALUE_FLOOR,
     TASK_FACTORS,
+    CellQuality,
+    DoseFit,
     cell_quality,
     dose_curve,
     dose_features,
@@ -43,8 +45,8 @@ def _range_text(row: ToleranceRow) -> str:
 # fits, quality: agents.analysis.dose_response's dictionaries (fit_every_flow_agent's and cell_quality's).
 def plot_dose_response(
     rows: Sequence[EpisodeRow],
-    fits: Mapping[str, Mapping[str, Any]],
-    quality: Mapping[tuple[str, float], Mapping[str, Any]],
+    fits: Mapping[str, DoseFit],
+    quality: Mapping[tuple[str, float], CellQuality],
     path: Path,
 ) -> None:
     """A panel per flow agent: each sensor cell's observed failure rate against its depth error (dots; open

@@ -120,7 +120,7 @@ def cell_quality(rows: Sequence[EpisodeRow]) -> dict[tuple[str, float], CellQual
 
 def _outlier_share(row: EpisodeRow) -> float:
     """The episode's outlier share; NaN in files from before it was recorded."""
-    share = row["mean_depth_outlier_share"]
+    share = row.get("mean_depth_outlier_share")
     return math.nan if share is None else float(share)
 
 

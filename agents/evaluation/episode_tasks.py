@@ -71,7 +71,7 @@ class EpisodeIdentity(TypedDict):
     policy_sha256: str
 
 
-def record_label(env_kwargs: dict[str, Any]) -> tuple[str, float]:
+def record_label(env_kwargs: Mapping[str, object]) -> tuple[str, float]:
     """(factor, level) of the records flown with ``env_kwargs``: ``clean`` for defaults, the kwarg and its value
     for one numeric setting (as in the sweep), else every setting spelled out, so different settings never share
     a row key."""
@@ -81,7 +81,7 @@ def record_label(env_kwargs: dict[str, Any]) -> tuple[str, float]:
         ((key, value),) = env_kwargs.items()
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             return key, float(value)
-    return ",".join(f"{k}={v}" for k, v in sorted(env_kwargs.items())), 0.0
+    return ",".join(f"{k}={env_kwargs[k]}" for k in sorted(env_kwargs)), 0.0
 
 
 @dataclass(frozen=True)
@@ -146,7 +146,7 @@ def suite_task(
     seed: int,
     *,
     env_id: str,
-    settings: Mapping[str, Any],
+    settings: Mapping[str, object],
     suite_version: str,
     policy: str | None = None,
     trust_pickle: bool = False,
@@ -159,14 +159,20 @@ def suite_task(
         SUITE_LEVEL,
         seed,
         env_id,
-        tuple(sorted(settings.items())),
+        tuple((name, settings[name]) for name in sorted(settings)),
         policy,
         trust_pickle=trust_pickle,
         suite_version=suite_version,
     )
 
 
-def with_tier(row: Mapping[str, Any]) -> dict[str, Any]:
+class TieredRow(EpisodeRow):
+    """A suite episode's row with its tier under its own key (:func:`with_tier`)."""
+
+    tier: str
+
+
+def with_tier(row: EpisodeRow) -> TieredRow:
     """A suite episode's row with its tier under its own key, ``tier``."""
     return {**row, "tier": row["factor"]}
 

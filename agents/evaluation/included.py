@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -21,10 +20,10 @@ from agents.analysis.paired import TierRanking
 from agents.analysis.records import read_records
 from agents.common.seeds import suite_seeds
 from agents.common.tables import markdown_cell, today
-from agents.evaluation.episode_tasks import with_tier
+from agents.evaluation.episode_tasks import TieredRow, with_tier
 from agents.evaluation.suite import EPISODES_CSV, agent_runs, summarise_suite
 from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
-from agents.evaluation.suite_report import merge_rows, read_included, read_score_runs, read_suite_csv
+from agents.evaluation.suite_report import SuiteRow, merge_rows, read_included, read_score_runs, read_suite_csv
 from agents.evaluation.verification_record import verification_mark
 from agents.policies import split_agent_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
@@ -49,7 +48,7 @@ def _runs_of(folder: Path, agents: Sequence[str]) -> dict[str, list[str]]:
 
 def _episodes(
     folder: Path, runs: Mapping[str, Sequence[str]], seeds: Sequence[int], version: str
-) -> list[dict[str, Any]]:
+) -> list[TieredRow]:
     """Suite ``version``'s episodes of ``runs`` on ``seeds`` in ``folder``'s episodes CSV, with their tiers."""
     path = Path(folder) / EPISODES_CSV
     if not path.is_file():
@@ -65,7 +64,7 @@ def _episodes(
 
 def _source(
     csv_path: Path, rows: Sequence[Mapping[str, object]], layouts: int, version: str, *, included: bool | str
-) -> tuple[list[dict[str, Any]], dict[str, dict[str, np.ndarray]], list[tuple[str, str]]]:
+) -> tuple[list[SuiteRow], dict[str, dict[str, np.ndarray]], list[tuple[str, str]]]:
     """One CSV's rows counted again on the first ``layouts`` layouts from its episodes: the summary rows, each
     tier's failure matrices (``included``: what marks its rows, an included file's verification), and the (agent,
     tier) pairs of its rows whose episodes are not beside it (or not on
@@ -87,7 +86,7 @@ def _source(
 
 def included_suite(
     suite_csv: Path, score_csvs: Sequence[str | Path], *, command: str, version: str = SUITE_VERSION
-) -> tuple[str, list[dict[str, Any]], dict[str, TierRanking], list[Path]]:
+) -> tuple[str, list[SuiteRow], dict[str, TierRanking], list[Path]]:
     """The published suite (of suite ``version``) with the agents of ``score_csvs`` ranked among its agents.
 
     Returns:

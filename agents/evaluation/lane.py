@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 from agents.analysis.records import read_records
 from flownav_env.tiers import TIER_NAMES, TIERS_BY_VERSION, tier_value
@@ -29,7 +29,20 @@ def lane_edge(tier_name: str) -> float:
     return width / 2.0 + radius
 
 
-def lane_values(folder: Path) -> list[dict[str, Any]]:
+class LaneRow(TypedDict):
+    """One (agent, tier) of :func:`lane_values`: the episodes that recorded their sideways extent, how many
+    entered the lane, the farthest one (m), and the lane's edges (m)."""
+
+    agent: str
+    tier: str
+    episodes: int
+    entered: int
+    widest: float
+    edge: float
+    bound: float
+
+
+def lane_values(folder: Path) -> list[LaneRow]:
     """Per (agent, tier) flown into ``folder``'s CSVs, in agent then tier order: the episodes that recorded
     their sideways extent, how many entered the lane, the farthest one (m), and the lane's edges (m)."""
     tiers_by_env = {spec.env_id: name for name, spec in TIERS_BY_VERSION[LANE_VERSION].items()}

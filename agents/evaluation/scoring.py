@@ -4,9 +4,8 @@ into a folder of its own, its rows beside any other agent's scored there.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 from agents.analysis.records import overwrite_hint, start_new_file
 from agents.common.folders import check_writable_folder
@@ -22,7 +21,7 @@ from agents.evaluation.suite import (
     summarise_suite,
     write_summary_csv,
 )
-from agents.evaluation.suite_report import SCORE_CSV, other_agents_rows, write_score_runs
+from agents.evaluation.suite_report import SCORE_CSV, SuiteRow, other_agents_rows, write_score_runs
 from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
 from agents.policies.external import check_display_name, display_name
 from flownav_env.tiers import SUITE_VERSION
@@ -44,7 +43,7 @@ def score(
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
     version: str = SUITE_VERSION,
     agent_limits: AgentLimits | None = None,
-) -> list[dict[str, Any]]:
+) -> list[SuiteRow]:
     """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
     Episodes are appended to ``<out>/suite_episodes.csv`` (calling again resumes); the rows are written to
@@ -97,9 +96,10 @@ def score(
         agent_limits=agent_limits,
     )
     rows = suite_rows(tasks, csv_path)
-    table = [{**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)]
-    write_summary_csv(
-        out / SCORE_CSV, other_agents_rows(out / SCORE_CSV, shown, runs[agent], version) + table
-    )
+    table: list[SuiteRow] = [
+        {**row, "agent": shown} for row in summarise_suite(rows, runs, tier_names, layouts, version)
+    ]
+    kept: list[Mapping[str, object]] = [*other_agents_rows(out / SCORE_CSV, shown, runs[agent], version)]
+    write_summary_csv(out / SCORE_CSV, [*kept, *table])
     write_score_runs(out, shown, runs[agent])
     return table

@@ -16,10 +16,11 @@ import csv
 import io
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import seed_interval
 from agents.analysis.records import read_records
@@ -28,7 +29,7 @@ from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
-from agents.evaluation.episode_tasks import EpisodeTask, rows_of, suite_task, with_tier
+from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
 from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.reference_chain import reference_chain
@@ -41,7 +42,7 @@ from agents.evaluation.suite_page import (
     tier_failures,
 )
 from agents.evaluation.suite_plot import plot_suite
-from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS
+from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, SuiteRow
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
     SUITE_AGENTS,
@@ -154,20 +155,20 @@ def suite_tasks(
     return tasks
 
 
-def suite_rows(tasks: Sequence[EpisodeTask], csv_path: Path) -> list[dict[str, Any]]:
+def suite_rows(tasks: Sequence[EpisodeTask], csv_path: Path) -> list[TieredRow]:
     """The episodes of ``tasks`` in the episodes CSV at ``csv_path``, each with its ``tier``."""
     return [with_tier(row) for row in rows_of(list(tasks), read_records(csv_path))]
 
 
 def summarise_suite(
-    rows: Iterable[Mapping[str, Any]],
+    rows: Iterable[TieredRow],
     runs: Mapping[str, Sequence[str]],
     tiers: Sequence[str],
     layouts: int = SUITE_LAYOUTS,
     version: str = SUITE_VERSION,
     *,
     privileged: Mapping[str, bool] | None = None,
-) -> list[dict[str, Any]]:
+) -> list[SuiteRow]:
     """One row per (agent, tier) with :data:`SUMMARY_COLUMNS` from the suite's episode rows (:func:`suite_rows`):
     each outcome's rate, with a 95 % interval over layouts (Wilson) for one run, or over runs × layouts
     (two-level bootstrap) for several training seeds. Agents and tiers with episodes missing are left out (a
@@ -184,7 +185,7 @@ def summarise_suite(
                 outcomes = {name: episode_outcomes(tier_rows, names, seeds, name) for name in OUTCOMES}
             except ValueError:
                 continue
-            row: dict[str, Any] = {
+            row: dict[str, object] = {
                 "suite_version": version,
                 "tier": tier_name,
                 "env_id": tier(tier_name, version).env_id,
@@ -204,7 +205,7 @@ def summarise_suite(
                 else:
                     low, high = _runs_interval(matrix)
                 row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
-            table.append({column: row[column] for column in SUMMARY_COLUMNS})
+            table.append(cast(SuiteRow, {column: row[column] for column in SUMMARY_COLUMNS}))  # each column set
     return table
 
 
@@ -219,7 +220,7 @@ def _runs_interval(matrix: np.ndarray) -> tuple[float, float]:
     return max(0.0, min(low, t_low)), min(1.0, max(high, t_high))
 
 
-def _flown_settings(rows: Sequence[Mapping[str, Any]], runs: Sequence[str]) -> str:
+def _flown_settings(rows: Sequence[EpisodeRow], runs: Sequence[str]) -> str:
     """The env kwargs (JSON) the episodes of ``runs`` were flown with: one set, as every run of an agent on a
     tier flies the same task.
 
@@ -249,8 +250,9 @@ def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
     return agent
 
 
-def write_summary_csv(path: Path, table: Sequence[Mapping[str, Any]]) -> None:
-    """The suite's rows as CSV (:data:`SUMMARY_COLUMNS`, rates to 4 decimals), replaced atomically."""
+def write_summary_csv(path: Path, table: Sequence[Mapping[str, object]]) -> None:
+    """The suite's rows as CSV (:data:`SUMMARY_COLUMNS`, rates to 4 decimals), replaced atomically; a row is a
+    :class:`SuiteRow` or one kept as its CSV text (:func:`~agents.evaluation.suite_report.other_agents_rows`)."""
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
     writer.writeheader()
@@ -341,14 +343,14 @@ def run_suite(
 
 
 def _report_values(
-    rows: Sequence[Mapping[str, object]],
+    rows: Sequence[TieredRow],
     runs: Mapping[str, Sequence[str]],
     tier_names: Sequence[str],
     layouts: int,
     version: str,
     out: Path,
     command: str,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Write ``suite.csv`` and ``suite.png`` from the flown ``rows`` and return what ``suite.md`` words."""
     table = summarise_suite(rows, runs, tier_names, layouts, version)
     whole = {(row["agent"], row["tier"]) for row in table}

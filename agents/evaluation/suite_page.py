@@ -10,21 +10,22 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NotRequired, TypedDict
 
 import numpy as np
 
 from agents.analysis.over_seeds import episode_outcomes
-from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, TierRanking, compare, rank_tier
+from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, Comparison, TierRanking, compare, rank_tier
 from agents.analysis.records import read_records
 from agents.common.jinja_reports import render
 from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
-from agents.evaluation.episode_tasks import with_tier
-from agents.evaluation.lane import LANE_DIR, lane_values
+from agents.evaluation.episode_tasks import TieredRow, with_tier
+from agents.evaluation.lane import LANE_DIR, LaneRow, lane_values
 from agents.evaluation.learning_gain import LearningGain
 from agents.evaluation.reference_chain import ChainLink
-from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES
+from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
+from agents.evaluation.tier_bound import TierBound
 from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
 from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
@@ -39,8 +40,57 @@ SUITE_READING = "per_axis"
 STUDENT_RECIPES_DIR = "student_recipes"
 
 
+class ShownRow(SuiteRow):
+    """A suite row as a tier's table shows it: what the agent trained on, its name as a table cell (an included
+    agent's name is the user's text) and, ranked, whether it is in the top group and its comparison with the
+    best (None for the best itself); left out of the ranking, why."""
+
+    trained_on: str
+    shown: str
+    in_top: NotRequired[bool]
+    comparison: NotRequired[Comparison | None]
+    why: NotRequired[str]
+
+
+class SensorReading(TypedDict):
+    """An agent flown at another reading of the noisy tier's velocity specification (:func:`reading_values`)."""
+
+    agent: str
+    reading: str
+    noise_m: float
+    layouts: int
+    first_seed: int
+    suite_failure: float
+    failure: float
+    comparison: Comparison
+
+
+class RetiredTier(TypedDict):
+    """A retired agent's failure rate on one tier, per training seed that flew every layout."""
+
+    tier: str
+    failures: list[float]
+
+
+class RetiredAgent(TypedDict):
+    """An agent retired from the suite (:func:`retired_values`): why, and its seeds' failures per tier."""
+
+    agent: str
+    why: str
+    tiers: list[RetiredTier]
+
+
+class BesideSuite(TypedDict):
+    """What :func:`beside_suite` reads from beside the suite, as :func:`suite_values` takes it."""
+
+    readings: list[SensorReading]
+    recipe_reports: dict[str, str]
+    lanes: list[LaneRow]
+    retired: list[RetiredAgent]
+
+
 def tier_failures(
-    rows: Sequence[Mapping[str, Any]],
+    rows: Sequence[TieredRow],
     runs: Mapping[str, Sequence[str]],
     tier_name: str,
     layouts: Sequence[int],
@@ -59,7 +109,7 @@ def tier_failures(
 
 
 def rank_suite(
-    table: Sequence[Mapping[str, Any]], failures: Mapping[str, Mapping[str, np.ndarray]]
+    table: Sequence[SuiteRow], failures: Mapping[str, Mapping[str, np.ndarray]]
 ) -> dict[str, TierRanking]:
     """Each tier's :class:`~agents.analysis.paired.TierRanking` of the agents in its rows; a tier with no rankable
     agent flown (privileged or provisional agents only) has none."""
@@ -100,19 +150,22 @@ def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
         return "—"
 
 
-def _tier_values(rows: Sequence[Mapping[str, Any]], ranking: TierRanking, version: str) -> dict[str, Any]:
-    # "shown": the name as a table cell (an included agent's name is the user's text).
-    by_agent = {
-        row["agent"]: dict(row)
-        | {"trained_on": _trained_on(row["agent"], version), "shown": markdown_cell(row["agent"])}
+def _tier_values(rows: Sequence[SuiteRow], ranking: TierRanking, version: str) -> dict[str, object]:
+    by_agent: dict[str, ShownRow] = {
+        row["agent"]: {
+            **row,
+            "trained_on": _trained_on(row["agent"], version),
+            "shown": markdown_cell(row["agent"]),
+        }
         for row in rows
     }
     compared = {c.agent: c for c in ranking.comparisons}
-    ranked = []
+    ranked: list[ShownRow] = []
     for agent in [ranking.best, *sorted(compared, key=lambda a: (by_agent[a]["failure_rate"], a))]:
-        entry = by_agent[agent] | {"in_top": agent in ranking.top_group, "comparison": compared.get(agent)}
-        ranked.append(entry)
-    apart = [by_agent[agent] | {"why": why} for agent, why in ranking.left_out.items()]
+        ranked.append(
+            {**by_agent[agent], "in_top": agent in ranking.top_group, "comparison": compared.get(agent)}
+        )
+    apart: list[ShownRow] = [{**by_agent[agent], "why": why} for agent, why in ranking.left_out.items()]
     best = by_agent[ranking.best]
     return {
         "ranked": ranked,
@@ -128,11 +181,11 @@ def _failures_by_seed(path: Path) -> dict[int, float]:
     return {int(row["seed"]): float(not row["success"]) for row in read_records(path)}
 
 
-def reading_values(folder: Path) -> list[dict[str, Any]]:
+def reading_values(folder: Path) -> list[SensorReading]:
     """Per agent flown at the suite's reading and at another one of the noisy tier's velocity specification
     (``<folder>/<agent>_<reading>.csv``), on the same validation layouts: each failure rate and the paired
     difference (other reading − suite's)."""
-    found = []
+    found: list[SensorReading] = []
     for path in sorted(Path(folder).glob(f"*_{SUITE_READING}.csv")):
         agent = path.name.removesuffix(f"_{SUITE_READING}.csv")
         suite = _failures_by_seed(path)
@@ -160,7 +213,7 @@ def reading_values(folder: Path) -> list[dict[str, Any]]:
 
 
 def suite_values(
-    table: Sequence[Mapping[str, Any]],
+    table: Sequence[SuiteRow],
     rankings: Mapping[str, TierRanking],
     *,
     command: str,
@@ -168,12 +221,12 @@ def suite_values(
     machine: str,
     missing: Sequence[str],
     generated: str,
-    readings: Sequence[Mapping[str, Any]] = (),
-    bounds: Mapping[str, Mapping[str, Any]] | None = None,
+    readings: Sequence[SensorReading] = (),
+    bounds: Mapping[str, TierBound] | None = None,
     gains: Sequence[LearningGain] = (),
     recipe_reports: Mapping[str, str] | None = None,
-    lanes: Sequence[Mapping[str, Any]] = (),
-    retired: Sequence[Mapping[str, Any]] = (),
+    lanes: Sequence[LaneRow] = (),
+    retired: Sequence[RetiredAgent] = (),
     version: str = SUITE_VERSION,
     chains: Mapping[str, Sequence[ChainLink]] | None = None,
     included_files: Sequence[tuple[str, str]] = (),
@@ -235,7 +288,7 @@ def suite_values(
 
 def beside_suite(
     out: Path, tier_names: Sequence[str], episodes_csv: Path, layouts: Sequence[int]
-) -> dict[str, Any]:
+) -> BesideSuite:
     """What ``suite.md`` reports from flights and reports kept beside it in ``out``: the noisy tier at other
     readings, the student's recipes per tier, the capsule-free lane, and the agents retired from the suite with
     the episodes ``episodes_csv`` kept of them (:func:`suite_values`' arguments)."""
@@ -247,16 +300,16 @@ def beside_suite(
     }
 
 
-def retired_values(episodes_csv: Path, layouts: Sequence[int]) -> list[dict[str, Any]]:
+def retired_values(episodes_csv: Path, layouts: Sequence[int]) -> list[RetiredAgent]:
     """Per agent retired from the suite (:data:`~agents.policies.base.RETIRED_AGENTS`), why, and each of its
     training seeds' failure rate per tier over the frozen ``layouts``, for the seeds that flew them all, read
     from the episodes ``episodes_csv`` kept of it (none when it has none there)."""
     rows = [with_tier(row) for row in read_records(episodes_csv)] if Path(episodes_csv).is_file() else []
-    found = []
+    found: list[RetiredAgent] = []
     for agent, why in RETIRED_AGENTS.items():
         names = {row["agent"] for row in rows if base_agent_name(row["agent"]) == agent}
         runs = {run: [run] for run in sorted(names, key=lambda run: split_agent_name(run)[1] or 0)}
-        tiers = []
+        tiers: list[RetiredTier] = []
         for name in TIER_NAMES:
             whole = tier_failures(rows, runs, name, layouts)  # only the seeds that flew every layout
             if whole:
@@ -272,6 +325,6 @@ def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:
     return {name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md" for name in tier_names}
 
 
-def suite_page(values: Mapping[str, Any]) -> str:
+def suite_page(values: Mapping[str, object]) -> str:
     """``suite.md``'s text from :func:`suite_values`."""
     return render("agents.evaluation", "suite.md.j2", values)

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from agents.evaluation.suite_report import HEADROOM_FAILURE
+from agents.evaluation.suite_report import HEADROOM_FAILURE, SuiteRow
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
@@ -15,7 +15,7 @@ if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
 
 
 def plot_suite(
-    rows: Sequence[Mapping[str, Any]], path: Path, top_groups: Mapping[str, Sequence[str]] | None = None
+    rows: Sequence[SuiteRow], path: Path, top_groups: Mapping[str, Sequence[str]] | None = None
 ) -> None:
     """Failure rate with its 95 % interval per agent, a panel per tier; with ``top_groups`` (tier → its top
     group, as the page ranks), a ranked agent outside its tier's top group is drawn hollow."""
@@ -64,7 +64,7 @@ def _plot_title(rows: Sequence[Mapping[str, object]], *, ranked: bool) -> str:
 def _plot_tier(
     axis: Axes,
     name: str,
-    rows: Sequence[Mapping[str, Any]],
+    rows: Sequence[SuiteRow],
     agents: list[str],
     top_group: Sequence[str] | None = None,
 ) -> None:
@@ -100,7 +100,7 @@ def _marker_colour(row: Mapping[str, object]) -> str:
     return "tab:grey" if row.get("privileged") else "tab:blue"
 
 
-def plot_label(agent: str, rows: Sequence[Mapping[str, Any]]) -> str:
+def plot_label(agent: str, rows: Sequence[SuiteRow]) -> str:
     """``agent`` in full on the figure's axis; an included agent marked with the layouts its rows rest on."""
     counts = sorted({r["layouts"] for r in rows if r["agent"] == agent and r.get("included")})
     if any(r.get("privileged") for r in rows if r["agent"] == agent):

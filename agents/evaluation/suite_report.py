@@ -10,7 +10,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import NotRequired, TypedDict, cast
 
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import SUITE_LAYOUTS
@@ -39,6 +39,48 @@ SUMMARY_COLUMNS = [
     "privileged",
 ]
 
+
+
+class SuiteRow(TypedDict):
+    """One (agent, tier) row of the suite (:data:`SUMMARY_COLUMNS`, typed), as summarised from episodes or read
+    from a suite or score CSV. ``included`` only on a row set beside the published ones: its file's
+    verification mark (:func:`~agents.evaluation.verification_record.verification_mark`), or True. A test keeps
+    the fields and the columns in step."""
+
+    suite_version: str
+    tier: str
+    env_id: str
+    agent: str
+    runs: int
+    layouts: int
+    episodes: int
+    failure_rate: float
+    failure_low: float
+    failure_high: float
+    collision_rate: float
+    collision_low: float
+    collision_high: float
+    out_of_bounds_rate: float
+    out_of_bounds_low: float
+    out_of_bounds_high: float
+    timeout_rate: float
+    timeout_low: float
+    timeout_high: float
+    success_rate: float
+    success_low: float
+    success_high: float
+    interval_over: str
+    env_kwargs: str
+    privileged: bool
+    included: NotRequired[str | bool]
+
+
+def outcome_interval(row: SuiteRow, outcome: str) -> tuple[float, float, float]:
+    """(rate, low, high) of ``outcome`` (one of :data:`OUTCOMES`) in ``row``."""
+    rates = cast("Mapping[str, float]", row)  # every <outcome>_<part> column holds a float
+    return rates[f"{outcome}_rate"], rates[f"{outcome}_low"], rates[f"{outcome}_high"]
+
+
 # A tier leaves room to improve when its best agent still fails at least this often.
 HEADROOM_FAILURE = 0.15
 
@@ -54,7 +96,7 @@ SCORE_RUNS_JSON = "score_runs.json"
 SCORE_CSV_HINT = "flownav score writes one"
 
 
-def read_suite_csv(path: Path, version: str = SUITE_VERSION) -> list[dict[str, Any]]:
+def read_suite_csv(path: Path, version: str = SUITE_VERSION) -> list[SuiteRow]:
     """Rows of a suite or score CSV (:data:`SUMMARY_COLUMNS`), typed.
 
     Raises:
@@ -107,7 +149,7 @@ RATE_TOLERANCE = 3e-4
 EXCLUSIVE_OUTCOMES = tuple(outcome for outcome in OUTCOMES if outcome != "failure")
 
 
-def check_row_numbers(row: dict[str, Any], path: Path, line: int) -> dict[str, Any]:
+def check_row_numbers(row: SuiteRow, path: Path, line: int) -> SuiteRow:
     """``row`` (typed) if its counts and rates can be a suite row: runs >= 1, layouts a prefix of the frozen
     layouts (1 to :data:`~agents.common.seeds.SUITE_LAYOUTS`), episodes runs × layouts; every rate and bound in
     [0, 1] with low <= rate <= high; the exclusive outcomes' rates summing to 1, failure 1 - success; and
@@ -127,7 +169,7 @@ def check_row_numbers(row: dict[str, Any], path: Path, line: int) -> dict[str, A
             f"{where}: episodes {row['episodes']} is not runs × layouts ({row['runs']} × {row['layouts']})"
         )
     for outcome in OUTCOMES:
-        rate, low, high = (row[f"{outcome}_{part}"] for part in ("rate", "low", "high"))
+        rate, low, high = outcome_interval(row, outcome)
         if not all(math.isfinite(value) and 0.0 <= value <= 1.0 for value in (rate, low, high)):
             raise ValueError(
                 f"{where}: {outcome} rate {rate!r} [{low!r}, {high!r}]: rates and bounds lie in [0, 1]"
@@ -136,7 +178,7 @@ def check_row_numbers(row: dict[str, Any], path: Path, line: int) -> dict[str, A
             raise ValueError(
                 f"{where}: {outcome} rate {rate:g} lies outside its interval [{low:g}, {high:g}]"
             )
-    total = sum(row[f"{outcome}_rate"] for outcome in EXCLUSIVE_OUTCOMES)
+    total = sum(outcome_interval(row, outcome)[0] for outcome in EXCLUSIVE_OUTCOMES)
     if abs(total - 1.0) > RATE_TOLERANCE:
         raise ValueError(
             f"{where}: the rates of {', '.join(EXCLUSIVE_OUTCOMES)} sum to {total:g}, not 1 (each episode ends one way)"
@@ -152,13 +194,13 @@ def check_row_numbers(row: dict[str, Any], path: Path, line: int) -> dict[str, A
     return row
 
 
-def _typed_row(row: Mapping[str, str], path: Path, line: int) -> dict[str, Any]:
+def _typed_row(row: Mapping[str, str], path: Path, line: int) -> SuiteRow:
     """A CSV row's :data:`SUMMARY_COLUMNS` as numbers and flags where they are ones.
 
     Raises:
         ValueError: a count or rate that is not a number, naming ``path``, the line and the column.
     """
-    typed: dict[str, Any] = {}
+    typed: dict[str, object] = {}
     for name in SUMMARY_COLUMNS:
         value = row[name]
         try:
@@ -173,12 +215,12 @@ def _typed_row(row: Mapping[str, str], path: Path, line: int) -> dict[str, Any]:
                 f"{path}, line {line}: column {name} is {value!r}, not a number; score the agent again with "
                 "flownav score"
             ) from None
-    return typed
+    return cast(SuiteRow, typed)  # every column set above, each as its type
 
 
 def read_included(
     paths: Sequence[str | Path], version: str = SUITE_VERSION
-) -> tuple[list[dict[str, Any]], list[Path]]:
+) -> tuple[list[SuiteRow], list[Path]]:
     """The rows of the ``score.csv`` files ``paths`` (:func:`read_suite_csv`), each file read once however
     often or under whatever spelling it is named, and the files read, in the order first given. Each row's
     ``included`` says whether ``flownav verify`` vouches for its file (:func:`verification_mark`).
@@ -189,7 +231,7 @@ def read_included(
         FileNotFoundError: a path with no file.
     """
     files = list(dict.fromkeys(Path(path).resolve() for path in paths))
-    rows: list[dict[str, Any]] = []
+    rows: list[SuiteRow] = []
     seen: dict[tuple[str, str], Path] = {}
     for path in files:
         found = read_suite_csv(path, version)
@@ -215,7 +257,7 @@ def read_included(
 
 def other_agents_rows(
     path: Path, agent: str, runs: Sequence[str], version: str = SUITE_VERSION
-) -> list[dict[str, Any]]:
+) -> list[dict[str, str]]:
     """The rows of the score CSV at ``path`` of agents other than ``agent`` (flying ``runs``), so that agents
     scored into one folder each keep their rows; ``agent``'s own are replaced by its new ones, as are those of
     the same runs under another name (``--name``). Rows of another suite version than ``version``, or of another
@@ -257,7 +299,7 @@ def read_score_runs(folder: Path) -> dict[str, list[str]]:
     return {str(agent): [str(run) for run in runs] for agent, runs in found.items() if isinstance(runs, list)}
 
 
-def check_row_task(row: Mapping[str, Any], path: Path) -> None:
+def check_row_task(row: Mapping[str, object], path: Path) -> None:
     """Refuse a row whose episodes were not flown on its tier's task (:func:`flownav_env.tiers.
     check_flown_settings`): a changed course or sensor, or privileged data for an agent not declared privileged.
 
@@ -265,13 +307,13 @@ def check_row_task(row: Mapping[str, Any], path: Path) -> None:
         ValueError: one line naming ``path``, the agent, the tier and the setting.
     """
     try:
-        flown = json.loads(row["env_kwargs"] or "{}")
+        flown = json.loads(str(row["env_kwargs"] or "{}"))
         if not isinstance(flown, dict):
             raise ValueError(f"env_kwargs is not a JSON object: {row['env_kwargs']!r}")
         check_flown_settings(
-            row["agent"],
+            str(row["agent"]),
             flown,
-            row["tier"],
+            str(row["tier"]),
             privileged=str(row["privileged"]) in ("True", "true"),
             version=str(row.get("suite_version") or SUITE_VERSION),
         )
@@ -279,23 +321,22 @@ def check_row_task(row: Mapping[str, Any], path: Path) -> None:
         raise ValueError(f"{path}: {error}") from None
 
 
-def merge_rows(
-    published: Sequence[Mapping[str, Any]], included: Sequence[Mapping[str, Any]]
-) -> list[dict[str, Any]]:
+def merge_rows(published: Sequence[SuiteRow], included: Sequence[SuiteRow]) -> list[SuiteRow]:
     """The published rows and the included ones (an included row replaces a published row of the same agent
     and tier), tier by tier, best first."""
-    merged = {(row["tier"], row["agent"]): dict(row) for row in published}
+    merged = {(row["tier"], row["agent"]): row.copy() for row in published}
     for row in included:
         merged[(row["tier"], row["agent"])] = {**row, "included": row.get("included") or True}
     order = {name: index for index, name in enumerate(TIER_NAMES)}
     return sorted(merged.values(), key=lambda r: (order[r["tier"]], r["failure_rate"], r["agent"]))
 
 
-def _interval(row: Mapping[str, float], outcome: str) -> str:
-    return f"{row[f'{outcome}_rate']:.2f} [{row[f'{outcome}_low']:.2f}, {row[f'{outcome}_high']:.2f}]"
+def _interval(row: SuiteRow, outcome: str) -> str:
+    rate, low, high = outcome_interval(row, outcome)
+    return f"{rate:.2f} [{low:.2f}, {high:.2f}]"
 
 
-def tier_tables(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+def tier_tables(rows: Sequence[SuiteRow]) -> list[str]:
     """A markdown table per tier, best agent first; an included row is marked."""
     lines: list[str] = []
     for name in TIER_NAMES:

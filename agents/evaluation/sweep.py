@@ -16,7 +16,7 @@ Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -178,16 +178,17 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     """
     seeds = range(config.seed_start, config.seed_start + config.episodes)
     passes = [seeds[start : start + config.seed_block] for start in range(0, len(seeds), config.seed_block)]
-    cells: list[tuple[str, float, dict[str, Any]]] = [("clean", 0.0, dict(config.env))]
+    cells: list[tuple[str, float, dict[str, object]]] = [("clean", 0.0, dict(config.env))]
     for factor, levels in config.factors.items():
         cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
     rotations = {agent: seed_rotation(config, agent) for agent in agents}
 
-    def task(agent: str, factor: str, level: float, kwargs: dict[str, Any], seed: int) -> EpisodeTask:
+    def task(agent: str, factor: str, level: float, kwargs: Mapping[str, object], seed: int) -> EpisodeTask:
         runs = rotations[agent]
         name = runs[(seed - config.seed_start) % len(runs)]
         policy = str(policy_file(name, directory=config.policy_folder())) if is_learned(name) else None
-        return EpisodeTask(name, factor, level, seed, config.env_id, tuple(sorted(kwargs.items())), policy)
+        settings = tuple((setting, kwargs[setting]) for setting in sorted(kwargs))
+        return EpisodeTask(name, factor, level, seed, config.env_id, settings, policy)
 
     return [
         task(agent, factor, level, kwargs, seed)
@@ -202,7 +203,7 @@ def run_sweep(
     config_path: Path,
     out: Path,
     *,
-    overrides: dict[str, Any] | None = None,
+    overrides: Mapping[str, int | str] | None = None,
     refly: list[str] | None = None,
     compare_with: Path | None = None,
     report_only: bool = False,
@@ -259,7 +260,7 @@ def run_sweep(
     return table
 
 
-def _load_sweep_config(config_path: Path, overrides: dict[str, Any] | None) -> SweepConfig:
+def _load_sweep_config(config_path: Path, overrides: Mapping[str, int | str] | None) -> SweepConfig:
     """The config file with the command line's overrides, its counts and env kwargs checked."""
     config = load_config(config_path, SweepConfig)
     for name, value in (overrides or {}).items():

@@ -7,12 +7,12 @@ own miss. The gap between a tier's best ranked agent and the planner is what is 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypedDict
 
 import gymnasium as gym
 import numpy as np
 
-from agents.analysis.paired import compare
+from agents.analysis.paired import Comparison, compare
 from agents.analysis.statistics import wilson_interval
 from agents.policies.planner_feasibility import corridor_exists
 from flownav_env.privileged import COURSE_INFO_FIELDS
@@ -21,6 +21,23 @@ from flownav_env.tiers import SUITE_VERSION, tier
 BOUND_AGENT = "planner"
 # The layout does not depend on the camera: the smallest frames make the check cheap.
 _CHECK_FRAME: dict[str, Any] = {"camera_width": 32, "camera_height": 24}
+
+
+class TierBound(TypedDict):
+    """A tier's bound (:func:`tier_bound`): the planner's failure rate with its 95 % interval (Wilson), its failed
+    layouts split into infeasible ones and its own misses, the infeasible share of all layouts, and the tier's
+    best ranked agent with its failure rate and its paired gap to the planner."""
+
+    planner_failure: float
+    planner_low: float
+    planner_high: float
+    failed: int
+    infeasible: int
+    misses: int
+    infeasible_share: float
+    best: str
+    best_failure: float
+    gap: Comparison
 
 
 def layout_is_feasible(tier_name: str, seed: int, version: str = SUITE_VERSION) -> bool:
@@ -51,7 +68,7 @@ def tier_bound(
     best: np.ndarray,
     layouts: Sequence[int],
     feasible: Callable[[str, int], bool] = layout_is_feasible,
-) -> dict[str, Any]:
+) -> TierBound:
     """The bound's values for one tier: the planner's failures (1, layouts) on ``layouts``, each failed layout
     classified, and the best ranked agent against the planner, paired by layout.
 
@@ -80,7 +97,7 @@ def suite_bounds(
     bests: Mapping[str, str],
     layouts: Sequence[int],
     version: str = SUITE_VERSION,
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, TierBound]:
     """:func:`tier_bound` for each tier the planner has flown in full, against that tier's best ranked agent
     (the layouts of suite ``version``)."""
 

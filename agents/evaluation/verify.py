@@ -15,12 +15,11 @@ import secrets
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from agents.evaluation.agent_settings import plan_settings
-from agents.evaluation.episode_tasks import EpisodeTask
+from agents.evaluation.episode_tasks import EpisodeTask, TieredRow
 from agents.evaluation.runner import FlightCache, run_task
 from agents.evaluation.suite import (
     EPISODES_CSV,
@@ -30,7 +29,7 @@ from agents.evaluation.suite import (
     suite_tasks,
     summarise_suite,
 )
-from agents.evaluation.suite_report import OUTCOMES, read_suite_csv
+from agents.evaluation.suite_report import OUTCOMES, SuiteRow, outcome_interval, read_suite_csv
 from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import end_agent_processes
 from flownav_env.task import episode_outcome
@@ -58,7 +57,7 @@ class Verification:
         return f"verified {self.checked}/{self.sampled}"
 
 
-def outcome_of(row: Mapping[str, Any]) -> str:
+def outcome_of(row: Mapping[str, object]) -> str:
     """The one way an episode ended (:func:`flownav_env.task.episode_outcome`)."""
     return episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
 
@@ -135,8 +134,8 @@ def verify(
 
 
 def _rates_mismatch(
-    rows: Sequence[Mapping[str, Any]],
-    episodes: Mapping[str, list[dict[str, Any]]],
+    rows: Sequence[SuiteRow],
+    episodes: Mapping[str, list[TieredRow]],
     runs: Mapping[str, Sequence[str]],
     score_csv: Path,
     version: str,
@@ -148,9 +147,11 @@ def _rates_mismatch(
             return f"{score_csv}, tier {row['tier']}: the episodes file lacks some of its {row['layouts']} layouts"
         summary = summaries[0]
         for outcome in OUTCOMES:
-            for part in ("rate", "low", "high"):
+            for part, given, exact in zip(
+                ("rate", "low", "high"), outcome_interval(row, outcome), outcome_interval(summary, outcome), strict=True
+            ):
                 column = f"{outcome}_{part}"
-                given, flown = row[column], round(summary[column], RATE_DECIMALS)
+                flown = round(exact, RATE_DECIMALS)
                 if not math.isclose(given, flown, abs_tol=10**-RATE_DECIMALS):
                     return f"{score_csv}, tier {row['tier']}: {column} is {given:g}, but its episodes give {flown:g}"
     return ""
@@ -158,14 +159,14 @@ def _rates_mismatch(
 
 def _fly_sample(
     tasks: Mapping[str, list[EpisodeTask]],
-    episodes: Mapping[str, list[dict[str, Any]]],
+    episodes: Mapping[str, list[TieredRow]],
     sample: int,
     step_timeout_s: float,
     limits: AgentLimits,
 ) -> Verification:
     """Fly ``sample`` episodes per tier, drawn here with a fresh seed, and compare each one's outcome."""
     draw = np.random.default_rng(secrets.randbits(128))
-    chosen: list[tuple[EpisodeTask, dict[str, Any]]] = []
+    chosen: list[tuple[EpisodeTask, TieredRow]] = []
     for tier, tier_tasks in tasks.items():
         recorded = {(row["agent"], int(row["seed"])): row for row in episodes[tier]}
         pairs = [(task, recorded[(task.agent, task.seed)]) for task in tier_tasks]

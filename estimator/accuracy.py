@@ -18,7 +18,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, NotRequired, TypedDict
+from typing import Any, TypedDict
 
 import cv2
 import numpy as np
@@ -38,8 +38,7 @@ OUTLIER_RELATIVE_ERROR = 0.5
 
 
 class PairErrors(TypedDict):
-    """One pair's row of :func:`evaluate_sequence` (see its Returns) and, with ``baseline_frames``, of
-    :func:`evaluate_stream`."""
+    """One pair's row of :func:`evaluate_sequence` (see its Returns)."""
 
     pair: tuple[int, int]
     points: int
@@ -50,7 +49,12 @@ class PairErrors(TypedDict):
     within_10pct: float
     median_epe_px: float
     time_ms: float
-    baseline_frames: NotRequired[float]
+
+
+class StreamPairErrors(PairErrors):
+    """One streamed pair's row of :func:`evaluate_stream`: :class:`PairErrors` and the mean baseline."""
+
+    baseline_frames: float
 
 
 #: Columns of :func:`format_error_table`: (row key, header, format).
@@ -180,7 +184,7 @@ def evaluate_stream(
     step: int = 1,
     # Passed straight on: FlowDepthEstimator checks each name and value.
     **estimator_params: Any,
-) -> list[PairErrors]:
+) -> list[StreamPairErrors]:
     """Stream a sequence through :meth:`~estimator.FlowDepthEstimator.update` and measure every result.
 
     Frames ``0, step, 2·step, …`` are fed in order with their ground-truth motion, as a drone would feed its
@@ -206,7 +210,7 @@ def evaluate_stream(
     estimator = FlowDepthEstimator(intrinsics, method=method, **estimator_params)
     frames = list(range(0, len(images), step))
     estimator.update(images[frames[0]], np.eye(3), np.zeros(3))
-    rows = []
+    rows: list[StreamPairErrors] = []
     for before, after in itertools.pairwise(frames):
         rotation, translation = relative_motion(poses[before], poses[after])
         result = estimator.update(images[after], rotation, translation)
@@ -214,10 +218,8 @@ def evaluate_stream(
             (before, after), result, _read_depth(depth_paths[before]), rotation, translation, intrinsics
         )
         baselines = result.baseline_frames
-        row["baseline_frames"] = (
-            float(np.mean(baselines[result.valid])) if baselines is not None and result.num_valid else 1.0
-        )
-        rows.append(row)
+        baseline = float(np.mean(baselines[result.valid])) if baselines is not None and result.num_valid else 1.0
+        rows.append({**row, "baseline_frames": baseline})
     return rows
 
 

@@ -23,7 +23,13 @@ from agents.common.tables import markdown_cell, today
 from agents.evaluation.episode_tasks import TieredRow, with_tier
 from agents.evaluation.suite import EPISODES_CSV, agent_runs, summarise_suite
 from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
-from agents.evaluation.suite_report import SuiteRow, merge_rows, read_included, read_score_runs, read_suite_csv
+from agents.evaluation.suite_report import (
+    SuiteRow,
+    merge_rows,
+    read_included,
+    read_score_runs,
+    read_suite_csv,
+)
 from agents.evaluation.verification_record import verification_mark
 from agents.policies import split_agent_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, NotRequired, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -31,6 +31,9 @@ from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
 from flownav_env.tiers import SUITE_VERSION, SUITE_VERSIONS, TIER_NAMES, tier
+
+if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
+    from typing import NotRequired
 
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
 # episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).

@@ -10,7 +10,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import NotRequired, TypedDict, cast
+from typing import TYPE_CHECKING, TypedDict, cast
 
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import SUITE_LAYOUTS
@@ -18,6 +18,9 @@ from agents.common.tables import markdown_cell, markdown_table
 from agents.evaluation.verification_record import verification_mark
 from agents.policies.base import AGENT_NAMES, PRIVILEGED_AGENTS
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
+
+if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
+    from typing import NotRequired
 
 # The rates the table reports: failure (did not reach the goal), then the exclusive ways an episode ends
 # (flownav_env.task.EPISODE_OUTCOMES), whose rates sum to 1.

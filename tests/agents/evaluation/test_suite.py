@@ -33,7 +33,7 @@ from agents.evaluation.suite import (
     suite_tasks,
     summarise_suite,
 )
-from agents.evaluation.suite_report import merge_rows, read_suite_csv
+from agents.evaluation.suite_report import SuiteRow, merge_rows, outcome_interval, read_suite_csv
 from flownav_env.tiers import SUITE_VERSION, TIERS
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
@@ -364,3 +364,12 @@ def test_included_rows_flown_with_other_settings_are_refused(
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert f"{included}: {message}" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_suite_rows_fields_are_the_summary_columns_then_the_included_mark() -> None:
+    assert list(SuiteRow.__annotations__) == [*SUMMARY_COLUMNS, "included"]
+
+
+def test_an_outcomes_interval_is_read_from_its_three_columns() -> None:
+    row = _row("bee", "hard", 0.25)
+    assert outcome_interval(row, "failure") == (row["failure_rate"], row["failure_low"], row["failure_high"])

@@ -42,7 +42,6 @@ def _range_text(row: ToleranceRow) -> str:
     return setting_range(row["factor"]).interval if unbroken_kind(row) == "end" else ""
 
 
-# fits, quality: agents.analysis.dose_response's dictionaries (fit_every_flow_agent's and cell_quality's).
 def plot_dose_response(
     rows: Sequence[EpisodeRow],
     fits: Mapping[str, DoseFit],

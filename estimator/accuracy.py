@@ -218,7 +218,9 @@ def evaluate_stream(
             (before, after), result, _read_depth(depth_paths[before]), rotation, translation, intrinsics
         )
         baselines = result.baseline_frames
-        baseline = float(np.mean(baselines[result.valid])) if baselines is not None and result.num_valid else 1.0
+        baseline = (
+            float(np.mean(baselines[result.valid])) if baselines is not None and result.num_valid else 1.0
+        )
         rows.append({**row, "baseline_frames": baseline})
     return rows
 

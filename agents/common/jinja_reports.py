@@ -57,7 +57,9 @@ def environment(package: str) -> jinja2.Environment:
     return made
 
 
-def render(package: str, template: str, values: Mapping[str, object], *, every_value_used: bool = False) -> str:
+def render(
+    package: str, template: str, values: Mapping[str, object], *, every_value_used: bool = False
+) -> str:
     """``package``'s ``templates/<template>`` rendered with ``values``.
 
     Args:

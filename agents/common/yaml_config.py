@@ -126,7 +126,10 @@ def field_range(
 
 
 def checked_field(
-    check: Check, *, default: object = dataclasses.MISSING, default_factory: Callable[[], object] | None = None
+    check: Check,
+    *,
+    default: object = dataclasses.MISSING,
+    default_factory: Callable[[], object] | None = None,
 ) -> Any:
     """A dataclass field whose value (or each of its items) must pass ``check(name, value)``, which raises
     ValueError otherwise: for ranges owned elsewhere, such as a setting's rule in the env

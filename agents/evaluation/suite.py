@@ -205,7 +205,8 @@ def summarise_suite(
                 else:
                     low, high = _runs_interval(matrix)
                 row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
-            table.append(cast(SuiteRow, {column: row[column] for column in SUMMARY_COLUMNS}))  # each column set
+            # Every column is set above, each as its type.
+            table.append(cast(SuiteRow, {column: row[column] for column in SUMMARY_COLUMNS}))
     return table
 
 

@@ -148,7 +148,10 @@ def _rates_mismatch(
         summary = summaries[0]
         for outcome in OUTCOMES:
             for part, given, exact in zip(
-                ("rate", "low", "high"), outcome_interval(row, outcome), outcome_interval(summary, outcome), strict=True
+                ("rate", "low", "high"),
+                outcome_interval(row, outcome),
+                outcome_interval(summary, outcome),
+                strict=True,
             ):
                 column = f"{outcome}_{part}"
                 flown = round(exact, RATE_DECIMALS)

@@ -15,4 +15,7 @@ def test_a_setting_the_limit_reads_must_be_a_number(value: object) -> None:
 
 
 def test_a_numpy_number_counts_as_a_number() -> None:
-    assert episode_step_limit("FlowNav-v0", {"forward_speed": np.float32(0.5), "frame_rate": np.int64(10)}) == 800
+    assert (
+        episode_step_limit("FlowNav-v0", {"forward_speed": np.float32(0.5), "frame_rate": np.int64(10)})
+        == 800
+    )

@@ -17,9 +17,8 @@ EPISODE_OUTCOMES = ("success", "collision", "out_of_bounds", "timeout")
 
 
 def episode_outcome(collision: bool, out_of_bounds: bool, success: bool) -> str:
-    """The one :data:`EPISODE_OUTCOMES` entry of an episode whose last step had these flags, which may hold
-    together in records from before the env made them exclusive: a collision outranks the rest, then leaving
-    the bounds, then the goal; none of them is a timeout."""
+    """The one :data:`EPISODE_OUTCOMES` entry of an episode whose last step had these flags: a collision
+    outranks the rest, then leaving the bounds, then the goal; none of them is a timeout."""
     if collision:
         return "collision"
     if out_of_bounds:
@@ -40,8 +39,10 @@ class EpisodeRecord:
 
     Depth quality, over the steps with ground truth: ``median_depth_error`` is the median of the per-step
     median relative errors, ``mean_depth_outlier_share`` the mean per-step share of valid depths off by more
-    than half (``estimator.accuracy.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth, or (the
-    outlier share) in files written before it was recorded.
+    than half (``estimator.accuracy.OUTLIER_RELATIVE_ERROR``); NaN when no step had ground truth.
+
+    The fields' order is the CSV's column order. How files written by earlier code, without some of these
+    columns, are read and resumed is the reader's business (:mod:`agents.analysis.earlier_rows`).
     """
 
     agent: str
@@ -65,19 +66,18 @@ class EpisodeRecord:
     agent_params: str = ""
     policy_sha256: str = ""
     code_version: str = ""
-    # Last, and defaulted: files written before them keep their columns (records.EARLIER_CSV_FIELDS).
     mean_depth_outlier_share: float = math.nan
     # The benchmark suite's version (flownav_env.tiers.SUITE_VERSION) for episodes of the suite, else "".
     suite_version: str = ""
     # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
-    # free lane beside it (agents/evaluation/lane.py); NaN in files written before it was recorded.
+    # free lane beside it (agents/evaluation/lane.py).
     max_abs_lateral_m: float = math.nan
 
 
 class EpisodeRow(TypedDict):
     """One row of an episodes CSV as read (:func:`agents.analysis.records.read_records`): the fields of
-    :class:`EpisodeRecord`, typed, and None where the file predates the column (unknown). A test keeps the two
-    in step."""
+    :class:`EpisodeRecord`, typed, and None where the file predates the column (unknown:
+    :func:`agents.analysis.earlier_rows.upgrade_row`). A test keeps the two in step."""
 
     agent: str
     factor: str

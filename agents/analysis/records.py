@@ -32,17 +32,15 @@ from agents.analysis.csv_file import (
     rewrite_locked,
     sealed_line,
 )
-from agents.analysis.episode_record import EpisodeRecord, EpisodeRow, episode_outcome
+from agents.analysis.earlier_rows import earlier_headers, exclusive_outcome, upgrade_row
+from agents.analysis.episode_record import EpisodeRecord, EpisodeRow
 
 RECORD_FIELDS = [f.name for f in fields(EpisodeRecord)]
 CSV_FIELDS = [*RECORD_FIELDS, CHECKSUM_FIELD]
-# Columns added since identities, last in the record, oldest first: a file written before one of them keeps its
-# own columns when episodes are appended (the newer values are then unknown, None on reading), so resuming never
-# re-flies. EARLIER_CSV_FIELDS[k] is the header of files from before ADDED_FIELDS[k].
-ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version", "max_abs_lateral_m")
-EARLIER_CSV_FIELDS = [
-    [name for name in CSV_FIELDS if name not in ADDED_FIELDS[since:]] for since in range(len(ADDED_FIELDS))
-]
+# A file written before one of the columns added since identities keeps its own columns when episodes are
+# appended (the newer values are then unknown, None on reading), so resuming never re-flies
+# (agents.analysis.earlier_rows). EARLIER_CSV_FIELDS[k]: the header of files from before earlier_rows.ADDED_FIELDS[k].
+EARLIER_CSV_FIELDS = earlier_headers(CSV_FIELDS)
 PREVIOUS_CSV_FIELDS = EARLIER_CSV_FIELDS[0]  # before the outlier share: the committed result CSVs
 _READABLE_HEADERS = [CSV_FIELDS, *reversed(EARLIER_CSV_FIELDS), LEGACY_FIELDS]
 
@@ -200,11 +198,11 @@ def read_records(path: Path) -> list[EpisodeRow]:
 
 def _typed(raw: Mapping[str, str]) -> EpisodeRow | None:
     row: dict[str, Any] = {}
-    for name, kind in _FIELD_TYPES.items():
-        if name not in raw:  # a column the file's format predates: unknown
+    for name, text in upgrade_row(raw, RECORD_FIELDS).items():
+        kind = _FIELD_TYPES[name]
+        if text is None:  # a column the file's format predates: unknown
             row[name] = None
             continue
-        text = raw[name]
         if kind in ("bool", bool):
             if text not in ("True", "False"):
                 return None
@@ -219,17 +217,6 @@ def _typed(raw: Mapping[str, str]) -> EpisodeRow | None:
                 return None
             row[name] = text
     return exclusive_outcome(cast(EpisodeRow, row))  # every field set above, each checked by its type
-
-
-def exclusive_outcome(row: EpisodeRow) -> EpisodeRow:
-    """``row`` with its ``collision``, ``out_of_bounds`` and ``success`` made exclusive by the env's rule
-    (:func:`flownav_env.task.episode_outcome`): episodes recorded before the rule (a goal reached out of bounds,
-    a collision out of bounds) count once, as the env now ends them. Their flights are unchanged: the flags
-    are those of the same last step."""
-    ended = episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
-    row["collision"], row["out_of_bounds"] = ended == "collision", ended == "out_of_bounds"
-    row["success"] = ended == "success"
-    return row
 
 
 def row_identity(row: Mapping[str, object]) -> tuple[str, ...] | None:

@@ -19,6 +19,7 @@ from flownav_env import task
 ANALYSIS = (
     "agents.analysis.csv_file",
     "agents.analysis.dose_response",
+    "agents.analysis.earlier_rows",
     "agents.analysis.episode_record",
     "agents.analysis.over_seeds",
     "agents.analysis.paired",

@@ -265,7 +265,7 @@ def test_a_full_disk_is_one_error_naming_the_file_and_keeps_the_rows(tmp_path: P
 
 
 def test_episodes_recorded_before_the_exclusive_rule_are_read_with_one_outcome(tmp_path: Path) -> None:
-    from agents.analysis.records import exclusive_outcome
+    from agents.analysis.earlier_rows import exclusive_outcome
 
     goal_out_of_bounds = exclusive_outcome({"collision": False, "out_of_bounds": True, "success": True})
     assert (goal_out_of_bounds["success"], goal_out_of_bounds["out_of_bounds"]) == (False, True)

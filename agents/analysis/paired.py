@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from agents.analysis.statistics import runs_and_layouts_interval
 from agents.common.agent_table import base_agent_name, kind_of
 
 CONFIDENCE = 0.95
@@ -180,6 +181,26 @@ def seed_interval(runs: np.ndarray) -> tuple[float, float]:
         return float(means[0]), float(means[0])
     half = stats.t.ppf(0.5 + CONFIDENCE / 2.0, len(means) - 1) * means.std(ddof=1) / np.sqrt(len(means))
     return float(means.mean() - half), float(means.mean() + half)
+
+
+RUNS_INTERVAL = "runs × layouts (bootstrap, at least the t-interval over runs)"
+"""How :func:`runs_interval` is made, as a table's "interval over" column names it."""
+
+
+def runs_interval(outcomes: np.ndarray) -> tuple[float, float]:
+    """95 % interval of a learned agent's rate over its runs and layouts (``outcomes``: (runs, layouts) of 0/1,
+    every run on the same layouts): the wider of the two-level bootstrap (runs, then layouts:
+    :func:`agents.analysis.statistics.runs_and_layouts_interval`) and the t-interval over the runs' own rates
+    (:func:`seed_interval`), clipped to [0, 1]. With few runs the bootstrap understates the spread between
+    training runs; the t-interval is the floor that keeps the interval about the recipe, not its runs.
+
+    Raises:
+        ValueError: not a (runs, layouts) matrix.
+    """
+    matrix = _check(outcomes, "outcomes")
+    low, high = runs_and_layouts_interval(matrix)
+    t_low, t_high = seed_interval(matrix)
+    return max(0.0, min(low, t_low)), min(1.0, max(high, t_high))
 
 
 @dataclass(frozen=True)

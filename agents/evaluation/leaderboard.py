@@ -6,7 +6,8 @@ Writes, to the output folder:
 - ``leaderboard_episodes.csv``: every episode (resumable; one agent name per run: ``ppo_flow@3``);
 - ``training_seeds.csv``: one row per (agent, training seed) with its episodes and rates;
 - ``leaderboard.md``: the table (failure and success rates with 95 % intervals: over layouts for a
-  reactive agent, over runs × layouts for a learned one), the interquartile mean over runs, and the
+  reactive agent, over runs × layouts for a learned one, at least the t-interval over its seeds:
+  :func:`agents.analysis.paired.runs_interval`), the interquartile mean over runs, and the
   probability that each learned agent improves on each reactive one (:mod:`agents.analysis.over_seeds`);
 - ``leaderboard.png``: failure rates with their intervals, a dot per training seed.
 """
@@ -30,9 +31,16 @@ from agents.analysis.over_seeds import (
     run_rates,
     success_outcomes,
 )
-from agents.analysis.paired import Comparison, compare, provisional_note, verdict
+from agents.analysis.paired import (
+    RUNS_INTERVAL,
+    Comparison,
+    compare,
+    provisional_note,
+    runs_interval,
+    verdict,
+)
 from agents.analysis.records import read_records
-from agents.analysis.statistics import runs_and_layouts_interval, wilson_interval
+from agents.analysis.statistics import wilson_interval
 from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.machine import code_version
@@ -115,8 +123,8 @@ def summarise_runs(
             low, high = wilson_interval(int(outcomes[agent].sum()), n)
             interval = "layouts (Wilson)"
         else:
-            low, high = runs_and_layouts_interval(outcomes[agent])
-            interval = "runs × layouts (bootstrap)"
+            low, high = runs_interval(outcomes[agent])
+            interval = RUNS_INTERVAL
         table.append(
             {
                 "agent": agent,
@@ -233,8 +241,10 @@ def report_lines(
         "differ from this table's; this one is kept as the clean tier's history.",
         "",
         "A learned agent is every training seed shipped in `results/policies/<agent>/seed_<k>.zip`, each flying "
-        "every layout; its rates are means over runs, with a 95 % interval from a two-level bootstrap (runs, "
-        "and layouts once for all runs, since every run flew the same layouts). A reactive agent is deterministic: one run, Wilson interval over "
+        "every layout; its rates are means over runs, and its 95 % interval is the wider of a two-level bootstrap "
+        "(runs, and layouts once for all runs, since every run flew the same layouts) and a t-interval over its "
+        "seeds' own rates, so it is never narrower than the spread between training runs allows (the rule of "
+        "`suite.md`). A reactive agent is deterministic: one run, Wilson interval over "
         "layouts. A failure is any episode that does not reach the goal (collision, out of bounds, time limit). "
         f"IQM: interquartile mean of the failure rate over runs × blocks of {block} layouts, with "
         "rliable's stratified-bootstrap interval over runs.",

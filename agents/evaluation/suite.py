@@ -22,9 +22,9 @@ import numpy as np
 
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
-from agents.analysis.paired import seed_interval
+from agents.analysis.paired import RUNS_INTERVAL, runs_interval
 from agents.analysis.records import read_records
-from agents.analysis.statistics import runs_and_layouts_interval, wilson_interval
+from agents.analysis.statistics import wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
@@ -203,22 +203,11 @@ def summarise_suite(
                 if len(names) == 1:
                     low, high = wilson_interval(int(matrix.sum()), matrix.size)
                 else:
-                    low, high = _runs_interval(matrix)
+                    low, high = runs_interval(matrix)
                 row.update({f"{name}_rate": float(np.mean(matrix)), f"{name}_low": low, f"{name}_high": high})
             # Every column is set above, each as its type.
             table.append(cast(SuiteRow, {column: row[column] for column in SUMMARY_COLUMNS}))
     return table
-
-
-# A learned agent's interval: the two-level bootstrap, widened where the t-interval over its runs' own rates is
-# wider (with few runs the bootstrap understates the spread between training runs).
-RUNS_INTERVAL = "runs × layouts (bootstrap, at least the t-interval over runs)"
-
-
-def _runs_interval(matrix: np.ndarray) -> tuple[float, float]:
-    low, high = runs_and_layouts_interval(matrix)
-    t_low, t_high = seed_interval(matrix)
-    return max(0.0, min(low, t_low)), min(1.0, max(high, t_high))
 
 
 def _flown_settings(rows: Sequence[EpisodeRow], runs: Sequence[str]) -> str:

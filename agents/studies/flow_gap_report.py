@@ -20,7 +20,7 @@ import numpy as np
 
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
-from agents.analysis.paired import Comparison, compare, verdict
+from agents.analysis.paired import Comparison, compare, runs_interval, verdict
 from agents.analysis.records import read_records
 from agents.analysis.statistics import runs_failure
 from agents.analysis.validation_rows import ConfirmationResult, SearchRecord
@@ -61,7 +61,11 @@ def gap(flow: np.ndarray, truth: np.ndarray) -> Comparison:
 
 
 def _cell(matrix: np.ndarray) -> Cell:
-    """A failure rate with its interval over runs and layouts (Wilson's for one run, such as the planner's)."""
+    """A failure rate with its interval: for several training runs the wider of the two-level bootstrap and the
+    t-interval over the runs' own rates (:func:`agents.analysis.paired.runs_interval`, suite.md's rule);
+    Wilson's over layouts for one run, such as the planner's."""
+    if len(matrix) > 1:
+        return (float(matrix.mean()), *runs_interval(matrix))
     return (float(matrix.mean()), *runs_failure(1 - matrix)[1:])
 
 

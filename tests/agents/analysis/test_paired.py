@@ -17,8 +17,10 @@ from agents.analysis.paired import (
     provisional_note,
     rank_tier,
     refuse_privileged,
+    runs_interval,
     seed_interval,
 )
+from agents.analysis.statistics import runs_and_layouts_interval
 
 
 def _failures(rate: float, runs: int = 1, layouts: int = 300, seed: int = 0) -> np.ndarray:
@@ -71,6 +73,22 @@ def test_a_learned_agents_interval_is_never_narrower_than_the_t_interval_over_it
     means = runs.mean(axis=1)
     assert low < means.mean() < high and high - low > 0.5  # the spread of five seeds, not of 1,500 episodes
     assert seed_interval(runs[:1]) == (means[0], means[0])
+
+
+def test_runs_interval_is_the_wider_of_the_bootstrap_and_the_t_interval_within_0_and_1() -> None:
+    spread = np.vstack([_failures(rate, seed=k) for k, rate in enumerate([0.04, 0.08, 0.08, 0.38, 0.64])])
+    assert runs_interval(spread) == (max(0.0, seed_interval(spread)[0]), seed_interval(spread)[1])
+    alike = np.vstack([_failures(0.2, seed=k) for k in range(5)])  # seeds alike: the layouts' noise rules
+    boot_low, boot_high = runs_and_layouts_interval(alike)
+    low, high = runs_interval(alike)
+    assert (low, high) == (min(boot_low, seed_interval(alike)[0]), max(boot_high, seed_interval(alike)[1]))
+    assert high - low >= boot_high - boot_low
+    assert runs_interval(_failures(0.0, runs=3)) == (0.0, 0.0)
+
+
+def test_runs_interval_refuses_what_is_not_a_runs_by_layouts_matrix() -> None:
+    with pytest.raises(ValueError, match=r"outcomes must be a \(runs, layouts\) matrix .* got \(4,\)"):
+        runs_interval(np.zeros(4))
 
 
 def test_the_top_group_holds_what_no_corrected_test_separates_and_leaves_out_references() -> None:

@@ -5,23 +5,20 @@ Training, resuming and loading all ask here, so the choice is made in one place.
 
 from __future__ import annotations
 
-from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
 from agents.training.train_config import PPOParams
 
 if TYPE_CHECKING:
-    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
-
-# Fields of PPOParams that shape the policy network rather than the algorithm.
-_NETWORK_FIELDS = ("net_arch", "log_std_init", "lstm_hidden_size")
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import PPO
 
 
 def is_recurrent(params: PPOParams) -> bool:
     return params.lstm_hidden_size > 0
 
 
-def algorithm_class(params: PPOParams) -> type[OnPolicyAlgorithm]:
+def algorithm_class(params: PPOParams) -> type[PPO] | type[RecurrentPPO]:
     """``stable_baselines3.PPO``, or ``sb3_contrib.RecurrentPPO`` for a recurrent policy."""
     # stable-baselines3 (and torch with it) is heavy, sb3-contrib optional: imported only when a model is made.
     if is_recurrent(params):
@@ -43,8 +40,3 @@ def network_kwargs(params: PPOParams) -> dict[str, Any]:
     if is_recurrent(params):
         network["lstm_hidden_size"] = params.lstm_hidden_size
     return network
-
-
-def algorithm_kwargs(params: PPOParams) -> dict[str, Any]:
-    """The remaining hyperparameters, as the algorithm's constructor takes them."""
-    return {key: value for key, value in asdict(params).items() if key not in _NETWORK_FIELDS}

@@ -17,7 +17,11 @@ from datetime import datetime, timezone
 from typing import Any
 
 from agents.common.folders import write_text_atomically
+from agents.common.machine import available_cores, code_version, cpu_model
 from agents.training.outputs import RunFiles
+from agents.training.train_config import TrainConfig, init_source
+from flownav_env.rendering import gl_renderer_name
+from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 
 # A session's status: running until it ends as finished, interrupted (Ctrl-C, SIGTERM) or failed (an error);
 # one that never wrote its end is marked killed by the next session.
@@ -26,6 +30,37 @@ RUNNING, FINISHED, INTERRUPTED, FAILED, KILLED = "running", "finished", "interru
 
 def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def session_facts(config: TrainConfig, in_process_envs: bool) -> dict[str, Any]:
+    """What a session runs with, for its entry in the record: the budget, the machine and the code."""
+    return {
+        "total_timesteps_asked": config.total_timesteps,
+        "max_minutes": config.max_minutes,
+        "cpu": cpu_model(),
+        "cores": available_cores(),
+        "n_envs": config.n_envs,
+        "env_workers": "in process" if in_process_envs or config.n_envs == 1 else "one subprocess per env",
+        # What the policy saw depends on these as much as on the config: record them per session.
+        "code": code_version(),
+        "env_estimator_defaults": dict(ENV_ESTIMATOR_DEFAULTS),
+        "gl_renderer": gl_renderer_name(),
+    }
+
+
+def init_summary(config: TrainConfig) -> dict[str, Any] | None:
+    """For the record: the earlier stage a run started from (``init_from``), its steps and training minutes
+    (from the record beside it, when there is one), so a curriculum's cost per seed adds up."""
+    source = init_source(config)
+    if source is None:
+        return None
+    record = source.with_suffix(".json")
+    earlier = json.loads(record.read_text()) if record.is_file() else {}
+    return {
+        "path": str(source),
+        "timesteps": earlier.get("total_timesteps"),
+        "wall_minutes": earlier.get("total_wall_minutes"),
+    }
 
 
 def read_record(files: RunFiles) -> dict[str, Any] | None:
@@ -67,7 +102,7 @@ class SessionRecord:
         command: the command line that started the session.
         keep_earlier: continue the record of earlier sessions (a resumed run) instead of starting anew.
         steps_at_start: the model's step count when the session starts.
-        init: the earlier stage the run started from (:func:`agents.training.ppo.init_summary`), or None.
+        init: the earlier stage the run started from (:func:`init_summary`), or None.
 
     Raises:
         OSError: the record could not be written; it names the file.

@@ -10,15 +10,15 @@ import pytest
 from helpers import EPISODE
 
 from agents.analysis.records import append_record
-from agents.evaluation.suite_checks import (
+from agents.evaluation.calibration_page import (
     FEASIBLE_FAILURE,
     SENSITIVITY_DIR,
     check_rows,
     passing,
     sensitivity_file,
     sensitivity_rows,
-    write_checks,
 )
+from agents.evaluation.suite_checks import frozen_physics, write_checks
 
 SUCCESS = replace(EPISODE, agent="planner", collision=False, success=True, max_abs_lateral_m=4.2)
 
@@ -34,7 +34,7 @@ def _fly(path: Path, seeds: range, failed: set[int], **fields: object) -> None:
 def test_each_reference_passes_a_tier_only_at_or_under_the_feasible_failure(tmp_path: Path) -> None:
     _fly(tmp_path / "planner_FlowNav-v1.csv", range(970_000, 970_050), set(), env_id="FlowNav-v1")
     _fly(tmp_path / "planner_FlowNavHard-v1.csv", range(970_000, 970_050), {970_003, 970_004}, env_id="FlowNavHard-v1")
-    rows = {(row["tier"], row["agent"]): row for row in check_rows(tmp_path)}
+    rows = {(row["tier"], row["agent"]): row for row in check_rows(tmp_path, frozen_physics().tiers)}
     clean, hard = rows[("clean", "planner")], rows[("hard", "planner")]
     assert (clean["layouts"], clean["failure"], clean["passes"]) == (50, 0.0, True)
     assert hard["failure"] == pytest.approx(0.04) and hard["failure"] > FEASIBLE_FAILURE and not hard["passes"]
@@ -51,7 +51,7 @@ def test_the_sensitivity_table_pairs_other_readings_with_the_frozen_one_by_layou
     assert other.name == "bee_ttc_FlowNavNoisy-v1_per_axis_tau1.csv"
     _fly(frozen, range(971_000, 971_010), {971_000}, agent="bee_ttc")
     _fly(other, range(971_000, 971_012), {971_000, 971_001, 971_002}, agent="bee_ttc")
-    (row,) = sensitivity_rows(tmp_path)
+    (row,) = sensitivity_rows(tmp_path, frozen_physics())
     assert (row["agent"], row["env_id"], row["tau"], row["layouts"]) == ("bee_ttc", "FlowNavNoisy-v1", 1.0, 10)
     assert row["frozen_failure"] == pytest.approx(0.1) and row["failure"] == pytest.approx(0.3)
     assert row["comparison"].difference == pytest.approx(0.2)

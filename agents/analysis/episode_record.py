@@ -70,7 +70,7 @@ class EpisodeRecord:
     # The benchmark suite's version (flownav_env.tiers.SUITE_VERSION) for episodes of the suite, else "".
     suite_version: str = ""
     # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
-    # free lane beside it (agents/evaluation/lane.py).
+    # free lane beside it (agents/evaluation/lane.py); NaN when not measured.
     max_abs_lateral_m: float = math.nan
 
 

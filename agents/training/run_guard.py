@@ -21,10 +21,9 @@ The time cap is not a failure: :class:`agents.training.callbacks.WallClockBudget
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass
-from typing import Any
 
 from stable_baselines3.common.callbacks import CallbackList, ProgressBarCallback
 from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
@@ -60,7 +59,7 @@ class RunGuard:
     def steps(self) -> int:
         return self.model.num_timesteps if self.model is not None else 0
 
-    def teacher_start(self, imitate: Callable[[], dict[str, Any]]) -> None:
+    def teacher_start(self, imitate: Callable[[], Mapping[str, object]]) -> None:
         """Run the teacher start (``imitate`` returns its summary, which goes into the session's record);
         Ctrl-C or SIGTERM ends the session as interrupted and is raised on.
 
@@ -80,7 +79,7 @@ class RunGuard:
         record.session["imitation"] = summary
         record.write()
 
-    def learn(self, learn: Callable[[], Any], callbacks: CallbackList) -> None:
+    def learn(self, learn: Callable[[], object], callbacks: CallbackList) -> None:
         """Run ``learn`` and checkpoint the model, the resume point; Ctrl-C or SIGTERM ends learning early with
         a checkpoint and :attr:`status` :data:`INTERRUPTED`. A progress bar among ``callbacks`` is closed
         whatever happens, or its refresh thread goes on printing into whatever runs next.

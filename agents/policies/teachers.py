@@ -1,10 +1,12 @@
 """Teachers for a run's teacher start (``imitation.teacher`` in a training config): which agents may teach, and
 the check that the run's env observes everything the teacher reads.
 
-A reactive rule reads the student's own observation, so the config's ``env`` must give it every key. The
-privileged planner reads the layout and true state (``observe_layout=True``): it declares that opt-in itself
-(:attr:`PlannerTeacher.privileged_settings`), the training envs get it, and the student never sees its keys
-(:mod:`agents.training.student_view`), so the config's ``env`` stays that of an ordinary agent.
+A reactive rule reads the student's own observation, so the config's ``env`` must give it every key. A
+privileged planner (any of :data:`~agents.policies.base.PLANNERS`: ``planner`` reads the layout and true state,
+``planner_camera`` besides the camera's pose and the histogram's bins) declares its own opt-in
+(:attr:`PlannerTeacher.privileged_settings`, the privileged part of the env settings it is flown with), the
+training envs get it, and the student never sees its keys (:mod:`agents.training.student_view`), so the
+config's ``env`` stays that of an ordinary agent.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import numpy as np
 
 from agents.policies.base import PLANNERS, REACTIVE_AGENTS, Agent
 from agents.policies.learned import PLANNER_CLASSES, agent_env_kwargs, load_agent
-from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
+from agents.policies.planner import PlannerAgent
 from flownav_env.tiers import privileged_requests
 
 TEACHERS = REACTIVE_AGENTS + PLANNERS
@@ -26,13 +28,20 @@ TEACHERS = REACTIVE_AGENTS + PLANNERS
 class PlannerTeacher:
     """A planner (``planner`` unless ``name`` says which of :data:`~agents.policies.base.PLANNERS`) over a batch
     of envs: one agent per env, since each plans its own episode's course and keeps that plan between steps.
-    Every planner reads the same privileged keys (``observe_layout=True``)."""
+    Its :attr:`privileged_settings` are the privileged env settings that planner is flown with, whichever it is.
 
-    privileged_settings: Mapping[str, object] = PLANNER_ENV_KWARGS["planner"]
+    Raises:
+        ValueError: ``name`` is not a planner, or ``params`` are not its parameters.
+    """
 
     def __init__(self, params: Mapping[str, float] | None = None, name: str = "planner") -> None:
+        if name not in PLANNERS:
+            raise ValueError(f"a planner teacher must be one of {', '.join(PLANNERS)}, got {name!r}")
+        self.name = name
         self.params = dict(params or {})
         self.planner_class = PLANNER_CLASSES[name]
+        # Its own opt-in, so that a planner reading more keys than the map's brings them to the training envs.
+        self.privileged_settings: Mapping[str, object] = privileged_requests(agent_env_kwargs(name))
         self.planners: list[PlannerAgent] = []
         self._planner()  # checks the parameters now, not at the first step
 
@@ -73,7 +82,7 @@ def check_teacher(
     own parameters ``params`` (a config's ``imitation.teacher_params``).
 
     Raises:
-        ValueError: ``name`` is neither a reactive agent nor the planner (a teacher acts from the observation
+        ValueError: ``name`` is neither a reactive agent nor a planner (a teacher acts from the observation
             alone, so learned policies, which need their own env settings, are not offered), the env lacks
             a setting the teacher reads, or ``params`` are not the teacher's; the message names the key and the
             config file ``source``.
@@ -94,12 +103,12 @@ def check_teacher(
 
 
 def check_teacher_params(name: str, params: Mapping[str, float], source: str) -> None:
-    """Raise ValueError unless ``params`` are parameters of teacher ``name``: a planner's fields, each a
-    number (an integer where the field counts, true or false for a switch) in its range; a rule flies its
-    shipped gains and takes none."""
+    """Raise ValueError unless ``params`` are parameters of teacher ``name``: that planner's own fields (the
+    camera-limited ones add ``view_range`` and ``memory`` to the map planner's), each a number (an integer where
+    the field counts, true or false for a switch) in its range; a rule flies its shipped gains and takes none."""
     if params and name not in PLANNERS:
         raise ValueError(
-            f"{source}: key 'imitation.teacher_params' sets the planner teacher's parameters; {name!r} flies its "
+            f"{source}: key 'imitation.teacher_params' sets a planner teacher's parameters; {name!r} flies its "
             f"shipped gains and takes none, got {sorted(params)}"
         )
     if name not in PLANNERS:
@@ -109,7 +118,7 @@ def check_teacher_params(name: str, params: Mapping[str, float], source: str) ->
     for key, value in params.items():
         if key not in defaults:
             raise ValueError(
-                f"{source}: key 'imitation.teacher_params.{key}' is not a planner parameter; allowed: "
+                f"{source}: key 'imitation.teacher_params.{key}' is not a parameter of {name}; allowed: "
                 f"{', '.join(defaults)}"
             )
         default = defaults[key]

@@ -112,14 +112,14 @@ def test_the_planner_teacher_flies_the_parameters_a_config_gives_it() -> None:
 @pytest.mark.parametrize(
     ("name", "params", "message"),
     [
-        ("planner", {"margin": 0.2}, r"run.yaml: key 'imitation.teacher_params.margin' is not a planner "
-         r"parameter; allowed: hard_margin, soft_clearance"),
+        ("planner", {"margin": 0.2}, r"run.yaml: key 'imitation.teacher_params.margin' is not a parameter "
+         r"of planner; allowed: hard_margin, soft_clearance"),
         ("planner", {"soft_clearance": "wide"}, r"'imitation.teacher_params.soft_clearance' must be a number, "
          r"got 'wide'"),
         ("planner", {"hard_margin": -0.1}, r"run.yaml: key 'imitation.teacher_params': hard_margin must be > 0, "
          r"got -0.1"),
         ("planner", {"commands": 9.5}, r"'imitation.teacher_params.commands' must be an integer, got 9.5"),
-        ("bee_ttc", {"soft_clearance": 0.8}, r"sets the planner teacher's parameters; 'bee_ttc' flies its shipped "
+        ("bee_ttc", {"soft_clearance": 0.8}, r"sets a planner teacher's parameters; 'bee_ttc' flies its shipped "
          r"gains and takes none, got \['soft_clearance'\]"),
     ],
 )

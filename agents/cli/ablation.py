@@ -53,7 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser,
         None,
         "a suite tier (clean, hard, noisy, hard_noisy): fly its course and sensor on its validation layouts "
-        "(from 960,100) instead of the ablation layouts; takes no --env",
+        "(suite v1 from 960,100, v2 from 972,000) instead of the ablation layouts; a recipe for every tier "
+        "(per_tier: true) is read as that tier's runs, <name>_<tier>; takes no --env",
     )
     add_suite_version_argument(parser)
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")

@@ -14,12 +14,13 @@ import shlex
 import sys
 from pathlib import Path
 
+from agents.cli.arguments import add_tier_argument, tier_name_of
 from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
 from agents.training.outputs import RunFiles
 from agents.training.parking import PARKED_DIR
-from agents.training.train_config import TrainConfig, override
+from agents.training.train_config import TrainConfig, for_tier, override
 from flownav_env.settings_check import check_env_kwargs
 
 HELP = "train a PPO policy from a YAML config into runs/<name>/ (resumable; --ship to publish it)"
@@ -85,6 +86,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=str(PARKED_DIR),
         help=f"where seeds are parked and restored from (default {PARKED_DIR})",
     )
+    add_tier_argument(
+        parser,
+        None,
+        "with a recipe for every tier ('per_tier: true'): the suite tier to train on (clean, hard, noisy, "
+        "hard_noisy, or its env id); the run flies that tier's id and is named <name>_<tier>",
+    )
     parser.add_argument("--total-timesteps", type=int, help="override the config's total_timesteps")
     parser.add_argument("--max-minutes", type=float, help="override the config's wall-clock budget")
 
@@ -95,7 +102,11 @@ def run(args: argparse.Namespace) -> int:
 
     config_path = Path(args.config)
     config = load_config(config_path, TrainConfig)
+    config = for_tier(config, args.tiers and tier_name_of(args.tiers), str(config_path))
     _check_mode_options(args)
+    if args.tiers and args.seeds is None:
+        # A seed's own config file, written into its run folder, holds the tier's id and name.
+        raise ValueError(f"--tiers {args.tiers} trains with --seeds (e.g. --seeds 0): give it")
     if args.ship_only:
         _ship_only(args, config.name)
         return 0

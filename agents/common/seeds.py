@@ -22,6 +22,7 @@ Sub-ranges with one use each:
 | camera-limited references (validation) | ``CAMERA_REFERENCE_SEED_START ..`` | checking the camera-limited planners (``planner_camera``, ``planner_camera_observed``) against ``planner`` on a field across the whole lateral bounds (``results/camera_reference/``) |
 | suite v2 checks (validation) | ``SUITE_V2_CHECK_SEED_START ..`` | the privileged references' feasibility checks of suite v2's tiers, before the freeze |
 | suite v2 sensor readings (validation) | ``SUITE_V2_SENSOR_READING_SEED_START ..`` | v2's noisy tiers at other readings of the velocity specification |
+| camera student recipes (validation) | ``CAMERA_STUDENT_RECIPE_SEED_START ..`` | recipes for the camera-limited planner's student compared per suite v2 tier (``flownav ablation --tiers T --suite-version 2``) |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -76,6 +77,13 @@ SUITE_V2_CHECK_SEED_START = 970_000
 # Validation layouts on which suite v2's noisy tiers are flown at other readings of the velocity specification
 # (the sensitivity table): past the checks' 1,000.
 SUITE_V2_SENSOR_READING_SEED_START = 971_000
+# Validation layouts on which recipes for the camera-limited planner's flow student (ppo_flow_camera_student, one
+# recipe per suite v2 tier) are compared per tier (flownav ablation --tiers, suite version 2): past the sensor
+# readings' 1,000.
+CAMERA_STUDENT_RECIPE_SEED_START = 972_000
+# Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's
+# camera student's.
+TIER_RECIPE_SEED_STARTS = {"1": STUDENT_RECIPE_SEED_START, "2": CAMERA_STUDENT_RECIPE_SEED_START}
 # Each suite version's frozen test layouts: no run of the project touched them before that version was frozen.
 SUITE_SEED_STARTS = {"1": 2_000_000, "2": 3_000_000}
 # The current (newest) version's first frozen layout.

@@ -26,7 +26,7 @@ from agents.analysis.validation_rows import AblationRow
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
-from agents.common.seeds import ABLATION_SEED_START, STUDENT_RECIPE_SEED_START, TEST_SEED_START
+from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, TIER_RECIPE_SEED_STARTS
 from agents.common.tables import today
 from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import (
@@ -40,9 +40,9 @@ from agents.evaluation.runner import execute
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
-from agents.training.train_config import TrainConfig
+from agents.training.train_config import TrainConfig, for_tier
 from flownav_env.settings_check import check_env_kwargs
-from flownav_env.tiers import SUITE_VERSION
+from flownav_env.tiers import SUITE_VERSION, check_suite_version
 from flownav_env.tiers import tier as tier_of
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
@@ -105,7 +105,8 @@ def compare_configs(
     labelled with the setting, so they never count with another condition's in the same CSV; ``ablation.md``
     reports the condition asked, so give each condition its own ``out`` to keep each report. ``tier``: fly the
     suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
-    ``STUDENT_RECIPE_SEED_START``.
+    ``TIER_RECIPE_SEED_STARTS[suite_version]``; a recipe for every tier (``per_tier: true``) is then read as
+    that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`).
 
     Raises:
         ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
@@ -124,13 +125,16 @@ def compare_configs(
     out.mkdir(parents=True, exist_ok=True)
     env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
     if tier is not None:
-        env_id, first_layout = tier_of(tier, suite_version).env_id, STUDENT_RECIPE_SEED_START
+        env_id = tier_of(tier, suite_version).env_id
+        first_layout = TIER_RECIPE_SEED_STARTS[check_suite_version(suite_version)]
     flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
     rows: list[AblationRow] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
         config = load_config(Path(config_path), TrainConfig)
+        if config.per_tier:
+            config = for_tier(config, tier, str(config_path))
         row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)
         if row is not None:
             rows.append(row)

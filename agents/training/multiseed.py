@@ -132,14 +132,19 @@ def finished(job: SeedJob) -> bool:
 
 def write_seed_config(job: SeedJob) -> Path:
     """The seed's own config file in its run folder: the source YAML with ``seed`` set, so that the shipped
-    ``seed_<k>.yaml`` says which seed it is."""
+    ``seed_<k>.yaml`` says which seed it is (and, for a recipe for every tier, the tier's id and run name)."""
     files = job.files
     files.run_dir.mkdir(parents=True, exist_ok=True)
     mapping = yaml.safe_load(job.source_config.read_text())
     mapping["seed"] = job.config.seed
+    tier_option = ""
+    if mapping.get("per_tier"):
+        # A recipe for every tier, trained for one (train_config.for_tier): the seed's file is that tier's.
+        mapping.update(name=job.config.name, env_id=job.config.env_id, per_tier=False)
+        tier_option = f" --tiers {job.config.env_id}"
     header = (
         f"# {job.source_config.name} with seed {job.config.seed}, written by\n"
-        f"# flownav train --config {job.source_config} --seeds {job.config.seed}\n"
+        f"# flownav train --config {job.source_config}{tier_option} --seeds {job.config.seed}\n"
     )
     write_text_atomically(files.config, header + yaml.safe_dump(mapping, sort_keys=False))
     return files.config

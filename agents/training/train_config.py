@@ -3,7 +3,7 @@ randomisation and the run itself (``configs/ppo_*.yaml``)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +11,7 @@ from agents.common.seeds import MAX_RUN_SEED
 from agents.common.yaml_config import Bounds, checked_field, field_range, from_mapping, interval, within
 from flownav_env.privileged import PRIVILEGED_KEYS
 from flownav_env.settings_check import setting_check
+from flownav_env.tiers import TIERS_BY_VERSION, tier, tier_of_env_id
 
 
 def env_setting_field(setting: str, **kwargs: Any) -> Any:
@@ -93,6 +94,9 @@ class TrainConfig:
 
     name: str
     env_id: str = "FlowNav-v0"
+    # One recipe for every tier of the suite version ``env_id`` belongs to: each run names its tier
+    # (``flownav train --tier hard``), flies that tier's id and is named ``<name>_<tier>`` (:func:`for_tier`).
+    per_tier: bool = False
     env: dict[str, Any] = field(default_factory=dict)
     randomize: Randomization = field(default_factory=Randomization)
     total_timesteps: int = field_range(1, 100_000_000, default=400_000)
@@ -121,6 +125,11 @@ class TrainConfig:
                 raise ValueError(
                     f"key 'init_from' may hold only the placeholder {{seed}}, got {self.init_from!r} ({error})"
                 ) from error
+        if self.per_tier and tier_of_env_id(self.env_id) is None:
+            raise ValueError(
+                f"key 'per_tier' needs 'env_id' to be a suite tier's id (it picks the suite version), got "
+                f"{self.env_id!r}"
+            )
         if self.imitation.teacher:
             self._check_teacher()
         if self.frame_stack > 1 and self.ppo.lstm_hidden_size > 0:
@@ -140,6 +149,42 @@ class TrainConfig:
                 f"key 'env.observe_layout' would show the student of teacher {self.imitation.teacher!r} the "
                 f"privileged keys ({', '.join(PRIVILEGED_KEYS)}): remove it; a privileged teacher gets them alone"
             )
+
+
+def tier_run_name(name: str, tier_name: str) -> str:
+    """The run (and shipped agent) name of per-tier recipe ``name`` trained for tier ``tier_name``."""
+    return f"{name}_{tier_name}"
+
+
+def for_tier(config: TrainConfig, tier_name: str | None, source: str) -> TrainConfig:
+    """The run a config asks for on ``tier_name`` (None: none named): a per-tier recipe (``per_tier: true``)
+    becomes that tier's config of the recipe's suite version, its id flown and its name
+    :func:`tier_run_name`; any other config is returned as it is, and takes no tier.
+
+    Raises:
+        ValueError: a per-tier recipe with no tier, a tier for a config that is not one, or an unknown tier;
+            the message names ``source`` and the value.
+    """
+    if not config.per_tier:
+        if tier_name is not None:
+            raise ValueError(
+                f"{source}: --tier {tier_name} needs a recipe with 'per_tier: true'; this config flies "
+                f"{config.env_id} only"
+            )
+        return config
+    found = tier_of_env_id(config.env_id)
+    if found is None:  # validate() refuses it; kept for configs built in code
+        raise ValueError(f"{source}: key 'per_tier' needs a suite tier's 'env_id', got {config.env_id!r}")
+    if tier_name is None:
+        raise ValueError(
+            f"{source}: a recipe for every tier ('per_tier: true') needs --tier, one of "
+            f"{', '.join(TIERS_BY_VERSION[found[0]])}"
+        )
+    try:
+        spec = tier(tier_name, found[0])
+    except ValueError as error:
+        raise ValueError(f"{source}: --tier: {error}") from error
+    return replace(config, name=tier_run_name(config.name, tier_name), env_id=spec.env_id, per_tier=False)
 
 
 def init_source(config: TrainConfig) -> Path | None:

@@ -15,6 +15,7 @@ from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import (
     ABLATION_SEED_START,
+    CAMERA_STUDENT_RECIPE_SEED_START,
     STUDENT_RECIPE_SEED_START,
     TEST_SEED_START,
     TIER_VALIDATION_SEEDS,
@@ -52,6 +53,32 @@ def test_a_tier_flies_its_own_env_on_its_validation_layouts(tmp_path: Path) -> N
         f"validation layouts {STUDENT_RECIPE_SEED_START:,}–{STUDENT_RECIPE_SEED_START:,} (tier `hard`, FlowNavHard-v0)"
         in "\n".join(lines)
     )
+
+
+def test_a_v2_tier_reads_a_per_tier_recipes_runs_on_the_camera_student_layouts(tmp_path: Path) -> None:
+    recipe = tmp_path / "student.yaml"
+    recipe.write_text("name: student\nenv_id: FlowNav-v1\nper_tier: true\ntotal_timesteps: 64\n")
+    out = tmp_path / "hard"
+    lines = "\n".join(
+        compare_configs(
+            [recipe],
+            [0],
+            out,
+            runs_dir=tmp_path / "runs",
+            policies_dir=None,
+            episodes=1,
+            workers=1,
+            reference_agents=["straight"],
+            tier="hard",
+            suite_version="2",
+        )
+    )
+    row = read_records(out / "reference" / "straight.csv")[0]
+    assert row["env_id"] == "FlowNavHard-v1" and row["seed"] == CAMERA_STUDENT_RECIPE_SEED_START
+    assert CAMERA_STUDENT_RECIPE_SEED_START in TIER_VALIDATION_SEEDS
+    assert (
+        "student_hard seed 0" in lines
+    )  # the hard tier's runs of the recipe, not yet trained: listed missing
 
 
 @pytest.mark.parametrize(

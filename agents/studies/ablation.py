@@ -133,6 +133,10 @@ def compare_configs(
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
         config = load_config(Path(config_path), TrainConfig)
+        if config.per_tier and tier is None:
+            # Its runs are one per tier (<name>_<tier>): which of them, only --tiers says.
+            missing.append(f"{config.name} (a recipe for every tier: compare it with --tiers)")
+            continue
         if config.per_tier:
             config = for_tier(config, tier, str(config_path))
         row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)

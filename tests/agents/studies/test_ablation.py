@@ -76,9 +76,10 @@ def test_a_v2_tier_reads_a_per_tier_recipes_runs_on_the_camera_student_layouts(t
     row = read_records(out / "reference" / "straight.csv")[0]
     assert row["env_id"] == "FlowNavHard-v1" and row["seed"] == CAMERA_STUDENT_RECIPE_SEED_START
     assert CAMERA_STUDENT_RECIPE_SEED_START in TIER_VALIDATION_SEEDS
-    assert (
-        "student_hard seed 0" in lines
-    )  # the hard tier's runs of the recipe, not yet trained: listed missing
+    # The hard tier's runs of the recipe, not yet trained: listed missing.
+    assert "student_hard seed 0" in lines
+    untiered = compare_configs([recipe], [0], tmp_path / "any", episodes=1, workers=1, report_only=True)
+    assert "student (a recipe for every tier: compare it with --tiers)" in "\n".join(untiered)
 
 
 @pytest.mark.parametrize(

@@ -46,3 +46,20 @@ def test_the_tier_validation_uses_take_their_own_layouts_in_turn() -> None:
     assert STUDENT_CHECK_SEED_START + 100 == STUDENT_RECIPE_SEED_START
     assert STUDENT_RECIPE_SEED_START + 100 == LANE_SEED_START
     assert LANE_SEED_START in TIER_VALIDATION_SEEDS
+
+
+def test_the_camera_student_recipes_fly_validation_layouts_no_earlier_v2_use_took() -> None:
+    from agents.common.seeds import (
+        CAMERA_STUDENT_RECIPE_SEED_START,
+        SUITE_V2_SENSOR_READING_SEED_START,
+        TIER_RECIPE_SEED_STARTS,
+        TIER_VALIDATION_SEEDS,
+    )
+    from flownav_env.tiers import SUITE_VERSIONS
+
+    # v2's checks took 970,000-970,999, its sensor readings 971,000-971,999; the recipes' 1,000 come after.
+    assert CAMERA_STUDENT_RECIPE_SEED_START == SUITE_V2_SENSOR_READING_SEED_START + 1_000
+    assert CAMERA_STUDENT_RECIPE_SEED_START + 1_000 - 1 in TIER_VALIDATION_SEEDS
+    assert CAMERA_STUDENT_RECIPE_SEED_START + 1_000 <= TEST_SEED_START <= min(suite_seeds(version="2"))
+    assert set(TIER_RECIPE_SEED_STARTS) == set(SUITE_VERSIONS)
+    assert TIER_RECIPE_SEED_STARTS["2"] == CAMERA_STUDENT_RECIPE_SEED_START

@@ -28,6 +28,9 @@ class AblationRow:
     per_seed: list[tuple[int, float]] | None
     failures: np.ndarray = field(compare=False)
     versus_first: Comparison | None = None
+    # How a config's runs were trained, from their records: the distinct commands, and each seed's minutes.
+    commands: tuple[str, ...] = ()
+    minutes_per_seed: tuple[tuple[int, float], ...] = ()
 
 
 @dataclass(frozen=True)

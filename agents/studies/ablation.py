@@ -12,6 +12,7 @@ Wilson interval: a lever is worth shipping only if it beats what needs no traini
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -196,6 +197,7 @@ def _fly_config(
     trained or not fully flown are added to ``missing``, each seed's evaluations file to ``curves``."""
     name = config.name
     outcomes, per_seed, counts = [], [], {"collision": 0, "out_of_bounds": 0}
+    trained: list[tuple[int, RunFiles]] = []
     for seed in seeds:
         files = seed_files(runs_dir, policies_dir, name, seed, config.total_timesteps)
         if files is None:
@@ -217,7 +219,40 @@ def _fly_config(
         evaluations = _evaluations_file(files)
         if evaluations is not None:
             curves.setdefault(name, {})[f"seed {seed}"] = evaluations
-    return _config_row(name, np.array(outcomes, float), per_seed, counts) if outcomes else None
+        trained.append((seed, files))
+    if not outcomes:
+        return None
+    commands, minutes = _how_trained(trained)
+    row = _config_row(name, np.array(outcomes, float), per_seed, counts)
+    return replace(row, commands=commands, minutes_per_seed=minutes)
+
+
+def _how_trained(
+    trained: Sequence[tuple[int, RunFiles]],
+) -> tuple[tuple[str, ...], tuple[tuple[int, float], ...]]:
+    """From the training records of a config's flown seeds: the distinct commands that trained them, and each
+    seed's training minutes (its sessions' wall time)."""
+    commands: list[str] = []
+    minutes: list[tuple[int, float]] = []
+    for seed, files in trained:
+        sessions = _training_sessions(files)
+        for command in (str(session.get("command") or "") for session in sessions):
+            if command and command not in commands:
+                commands.append(command)
+        walls = (session.get("wall_minutes") for session in sessions)
+        minutes.append((seed, sum(float(wall) for wall in walls if isinstance(wall, int | float))))
+    return tuple(commands), tuple(minutes)
+
+
+def _training_sessions(files: RunFiles) -> list[dict[str, object]]:
+    """The sessions of a seed's training record (each its command and wall minutes), in its run folder or, for
+    a shipped seed, beside its policy; empty without one."""
+    record = files.record
+    if not record.is_file():
+        record = files.run_dir / files.shipped_names()[files.record]
+    if not record.is_file():
+        return []
+    return list(json.loads(record.read_text()).get("sessions", []))
 
 
 def _evaluations_file(files: RunFiles) -> Path | None:

@@ -102,6 +102,18 @@ def test_each_trained_seed_flies_the_same_layouts_and_missing_ones_are_listed(tm
     lines = compare_configs([config_path], [0, 1, 2], out, runs_dir=runs_dir, episodes=2, workers=1)
     text = "\n".join(lines)
     assert "| lever | 2 | 4 |" in text and "Not flown (not trained, or cut short): lever seed 1." in text
+    # How the runs were trained, from each seed's record: the command and the minutes per seed.
+    # Called from code, each seed's record names its own config file.
+    trained_by = re.search(
+        r"^- lever: (`[^`]*`(?:; )?)+ \(seed 0: [\d.]+ min, seed 2: [\d.]+ min\)$", text, re.M
+    )
+    assert trained_by is not None
+    commands = re.findall(r"`(flownav train [^`]*)`", trained_by.group(0))
+    assert len(commands) == 2
+    for command, seed in zip(commands, (0, 2), strict=True):
+        assert command.startswith(
+            f"flownav train --config {runs_dir / 'lever' / f'seed_{seed}' / f'seed_{seed}.yaml'}"
+        )
     for seed in (0, 2):
         rows = read_records(out / "lever" / f"seed_{seed}.csv")
         assert sorted(r["seed"] for r in rows) == [ABLATION_SEED_START, ABLATION_SEED_START + 1]

@@ -133,13 +133,9 @@ def compare_configs(
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
-        config = load_config(Path(config_path), TrainConfig)
-        if config.per_tier and tier is None:
-            # Its runs are one per tier (<name>_<tier>): which of them, only --tiers says.
-            missing.append(f"{config.name} (a recipe for every tier: compare it with --tiers)")
+        config = _config_for(Path(config_path), tier, missing)
+        if config is None:
             continue
-        if config.per_tier:
-            config = for_tier(config, tier, str(config_path))
         row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)
         if row is not None:
             rows.append(row)
@@ -162,6 +158,18 @@ def compare_configs(
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
+
+
+def _config_for(config_path: Path, tier: str | None, missing: list[str]) -> TrainConfig | None:
+    """The config at ``config_path`` as flown on ``tier``: a recipe for every tier as that tier's runs
+    (``<name>_<tier>``), or None (and a line in ``missing``) without a tier to choose them."""
+    config = load_config(config_path, TrainConfig)
+    if not config.per_tier:
+        return config
+    if tier is None:
+        missing.append(f"{config.name} (a recipe for every tier: compare it with --tiers)")
+        return None
+    return for_tier(config, tier, str(config_path))
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,6 @@ Wilson interval: a lever is worth shipping only if it beats what needs no traini
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -29,19 +28,18 @@ from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, TIER_RECIPE_SEED_STARTS
 from agents.common.tables import today
-from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import (
     EpisodeTask,
-    cached_file_sha256,
     record_label,
     rows_of,
     set_aside_stale_episodes,
 )
 from agents.evaluation.runner import execute
+from agents.evaluation.trained_runs import evaluations_file, how_trained, recipe_on_tier, seed_files
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
-from agents.training.train_config import TrainConfig, for_tier
+from agents.training.train_config import TrainConfig
 from flownav_env.settings_check import check_env_kwargs
 from flownav_env.tiers import SUITE_VERSION, check_suite_version
 from flownav_env.tiers import tier as tier_of
@@ -133,8 +131,9 @@ def compare_configs(
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
     for config_path in config_paths:
-        config = _config_for(Path(config_path), tier, missing)
-        if config is None:
+        config = recipe_on_tier(Path(config_path), tier)
+        if isinstance(config, str):
+            missing.append(f"{config} (a recipe for every tier: compare it with --tiers)")
             continue
         row = _fly_config(config, seeds, runs_dir, policies_dir, flights, missing, curves)
         if row is not None:
@@ -158,18 +157,6 @@ def compare_configs(
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
-
-
-def _config_for(config_path: Path, tier: str | None, missing: list[str]) -> TrainConfig | None:
-    """The config at ``config_path`` as flown on ``tier``: a recipe for every tier as that tier's runs
-    (``<name>_<tier>``), or None (and a line in ``missing``) without a tier to choose them."""
-    config = load_config(config_path, TrainConfig)
-    if not config.per_tier:
-        return config
-    if tier is None:
-        missing.append(f"{config.name} (a recipe for every tier: compare it with --tiers)")
-        return None
-    return for_tier(config, tier, str(config_path))
 
 
 @dataclass(frozen=True)
@@ -224,51 +211,15 @@ def _fly_config(
         per_seed.append((seed, 1.0 - float(np.mean(outcomes[-1]))))
         counts["collision"] += sum(r["collision"] for r in flown)
         counts["out_of_bounds"] += sum(r["out_of_bounds"] for r in flown)
-        evaluations = _evaluations_file(files)
+        evaluations = evaluations_file(files)
         if evaluations is not None:
             curves.setdefault(name, {})[f"seed {seed}"] = evaluations
         trained.append((seed, files))
     if not outcomes:
         return None
-    commands, minutes = _how_trained(trained)
+    commands, minutes = how_trained(trained)
     row = _config_row(name, np.array(outcomes, float), per_seed, counts)
     return replace(row, commands=commands, minutes_per_seed=minutes)
-
-
-def _how_trained(
-    trained: Sequence[tuple[int, RunFiles]],
-) -> tuple[tuple[str, ...], tuple[tuple[int, float], ...]]:
-    """From the training records of a config's flown seeds: the distinct commands that trained them, and each
-    seed's training minutes (its sessions' wall time)."""
-    commands: list[str] = []
-    minutes: list[tuple[int, float]] = []
-    for seed, files in trained:
-        sessions = _training_sessions(files)
-        for command in (str(session.get("command") or "") for session in sessions):
-            if command and command not in commands:
-                commands.append(command)
-        walls = (session.get("wall_minutes") for session in sessions)
-        minutes.append((seed, sum(float(wall) for wall in walls if isinstance(wall, int | float))))
-    return tuple(commands), tuple(minutes)
-
-
-def _training_sessions(files: RunFiles) -> list[dict[str, object]]:
-    """The sessions of a seed's training record (each its command and wall minutes), in its run folder or, for
-    a shipped seed, beside its policy; empty without one."""
-    record = files.record
-    if not record.is_file():
-        record = files.run_dir / files.shipped_names()[files.record]
-    if not record.is_file():
-        return []
-    return list(json.loads(record.read_text()).get("sessions", []))
-
-
-def _evaluations_file(files: RunFiles) -> Path | None:
-    """A seed's evaluations during training: in its run folder, or for a shipped seed beside its policy."""
-    evaluations = files.evaluations
-    if not evaluations.is_file():
-        evaluations = files.run_dir / files.shipped_names()[files.evaluations]
-    return evaluations if evaluations.is_file() else None
 
 
 def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> AblationRow | None:
@@ -284,23 +235,6 @@ def _fly_reference(agent: str, flights: _Flights, missing: list[str]) -> Ablatio
         return None
     by_seed = {int(r["seed"]): r for r in flown}
     return _reference_row(agent, [by_seed[task.seed] for task in tasks])
-
-
-def seed_files(
-    runs_dir: Path, policies_dir: Path | None, name: str, seed: int, total_timesteps: int
-) -> RunFiles | None:
-    """The files of finished training seed ``seed`` of config ``name``: its shipped files (``<policies_dir>/
-    <name>/seed_<k>.*``, the same names without the run folder) unless its run folder holds another finished
-    policy (it trained on or was selected since shipping), then the run folder's; None when neither holds a
-    finished one. A run folder stopped short of ``total_timesteps`` never counts: its policy is whatever the
-    interruption saved. The shipped copy is the one its folder's manifest vouches for."""
-    run = RunFiles.of_seed(runs_dir, name, seed)
-    run_finished = run.trained_steps() >= total_timesteps
-    shipped = RunFiles(Path(policies_dir) / name, run.name) if policies_dir is not None else None
-    if shipped is not None and shipped.policy.is_file():
-        if not run_finished or cached_file_sha256(run.policy) == cached_file_sha256(shipped.policy):
-            return shipped
-    return run if run_finished else None
 
 
 def _config_row(

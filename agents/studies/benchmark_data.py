@@ -39,6 +39,7 @@ from agents.policies.base import (
     split_agent_name,
 )
 from agents.studies.error_analysis import baseline_of_flown_runs, tolerance_table
+from flownav_env.tiers import SUITE_VERSION
 
 CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
@@ -337,7 +338,7 @@ def _summarise(results: Path, fingerprint: tuple[tuple[str, int, int], ...]) -> 
         validation=_validation(results),
         oracle_reactive=_rates_per_agent(oracle),
         training=_training(results, learned),
-        suite_top=suite_top_groups(results / SUITE_RESULTS_FOLDERS["1"], version="1"),
+        suite_top=suite_top_groups(results / SUITE_RESULTS_FOLDERS[SUITE_VERSION], version=SUITE_VERSION),
     )
 
 

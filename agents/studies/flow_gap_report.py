@@ -6,7 +6,7 @@ and on the true depths at the same tracked points. Two recipes answer it: the pl
 (:func:`agents.analysis.paired.compare`): every training seed of both agents flew the same layouts, the
 interval resamples training seeds (each agent's apart) and layouts (once for both). The sources are the
 confirmation flights on fresh validation layouts (``results/confirmation/``), the suite's frozen test layouts
-(``results/suite_v1/suite_episodes.csv``, suite v1) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
+(``results/suite_episodes.csv``, the current suite version) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
 benchmark's values (:mod:`agents.studies.benchmark_report`) beside this report's own; nothing is flown.
 """
 
@@ -44,11 +44,11 @@ from agents.studies.confirmation import (
     search_record,
 )
 from agents.studies.wording import render_report
-from flownav_env.tiers import TIER_NAMES
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
-# The suite version whose frozen layouts this page reads: v1's, the one its agents have flown in full (v2's
-# flights are under way; results/suite.md lists what is left).
-READ_SUITE_VERSION = "1"
+# The suite version whose frozen layouts this page reads: the current one; a pair of agents not yet flown whole on
+# a tier is left out of that tier (results/suite.md lists what is left).
+READ_SUITE_VERSION = SUITE_VERSION
 
 Cell = tuple[float, float, float]  # a failure rate and its 95 % interval
 Row = tuple[str, np.ndarray, np.ndarray]  # where, flow's failures, truth's failures (runs, layouts)

@@ -118,7 +118,7 @@ def _thesis_block(report: Report, folder: Path) -> None:
 # What benchmark.md and the thesis's closed-loop paragraph are written from (agents/studies/benchmark_data.py).
 BENCHMARK_INPUTS = (
     "leaderboard_episodes.csv",
-    "suite_v1/suite_episodes.csv",
+    "suite_episodes.csv",
     "training_seeds.csv",
     "sweep_episodes.csv",
     "diagnostics/reactive_oracle_episodes.csv",

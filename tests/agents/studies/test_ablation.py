@@ -21,8 +21,9 @@ from agents.common.seeds import (
     TIER_VALIDATION_SEEDS,
     VALIDATION_SEED_START,
 )
+from agents.evaluation.trained_runs import seed_files
 from agents.policies import REACTIVE_AGENTS
-from agents.studies.ablation import ablation_tasks, compare_configs, seed_files
+from agents.studies.ablation import ablation_tasks, compare_configs
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 

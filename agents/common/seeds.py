@@ -81,6 +81,9 @@ SUITE_V2_SENSOR_READING_SEED_START = 971_000
 # recipe per suite v2 tier) are compared per tier (flownav ablation --tiers, suite version 2): past the sensor
 # readings' 1,000.
 CAMERA_STUDENT_RECIPE_SEED_START = 972_000
+# Fresh validation layouts on which a camera student recipe picked on the ones above is confirmed against the rule:
+# past the recipes' 1,000.
+CAMERA_STUDENT_CONFIRM_SEED_START = 973_000
 # Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's
 # camera student's.
 TIER_RECIPE_SEED_STARTS = {"1": STUDENT_RECIPE_SEED_START, "2": CAMERA_STUDENT_RECIPE_SEED_START}

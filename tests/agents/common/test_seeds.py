@@ -50,6 +50,7 @@ def test_the_tier_validation_uses_take_their_own_layouts_in_turn() -> None:
 
 def test_the_camera_student_recipes_fly_validation_layouts_no_earlier_v2_use_took() -> None:
     from agents.common.seeds import (
+        CAMERA_STUDENT_CONFIRM_SEED_START,
         CAMERA_STUDENT_RECIPE_SEED_START,
         SUITE_V2_SENSOR_READING_SEED_START,
         TIER_RECIPE_SEED_STARTS,
@@ -63,3 +64,5 @@ def test_the_camera_student_recipes_fly_validation_layouts_no_earlier_v2_use_too
     assert CAMERA_STUDENT_RECIPE_SEED_START + 1_000 <= TEST_SEED_START <= min(suite_seeds(version="2"))
     assert set(TIER_RECIPE_SEED_STARTS) == set(SUITE_VERSIONS)
     assert TIER_RECIPE_SEED_STARTS["2"] == CAMERA_STUDENT_RECIPE_SEED_START
+    assert CAMERA_STUDENT_CONFIRM_SEED_START == CAMERA_STUDENT_RECIPE_SEED_START + 1_000
+    assert CAMERA_STUDENT_CONFIRM_SEED_START + 1_000 <= TEST_SEED_START

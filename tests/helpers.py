@@ -6,6 +6,10 @@ Test modules import them as ``from helpers import ...``: pytest puts ``tests/`` 
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import yaml
@@ -73,3 +77,26 @@ EPISODE = EpisodeRecord(
     policy_sha256="",
     code_version="commit `abc1234`",
 )
+
+
+# The modules that fly: a simulator, the env, the estimator, images, learning.
+FLIGHT_PACKAGES = ("mujoco", "gymnasium", "flownav_env", "estimator", "cv2", "torch", "stable_baselines3")
+
+
+def flight_modules_loaded_by(module: str) -> list[str]:
+    """The :data:`FLIGHT_PACKAGES` modules that importing ``module`` loads, in a fresh interpreter with this
+    checkout's packages first on its path (as pytest's own path has them)."""
+    code = (
+        f"import json, sys; import {module}; "
+        f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in {FLIGHT_PACKAGES!r})))"
+    )
+    root = Path(__file__).resolve().parents[1]
+    path = os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")])
+    loaded = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": path},
+    )
+    return list(json.loads(loaded.stdout))

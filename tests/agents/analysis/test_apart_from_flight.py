@@ -5,13 +5,9 @@ record outcome is the env's rule."""
 from __future__ import annotations
 
 import itertools
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
+from helpers import flight_modules_loaded_by
 
 from agents.analysis.episode_record import EPISODE_OUTCOMES, episode_outcome
 from flownav_env import task
@@ -27,26 +23,9 @@ ANALYSIS = (
     "agents.analysis.statistics",
     "agents.analysis.weaving",
 )
-ROOT = Path(__file__).resolve().parents[3]
-FLIGHT = ("mujoco", "gymnasium", "flownav_env", "estimator", "cv2", "torch", "stable_baselines3")
-
-
 @pytest.mark.parametrize("module", ANALYSIS)
 def test_importing_the_analysis_loads_no_simulator(module: str) -> None:
-    code = (
-        f"import json, sys; import {module}; "
-        f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in {FLIGHT!r})))"
-    )
-    # This checkout's packages first, as pytest's own path has them.
-    path = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
-    loaded = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        check=True,
-        env={**os.environ, "PYTHONPATH": path},
-    )
-    assert json.loads(loaded.stdout) == []
+    assert flight_modules_loaded_by(module) == []
 
 
 def test_the_record_outcome_is_the_envs_rule() -> None:

@@ -4,36 +4,18 @@ and the physics it states is what it is handed."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from helpers import flight_modules_loaded_by
 
 from agents.evaluation.calibration_page import FrozenPhysics, TierFacts, check_values
 from agents.evaluation.suite_checks import frozen_physics
 
-ROOT = Path(__file__).resolve().parents[3]
-FLIGHT = ("mujoco", "gymnasium", "flownav_env", "estimator", "cv2", "torch", "stable_baselines3")
-
 
 def test_importing_the_calibration_page_loads_no_simulator() -> None:
-    code = (
-        "import json, sys; import agents.evaluation.calibration_page; "
-        f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in {FLIGHT!r})))"
-    )
-    path = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
-    loaded = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        check=True,
-        env={**os.environ, "PYTHONPATH": path},
-    )
-    assert json.loads(loaded.stdout) == []
+    assert flight_modules_loaded_by("agents.evaluation.calibration_page") == []
 
 
 def test_the_page_states_the_physics_it_is_handed(tmp_path: Path) -> None:

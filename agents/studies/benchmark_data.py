@@ -48,7 +48,7 @@ INPUTS = {
     "training_seeds.csv": "flownav leaderboard --out results",
     "sweep_episodes.csv": "flownav sweep --config configs/sweep.yaml --out results",
     "diagnostics/reactive_oracle_episodes.csv": "flownav evaluate --env obs_source=oracle (diagnostics/README.md)",
-    "suite_v1/suite_episodes.csv": "flownav suite --suite-version 1 --out results/suite_v1",
+    "suite_episodes.csv": "flownav suite --out results",
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
 ABLATION_CONDITIONS = {"clean": "", "density": "density_0.18", "speed": "speed_1.5"}

@@ -316,6 +316,7 @@ REPORTS: tuple[Report, ...] = (
         _PROSE,
         "README.md",
         "camera_reference/README.md",
+        "student_recipes_v2/hard_confirmation/README.md",
         "diagnostics/README.md",
         "renderer_check/README.md",
         "sweep_fast20/README.md",

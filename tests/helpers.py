@@ -100,3 +100,23 @@ def flight_modules_loaded_by(module: str) -> list[str]:
         env={**os.environ, "PYTHONPATH": path},
     )
     return list(json.loads(loaded.stdout))
+
+
+def teacher_started_record(directory: Path, imitation: dict, **keys) -> tuple[TrainConfig, Path]:
+    """Train a tiny run (64 steps, ``keys`` as in :func:`tiny_train_config`) that starts by imitating the teacher
+    ``imitation`` names; the run's config and its training record's path."""
+    from agents.policies.teachers import make_teacher
+    from agents.training.outputs import RunFiles
+    from agents.training.ppo import train
+
+    config, config_path = tiny_train_config(directory, total=64, imitation=imitation, **keys)
+    runs = directory / "runs"
+    train(
+        config,
+        config_path=config_path,
+        resume=False,
+        runs_dir=runs,
+        progress_bar=False,
+        make_teacher=make_teacher,
+    )
+    return config, RunFiles.of(runs, config.name).record

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
-from helpers import tiny_train_config
+from helpers import teacher_started_record, tiny_train_config
 
 from agents.policies.base import PLANNERS
 from agents.policies.planner_camera import CAMERA_PLANNER_KEYS
@@ -16,7 +16,7 @@ from agents.policies.teachers import PlannerTeacher, check_teacher, make_teacher
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fly
 from agents.training.outputs import RunFiles
-from agents.training.ppo import new_model, train
+from agents.training.ppo import new_model
 from agents.training.student_view import privileged_settings
 from flownav_env.privileged import PRIVILEGED_KEYS
 
@@ -120,17 +120,9 @@ def test_the_camera_planner_reads_its_keys_while_the_student_never_sees_them(tmp
 
 def test_a_dagger_run_taught_by_the_camera_planner_records_its_teacher(tmp_path: Path) -> None:
     imitation = {"teacher": "planner_camera", "rounds": 2, "steps_per_round": 8, "epochs": 1}
-    config, config_path = tiny_train_config(tmp_path, total=64, imitation=imitation)
-    train(
-        config,
-        config_path=config_path,
-        resume=False,
-        runs_dir=tmp_path / "runs",
-        progress_bar=False,
-        make_teacher=make_teacher,
-    )
+    config, record = teacher_started_record(tmp_path, imitation)
     files = RunFiles.of(tmp_path / "runs", config.name)
-    summary = json.loads(files.record.read_text())["sessions"][-1]["imitation"]
+    summary = json.loads(record.read_text())["sessions"][-1]["imitation"]
     assert summary["teacher"] == "planner_camera" and summary["teacher_env"] == {"observe_layout": True}
     assert [r["states"] for r in summary["rounds"]] == [8, 16]
     assert files.policy.is_file()

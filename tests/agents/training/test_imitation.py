@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import tiny_train_config
+from helpers import teacher_started_record, tiny_train_config
 
 from agents.common.yaml_config import ConfigError
 from agents.policies.teachers import check_teacher, make_teacher
@@ -65,18 +65,8 @@ def test_the_student_learns_to_act_as_the_teacher(tmp_path: Path) -> None:
 
 def test_a_run_with_a_teacher_imitates_it_first_and_records_it(tmp_path: Path) -> None:
     imitation = {"teacher": "bee_ttc", "rounds": 2, "steps_per_round": 16, "epochs": 2}
-    config, config_path = tiny_train_config(
-        tmp_path, total=64, env={**_small_env(), **TEACHER_ENV}, imitation=imitation
-    )
-    train(
-        config,
-        config_path=config_path,
-        resume=False,
-        runs_dir=tmp_path / "runs",
-        progress_bar=False,
-        make_teacher=make_teacher,
-    )
-    record = json.loads(RunFiles.of(tmp_path / "runs", config.name).record.read_text())
+    _, record_path = teacher_started_record(tmp_path, imitation, env={**_small_env(), **TEACHER_ENV})
+    record = json.loads(record_path.read_text())
     summary = record["sessions"][-1]["imitation"]
     assert summary["teacher"] == "bee_ttc" and summary["env_steps"] == 32
     assert [r["states"] for r in summary["rounds"]] == [16, 32]

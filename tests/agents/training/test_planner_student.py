@@ -9,7 +9,7 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
-from helpers import SMALL, tiny_train_config
+from helpers import SMALL, teacher_started_record, tiny_train_config
 
 from agents.common.yaml_config import ConfigError, load_config
 from agents.policies.learned import agent_env_kwargs
@@ -17,7 +17,7 @@ from agents.policies.teachers import PlannerTeacher, check_teacher, make_teacher
 from agents.training.envs import build_envs, close_quietly
 from agents.training.imitation import fly
 from agents.training.outputs import RunFiles
-from agents.training.ppo import new_model, train
+from agents.training.ppo import new_model
 from agents.training.student_view import StudentView, privileged_settings, teacher_view
 from agents.training.train_config import TrainConfig
 from flownav_env.privileged import PRIVILEGED_KEYS
@@ -58,17 +58,9 @@ def test_the_student_sees_no_privileged_key_while_the_planner_reads_them(tmp_pat
 
 def test_a_planner_taught_run_records_the_teacher_and_ships_an_ordinary_config(tmp_path: Path) -> None:
     imitation = {"teacher": "planner", "rounds": 2, "steps_per_round": 8, "epochs": 1}
-    config, config_path = tiny_train_config(tmp_path, total=64, imitation=imitation)
-    train(
-        config,
-        config_path=config_path,
-        resume=False,
-        runs_dir=tmp_path / "runs",
-        progress_bar=False,
-        make_teacher=make_teacher,
-    )
+    config, record = teacher_started_record(tmp_path, imitation)
     files = RunFiles.of(tmp_path / "runs", config.name)
-    summary = json.loads(files.record.read_text())["sessions"][-1]["imitation"]
+    summary = json.loads(record.read_text())["sessions"][-1]["imitation"]
     assert summary["teacher"] == "planner" and summary["teacher_env"] == {"observe_layout": True}
     assert [r["states"] for r in summary["rounds"]] == [8, 16]
     # The saved env is the student's own: nothing privileged; past the test's small camera, what any tier allows.
@@ -112,15 +104,31 @@ def test_the_planner_teacher_flies_the_parameters_a_config_gives_it() -> None:
 @pytest.mark.parametrize(
     ("name", "params", "message"),
     [
-        ("planner", {"margin": 0.2}, r"run.yaml: key 'imitation.teacher_params.margin' is not a parameter "
-         r"of planner; allowed: hard_margin, soft_clearance"),
-        ("planner", {"soft_clearance": "wide"}, r"'imitation.teacher_params.soft_clearance' must be a number, "
-         r"got 'wide'"),
-        ("planner", {"hard_margin": -0.1}, r"run.yaml: key 'imitation.teacher_params': hard_margin must be > 0, "
-         r"got -0.1"),
+        (
+            "planner",
+            {"margin": 0.2},
+            r"run.yaml: key 'imitation.teacher_params.margin' is not a parameter "
+            r"of planner; allowed: hard_margin, soft_clearance",
+        ),
+        (
+            "planner",
+            {"soft_clearance": "wide"},
+            r"'imitation.teacher_params.soft_clearance' must be a number, "
+            r"got 'wide'",
+        ),
+        (
+            "planner",
+            {"hard_margin": -0.1},
+            r"run.yaml: key 'imitation.teacher_params': hard_margin must be > 0, "
+            r"got -0.1",
+        ),
         ("planner", {"commands": 9.5}, r"'imitation.teacher_params.commands' must be an integer, got 9.5"),
-        ("bee_ttc", {"soft_clearance": 0.8}, r"sets a planner teacher's parameters; 'bee_ttc' flies its shipped "
-         r"gains and takes none, got \['soft_clearance'\]"),
+        (
+            "bee_ttc",
+            {"soft_clearance": 0.8},
+            r"sets a planner teacher's parameters; 'bee_ttc' flies its shipped "
+            r"gains and takes none, got \['soft_clearance'\]",
+        ),
     ],
 )
 def test_teacher_parameters_that_are_not_the_planners_are_refused(name, params, message) -> None:

@@ -33,6 +33,7 @@ class AgentEntry:
     kind: Kind
     sees: Sight
     suite_only: bool = False
+    per_tier: bool = False
     retired: str = ""
 
     @property
@@ -51,7 +52,7 @@ def read_agent_table(path: Path = AGENTS_FILE) -> tuple[AgentEntry, ...]:
     entries = yaml.safe_load(path.read_text(encoding="utf-8"))["agents"]
     table = []
     for name, values in entries.items():
-        unknown = set(values) - {"kind", "sees", "suite_only", "retired"}
+        unknown = set(values) - {"kind", "sees", "suite_only", "per_tier", "retired"}
         if unknown:
             raise ValueError(f"{path}: agent {name!r} has unknown keys {sorted(unknown)}")
         for key, allowed in (("kind", get_args(Kind)), ("sees", get_args(Sight))):
@@ -59,6 +60,8 @@ def read_agent_table(path: Path = AGENTS_FILE) -> tuple[AgentEntry, ...]:
                 raise ValueError(
                     f"{path}: agent {name!r} {key} must be one of {', '.join(allowed)}, got {values.get(key)!r}"
                 )
+        if values.get("per_tier") and values["kind"] != "learned":
+            raise ValueError(f"{path}: agent {name!r} is per_tier, which only a learned agent can be")
         table.append(AgentEntry(name=str(name), **values))
     return tuple(table)
 
@@ -81,6 +84,13 @@ def kind_of(name: str) -> Kind | None:
     (an outside agent, an experiment's recipe). Not validated, as :func:`base_agent_name`."""
     entry = AGENTS.get(base_agent_name(name))
     return None if entry is None else entry.kind
+
+
+def is_per_tier(name: str) -> bool:
+    """Whether the agent a run name belongs to is learned once per tier (``per_tier`` in the table): on tier
+    ``<tier>`` it flies the policies of ``<agent>_<tier>``. Not validated, as :func:`base_agent_name`."""
+    entry = AGENTS.get(base_agent_name(name))
+    return entry is not None and entry.per_tier
 
 
 def base_agent_name(name: str) -> str:

@@ -59,6 +59,9 @@ def _learned_on_flow(name: str) -> bool:
     return _learned(name, privileged=False)
 
 
+# The camera-limited reference: what the camera's view allows, the bar a learned flow agent is held to.
+CAMERA_VIEW_REFERENCE = PLANNERS[1]
+
 # Each link: what its agent knows, and how it is picked among the agents flown on the tier.
 CHAIN: Sequence[tuple[str, Callable[[Mapping[str, np.ndarray]], str | None]]] = (
     *(

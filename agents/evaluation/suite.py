@@ -50,6 +50,7 @@ from agents.policies import (
     check_not_retired,
     default_runs,
     is_learned,
+    is_per_tier,
     is_privileged,
     load_agent,
     policy_file,
@@ -135,11 +136,16 @@ def suite_tasks(
     tasks = []
     for tier_name in tiers:
         spec = tier(tier_name, version)
-        for agent, names in runs.items():
-            _check_agent_fits_tier(names[0], policies.get(agent), tier_name, version)
+        flown = {
+            agent: _tier_policies(names, policies.get(agent), tier_name) for agent, names in runs.items()
+        }
+        flown = {agent: files for agent, files in flown.items() if files}
+        for files in flown.values():
+            name, policy = next(iter(files.items()))
+            _check_agent_fits_tier(name, policy, tier_name, version)
         for seed in seeds:
-            for agent, names in runs.items():
-                for name in names:
+            for files in flown.values():
+                for name, policy in files.items():
                     tasks.append(
                         suite_task(
                             name,
@@ -148,11 +154,21 @@ def suite_tasks(
                             env_id=spec.env_id,
                             settings=spec.settings,
                             suite_version=version,
-                            policy=policies.get(agent),
+                            policy=policy,
                             trust_pickle=trust_pickle,
                         )
                     )
     return tasks
+
+
+def _tier_policies(names: Sequence[str], policy: str | None, tier_name: str) -> dict[str, str | None]:
+    """Each run of an agent that flies ``tier_name`` → its policy file (None: the shipped one). An agent
+    learned once per tier flies the runs that tier ships, each from that tier's folder; none where the tier
+    ships none yet (the report lists the pair as not flown)."""
+    if policy is not None or not is_per_tier(names[0]):
+        return dict.fromkeys(names, policy)
+    files = {name: policy_file(name, directory=POLICIES_DIR, tier=tier_name) for name in names}
+    return {name: str(path) for name, path in files.items() if path.is_file()}
 
 
 def suite_rows(tasks: Sequence[EpisodeTask], csv_path: Path) -> list[TieredRow]:

@@ -22,11 +22,11 @@ from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
 from agents.evaluation.episode_tasks import TieredRow, with_tier
 from agents.evaluation.lane import LANE_DIR, LaneRow, lane_values
-from agents.evaluation.learning_gain import LearningGain
-from agents.evaluation.reference_chain import ChainLink
+from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
+from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
-from agents.policies import RETIRED_AGENTS, is_learned, split_agent_name, trained_on
+from agents.policies import RETIRED_AGENTS, is_learned, is_per_tier, split_agent_name, trained_on
 from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
@@ -41,6 +41,9 @@ SENSOR_READING_DIR = "sensor_reading"
 SUITE_READING = "per_axis"
 # Where recipes for the planner's student are compared per tier (flownav ablation --tier), beside the suite.
 STUDENT_RECIPES_DIR = "student_recipes"
+# Where recipes for the camera-limited planner's student are compared per tier on suite v2's validation layouts
+# (flownav ablation --tiers <tier> --suite-version 2), and where the pick is confirmed on fresh ones.
+CAMERA_STUDENT_RECIPES_DIR = "student_recipes_v2"
 
 
 class ShownRow(SuiteRow):
@@ -88,6 +91,7 @@ class BesideSuite(TypedDict):
 
     readings: list[SensorReading]
     recipe_reports: dict[str, str]
+    camera_recipe_reports: dict[str, str]
     lanes: list[LaneRow]
     retired: list[RetiredAgent]
 
@@ -140,6 +144,8 @@ def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
     else those of an earlier version it trained on, named with their version, else what it trained on in the
     training config's words; a dash for an agent that did not learn."""
     try:
+        if is_per_tier(agent):
+            return "each tier its own (one policy per tier)"
         tiers = agent_tiers(agent, version)
         if tiers:
             return "every tier (one policy)" if tiers == TIER_NAMES else ", ".join(tiers)
@@ -228,6 +234,7 @@ def suite_values(
     bounds: Mapping[str, TierBound] | None = None,
     gains: Sequence[LearningGain] = (),
     recipe_reports: Mapping[str, str] | None = None,
+    camera_recipe_reports: Mapping[str, str] | None = None,
     lanes: Sequence[LaneRow] = (),
     retired: Sequence[RetiredAgent] = (),
     version: str = SUITE_VERSION,
@@ -278,6 +285,9 @@ def suite_values(
         "gains": list(gains),
         "trained_on": {gain.learned: _trained_on(gain.learned, version) for gain in gains},
         "recipe_reports": dict(recipe_reports or {}),
+        "camera_recipe_reports": dict(camera_recipe_reports or {}),
+        "camera_reference": CAMERA_VIEW_REFERENCE,
+        "camera_margin": CAMERA_MARGIN,
         "lanes": list(lanes),
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
@@ -298,6 +308,7 @@ def beside_suite(
     return {
         "readings": reading_values(Path(out) / SENSOR_READING_DIR),
         "recipe_reports": student_recipe_reports(tier_names),
+        "camera_recipe_reports": camera_student_recipe_reports(Path(out)),
         "lanes": lane_values(Path(out) / LANE_DIR),
         "retired": retired_values(episodes_csv, layouts),
     }
@@ -326,6 +337,14 @@ def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:
     for the planner's student on the tier's validation layouts, relative to ``results/`` (as every link of
     ``suite.md``; the suite's report lives there)."""
     return {name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md" for name in tier_names}
+
+
+def camera_student_recipe_reports(out: Path) -> dict[str, str]:
+    """The camera-limited planner's student's recipe comparisons and confirmations that ``out`` holds, each
+    folder of ``out/student_recipes_v2/`` (``hard``, ``hard_confirmation``) → its page, relative to ``out``."""
+    folder = Path(out) / CAMERA_STUDENT_RECIPES_DIR
+    pages = sorted(folder.glob("*/ablation.md")) + sorted(folder.glob("*/README.md")) if folder.is_dir() else []
+    return {page.parent.name: page.relative_to(out).as_posix() for page in sorted(pages)}
 
 
 def suite_page(values: Mapping[str, object]) -> str:

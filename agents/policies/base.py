@@ -17,6 +17,7 @@ from agents.common.agent_table import (
     agents_where,
     base_agent_name,
     is_learned,
+    is_per_tier,
     seeded_agent_name,
     split_agent_name,
 )
@@ -54,6 +55,7 @@ __all__ = [
     "base_agent_name",
     "check_not_retired",
     "is_learned",
+    "is_per_tier",
     "seeded_agent_name",
     "split_agent_name",
 ]

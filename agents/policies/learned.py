@@ -23,6 +23,7 @@ from agents.policies.base import (
     PRIVILEGED_AGENTS,
     Agent,
     is_learned,
+    is_per_tier,
     seeded_agent_name,
     split_agent_name,
 )
@@ -47,7 +48,8 @@ from agents.policies.sb3_models import (
     sb3_model_parameters,
 )
 from agents.policies.training_seeds import TrainingSeedsAgent
-from agents.training.train_config import TrainConfig
+from agents.training.train_config import TrainConfig, tier_run_name
+from flownav_env.tiers import TIER_NAMES
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
@@ -88,21 +90,50 @@ TRUST_PICKLE_HELP = (
 """The ``--trust-pickle`` help of every command that takes ``--policy``."""
 
 
-def policy_file(name: str, path: str | Path | None = None, directory: str | Path = POLICIES_DIR) -> Path:
+def policy_file(
+    name: str,
+    path: str | Path | None = None,
+    directory: str | Path = POLICIES_DIR,
+    *,
+    tier: str | None = None,
+) -> Path:
     """Where the learned agent ``name`` is stored: ``path`` if given, else ``<directory>/<agent>/seed_<k>.zip``
-    for a training seed ``<agent>@<k>``; for an agent named alone, its first shipped training seed's file if it
+    for a training seed ``<agent>@<k>`` (``<directory>/<agent>_<tier>/seed_<k>.zip`` for an agent learned once
+    per tier, :func:`policy_folder`); for an agent named alone, its first shipped training seed's file if it
     has any (where one file must stand for it: its env settings, a task's policy), else its single
-    :func:`single_policy_file`. The default directory is the repository's ``results/policies/``, whatever the
-    current directory."""
+    :func:`single_policy_file`. A per-tier agent's file without ``tier`` is that of the first tier, in suite
+    order, that ships the seed: the tiers' recipe is one, so it stands for the others. The default directory
+    is the repository's ``results/policies/``, whatever the current directory."""
     if path:
         return Path(path)
     agent, train_seed = split_agent_name(name)
     if train_seed is None:
-        seeds = trained_seeds(agent, directory)
+        seeds = trained_seeds(agent, directory, tier=tier)
         if not seeds:
             return single_policy_file(agent, directory)
         train_seed = seeds[0]
-    return Path(directory) / agent / f"seed_{train_seed}.zip"
+    if is_per_tier(agent) and tier is None:
+        tier = next(
+            (t for t in TIER_NAMES if train_seed in trained_seeds(agent, directory, tier=t)), TIER_NAMES[0]
+        )
+    return policy_folder(agent, directory, tier=tier) / f"seed_{train_seed}.zip"
+
+
+def policy_folder(agent: str, directory: str | Path = POLICIES_DIR, *, tier: str | None = None) -> Path:
+    """The folder of the learned ``agent``'s shipped training seeds: ``<directory>/<agent>``, or for an agent
+    learned once per tier, tier ``tier``'s run as ``flownav train --tiers <tier> --ship`` ships it
+    (``<directory>/<agent>_<tier>``).
+
+    Raises:
+        ValueError: a per-tier agent without a tier, or a tier on an agent that is not per-tier.
+    """
+    if is_per_tier(agent) != (tier is not None):
+        raise ValueError(
+            f"{agent} is learned once per tier: name one of {', '.join(TIER_NAMES)}"
+            if tier is None
+            else f"{agent} has one policy for every tier, got tier {tier!r}"
+        )
+    return Path(directory) / (tier_run_name(agent, tier) if tier is not None else agent)
 
 
 def single_policy_file(agent: str, directory: str | Path = POLICIES_DIR) -> Path:
@@ -110,9 +141,14 @@ def single_policy_file(agent: str, directory: str | Path = POLICIES_DIR) -> Path
     return Path(directory) / f"{agent}.zip"
 
 
-def trained_seeds(agent: str, policies_dir: str | Path = POLICIES_DIR) -> list[int]:
-    """The training seeds shipped for the learned ``agent``: ``<policies_dir>/<agent>/seed_<k>.zip``."""
-    folder = Path(policies_dir) / agent
+def trained_seeds(
+    agent: str, policies_dir: str | Path = POLICIES_DIR, *, tier: str | None = None
+) -> list[int]:
+    """The training seeds shipped for the learned ``agent``: ``<policies_dir>/<agent>/seed_<k>.zip``; for an
+    agent learned once per tier, those of ``tier``, or with no tier those shipped on any tier."""
+    if is_per_tier(agent) and tier is None:
+        return sorted({seed for name in TIER_NAMES for seed in trained_seeds(agent, policies_dir, tier=name)})
+    folder = policy_folder(agent, policies_dir, tier=tier)
     if not folder.is_dir():
         return []
     return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _SEED_FILE.match(p.name)))
@@ -134,12 +170,14 @@ def default_runs(agent: str, policies_dir: str | Path = POLICIES_DIR) -> tuple[l
     single = single_policy_file(agent, policies_dir)
     if names:
         seeds = ", ".join(str(split_agent_name(name)[1]) for name in names)
-        where = Path(policies_dir) / agent
+        where = Path(policies_dir) / (f"{agent}_<tier>" if is_per_tier(agent) else agent)
         return names, f"{agent}: training seeds {seeds} in turn over the layouts ({where}/seed_<k>.zip)"
     if single.exists():
         return [agent], (
             f"{agent}: no training seeds in {Path(policies_dir) / agent}/, flying the single policy {single}"
         )
+    if is_per_tier(agent):
+        return [], f"{agent}: no policy on any tier at {Path(policies_dir) / agent}_<tier>/seed_<k>.zip"
     return [], f"{agent}: no policy at {Path(policies_dir) / agent}/seed_<k>.zip or {single}"
 
 
@@ -272,6 +310,11 @@ def _rule_agent(name: str, gains: Mapping[str, float]) -> RuleAgent:
 
 
 def _shipped_agent(agent: str, trust_pickle: bool) -> Agent:
+    if is_per_tier(agent):
+        raise ValueError(
+            f"{agent} is learned once per tier: flownav suite and score fly each tier's policies; elsewhere name "
+            f"one with --policy {POLICIES_DIR}/{agent}_<tier>/seed_<k>.zip"
+        )
     runs, message = default_runs(agent, POLICIES_DIR)
     if not runs:
         raise FileNotFoundError(f"nothing to fly for {message} (train it first: flownav train --seeds)")

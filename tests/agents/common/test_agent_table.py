@@ -44,6 +44,7 @@ def test_a_training_seed_on_a_rule_is_refused() -> None:
         ("{kind: rule, sees: flow, colour: red}", r"agent 'x' has unknown keys \['colour'\]"),
         ("{kind: genius, sees: flow}", r"agent 'x' kind must be one of rule, learned, planner, got 'genius'"),
         ("{kind: rule}", r"agent 'x' sees must be one of flow, nothing, true_depth, layout, camera_view, got None"),
+        ("{kind: rule, sees: flow, per_tier: true}", r"agent 'x' is per_tier, which only a learned agent can be"),
     ],
 )
 def test_a_bad_entry_is_refused(tmp_path: Path, entry: str, message: str) -> None:

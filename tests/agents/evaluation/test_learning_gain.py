@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from agents.analysis.paired import rank_tier
-from agents.evaluation.learning_gain import learning_gain, learning_gains
+from agents.evaluation.learning_gain import CAMERA_MARGIN, learning_gain, learning_gains
 
 
 def _failures(rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -36,3 +36,23 @@ def test_a_tier_with_no_ranked_learned_agent_has_no_gain():
     ranking = rank_tier(failures, privileged=["ppo_oracle"], learned=["ppo_flow", "ppo_oracle"])
     assert learning_gain("hard", failures, ranking) is None
     assert learning_gains({"hard": failures}, {"hard": ranking}) == []
+
+
+def test_the_learned_agent_is_set_against_the_camera_limited_reference_where_it_flew():
+    failures = _failures(np.random.default_rng(2))
+    ranking = rank_tier(failures, privileged=["ppo_oracle"], learned=["ppo_flow", "ppo_oracle"])
+    gain = learning_gain("hard", failures, ranking)
+    assert gain is not None and gain.camera is None and gain.within_camera_margin is None
+    failures["planner_camera"] = np.zeros((1, 200))
+    ranking = rank_tier(
+        failures, privileged=["ppo_oracle", "planner_camera"], learned=["ppo_flow", "ppo_oracle"]
+    )
+    gain = learning_gain("hard", failures, ranking)
+    assert gain is not None and gain.camera is not None
+    assert (gain.camera.agent, gain.camera.reference) == ("ppo_flow", "planner_camera")
+    assert gain.camera.difference == gain.learned_failure
+    # 0.10 more than a reference that never fails: the interval reaches past the margin
+    assert gain.camera.high > CAMERA_MARGIN and gain.within_camera_margin is False
+    failures["planner_camera"] = failures["ppo_flow"][:1].copy()
+    gain = learning_gain("hard", failures, ranking)
+    assert gain is not None and gain.within_camera_margin is True

@@ -24,11 +24,14 @@ from agents.policies import (
     UnverifiedPolicyWarning,
     agent_env_kwargs,
     agent_parameters,
+    is_per_tier,
     load_agent,
     load_policy,
     policy_file,
+    policy_folder,
     sector_nearness,
 )
+from flownav_env.tiers import TIER_NAMES
 
 SMALL = {"camera_width": 96, "camera_height": 72}
 
@@ -126,10 +129,14 @@ def test_every_learned_agent_ships_verified_training_seeds_that_fly_with_their_o
     from agents.policies import LEARNED_AGENTS, trained_seeds
 
     for name in LEARNED_AGENTS:
-        seeds = trained_seeds(name)
-        assert len(seeds) >= 3 and (name == "ppo_robust" or len(seeds) >= 5), (name, seeds)
-        manifest = read_manifest(POLICIES_DIR / name / MANIFEST_NAME)
-        assert {f"seed_{k}.zip" for k in seeds} <= set(manifest), name
+        # An agent learned once per tier ships each tier's seeds in that tier's folder, on one tier at least.
+        tiers = [t for t in TIER_NAMES if trained_seeds(name, tier=t)] if is_per_tier(name) else [None]
+        assert tiers, name
+        for tier_name in tiers:
+            seeds = trained_seeds(name, tier=tier_name)
+            assert len(seeds) >= 3 and (name == "ppo_robust" or len(seeds) >= 5), (name, tier_name, seeds)
+            manifest = read_manifest(policy_folder(name, tier=tier_name) / MANIFEST_NAME)
+            assert {f"seed_{k}.zip" for k in seeds} <= set(manifest), name
     # The winner reads the approach input it was trained on; its seeds act on a real env.
     winner = "ppo_flow_course_approach_curriculum_slow"
     assert agent_env_kwargs(f"{winner}@4")["observe_approach"] is True
@@ -167,7 +174,9 @@ def test_policies_the_manifest_does_not_vouch_for_load_with_a_warning(tmp_path: 
         warnings.simplefilter("error", UnverifiedPolicyWarning)
         load_agent("ppo_flow", policy)
     bare = copy_policy("ppo_robust", tmp_path, with_config=False)
-    with pytest.warns(UnverifiedPolicyWarning, match=r"ppo_robust.zip is not listed .*unpickled with PPO.load"):
+    with pytest.warns(
+        UnverifiedPolicyWarning, match=r"ppo_robust.zip is not listed .*unpickled with PPO.load"
+    ):
         load_agent("ppo_robust", bare, trust_pickle=True)
 
 

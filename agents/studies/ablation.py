@@ -8,6 +8,10 @@ flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEE
 bootstrap interval, each seed's failure rate, and the learning curves of its seeds. Reactive reference agents
 (``--reference bee_robust``) fly the same layouts once, into ``<out>/reference/<agent>.csv``, for a row with a
 Wilson interval: a lever is worth shipping only if it beats what needs no training.
+
+With ``--tiers T --confirm`` the same comparison flies the tier's confirmation layouts instead
+(:func:`tier_first_layout`): fresh validation layouts on which nothing was chosen, to confirm a recipe picked on
+the recipe layouts.
 """
 
 from __future__ import annotations
@@ -26,7 +30,12 @@ from agents.analysis.validation_rows import AblationRow
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
-from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, TIER_RECIPE_SEED_STARTS
+from agents.common.seeds import (
+    ABLATION_SEED_START,
+    TEST_SEED_START,
+    TIER_CONFIRM_SEED_STARTS,
+    TIER_RECIPE_SEED_STARTS,
+)
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import (
     EpisodeTask,
@@ -41,12 +50,31 @@ from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
 from flownav_env.settings_check import check_env_kwargs
-from flownav_env.tiers import SUITE_VERSION, check_suite_version
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_suite_version
 from flownav_env.tiers import tier as tier_of
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
 # labels the rows, and each run has its own CSV, so one name serves every config.
 RUN_LABEL = "ppo_flow"
+
+
+def tier_first_layout(suite_version: str, confirm: bool = False) -> int:
+    """The first of a tier's validation layouts that ``flownav ablation --tiers`` flies in ``suite_version``: its
+    recipe layouts (:data:`~agents.common.seeds.TIER_RECIPE_SEED_STARTS`), or with ``confirm`` its fresh
+    confirmation layouts (:data:`~agents.common.seeds.TIER_CONFIRM_SEED_STARTS`).
+
+    Raises:
+        ValueError: an unknown suite version, or ``confirm`` in a version without confirmation layouts.
+    """
+    version = check_suite_version(suite_version)
+    if not confirm:
+        return TIER_RECIPE_SEED_STARTS[version]
+    if version not in TIER_CONFIRM_SEED_STARTS:
+        raise ValueError(
+            f"--confirm: suite version {version} has no confirmation layouts (versions with them: "
+            f"{', '.join(TIER_CONFIRM_SEED_STARTS)})"
+        )
+    return TIER_CONFIRM_SEED_STARTS[version]
 
 
 def ablation_tasks(
@@ -96,6 +124,7 @@ def compare_configs(
     env: Mapping[str, object] | None = None,
     tier: str | None = None,
     suite_version: str = SUITE_VERSION,
+    confirm: bool = False,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
@@ -105,13 +134,18 @@ def compare_configs(
     reports the condition asked, so give each condition its own ``out`` to keep each report. ``tier``: fly the
     suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
     ``TIER_RECIPE_SEED_STARTS[suite_version]``; a recipe for every tier (``per_tier: true``) is then read as
-    that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`).
+    that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`). ``confirm``: fly the
+    tier's confirmation layouts instead (:func:`tier_first_layout`), and say so on the page.
 
     Raises:
-        ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
-            reactive.
+        ValueError: a bad config, episode count, worker count or env setting, a reference agent that is not
+            reactive, or ``confirm`` without a tier or in a suite version without confirmation layouts.
     """
     env = check_env_kwargs(dict(env or {}), "command line", key="--env")
+    if confirm and tier is None:
+        raise ValueError(
+            f"--confirm flies a tier's confirmation layouts: give --tiers TIER ({', '.join(TIER_NAMES)})"
+        )
     if tier is not None and env:
         raise ValueError(f"--env and --tiers {tier}: a tier fixes its own settings, so give one or the other")
     for agent in reference_agents:
@@ -119,13 +153,13 @@ def compare_configs(
             raise ValueError(
                 f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
             )
-    out = Path(out)
-    check_writable_folder(out)
-    out.mkdir(parents=True, exist_ok=True)
     env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
     if tier is not None:
         env_id = tier_of(tier, suite_version).env_id
-        first_layout = TIER_RECIPE_SEED_STARTS[check_suite_version(suite_version)]
+        first_layout = tier_first_layout(suite_version, confirm)
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
     flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
     rows: list[AblationRow] = []
     missing: list[str] = []
@@ -153,7 +187,17 @@ def compare_configs(
     text = render(
         "agents.studies",
         "ablation.md.j2",
-        ablation_values(rows, missing, seeds, command, env, bool(curves), flights, tier),
+        ablation_values(
+            rows,
+            missing,
+            seeds,
+            command,
+            env,
+            bool(curves),
+            flights,
+            tier,
+            recipe_layouts_from=tier_first_layout(suite_version) if confirm else None,
+        ),
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
@@ -296,8 +340,11 @@ def ablation_values(
     curves: bool,
     flights: _Flights,
     tier: str | None = None,
+    *,
+    recipe_layouts_from: int | None = None,
 ) -> dict[str, object]:
-    """Every value ``ablation.md`` words (``templates/ablation.md.j2``)."""
+    """Every value ``ablation.md`` words (``templates/ablation.md.j2``); ``recipe_layouts_from``: where the tier's
+    recipe layouts start, for a confirmation page (None: the rows flew those, or the ablation layouts)."""
     condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
     return {
         "generated": today(),
@@ -309,4 +356,5 @@ def ablation_values(
         "rows": rows,
         "missing": missing,
         "curves": curves,
+        "recipe_layouts_from": recipe_layouts_from,
     }

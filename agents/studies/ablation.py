@@ -10,7 +10,7 @@ bootstrap interval, each seed's failure rate, and the learning curves of its see
 Wilson interval: a lever is worth shipping only if it beats what needs no training.
 
 With ``--tiers T --confirm`` the same comparison flies the tier's confirmation layouts instead
-(:func:`tier_first_layout`): fresh validation layouts on which nothing was chosen, to confirm a recipe picked on
+(:func:`tier_layouts`): fresh validation layouts on which nothing was chosen, to confirm a recipe picked on
 the recipe layouts.
 """
 
@@ -58,23 +58,25 @@ from flownav_env.tiers import tier as tier_of
 RUN_LABEL = "ppo_flow"
 
 
-def tier_first_layout(suite_version: str, confirm: bool = False) -> int:
-    """The first of a tier's validation layouts that ``flownav ablation --tiers`` flies in ``suite_version``: its
-    recipe layouts (:data:`~agents.common.seeds.TIER_RECIPE_SEED_STARTS`), or with ``confirm`` its fresh
-    confirmation layouts (:data:`~agents.common.seeds.TIER_CONFIRM_SEED_STARTS`).
+def tier_layouts(suite_version: str, confirm: bool = False) -> range:
+    """The validation layouts a tier's ``flownav ablation --tiers`` may fly in ``suite_version``: its recipe
+    layouts (from :data:`~agents.common.seeds.TIER_RECIPE_SEED_STARTS`, ending where the version's confirmation
+    layouts begin, so that no recipe comparison flies one), or with ``confirm`` its fresh confirmation layouts
+    (from :data:`~agents.common.seeds.TIER_CONFIRM_SEED_STARTS`); either ends at the test layouts at the latest.
 
     Raises:
         ValueError: an unknown suite version, or ``confirm`` in a version without confirmation layouts.
     """
     version = check_suite_version(suite_version)
+    confirm_start = TIER_CONFIRM_SEED_STARTS.get(version)
     if not confirm:
-        return TIER_RECIPE_SEED_STARTS[version]
-    if version not in TIER_CONFIRM_SEED_STARTS:
+        return range(TIER_RECIPE_SEED_STARTS[version], confirm_start or TEST_SEED_START)
+    if confirm_start is None:
         raise ValueError(
             f"--confirm: suite version {version} has no confirmation layouts (versions with them: "
             f"{', '.join(TIER_CONFIRM_SEED_STARTS)})"
         )
-    return TIER_CONFIRM_SEED_STARTS[version]
+    return range(confirm_start, TEST_SEED_START)
 
 
 def ablation_tasks(
@@ -85,18 +87,20 @@ def ablation_tasks(
     *,
     env_id: str = "FlowNav-v0",
     first_layout: int = ABLATION_SEED_START,
+    layouts_end: int = TEST_SEED_START,
 ) -> list[EpisodeTask]:
-    """One run's episodes on validation layouts ``first_layout ..`` of ``env_id`` (a tier's id flies its
-    course and sensor): clean, or with the env settings ``env`` on top of the run's own (the robustness
-    conditions, such as ``obstacle_density=0.18``). ``policy`` None: a reactive ``agent``.
+    """One run's episodes on validation layouts ``first_layout ..`` (short of ``layouts_end``) of ``env_id`` (a
+    tier's id flies its course and sensor): clean, or with the env settings ``env`` on top of the run's own (the
+    robustness conditions, such as ``obstacle_density=0.18``). ``policy`` None: a reactive ``agent``.
 
     Raises:
-        ValueError: so many episodes that they would reach the test layouts.
+        ValueError: so many episodes that they would reach ``layouts_end`` (by default the test layouts).
     """
-    if episodes < 1 or first_layout + episodes > TEST_SEED_START:
+    if episodes < 1 or first_layout + episodes > layouts_end:
+        short_of = "" if layouts_end == TEST_SEED_START else f", short of {layouts_end:,}"
         raise ValueError(
-            f"--layouts must be in [1, {TEST_SEED_START - first_layout}] (validation layouts from "
-            f"{first_layout:,}), got {episodes}"
+            f"--layouts must be in [1, {layouts_end - first_layout}] (validation layouts from "
+            f"{first_layout:,}{short_of}), got {episodes}"
         )
     seeds = range(first_layout, first_layout + episodes)
     env = dict(env or {})
@@ -135,7 +139,7 @@ def compare_configs(
     suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
     ``TIER_RECIPE_SEED_STARTS[suite_version]``; a recipe for every tier (``per_tier: true``) is then read as
     that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`). ``confirm``: fly the
-    tier's confirmation layouts instead (:func:`tier_first_layout`), and say so on the page.
+    tier's confirmation layouts instead (:func:`tier_layouts`), and say so on the page.
 
     Raises:
         ValueError: a bad config, episode count, worker count or env setting, a reference agent that is not
@@ -153,14 +157,14 @@ def compare_configs(
             raise ValueError(
                 f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
             )
-    env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
+    env_id, layouts = "FlowNav-v0", range(ABLATION_SEED_START, TEST_SEED_START)
     if tier is not None:
         env_id = tier_of(tier, suite_version).env_id
-        first_layout = tier_first_layout(suite_version, confirm)
+        layouts = tier_layouts(suite_version, confirm)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
+    flights = _Flights(out, episodes, env, workers, report_only, env_id, layouts.start, layouts.stop)
     rows: list[AblationRow] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
@@ -196,7 +200,7 @@ def compare_configs(
             bool(curves),
             flights,
             tier,
-            recipe_layouts_from=tier_first_layout(suite_version) if confirm else None,
+            recipe_layouts_from=tier_layouts(suite_version).start if confirm else None,
         ),
     )
     (out / "ablation.md").write_text(text)
@@ -207,7 +211,7 @@ def compare_configs(
 class _Flights:
     """How every run and reference agent of a comparison flies: into CSVs under ``out``, ``episodes`` each,
     in the env setting ``env``, with ``workers`` processes, or not at all with ``report_only``, on ``env_id``'s
-    layouts from ``first_layout``."""
+    layouts from ``first_layout`` (short of ``layouts_end``)."""
 
     out: Path
     episodes: int
@@ -216,10 +220,17 @@ class _Flights:
     report_only: bool
     env_id: str
     first_layout: int
+    layouts_end: int
 
     def tasks(self, policy: Path | None, agent: str = RUN_LABEL) -> list[EpisodeTask]:
         return ablation_tasks(
-            policy, self.episodes, self.env, agent, env_id=self.env_id, first_layout=self.first_layout
+            policy,
+            self.episodes,
+            self.env,
+            agent,
+            env_id=self.env_id,
+            first_layout=self.first_layout,
+            layouts_end=self.layouts_end,
         )
 
 

@@ -24,7 +24,7 @@ from agents.common.seeds import (
 )
 from agents.evaluation.trained_runs import seed_files
 from agents.policies import REACTIVE_AGENTS
-from agents.studies.ablation import ablation_tasks, compare_configs, tier_first_layout
+from agents.studies.ablation import ablation_tasks, compare_configs, tier_layouts
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 
@@ -271,17 +271,36 @@ def test_each_row_is_compared_with_the_first_on_the_same_layouts(tmp_path: Path)
 
 
 def test_a_confirm_run_flies_the_tiers_fresh_confirmation_layouts(tmp_path: Path) -> None:
-    recipe_start, confirm_start = tier_first_layout("2"), tier_first_layout("2", confirm=True)
-    assert (recipe_start, confirm_start) == (
-        CAMERA_STUDENT_RECIPE_SEED_START,
-        CAMERA_STUDENT_CONFIRM_SEED_START,
+    recipes, confirmation = tier_layouts("2"), tier_layouts("2", confirm=True)
+    # The recipe layouts end where the confirmation layouts begin; both are the tier's validation layouts.
+    assert recipes == range(CAMERA_STUDENT_RECIPE_SEED_START, CAMERA_STUDENT_CONFIRM_SEED_START)
+    assert confirmation == range(CAMERA_STUDENT_CONFIRM_SEED_START, TEST_SEED_START)
+    assert tier_layouts("1") == range(STUDENT_RECIPE_SEED_START, TEST_SEED_START)  # v1 has no confirmation
+    assert confirmation.stop <= TIER_VALIDATION_SEEDS.stop
+    tasks = ablation_tasks(
+        Path("p.zip"),
+        50,
+        env_id="FlowNavHard-v1",
+        first_layout=confirmation.start,
+        layouts_end=confirmation.stop,
     )
-    tasks = ablation_tasks(Path("p.zip"), 50, env_id="FlowNavHard-v1", first_layout=confirm_start)
     seeds = [t.seed for t in tasks]
     assert seeds == list(range(CAMERA_STUDENT_CONFIRM_SEED_START, CAMERA_STUDENT_CONFIRM_SEED_START + 50))
-    # None of them is a recipe layout (the pilot flew 50 of its 1,000), all are the tier's validation layouts.
-    assert not set(seeds) & set(range(recipe_start, recipe_start + 1_000))
-    assert set(seeds) <= set(TIER_VALIDATION_SEEDS)
+    assert not set(seeds) & set(recipes)
+    # A recipe comparison cannot reach them, however many layouts it asks for.
+    with pytest.raises(
+        ValueError,
+        match=r"^--layouts must be in \[1, 1000\] \(validation layouts from 972,000, short of 973,000\), got 1001$",
+    ):
+        compare_configs(
+            [],
+            [0],
+            tmp_path / "long",
+            episodes=1_001,
+            report_only=True,
+            reference_agents=["straight"],
+            tier="hard",
+        )
     out = tmp_path / "hard_confirmation"
     lines = compare_configs(
         [], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard", confirm=True

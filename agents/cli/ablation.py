@@ -17,6 +17,7 @@ from agents.cli.arguments import (
 )
 from agents.cli.suite import add_suite_version_argument
 from agents.common.locations import POLICIES_DIR
+from agents.common.seeds import TIER_CONFIRM_SEED_STARTS
 
 HELP = "compare training configs over their seeds on validation layouts -> ablation.md"
 
@@ -57,6 +58,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(per_tier: true) is read as that tier's runs, <name>_<tier>; takes no --env",
     )
     add_suite_version_argument(parser)
+    parser.add_argument(
+        "--confirm",
+        action="store_true",
+        help="with --tiers: fly the tier's fresh confirmation layouts ("
+        + ", ".join(f"suite v{version} from {start:,}" for version, start in TIER_CONFIRM_SEED_STARTS.items())
+        + "), on which nothing was chosen, instead of its recipe layouts: a recipe picked there flown again",
+    )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -83,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         env=dict(args.env),
         tier=args.tiers and tier_name_of(args.tiers),
         suite_version=args.suite_version,
+        confirm=args.confirm,
     )
     print("\n".join(lines))
     return 0

@@ -23,6 +23,7 @@ Sub-ranges with one use each:
 | suite v2 checks (validation) | ``SUITE_V2_CHECK_SEED_START ..`` | the privileged references' feasibility checks of suite v2's tiers, before the freeze |
 | suite v2 sensor readings (validation) | ``SUITE_V2_SENSOR_READING_SEED_START ..`` | v2's noisy tiers at other readings of the velocity specification |
 | camera student recipes (validation) | ``CAMERA_STUDENT_RECIPE_SEED_START ..`` | recipes for the camera-limited planner's student compared per suite v2 tier (``flownav ablation --tiers T --suite-version 2``) |
+| camera student confirmation (validation) | ``CAMERA_STUDENT_CONFIRM_SEED_START ..`` | the recipe picked there flown again on fresh layouts, per suite v2 tier (``flownav ablation --tiers T --suite-version 2 --confirm``) |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -87,6 +88,10 @@ CAMERA_STUDENT_CONFIRM_SEED_START = 973_000
 # Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's
 # camera student's.
 TIER_RECIPE_SEED_STARTS = {"1": STUDENT_RECIPE_SEED_START, "2": CAMERA_STUDENT_RECIPE_SEED_START}
+# Per suite version, where ``flownav ablation --tiers --confirm`` starts its fresh validation layouts: a recipe
+# picked on the version's recipe layouts above flies again where nothing was chosen. v1 has none (its student's
+# recipes were never confirmed on a range of their own).
+TIER_CONFIRM_SEED_STARTS = {"2": CAMERA_STUDENT_CONFIRM_SEED_START}
 # Each suite version's frozen test layouts: no run of the project touched them before that version was frozen.
 SUITE_SEED_STARTS = {"1": 2_000_000, "2": 3_000_000}
 # The current (newest) version's first frozen layout.

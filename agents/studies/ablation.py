@@ -8,6 +8,10 @@ flies the same validation layouts (from :data:`~agents.common.seeds.ABLATION_SEE
 bootstrap interval, each seed's failure rate, and the learning curves of its seeds. Reactive reference agents
 (``--reference bee_robust``) fly the same layouts once, into ``<out>/reference/<agent>.csv``, for a row with a
 Wilson interval: a lever is worth shipping only if it beats what needs no training.
+
+With ``--tiers T --confirm`` the same comparison flies the tier's confirmation layouts instead
+(:func:`tier_layouts`): fresh validation layouts on which nothing was chosen, to confirm a recipe picked on
+the recipe layouts.
 """
 
 from __future__ import annotations
@@ -26,7 +30,12 @@ from agents.analysis.validation_rows import AblationRow
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
-from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, TIER_RECIPE_SEED_STARTS
+from agents.common.seeds import (
+    ABLATION_SEED_START,
+    TEST_SEED_START,
+    TIER_CONFIRM_SEED_STARTS,
+    TIER_RECIPE_SEED_STARTS,
+)
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import (
     EpisodeTask,
@@ -41,12 +50,33 @@ from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
 from agents.training.train_config import TrainConfig
 from flownav_env.settings_check import check_env_kwargs
-from flownav_env.tiers import SUITE_VERSION, check_suite_version
+from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_suite_version
 from flownav_env.tiers import tier as tier_of
 
 # Any learned agent name loads a policy file with the env settings of the config beside it; the name only
 # labels the rows, and each run has its own CSV, so one name serves every config.
 RUN_LABEL = "ppo_flow"
+
+
+def tier_layouts(suite_version: str, confirm: bool = False) -> range:
+    """The validation layouts a tier's ``flownav ablation --tiers`` may fly in ``suite_version``: its recipe
+    layouts (from :data:`~agents.common.seeds.TIER_RECIPE_SEED_STARTS`, ending where the version's confirmation
+    layouts begin, so that no recipe comparison flies one), or with ``confirm`` its fresh confirmation layouts
+    (from :data:`~agents.common.seeds.TIER_CONFIRM_SEED_STARTS`); either ends at the test layouts at the latest.
+
+    Raises:
+        ValueError: an unknown suite version, or ``confirm`` in a version without confirmation layouts.
+    """
+    version = check_suite_version(suite_version)
+    confirm_start = TIER_CONFIRM_SEED_STARTS.get(version)
+    if not confirm:
+        return range(TIER_RECIPE_SEED_STARTS[version], confirm_start or TEST_SEED_START)
+    if confirm_start is None:
+        raise ValueError(
+            f"--confirm: suite version {version} has no confirmation layouts (versions with them: "
+            f"{', '.join(TIER_CONFIRM_SEED_STARTS)})"
+        )
+    return range(confirm_start, TEST_SEED_START)
 
 
 def ablation_tasks(
@@ -57,18 +87,20 @@ def ablation_tasks(
     *,
     env_id: str = "FlowNav-v0",
     first_layout: int = ABLATION_SEED_START,
+    layouts_end: int = TEST_SEED_START,
 ) -> list[EpisodeTask]:
-    """One run's episodes on validation layouts ``first_layout ..`` of ``env_id`` (a tier's id flies its
-    course and sensor): clean, or with the env settings ``env`` on top of the run's own (the robustness
-    conditions, such as ``obstacle_density=0.18``). ``policy`` None: a reactive ``agent``.
+    """One run's episodes on validation layouts ``first_layout ..`` (short of ``layouts_end``) of ``env_id`` (a
+    tier's id flies its course and sensor): clean, or with the env settings ``env`` on top of the run's own (the
+    robustness conditions, such as ``obstacle_density=0.18``). ``policy`` None: a reactive ``agent``.
 
     Raises:
-        ValueError: so many episodes that they would reach the test layouts.
+        ValueError: so many episodes that they would reach ``layouts_end`` (by default the test layouts).
     """
-    if episodes < 1 or first_layout + episodes > TEST_SEED_START:
+    if episodes < 1 or first_layout + episodes > layouts_end:
+        short_of = "" if layouts_end == TEST_SEED_START else f", short of {layouts_end:,}"
         raise ValueError(
-            f"--layouts must be in [1, {TEST_SEED_START - first_layout}] (validation layouts from "
-            f"{first_layout:,}), got {episodes}"
+            f"--layouts must be in [1, {layouts_end - first_layout}] (validation layouts from "
+            f"{first_layout:,}{short_of}), got {episodes}"
         )
     seeds = range(first_layout, first_layout + episodes)
     env = dict(env or {})
@@ -96,6 +128,7 @@ def compare_configs(
     env: Mapping[str, object] | None = None,
     tier: str | None = None,
     suite_version: str = SUITE_VERSION,
+    confirm: bool = False,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
@@ -105,13 +138,18 @@ def compare_configs(
     reports the condition asked, so give each condition its own ``out`` to keep each report. ``tier``: fly the
     suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
     ``TIER_RECIPE_SEED_STARTS[suite_version]``; a recipe for every tier (``per_tier: true``) is then read as
-    that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`).
+    that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`). ``confirm``: fly the
+    tier's confirmation layouts instead (:func:`tier_layouts`), and say so on the page.
 
     Raises:
-        ValueError: a bad config, episode count, worker count or env setting, or a reference agent that is not
-            reactive.
+        ValueError: a bad config, episode count, worker count or env setting, a reference agent that is not
+            reactive, or ``confirm`` without a tier or in a suite version without confirmation layouts.
     """
     env = check_env_kwargs(dict(env or {}), "command line", key="--env")
+    if confirm and tier is None:
+        raise ValueError(
+            f"--confirm flies a tier's confirmation layouts: give --tiers TIER ({', '.join(TIER_NAMES)})"
+        )
     if tier is not None and env:
         raise ValueError(f"--env and --tiers {tier}: a tier fixes its own settings, so give one or the other")
     for agent in reference_agents:
@@ -119,14 +157,14 @@ def compare_configs(
             raise ValueError(
                 f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
             )
+    env_id, layouts = "FlowNav-v0", range(ABLATION_SEED_START, TEST_SEED_START)
+    if tier is not None:
+        env_id = tier_of(tier, suite_version).env_id
+        layouts = tier_layouts(suite_version, confirm)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    env_id, first_layout = "FlowNav-v0", ABLATION_SEED_START
-    if tier is not None:
-        env_id = tier_of(tier, suite_version).env_id
-        first_layout = TIER_RECIPE_SEED_STARTS[check_suite_version(suite_version)]
-    flights = _Flights(out, episodes, env, workers, report_only, env_id, first_layout)
+    flights = _Flights(out, episodes, env, workers, report_only, env_id, layouts.start, layouts.stop)
     rows: list[AblationRow] = []
     missing: list[str] = []
     curves: dict[str, dict[str, Path]] = {}
@@ -153,7 +191,17 @@ def compare_configs(
     text = render(
         "agents.studies",
         "ablation.md.j2",
-        ablation_values(rows, missing, seeds, command, env, bool(curves), flights, tier),
+        ablation_values(
+            rows,
+            missing,
+            seeds,
+            command,
+            env,
+            bool(curves),
+            flights,
+            tier,
+            recipe_layouts_from=tier_layouts(suite_version).start if confirm else None,
+        ),
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
@@ -163,7 +211,7 @@ def compare_configs(
 class _Flights:
     """How every run and reference agent of a comparison flies: into CSVs under ``out``, ``episodes`` each,
     in the env setting ``env``, with ``workers`` processes, or not at all with ``report_only``, on ``env_id``'s
-    layouts from ``first_layout``."""
+    layouts from ``first_layout`` (short of ``layouts_end``)."""
 
     out: Path
     episodes: int
@@ -172,10 +220,17 @@ class _Flights:
     report_only: bool
     env_id: str
     first_layout: int
+    layouts_end: int
 
     def tasks(self, policy: Path | None, agent: str = RUN_LABEL) -> list[EpisodeTask]:
         return ablation_tasks(
-            policy, self.episodes, self.env, agent, env_id=self.env_id, first_layout=self.first_layout
+            policy,
+            self.episodes,
+            self.env,
+            agent,
+            env_id=self.env_id,
+            first_layout=self.first_layout,
+            layouts_end=self.layouts_end,
         )
 
 
@@ -296,8 +351,11 @@ def ablation_values(
     curves: bool,
     flights: _Flights,
     tier: str | None = None,
+    *,
+    recipe_layouts_from: int | None = None,
 ) -> dict[str, object]:
-    """Every value ``ablation.md`` words (``templates/ablation.md.j2``)."""
+    """Every value ``ablation.md`` words (``templates/ablation.md.j2``); ``recipe_layouts_from``: where the tier's
+    recipe layouts start, for a confirmation page (None: the rows flew those, or the ablation layouts)."""
     condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
     return {
         "generated": today(),
@@ -309,4 +367,5 @@ def ablation_values(
         "rows": rows,
         "missing": missing,
         "curves": curves,
+        "recipe_layouts_from": recipe_layouts_from,
     }

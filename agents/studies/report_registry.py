@@ -87,6 +87,7 @@ def _ablation(
     reference: Sequence[str],
     tier: str | None,
     suite_version: str,
+    confirm: bool,
 ) -> None:
     # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
     # checkout, so the report does not depend on what this machine trained.
@@ -103,6 +104,7 @@ def _ablation(
             env=env,
             tier=tier,
             suite_version=suite_version,
+            confirm=confirm,
         )
 
 
@@ -150,6 +152,9 @@ _CONDITION_ABLATION = ("configs/ppo_flow.yaml", *_LEVERS)
 STUDENT_RECIPES = tuple(
     f"configs/experiments/ppo_flow_planner_student{variant}.yaml" for variant in ("", "_wide", "_finetune")
 )
+# The camera student's recipe picked on the hard pilot (student_recipes_v2/hard/ablation.md), confirmed on fresh
+# layouts: its seeds are shipped, so its page is rebuilt from them.
+CAMERA_STUDENT_PICK = "configs/experiments/ppo_flow_camera_student_fine_rounds6.yaml"
 
 
 def _ablation_report(
@@ -161,11 +166,14 @@ def _ablation_report(
     reference: Sequence[str] = ("bee_robust", "bee_ttc"),
     tier: str | None = None,
     suite_version: str = "1",
+    confirm: bool = False,
 ) -> Report:
     """An ``ablation.md``, its command written from the same settings the writer is called with (a tier's of
-    ``suite_version``: the student's recipes were compared on suite v1's tiers)."""
+    ``suite_version``: the student's recipes were compared on suite v1's tiers; with ``confirm``, on the tier's
+    confirmation layouts)."""
     options = f" --layouts {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
     options += f" --tiers {tier} --suite-version {suite_version}" if tier else ""
+    options += " --confirm" if confirm else ""
     return Report(
         f"{folder}/ablation.md",
         name=folder.replace("/", "-").replace("_", "-"),
@@ -181,6 +189,7 @@ def _ablation_report(
             reference=reference,
             tier=tier,
             suite_version=suite_version,
+            confirm=confirm,
         ),
     )
 
@@ -300,6 +309,17 @@ REPORTS: tuple[Report, ...] = (
         command="flownav reports --out results --only flow-gap",
         inputs=(*BENCHMARK_INPUTS, "confirmation/*.csv"),
         write=lambda report, folder: write_flow_gap(folder, folder, report.command),
+    ),
+    _ablation_report(
+        "student_recipes_v2/hard_confirmation",
+        (CAMERA_STUDENT_PICK,),
+        50,
+        {},
+        (0, 1),
+        ("bee_ttc",),
+        "hard",
+        suite_version="2",
+        confirm=True,
     ),
     Report(
         "student_recipes_v2/hard/ablation.md",

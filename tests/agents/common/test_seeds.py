@@ -66,3 +66,20 @@ def test_the_camera_student_recipes_fly_validation_layouts_no_earlier_v2_use_too
     assert TIER_RECIPE_SEED_STARTS["2"] == CAMERA_STUDENT_RECIPE_SEED_START
     assert CAMERA_STUDENT_CONFIRM_SEED_START == CAMERA_STUDENT_RECIPE_SEED_START + 1_000
     assert CAMERA_STUDENT_CONFIRM_SEED_START + 1_000 <= TEST_SEED_START
+
+
+def test_each_versions_confirmation_layouts_follow_its_recipe_layouts_apart_from_them() -> None:
+    from agents.common.seeds import (
+        CAMERA_STUDENT_CONFIRM_SEED_START,
+        TIER_CONFIRM_SEED_STARTS,
+        TIER_RECIPE_SEED_STARTS,
+        TIER_VALIDATION_SEEDS,
+    )
+    from flownav_env.tiers import SUITE_VERSIONS
+
+    assert set(TIER_CONFIRM_SEED_STARTS) <= set(SUITE_VERSIONS)
+    assert TIER_CONFIRM_SEED_STARTS["2"] == CAMERA_STUDENT_CONFIRM_SEED_START
+    for version, start in TIER_CONFIRM_SEED_STARTS.items():
+        # Past the 1,000 recipe layouts of the same version, and a tier's validation layouts, never a test one.
+        assert start >= TIER_RECIPE_SEED_STARTS[version] + 1_000
+        assert start in TIER_VALIDATION_SEEDS and start + 1_000 <= TEST_SEED_START

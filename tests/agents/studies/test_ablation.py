@@ -15,6 +15,7 @@ from agents.analysis.records import read_records
 from agents.cli import main
 from agents.common.seeds import (
     ABLATION_SEED_START,
+    CAMERA_STUDENT_CONFIRM_SEED_START,
     CAMERA_STUDENT_RECIPE_SEED_START,
     STUDENT_RECIPE_SEED_START,
     TEST_SEED_START,
@@ -23,7 +24,7 @@ from agents.common.seeds import (
 )
 from agents.evaluation.trained_runs import seed_files
 from agents.policies import REACTIVE_AGENTS
-from agents.studies.ablation import ablation_tasks, compare_configs
+from agents.studies.ablation import ablation_tasks, compare_configs, tier_layouts
 from agents.training.multiseed import seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 
@@ -267,3 +268,91 @@ def test_each_row_is_compared_with_the_first_on_the_same_layouts(tmp_path: Path)
     row = next(line for line in lines if line.startswith("| bee_ttc"))
     assert row.endswith(f"| {expected.difference:+.3f} [{expected.low:+.3f}, {expected.high:+.3f}] |")
     assert next(line for line in lines if line.startswith("| straight")).endswith("| - |")
+
+
+def test_a_confirm_run_flies_the_tiers_fresh_confirmation_layouts(tmp_path: Path) -> None:
+    recipes, confirmation = tier_layouts("2"), tier_layouts("2", confirm=True)
+    # The recipe layouts end where the confirmation layouts begin; both are the tier's validation layouts.
+    assert recipes == range(CAMERA_STUDENT_RECIPE_SEED_START, CAMERA_STUDENT_CONFIRM_SEED_START)
+    assert confirmation == range(CAMERA_STUDENT_CONFIRM_SEED_START, TEST_SEED_START)
+    assert tier_layouts("1") == range(STUDENT_RECIPE_SEED_START, TEST_SEED_START)  # v1 has no confirmation
+    assert confirmation.stop <= TIER_VALIDATION_SEEDS.stop
+    tasks = ablation_tasks(
+        Path("p.zip"),
+        50,
+        env_id="FlowNavHard-v1",
+        first_layout=confirmation.start,
+        layouts_end=confirmation.stop,
+    )
+    seeds = [t.seed for t in tasks]
+    assert seeds == list(range(CAMERA_STUDENT_CONFIRM_SEED_START, CAMERA_STUDENT_CONFIRM_SEED_START + 50))
+    assert not set(seeds) & set(recipes)
+    # A recipe comparison cannot reach them, however many layouts it asks for.
+    with pytest.raises(
+        ValueError,
+        match=r"^--layouts must be in \[1, 1000\] \(validation layouts from 972,000, short of 973,000\), got 1001$",
+    ):
+        compare_configs(
+            [],
+            [0],
+            tmp_path / "long",
+            episodes=1_001,
+            report_only=True,
+            reference_agents=["straight"],
+            tier="hard",
+        )
+    out = tmp_path / "hard_confirmation"
+    lines = compare_configs(
+        [], [0], out, episodes=1, workers=1, reference_agents=["straight"], tier="hard", confirm=True
+    )
+    row = read_records(out / "reference" / "straight.csv")[0]
+    assert row["env_id"] == "FlowNavHard-v1" and row["seed"] == CAMERA_STUDENT_CONFIRM_SEED_START
+    text = "\n".join(lines)
+    assert lines[0] == "# Confirmation on fresh validation layouts"
+    assert "Every run flies fresh confirmation layouts 973,000–973,000 (tier `hard`, FlowNavHard-v1)" in text
+    assert "not its recipe layouts (from 972,000), on which the recipes were compared" in text
+    assert "Nothing was chosen on these" in text
+    # Without --confirm the same tier flies its recipe layouts, and the page says nothing of a confirmation.
+    recipe = "\n".join(compare_configs([], [0], tmp_path / "hard", episodes=1, report_only=True, tier="hard"))
+    assert recipe.startswith("# Ablations on validation layouts") and "confirmation" not in recipe
+    assert "validation layouts 972,000–972,000 (tier `hard`" in recipe
+
+
+@pytest.mark.parametrize(
+    ("tier", "version", "message"),
+    [
+        (
+            None,
+            "2",
+            "--confirm flies a tier's confirmation layouts: give --tiers TIER (clean, hard, noisy, hard_noisy)",
+        ),
+        ("hard", "1", "--confirm: suite version 1 has no confirmation layouts (versions with them: 2)"),
+    ],
+)
+def test_confirm_without_a_tier_or_in_a_version_without_confirmation_layouts_is_refused(
+    tmp_path: Path, tier: str | None, version: str, message: str
+) -> None:
+    with pytest.raises(ValueError) as error:
+        compare_configs([], [0], tmp_path / "out", episodes=1, tier=tier, suite_version=version, confirm=True)
+    assert type(error.value) is ValueError and str(error.value) == message
+    assert not (tmp_path / "out").exists()  # refused before anything is written
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (
+            [],
+            "--confirm flies a tier's confirmation layouts: give --tiers TIER (clean, hard, noisy, hard_noisy)",
+        ),
+        (
+            ["--tiers", "hard", "--suite-version", "1"],
+            "--confirm: suite version 1 has no confirmation layouts",
+        ),
+    ],
+)
+def test_the_command_refuses_confirm_in_one_line(tmp_path: Path, capsys, options, message) -> None:
+    command = ["ablation", "--configs", "c.yaml", "--confirm", *options, "--out", str(tmp_path / "out")]
+    assert main(command) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"flownav ablation: error: {message}") and err.count("\n") == 1

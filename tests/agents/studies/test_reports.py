@@ -188,3 +188,4 @@ def test_each_command_is_a_valid_report_only_call_that_writes_where_the_report_l
         assert args.reference == ",".join(write.keywords["reference"])
         assert (args.tiers and tier_name_of(args.tiers)) == write.keywords["tier"]
         assert args.suite_version == write.keywords["suite_version"] or not args.tiers
+        assert args.confirm == write.keywords["confirm"]

@@ -18,6 +18,7 @@ from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, Comparison, TierRanking, compare, rank_tier
 from agents.analysis.records import read_records
 from agents.common.jinja_reports import render
+from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
 from agents.evaluation.episode_tasks import TieredRow, with_tier
@@ -308,7 +309,7 @@ def beside_suite(
     return {
         "readings": reading_values(Path(out) / SENSOR_READING_DIR),
         "recipe_reports": student_recipe_reports(tier_names),
-        "camera_recipe_reports": camera_student_recipe_reports(Path(out)),
+        "camera_recipe_reports": camera_student_recipe_reports(),
         "lanes": lane_values(Path(out) / LANE_DIR),
         "retired": retired_values(episodes_csv, layouts),
     }
@@ -339,12 +340,15 @@ def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:
     return {name: f"{STUDENT_RECIPES_DIR}/{name}/ablation.md" for name in tier_names}
 
 
-def camera_student_recipe_reports(out: Path) -> dict[str, str]:
-    """The camera-limited planner's student's recipe comparisons and confirmations that ``out`` holds, each
-    folder of ``out/student_recipes_v2/`` (``hard``, ``hard_confirmation``) → its page, relative to ``out``."""
-    folder = Path(out) / CAMERA_STUDENT_RECIPES_DIR
-    pages = sorted(folder.glob("*/ablation.md")) + sorted(folder.glob("*/README.md")) if folder.is_dir() else []
-    return {page.parent.name: page.relative_to(out).as_posix() for page in sorted(pages)}
+def camera_student_recipe_reports() -> dict[str, str]:
+    """The camera-limited planner's student's recipe comparisons and confirmations committed under
+    ``results/student_recipes_v2/`` (``hard``, ``hard_confirmation``), each folder → its ``ablation.md``, relative
+    to ``results/`` (as :func:`student_recipe_reports`' links, wherever the page is written)."""
+    folder = RESULTS_DIR / CAMERA_STUDENT_RECIPES_DIR
+    return {
+        page.parent.name: page.relative_to(RESULTS_DIR).as_posix()
+        for page in sorted(folder.glob("*/ablation.md"))
+    }
 
 
 def suite_page(values: Mapping[str, object]) -> str:

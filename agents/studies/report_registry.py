@@ -323,9 +323,10 @@ REPORTS: tuple[Report, ...] = (
     ),
     Report(
         "student_recipes_v2/hard/ablation.md",
-        reason="a pilot whose policies were not shipped: flownav ablation wrote it from the run folders its "
-        "training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
-        "are committed beside it)",
+        reason="a pilot whose policies, but the pick's, were not shipped: flownav ablation wrote it from the run "
+        "folders its training left in runs/, which a checkout does not keep (the commands are in the report; its "
+        "episodes are committed beside it; the pick's seeds are results/policies/"
+        "ppo_flow_camera_student_fine_rounds6_hard/)",
     ),
     Report(
         "ablation/lever_lab_notes.md",

@@ -82,9 +82,10 @@ def build_envs(
     several training seeds side by side, one process per core, where a lock-stepped worker per env loses
     cores to waiting. Both give the same rollouts.
 
-    ``teacher_settings`` (a privileged teacher's ``observe_layout``) are given to the training envs only, and
-    both vector envs are wrapped in :class:`~agents.training.student_view.StudentView`, so the policy built on
-    them never sees the teacher's keys.
+    ``teacher_settings`` (a privileged teacher's ``observe_layout``) are given to the training envs only. A run
+    with a teacher has both vector envs wrapped in :class:`~agents.training.student_view.StudentView`, so the
+    policy built on them never sees the teacher's keys, and the teacher reads the current frame there when
+    ``frame_stack`` stacks the student's observations above it.
     """
     factories = [make_env_factory(config, i, teacher_settings) for i in range(config.n_envs)]
     eval_count = EVAL_WORKERS if config.n_envs > 1 else 1
@@ -107,7 +108,7 @@ def build_envs(
         envs, eval_env = DummyVecEnv(factories), DummyVecEnv(eval_factories)
     envs.seed(training_env_seed(config.seed))
     eval_env.seed(checkpoint_selection_seed(config.seed))
-    if teacher_settings:
+    if teacher_settings or config.imitation.teacher:
         envs, eval_env = StudentView(envs), StudentView(eval_env)
     if config.frame_stack > 1:
         envs, eval_env = VecFrameStack(envs, config.frame_stack), VecFrameStack(eval_env, config.frame_stack)

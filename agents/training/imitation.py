@@ -13,6 +13,10 @@ deterministic)`` over a batch; it is passed in (the rules live above this layer,
 The teacher reads the same observation dict as the student, so the run's env must observe every key the
 teacher reads; a privileged teacher (the planner) reads, besides, the keys that only envs wrapped in
 :class:`~agents.training.student_view.StudentView` show it, never the student.
+
+A student with memory (``frame_stack: k``) acts on, and is fitted to, the stacks of its last k observations
+that its envs give; the teacher still labels each state from the current frame alone
+(:func:`~agents.training.student_view.teacher_view`).
 """
 
 from __future__ import annotations

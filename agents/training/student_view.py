@@ -4,6 +4,10 @@ student, whose policy and observation space are built on :class:`StudentView`, n
 
 The opt-in belongs to the teacher, not to the run's ``env`` section: the policy shipped from the run is an ordinary
 agent, evaluated with that section alone, so it must ask a tier for nothing privileged.
+
+A student with memory (``frame_stack``) sees a ``VecFrameStack`` over the view; the teacher still reads the
+current frame alone, the view's :attr:`StudentView.full_observation` (:func:`teacher_view` finds it beneath
+the stack).
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
-from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper, VecFrameStack
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 from flownav_env.privileged import PRIVILEGED_KEYS
@@ -65,10 +69,28 @@ class StudentView(VecEnvWrapper):
 
 
 def teacher_view(envs: VecEnv, observation: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """What the teacher reads in the state whose student observation is ``observation``: the full observation
-    when ``envs`` is a :class:`StudentView` that holds one, else ``observation`` itself."""
-    full = getattr(envs, "full_observation", None)
-    return full if isinstance(envs, StudentView) and full else observation
+    """What the teacher reads in the state whose student observation is ``observation``: the current frame's
+    full observation when ``envs`` is, or wraps, a :class:`StudentView` that holds one, else ``observation``
+    itself.
+
+    Raises:
+        ValueError: ``envs`` stack frames (``VecFrameStack``) over no :class:`StudentView`: ``observation``
+            is then a stack, and a teacher reads one frame.
+    """
+    stack: VecFrameStack | None = None
+    inner: VecEnv = envs
+    while isinstance(inner, VecEnvWrapper):
+        if isinstance(inner, StudentView):
+            return inner.full_observation or observation
+        if isinstance(inner, VecFrameStack):
+            stack = inner
+        inner = inner.venv
+    if stack is not None:
+        raise ValueError(
+            f"a teacher reads one frame, but these envs stack {stack.stacked_obs.n_stack} frames over no "
+            "StudentView to read the current frame from: wrap the envs in StudentView beneath VecFrameStack"
+        )
+    return observation
 
 
 def privileged_settings(teacher: object) -> dict[str, Any]:

@@ -139,10 +139,12 @@ class TrainConfig:
             )
 
     def _check_teacher(self) -> None:
-        if self.init_from or self.frame_stack > 1 or self.ppo.lstm_hidden_size > 0:
+        # DAgger fits a feed-forward policy's actions state by state; memory comes from 'frame_stack', whose
+        # stacks the student is fitted on while the teacher labels the current frame.
+        if self.init_from or self.ppo.lstm_hidden_size > 0:
             raise ValueError(
                 f"key 'imitation.teacher' ({self.imitation.teacher!r}) starts a feed-forward policy from scratch: "
-                "it takes no 'init_from', 'frame_stack' above 1 or 'ppo.lstm_hidden_size' above 0"
+                "it takes no 'init_from' or 'ppo.lstm_hidden_size' above 0 (for memory, use 'frame_stack')"
             )
         if self.env.get("observe_layout"):
             raise ValueError(

@@ -329,6 +329,12 @@ REPORTS: tuple[Report, ...] = (
         "ppo_flow_camera_student_fine_rounds6_hard/)",
     ),
     Report(
+        "student_recipes_v2/hard_stack/ablation.md",
+        reason="a pilot whose frame-stacked policies were not shipped: flownav ablation wrote it from the run folders "
+        "its training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
+        "are committed beside it)",
+    ),
+    Report(
         "ablation/lever_lab_notes.md",
         reason="the lever search's lab notebook, hand-written lever by lever as each was judged and kept as it was: its "
         "figures are those of their day (the current ones are flow_gap.md's and ablation.md's)",

@@ -104,13 +104,18 @@ def test_train_refuses_a_tier_without_seeds(tmp_path: Path, capsys: pytest.Captu
 
 
 @pytest.mark.parametrize("path", CAMERA_STUDENT_RECIPES, ids=lambda p: p.stem)
-def test_the_camera_student_recipes_ask_no_tier_for_privileged_data(path: Path) -> None:
+def test_the_camera_student_recipes_ask_no_tier_for_privileged_data_but_the_true_depth_twin(path: Path) -> None:
     recipe = load_config(path, TrainConfig)
     assert recipe.per_tier and recipe.imitation.teacher == "planner_camera"
     check_teacher(recipe.imitation.teacher, recipe.env, str(path), recipe.imitation.teacher_params)
+    twin = path.stem.endswith("_oracle")
     for tier_name in TIERS_BY_VERSION["2"]:
         config = for_tier(recipe, tier_name, str(path))
-        check_agent_settings(config.name, config.env, tier_name)
+        # The twin reads true depths (obs_source oracle): a tier allows that only to an agent declared privileged.
+        check_agent_settings(config.name, config.env, tier_name, privileged=twin)
+        if twin:
+            with pytest.raises(ValueError, match="obs_source"):
+                check_agent_settings(config.name, config.env, tier_name)
 
 
 def test_there_are_the_base_recipe_and_its_variants() -> None:
@@ -118,6 +123,7 @@ def test_there_are_the_base_recipe_and_its_variants() -> None:
         "ppo_flow_camera_student",
         "ppo_flow_camera_student_fine",
         "ppo_flow_camera_student_fine_rounds6",
+        "ppo_flow_camera_student_fine_rounds6_oracle",
         "ppo_flow_camera_student_fine_rounds6_stack4",
         "ppo_flow_camera_student_rounds6",
     ]

@@ -33,10 +33,12 @@ from agents.policies import (
     agent_env_kwargs,
     agent_parameters,
     is_learned,
+    is_per_tier,
     policy_file,
     split_agent_name,
 )
 from agents.policies.agent_limits import AgentLimits
+from flownav_env.tiers import tier_of_env_id
 
 
 def canonical_json(value: object) -> str:
@@ -114,10 +116,24 @@ class EpisodeTask:
         return self.factor if self.suite_version else ""
 
     def policy_path(self) -> Path | None:
-        """The learned agent's policy file (wherever the command runs from); None for reactive agents."""
+        """The learned agent's policy file (wherever the command runs from); None for reactive agents. An agent
+        learned once per tier flies the policy of the tier whose id the task flies.
+
+        Raises:
+            ValueError: an agent learned once per tier, without a policy file, on an id that is no tier's.
+        """
         if not is_learned(self.agent):
             return None
-        return policy_file(self.agent, self.policy, directory=POLICIES_DIR)
+        tier_name = None
+        if self.policy is None and is_per_tier(self.agent):
+            found = tier_of_env_id(self.env_id)
+            if found is None:
+                raise ValueError(
+                    f"{self.agent} is learned once per tier: fly it on a suite tier (--tiers clean, hard, noisy or "
+                    f"hard_noisy), or name one of its policies with --policy; got {self.env_id!r}"
+                )
+            tier_name = found[1].name
+        return policy_file(self.agent, self.policy, directory=POLICIES_DIR, tier=tier_name)
 
     def env_settings(self) -> dict[str, Any]:
         """The env kwargs to fly with: the agent's own (a learned agent keeps what it was trained with, such

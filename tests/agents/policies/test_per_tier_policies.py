@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.suite import agent_runs, suite_tasks
 from agents.policies import load_agent, policy_file, policy_folder, trained_seeds
 from agents.policies.learned import default_runs
@@ -70,3 +71,18 @@ def test_the_suite_flies_each_tier_with_that_tiers_policies_and_skips_a_tier_not
     for task in tasks:
         assert task.policy is not None and Path(task.policy).parent.name == f"{STUDENT}_hard"
         assert task.env_id == "FlowNavHard-v1" and task.identity()["policy_sha256"]
+
+
+def test_a_task_flies_the_policy_of_the_tier_whose_id_it_flies() -> None:
+    task = EpisodeTask(f"{STUDENT}@0", "clean", 0.0, 0, env_id="FlowNavHard-v1")
+    assert task.policy_path() == policy_file(f"{STUDENT}@0", tier="hard")
+    assert task.policy_path() == policy_folder(STUDENT, tier="hard") / "seed_0.zip"
+    with pytest.raises(
+        ValueError,
+        match=rf"{STUDENT}@0 is learned once per tier: fly it on a suite tier .*got 'FlowNavSingle-v0'",
+    ):
+        EpisodeTask(f"{STUDENT}@0", "clean", 0.0, 0, env_id="FlowNavSingle-v0").policy_path()
+    named = EpisodeTask(
+        f"{STUDENT}@0", "clean", 0.0, 0, env_id="FlowNavSingle-v0", policy="elsewhere/seed_0.zip"
+    )
+    assert named.policy_path() == Path("elsewhere/seed_0.zip")

@@ -122,6 +122,7 @@ def test_there_are_the_base_recipe_and_its_variants() -> None:
     assert [p.stem for p in CAMERA_STUDENT_RECIPES] == [
         "ppo_flow_camera_student",
         "ppo_flow_camera_student_fine",
+        "ppo_flow_camera_student_fine_rounds12",
         "ppo_flow_camera_student_fine_rounds6",
         "ppo_flow_camera_student_fine_rounds6_oracle",
         "ppo_flow_camera_student_fine_rounds6_stack4",

@@ -146,7 +146,7 @@ def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
     training config's words; a dash for an agent that did not learn."""
     try:
         if is_per_tier(agent):
-            return "each tier its own (one policy per tier)"
+            return "the tier it flies (one policy per tier)"
         tiers = agent_tiers(agent, version)
         if tiers:
             return "every tier (one policy)" if tiers == TIER_NAMES else ", ".join(tiers)

@@ -145,18 +145,7 @@ def compare_configs(
         ValueError: a bad config, episode count, worker count or env setting, a reference agent that is not
             reactive, or ``confirm`` without a tier or in a suite version without confirmation layouts.
     """
-    env = check_env_kwargs(dict(env or {}), "command line", key="--env")
-    if confirm and tier is None:
-        raise ValueError(
-            f"--confirm flies a tier's confirmation layouts: give --tiers TIER ({', '.join(TIER_NAMES)})"
-        )
-    if tier is not None and env:
-        raise ValueError(f"--env and --tiers {tier}: a tier fixes its own settings, so give one or the other")
-    for agent in reference_agents:
-        if agent not in REACTIVE_AGENTS:
-            raise ValueError(
-                f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
-            )
+    env = _checked_options(env, tier, confirm, reference_agents)
     env_id, layouts = "FlowNav-v0", range(ABLATION_SEED_START, TEST_SEED_START)
     if tier is not None:
         env_id = tier_of(tier, suite_version).env_id
@@ -205,6 +194,26 @@ def compare_configs(
     )
     (out / "ablation.md").write_text(text)
     return text.splitlines()
+
+
+def _checked_options(
+    env: Mapping[str, object] | None, tier: str | None, confirm: bool, reference_agents: Sequence[str]
+) -> dict[str, object]:
+    """The comparison's env settings, checked, once its options agree: ``--confirm`` only with a tier, a tier
+    or ``--env`` but not both, reactive reference agents only (:func:`compare_configs`' errors)."""
+    checked = check_env_kwargs(dict(env or {}), "command line", key="--env")
+    if confirm and tier is None:
+        raise ValueError(
+            f"--confirm flies a tier's confirmation layouts: give --tiers TIER ({', '.join(TIER_NAMES)})"
+        )
+    if tier is not None and checked:
+        raise ValueError(f"--env and --tiers {tier}: a tier fixes its own settings, so give one or the other")
+    for agent in reference_agents:
+        if agent not in REACTIVE_AGENTS:
+            raise ValueError(
+                f"reference agents must be reactive ({', '.join(REACTIVE_AGENTS)}), got {agent!r}"
+            )
+    return checked
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -12,6 +13,13 @@ from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
     from matplotlib.axes import Axes
+
+# Inches per character of a tick label (10 pt) and of the title (12 pt) in matplotlib's default sans font: the
+# figure is made as wide as its longest agent name needs, and the title wrapped to the width, so that one tier's
+# panel (the demo's) shows whole names and a whole title, not a panel squeezed between clipped ones.
+_LABEL_INCH_PER_CHAR = 0.075
+_TITLE_INCH_PER_CHAR = 0.1
+_PANEL_WIDTH_IN = 3.2
 
 
 def plot_suite(
@@ -27,10 +35,13 @@ def plot_suite(
     tiers = [name for name in TIER_NAMES if any(r["tier"] == name for r in rows)]
     agents = sorted({r["agent"] for r in rows}, key=lambda a: a.lower())
     labels = [plot_label(agent, rows) for agent in agents]
+    longest = max((len(line) for label in labels for line in label.split("\n")), default=0)
+    width = _PANEL_WIDTH_IN * max(len(tiers), 1) + _LABEL_INCH_PER_CHAR * longest
+    title = textwrap.fill(_plot_title(rows, ranked=top_groups is not None), int(width / _TITLE_INCH_PER_CHAR))
     figure, axes = plt.subplots(
         1,
         max(len(tiers), 1),
-        figsize=(3.2 * max(len(tiers), 1), 0.35 * len(agents) + 1.5),
+        figsize=(width, 0.35 * len(agents) + 1.2 + 0.25 * title.count("\n")),
         sharey=True,
         squeeze=False,
     )
@@ -40,7 +51,7 @@ def plot_suite(
     for tick, agent in zip(axes[0][0].get_yticklabels(), agents, strict=True):
         if any(r.get("included") for r in rows if r["agent"] == agent):
             tick.set_color("tab:red")
-    figure.suptitle(_plot_title(rows, ranked=top_groups is not None))
+    figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)

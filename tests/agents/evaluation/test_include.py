@@ -366,3 +366,21 @@ def test_rows_on_one_layout_cannot_be_ranked_and_say_so(
     assert "an included row rests on 1 layout; a ranking compares agents on at least 2" in one_error_line(
         capsys, "leaderboard"
     )
+
+
+def test_one_tier_figure_is_as_wide_as_its_longest_name(scored: dict[str, Path], tmp_path: Path) -> None:
+    """The demo draws one tier: the figure widens for long agent names and wraps its title, so matplotlib lays it
+    out without clipping (a clipped layout warns)."""
+    import warnings
+
+    from PIL import Image
+
+    published = read_suite_csv(scored["published"])
+    long_name = "ppo_flow_course_approach_curriculum_slow_oracle"
+    rows = [*published, {**published[0], "agent": long_name}]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plot_suite(rows, tmp_path / "long.png")
+        plot_suite(published, tmp_path / "short.png")
+    with Image.open(tmp_path / "long.png") as long_image, Image.open(tmp_path / "short.png") as short_image:
+        assert long_image.width > short_image.width

@@ -33,6 +33,9 @@ from agents.training.train_config import TrainConfig
 CLEAN_FAILURE_BAR = 0.05
 # The time-to-policy goal: a recipe in at most a third of the reference's minutes per seed.
 TARGET_TIME_RATIO = 1 / 3
+# The budget a recipe's seed must fit: a quarter of an hour on the benchmark's 2-core machine, so that a
+# researcher can train the 10 seeds a ranked agent needs in an afternoon.
+SEED_BUDGET_MINUTES = 15.0
 # flownav ablation's folders per condition, under its --out (results/ablation).
 CONDITIONS = {"clean": "", "density 0.18": "density_0.18", "1.5 m/s": "speed_1.5"}
 # Validation layouts flownav ablation flies per seed: clean, and under each condition.
@@ -202,6 +205,14 @@ def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: R
         "allowed_rise": f"{ALLOWED_RISE:.2f}",
         "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
         "targets": [_target(r["recipe"], r["ratio_to_reference"], r["meets_quality"]) for r in rows[1:]],
+        # The quality section and the ratio target read flownav ablation's lever-search conditions: shown only
+        # where some recipe was flown there, else every row would say "not flown".
+        "quality_flown": any(row["meets_quality"] != "" for row in rows),
+        "seed_budget": f"{SEED_BUDGET_MINUTES:g}",
+        "budgets": [
+            {"recipe": r["recipe"], "minutes": r["minutes_per_seed"], "within": float(r["minutes_per_seed"]) <= SEED_BUDGET_MINUTES}
+            for r in rows
+        ],
         "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
     }
 

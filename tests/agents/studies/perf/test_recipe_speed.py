@@ -145,3 +145,15 @@ def test_the_target_needs_both_a_third_of_the_time_and_the_quality(ratio, meets,
         f"- `new`: {ratio:.2f}× the minutes per seed of `old` (target ≤ 0.33×), and it {verdict}." in report
     )
     assert "Recipes with a teacher here: `new`." in report
+
+
+def test_recipes_never_flown_on_the_lever_conditions_are_judged_by_the_seed_budget_alone() -> None:
+    slow = {**recipe_row("slow", 4.0, "", 10), "minutes_per_seed": 16.0}
+    rows = [recipe_row("old", 1.0, "", 0), recipe_row("new", 0.5, "", 10), slow]
+    values = recipe_report_values(rows, 3, RunFacts("flownav bench recipe", 60.0, "now", "-", 2, True))
+    report = render("agents.studies.perf", "training_performance.md.j2", values, every_value_used=True)
+    assert "## Quality on the validation layouts" not in report
+    assert "target ≤ 0.33×" not in report
+    assert "this page states no quality and no time ratio target" in report
+    assert "- `new`: 4.0 min per seed → **within**" in report
+    assert "- `slow`: 16.0 min per seed → **over**" in report

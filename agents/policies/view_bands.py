@@ -11,6 +11,7 @@ bit for bit as when they were written in columns.
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -32,7 +33,9 @@ def column_weights(cols: int, start: Fraction, stop: Fraction) -> np.ndarray:
     """
     _check_band(cols, start, stop)
     low, high = Fraction(start) * cols, Fraction(stop) * cols
-    return np.array([float(max(min(high, j + 1) - max(low, j), 0)) for j in range(cols)])
+    return np.array(
+        [float(max(min(high, Fraction(j + 1)) - max(low, Fraction(j)), Fraction(0))) for j in range(cols)]
+    )
 
 
 def band_mean(per_column: np.ndarray, start: Fraction, stop: Fraction) -> np.ndarray:
@@ -80,7 +83,7 @@ def triangle_kernel(cols: int, half_width: Fraction) -> np.ndarray:
     if not 0 < half_width <= 1:
         raise ValueError(f"a kernel's half-width must be in (0, 1] of the view, got {half_width}")
     reach = Fraction(half_width) * cols  # in columns
-    offsets = range(-int(np.ceil(reach)) + 1, int(np.ceil(reach)))
+    offsets = range(-math.ceil(reach) + 1, math.ceil(reach))
     weights = np.array([float(1 - Fraction(abs(k)) / reach) for k in offsets])
     return weights / weights.sum()
 

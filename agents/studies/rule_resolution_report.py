@@ -7,7 +7,6 @@ from pathlib import Path
 from typing import TypedDict, Unpack
 
 from agents.common.folders import write_text_atomically
-from agents.common.jinja_reports import render
 from agents.common.seeds import RULE_RESOLUTION_CONFIRM_SEED_START, RULE_RESOLUTION_SEED_START
 from agents.common.tables import today
 from agents.policies.histogram_resolution import RESOLUTION_RULES
@@ -19,6 +18,7 @@ from agents.studies.rule_resolution import (
     RuleResolutionResult,
     run_rule_resolution,
 )
+from agents.studies.wording import render_report
 
 PAGE = "rule_resolution.md"
 FIGURE = "rule_resolution.png"
@@ -63,7 +63,9 @@ def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:
     import matplotlib.pyplot as plt  # only once the backend is chosen
 
     names = [resolution.name for resolution in CANDIDATES]
-    figure, axes = plt.subplots(1, len(RULES), figsize=(3.4 * len(RULES), 2.6), sharey=True, squeeze=False)
+    figure, axes = plt.subplots(
+        1, len(RULES), figsize=(3.4 * len(RULES), 2.8), sharex=True, sharey=True, squeeze=False
+    )
     for axis, rule in zip(axes[0], RULES, strict=True):
         axis.axvline(0.0, color="grey", linewidth=0.8)
         for row in compared:
@@ -86,9 +88,13 @@ def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:
         axis.set_xlabel(f"failure minus at {TODAY.name}")
     axes[0][0].set_yticks(range(len(names)), names)
     axes[0][0].invert_yaxis()
-    handles, labels = axes[0][0].get_legend_handles_labels()
-    unique = dict(zip(labels, handles, strict=True))
-    figure.legend(unique.values(), unique.keys(), loc="lower right", fontsize="small")
+    handles, labels = [], []
+    for axis in axes[0]:
+        for handle, label in zip(*axis.get_legend_handles_labels(), strict=True):
+            if label not in labels:
+                handles.append(handle)
+                labels.append(label)
+    axes[0][-1].legend(handles, labels, loc="best", fontsize="small")
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
@@ -112,6 +118,6 @@ def write_rule_resolution(out: Path, command: str, **options: Unpack[StudyOption
     """
     result = run_rule_resolution(Path(out), **options)
     figure = plot_rule_resolution(result, Path(out) / FIGURE)
-    text = render("agents.studies", "rule_resolution.md.j2", page_values(result, command, figure))
+    text = render_report("rule_resolution.md.j2", page_values(result, command, figure))
     write_text_atomically(Path(out) / PAGE, text)
     return text.splitlines()

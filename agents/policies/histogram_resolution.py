@@ -50,9 +50,3 @@ class HistogramResolution:
     def rule_parameters(self) -> dict[str, Any]:
         """A rule's parameters that read this resolution: its ``bin_edges`` where they are not the default."""
         return {} if self.bin_edges == EnvSettings().depth_bin_edges else {"bin_edges": self.bin_edges}
-
-
-# The rule entries that fly a rule at another resolution than the env's default (configs/agents.yaml: kind rule):
-# name -> (the rule, its resolution). Only resolutions that the rule resolution study picked on validation layouts
-# and confirmed on fresh ones (results/rule_resolution/) are listed.
-RESOLUTION_RULES: dict[str, tuple[str, HistogramResolution]] = {}

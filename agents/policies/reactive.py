@@ -89,8 +89,8 @@ class BeeAgent:
     slides away from the nearer side, and when the centre looms (its nearness exceeds ``frontal_threshold``) it
     also turns and slides toward the emptier side. Only the sector rows at and above the horizon are used: the
     bottom row mostly sees the ground. The sides and the centre are shares of the view, not columns
-    (:data:`SIDE_SHARE`), so the law reads the same angles at any ``histogram_sectors`` column count. Height and heading are held as in
-    :class:`StraightAgent`. The gains are the winner of ``flownav tune --agent bee`` (40 TPE trials on 30
+    (:data:`SIDE_SHARE`), so the law reads the same angles at any ``histogram_sectors`` column count. Height
+    and heading are held as in :class:`StraightAgent`. The gains are the winner of ``flownav tune --agent bee`` (40 TPE trials on 30
     training layouts, 5 finalists on 150 fresh training layouts; ``results/tuning/bee/tuning.md``, re-tuned
     2026-12-02 after the camera's near-plane fix), to 4 significant digits: failure 0.17 [0.12, 0.24] on the
     final layouts, against 0.29 [0.22, 0.36] with the gains of the 16-candidate search before the fix

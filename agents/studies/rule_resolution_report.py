@@ -9,7 +9,6 @@ from typing import TypedDict, Unpack
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import RULE_RESOLUTION_CONFIRM_SEED_START, RULE_RESOLUTION_SEED_START
 from agents.common.tables import today
-from agents.policies.histogram_resolution import RESOLUTION_RULES
 from agents.studies.rule_resolution import (
     CANDIDATES,
     RULES,
@@ -26,10 +25,11 @@ FIGURE = "rule_resolution.png"
 
 def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dict[str, object]:
     """Every value ``rule_resolution.md`` words (``templates/rule_resolution.md.j2``)."""
-    entries = {
-        rule: [name for name, (base, resolution) in RESOLUTION_RULES.items() if base == rule]
-        for rule in RULES
-    }
+    compared = [row for row in result.rows if row.stage == "search" and row.versus_today is not None]
+    # The candidate nearest to a pick: the largest drop against the rule's own (None before any comparison).
+    nearest = min(
+        compared, key=lambda row: row.versus_today.difference if row.versus_today else 0.0, default=None
+    )
     return {
         "generated": today(),
         "command": command,
@@ -45,7 +45,7 @@ def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dic
         "confirmation": [row for row in result.rows if row.stage == "confirmation"],
         "picks": result.picks,
         "confirmed": result.confirmed,
-        "entries": entries,
+        "nearest": nearest,
         "missing": result.missing,
         "figure": FIGURE if figure else "",
     }

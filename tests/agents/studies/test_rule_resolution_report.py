@@ -51,10 +51,18 @@ def test_the_page_words_each_comparison_from_its_interval_and_counts_what_was_tr
         in text
     )
     assert "| `bee_ttc` | 3x5 (its own) | 1.00 | 0.20 | 0.60 [0.39, 0.78] | — | — |" in text
-    assert "| `bee_ttc` | 3x15-9bins | 0.00 | 0.20 | 0.10 [0.03, 0.30] | -0.500 [" in text and "| fails less |" in text
+    assert (
+        "| `bee_ttc` | 3x15-9bins | 0.00 | 0.20 | 0.10 [0.03, 0.30] | -0.500 [" in text
+        and "| fails less |" in text
+    )
     assert "| `vfh` | 3x10 |" in text and "| +0.000 [+0.000, +0.000] | no difference shown |" in text
     assert "- `bee_ttc`: picked 3x15-9bins." in text and "- `vfh`: no finer histogram picked." in text
     assert "- `bee_ttc` at 3x15-9bins: confirmed." in text
+    assert (
+        "- `bee_ttc`: 3x15-9bins, confirmed, is worth a rule entry of its own in `configs/agents.yaml`"
+        in text
+    )
+    assert "The nearest to a pick" not in text  # said only of a finished search that picked nothing
     assert "- bee_robust at 3x5 (search)" in text  # what is still to fly
     assert f"![Each candidate resolution minus the rule's own, per rule](./{FIGURE})" in text
     assert "100 episodes in all" in text
@@ -88,3 +96,27 @@ def test_writing_reads_the_study_and_writes_page_and_figure(
     lines = write_rule_resolution(tmp_path, "flownav rule-resolution --report-only", report_only=True)
     assert (tmp_path / PAGE).read_text().splitlines() == lines and (tmp_path / FIGURE).is_file()
     assert lines[0] == "# The flow rules at finer depth histograms"
+
+
+def test_a_finished_search_without_a_pick_names_the_candidate_nearest_to_one() -> None:
+    today = np.zeros((1, 20))
+    today[0, :12] = 1.0
+    slightly = today.copy()
+    slightly[0, :2] = 0.0
+    rows = [
+        _row("search", "bee_ttc", TODAY, today, None),
+        _row("search", "bee_ttc", CANDIDATES[1], slightly, today),
+    ]
+    rows.append(_row("search", "vfh", CANDIDATES[0], today, today))
+    result = RuleResolutionResult(
+        rows,
+        dict.fromkeys(("bee_robust", "bee_ttc", "vfh")),
+        dict.fromkeys(("bee_robust", "bee_ttc", "vfh")),
+        {"search": 10, "confirmation": 10},
+        12,
+        [],
+    )
+    text = _page(result)
+    assert "The nearest to a pick: `bee_ttc` at 3x15, -0.100 [" in text
+    assert "its interval holds 0, so by the rule set before flying it is not picked." in text
+    assert "Nothing to confirm: no candidate's interval lay wholly below 0." in text

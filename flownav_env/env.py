@@ -78,6 +78,11 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     | ``camera``        | (15,)                   | ±1000 m, [-1, 1], ±1e5 px | only with ``observe_layout=True``: the camera's true world position (m), world-from-camera rotation in OpenCV axes row by row, and horizontal focal length, principal point and image width (px) |
     | ``depth_bin_edges``| (bins + 1,)            | [0, 1000]            | only with ``observe_layout=True``: the histogram's ``depth_bin_edges`` (m) |
 
+    The histogram's resolution, ``histogram_sectors`` and ``depth_bin_edges``, is an observation setting: any
+    agent may ask any tier for another (the same estimated depths binned finer or coarser; the task stays the
+    tier's, :data:`flownav_env.tiers.AGENT_OBSERVATION_SETTINGS`), as the camera-limited planner's flow student
+    asks for 3 x 15 sectors and half-metre bins.
+
     ``state`` (clipped to the bounds of the space):
 
     | Num | Observation          | Min   | Max  | Unit |

@@ -263,7 +263,8 @@ class EnvSettings(SensorSettings):
     depth_bin_edges: tuple[float, ...] = _setting(
         tuple(DEFAULT_BIN_EDGES),
         BinEdges(),
-        "depth bin edges of the histogram (m; beyond the last edge counts in the last bin)",
+        "depth bin edges of the histogram (m; beyond the last edge counts in the last bin); like "
+        "``histogram_sectors``, an agent may ask any tier for other bins",
     )
     max_lateral_speed: float = _setting(1.0, _SPEED, "lateral speed at action 1")
     max_vertical_speed: float = _setting(0.5, _SPEED, "vertical speed at action 1")

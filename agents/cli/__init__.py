@@ -35,6 +35,7 @@ COMMANDS = {
     "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",
     "ablation": "agents.cli.ablation",
+    "rule-resolution": "agents.cli.rule_resolution",
     "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",

@@ -91,7 +91,9 @@ def describe_tier(tier_name: str) -> list[str]:
         _observation_table(observation_space, _doc_table(doc, OBSERVATION_HEADING), OBSERVATION_KEY_SETTINGS),
         "",
         f"depth_histogram's bins on this tier: {_bins_text(settings.depth_bin_edges)}; sectors "
-        f"{settings.histogram_sectors[0]} rows by {settings.histogram_sectors[1]} columns of the image.",
+        f"{settings.histogram_sectors[0]} rows by {settings.histogram_sectors[1]} columns of the image. The "
+        'resolution is the agent\'s to choose: ask for another with env_settings = {"histogram_sectors": '
+        '[rows, cols], "depth_bin_edges": [...]} (the same depths binned otherwise; the task stays the tier\'s).',
         "",
         "The state entries:",
         "",

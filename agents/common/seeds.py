@@ -24,6 +24,8 @@ Sub-ranges with one use each:
 | suite v2 sensor readings (validation) | ``SUITE_V2_SENSOR_READING_SEED_START ..`` | v2's noisy tiers at other readings of the velocity specification |
 | camera student recipes (validation) | ``CAMERA_STUDENT_RECIPE_SEED_START ..`` | recipes for the camera-limited planner's student compared per suite v2 tier (``flownav ablation --tiers T --suite-version 2``) |
 | camera student confirmation (validation) | ``CAMERA_STUDENT_CONFIRM_SEED_START ..`` | the recipe picked there flown again on fresh layouts, per suite v2 tier (``flownav ablation --tiers T --suite-version 2 --confirm``) |
+| rule resolutions (validation) | ``RULE_RESOLUTION_SEED_START ..`` (1,000) | the flow rules at finer depth histograms, per suite v2 hard tier, paired against their own resolution (``flownav rule-resolution``, ``results/rule_resolution/``) |
+| rule resolution confirmation (validation) | ``RULE_RESOLUTION_CONFIRM_SEED_START ..`` (1,000) | a resolution picked there flown again against the rule's own on fresh layouts |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -85,6 +87,13 @@ CAMERA_STUDENT_RECIPE_SEED_START = 972_000
 # Fresh validation layouts on which a camera student recipe picked on the ones above is confirmed against the rule:
 # past the recipes' 1,000.
 CAMERA_STUDENT_CONFIRM_SEED_START = 973_000
+# Validation layouts on which the flow rules fly at finer depth histograms than the default, per suite v2 hard tier
+# (agents/studies/rule_resolution.py): past the camera student's confirmation's 1,000 (973,000-973,999).
+RULE_RESOLUTION_SEED_START = 974_000
+# Fresh validation layouts on which a resolution picked on the ones above is confirmed: past their 1,000.
+RULE_RESOLUTION_CONFIRM_SEED_START = 975_000
+# How many layouts each of the two rule resolution ranges holds (the next use starts past them).
+RULE_RESOLUTION_LAYOUTS = 1_000
 # Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's
 # camera student's.
 TIER_RECIPE_SEED_STARTS = {"1": STUDENT_RECIPE_SEED_START, "2": CAMERA_STUDENT_RECIPE_SEED_START}

@@ -9,11 +9,34 @@ them all.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
+from agents.policies.view_bands import band_columns, band_mean
 from estimator import DEFAULT_BIN_EDGES
+
+# The bee's regions of the view: the left and the right SIDE_SHARE of the image's width, whose nearness it
+# balances, and the middle between them, where it watches for looming. At the 5 columns it was tuned at they are
+# the two outer columns each side and the middle one (15 degrees of the 75-degree view); a rule written in columns
+# would watch a 5-degree band at 15 columns and balance 7 columns each side, which is not the law it was tuned as.
+SIDE_SHARE = Fraction(2, 5)
+
+
+def check_bins(histogram: np.ndarray, bin_edges: Sequence[float]) -> None:
+    """Refuse a histogram (..., bins) whose bins are not those of the rule's ``bin_edges``: a rule must be given
+    the env's ``depth_bin_edges``.
+
+    Raises:
+        ValueError: one line naming both counts.
+    """
+    if histogram.shape[-1] != len(bin_edges) - 1:
+        raise ValueError(
+            f"the depth histogram has {histogram.shape[-1]} bins but the rule's bin_edges {tuple(bin_edges)} make "
+            f"{len(bin_edges) - 1}: give the rule the env's depth_bin_edges"
+        )
 
 
 def bin_nearness(bin_edges: np.ndarray) -> np.ndarray:
@@ -63,10 +86,11 @@ class BeeAgent:
     """Bee-style centring on the depth histogram.
 
     ``lateral = centring_gain · (nearness_left − nearness_right) + frontal_gain · looming · side``: the drone
-    slides away from the nearer side, and when the centre columns loom (their nearness exceeds
-    ``frontal_threshold``) it also turns and slides toward the emptier side. Only the sector rows at and above
-    the horizon are used: the bottom row mostly sees the ground. Height and heading are held as in
-    :class:`StraightAgent`. The gains are the winner of ``flownav tune --agent bee`` (40 TPE trials on 30
+    slides away from the nearer side, and when the centre looms (its nearness exceeds ``frontal_threshold``) it
+    also turns and slides toward the emptier side. Only the sector rows at and above the horizon are used: the
+    bottom row mostly sees the ground. The sides and the centre are shares of the view, not columns
+    (:data:`SIDE_SHARE`), so the law reads the same angles at any ``histogram_sectors`` column count. Height
+    and heading are held as in :class:`StraightAgent`. The gains are the winner of ``flownav tune --agent bee`` (40 TPE trials on 30
     training layouts, 5 finalists on 150 fresh training layouts; ``results/tuning/bee/tuning.md``, re-tuned
     2026-12-02 after the camera's near-plane fix), to 4 significant digits: failure 0.17 [0.12, 0.24] on the
     final layouts, against 0.29 [0.22, 0.36] with the gains of the 16-candidate search before the fix
@@ -88,6 +112,7 @@ class BeeAgent:
         histogram = np.asarray(observation["depth_histogram"], np.float64)
         batched = histogram.ndim == 4
         histogram = histogram.reshape((-1, *histogram.shape[-3:]))
+        check_bins(histogram, self.bin_edges)
         nearness = sector_nearness(histogram[:, : self.obstacle_rows], np.asarray(self.bin_edges))
         actions = self.centring_actions(nearness, observation)
         return (actions if batched else actions[0]), state
@@ -96,15 +121,9 @@ class BeeAgent:
         """The bee's steering law on a nearness per sector (batch, obstacle rows, cols): (batch, 3) actions."""
         heights, headings, _ = heights_and_headings(observation)
         per_column = nearness.max(axis=1)  # (batch, cols): the nearest thing in each column
-        cols = per_column.shape[1]
-        half = cols // 2
-        left = per_column[:, :half].mean(axis=1)
-        right = per_column[:, cols - half :].mean(axis=1)
-        centre = (
-            per_column[:, half : cols - half].max(axis=1)
-            if cols % 2
-            else np.maximum(per_column[:, half - 1], per_column[:, half])
-        )
+        left = band_mean(per_column, Fraction(0), SIDE_SHARE)
+        right = band_mean(per_column, 1 - SIDE_SHARE, Fraction(1))
+        centre = per_column[:, band_columns(per_column.shape[1], SIDE_SHARE, 1 - SIDE_SHARE)].max(axis=1)
         # Positive lateral action moves right: away from a nearer left side.
         side = np.where(left >= right, 1.0, -1.0)
         looming = np.maximum(centre - self.frontal_threshold, 0.0)

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
-from agents.policies.reactive import BeeAgent, bin_nearness, heights_and_headings
+from agents.policies.reactive import BeeAgent, bin_nearness, check_bins, heights_and_headings
+from agents.policies.view_bands import smooth_across_columns, triangle_kernel
 from estimator import DEFAULT_BIN_EDGES
 from flownav_env.observation import exponential_average
 
@@ -99,6 +101,7 @@ class BeeRobustAgent(BeeAgent):
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         histogram, unresolved, batched = _histograms(observation)
+        check_bins(histogram, self.bin_edges)
         rows = slice(0, self.obstacle_rows)
         nearness = quantile_nearness(
             histogram[:, rows], unresolved[:, rows], np.asarray(self.bin_edges), self.quantile
@@ -116,6 +119,11 @@ class BeeRobustAgent(BeeAgent):
         """What the steering law reads, from the smoothed nearness (batch, rows, cols): the nearness itself."""
         return nearness
 
+
+# How far VFH's smoothing reaches either side, as a share of the image's width: one column either side at the 5
+# columns it was tuned at ([1/4, 1/2, 1/4]), written as an angle so that finer columns are smoothed over the same
+# angles, not over a third of them.
+VFH_SMOOTHING_HALF_WIDTH = Fraction(2, 5)
 
 # Forward speeds the time-to-contact scaling is clipped to (m/s): below, a drone barely moving would
 # ignore obstacles; above, one reading of a fast state would swamp the gains.
@@ -157,7 +165,8 @@ class VFHAgent:
 
     Per image column, the obstacle density is the largest over the obstacle rows of ``Σ_bins fraction ·
     max(0, 1 − depth / safe_distance_m)²`` (resolved points only: unresolved ones are far). The densities are
-    smoothed with a [¼, ½, ¼] kernel across columns; a column below ``threshold`` is free. The target is the
+    smoothed across columns by a triangle :data:`VFH_SMOOTHING_HALF_WIDTH` of the view wide either side ([¼, ½, ¼]
+    at the 5 columns it was tuned at; the same angles at any column count); a column below ``threshold`` is free. The target is the
     free column whose direction is nearest the goal's (minus the state's ``heading_error``, mapped onto the
     columns through ``horizontal_fov_deg``; a goal out of view maps to the edge column), or the least dense
     column when none is free. The drone slides and turns toward the target's direction and holds its height.
@@ -179,6 +188,7 @@ class VFHAgent:
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         histogram, unresolved, batched = _histograms(observation)
+        check_bins(histogram, self.bin_edges)
         heights, headings, _ = heights_and_headings(observation)
         rows = slice(0, self.obstacle_rows)
         edges = np.asarray(self.bin_edges, np.float64)
@@ -186,9 +196,8 @@ class VFHAgent:
         magnitude = np.clip(1.0 - depths / self.safe_distance_m, 0.0, 1.0) ** 2
         resolved = histogram[:, rows] * (1.0 - unresolved[:, rows])[..., None]
         density = (resolved @ magnitude).max(axis=1)  # (batch, cols)
-        padded = np.pad(density, ((0, 0), (1, 1)), mode="edge")
-        smoothed = 0.25 * padded[:, :-2] + 0.5 * padded[:, 1:-1] + 0.25 * padded[:, 2:]
-        cols = smoothed.shape[1]
+        cols = density.shape[1]
+        smoothed = smooth_across_columns(density, triangle_kernel(cols, VFH_SMOOTHING_HALF_WIDTH))
         half_fov = math.radians(self.horizontal_fov_deg) / 2.0
         # Column centres as directions, positive to the left like the heading error.
         directions = half_fov * (1.0 - (2.0 * np.arange(cols) + 1.0) / cols)

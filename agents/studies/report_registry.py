@@ -24,6 +24,7 @@ from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
+from agents.studies.rule_resolution_report import write_rule_resolution
 from flownav_env.tiers import TIER_NAMES
 
 
@@ -320,6 +321,13 @@ REPORTS: tuple[Report, ...] = (
         "hard",
         suite_version="2",
         confirm=True,
+    ),
+    Report(
+        "rule_resolution/rule_resolution.md",
+        name="rule-resolution",
+        command="flownav rule-resolution --out results/rule_resolution --report-only",
+        inputs=("rule_resolution/episodes.csv",),
+        write=lambda report, folder: write_rule_resolution(folder, report.command, report_only=True),
     ),
     Report(
         "student_recipes_v2/hard/ablation.md",

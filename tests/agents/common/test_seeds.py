@@ -83,3 +83,19 @@ def test_each_versions_confirmation_layouts_follow_its_recipe_layouts_apart_from
         # Past the 1,000 recipe layouts of the same version, and a tier's validation layouts, never a test one.
         assert start >= TIER_RECIPE_SEED_STARTS[version] + 1_000
         assert start in TIER_VALIDATION_SEEDS and start + 1_000 <= TEST_SEED_START
+
+
+def test_the_rule_resolution_ranges_follow_the_camera_students_and_each_other_apart() -> None:
+    from agents.common.seeds import (
+        CAMERA_STUDENT_CONFIRM_SEED_START,
+        RULE_RESOLUTION_CONFIRM_SEED_START,
+        RULE_RESOLUTION_LAYOUTS,
+        RULE_RESOLUTION_SEED_START,
+        TIER_VALIDATION_SEEDS,
+    )
+
+    # The camera student's confirmation took 973,000-973,999; the search's 1,000 and the confirmation's follow.
+    assert RULE_RESOLUTION_SEED_START == CAMERA_STUDENT_CONFIRM_SEED_START + 1_000
+    assert RULE_RESOLUTION_CONFIRM_SEED_START == RULE_RESOLUTION_SEED_START + RULE_RESOLUTION_LAYOUTS
+    last = RULE_RESOLUTION_CONFIRM_SEED_START + RULE_RESOLUTION_LAYOUTS - 1
+    assert last in TIER_VALIDATION_SEEDS and last < TEST_SEED_START

@@ -1,0 +1,248 @@
+"""The flow rules at finer depth histograms, chosen on validation layouts (``flownav rule-resolution``).
+
+``histogram_sectors`` and ``depth_bin_edges`` are settings any agent may ask any tier for; the camera-limited
+planner's flow student asks for 3 x 15 sectors and finer bins. Here each flow rule (:data:`RULES`), with its tuned
+gains and its law read in shares of the view (:mod:`agents.policies.view_bands`), flies its own resolution
+(:data:`TODAY`) and each of :data:`CANDIDATES` on suite v2's hard tiers (:data:`TIERS`), on the same validation
+layouts from :data:`~agents.common.seeds.RULE_RESOLUTION_SEED_START`. A candidate is compared with the rule's own
+resolution paired by (tier, layout) (:func:`agents.analysis.paired.compare`); it is picked for the rule only where
+the interval of the difference lies wholly below 0, the largest drop among such. A pick is the best of several,
+so it flies again, with the rule's own resolution, on fresh layouts from
+:data:`~agents.common.seeds.RULE_RESOLUTION_CONFIRM_SEED_START`: confirmed only where that interval lies wholly
+below 0 too. Every episode goes to ``<out>/episodes.csv`` (resumable: a run flies only what it lacks).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.paired import Comparison, compare
+from agents.analysis.records import read_records
+from agents.analysis.statistics import wilson_interval
+from agents.common.folders import check_writable_folder
+from agents.common.seeds import (
+    RULE_RESOLUTION_CONFIRM_SEED_START,
+    RULE_RESOLUTION_LAYOUTS,
+    RULE_RESOLUTION_SEED_START,
+)
+from agents.evaluation.episode_tasks import EpisodeTask, rows_of
+from agents.evaluation.runner import execute
+from agents.policies.histogram_resolution import FINE_BIN_EDGES, HistogramResolution
+from flownav_env.tiers import check_agent_settings, tier
+
+RULES = ("bee_robust", "bee_ttc", "vfh")
+# Suite v2's tiers where the flow student's finer histogram beat the best rule; the clean ones are left to it.
+SUITE_VERSION = "2"
+TIERS = ("hard", "hard_noisy")
+TODAY = HistogramResolution()
+# Columns that split the bee's fifths of the view on column edges (10, 15; 9 would cut them), then the student's.
+CANDIDATES = (
+    HistogramResolution((3, 10)),
+    HistogramResolution((3, 15)),
+    HistogramResolution((3, 15), FINE_BIN_EDGES),
+)
+# Per tier: 3 rules x 4 resolutions x 2 tiers x 25 = 600 searched, at most 3 x 2 x 2 x 25 = 300 confirming.
+SEARCH_LAYOUTS = 25
+CONFIRM_LAYOUTS = 25
+EPISODES_FILE = "episodes.csv"
+STAGES = {"search": RULE_RESOLUTION_SEED_START, "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START}
+
+
+def layout_seeds(stage: str, layouts: int) -> range:
+    """The first ``layouts`` validation layouts of ``stage`` (``search`` or ``confirmation``).
+
+    Raises:
+        ValueError: an unknown stage, or ``layouts`` not an integer in [1, RULE_RESOLUTION_LAYOUTS].
+    """
+    if stage not in STAGES:
+        raise ValueError(f"stage must be one of {', '.join(STAGES)}, got {stage!r}")
+    if (
+        isinstance(layouts, bool)
+        or not isinstance(layouts, int)
+        or not 1 <= layouts <= RULE_RESOLUTION_LAYOUTS
+    ):
+        raise ValueError(
+            f"{stage} layouts must be an integer in [1, {RULE_RESOLUTION_LAYOUTS}], got {layouts!r}"
+        )
+    return range(STAGES[stage], STAGES[stage] + layouts)
+
+
+def resolution_named(name: str) -> HistogramResolution:
+    """The resolution of this study called ``name`` (``3x15-9bins``).
+
+    Raises:
+        ValueError: no resolution of the study has that name; the message lists them.
+    """
+    for resolution in (TODAY, *CANDIDATES):
+        if resolution.name == name:
+            return resolution
+    names = ", ".join(r.name for r in (TODAY, *CANDIDATES))
+    raise ValueError(f"resolution must be one of {names}, got {name!r}")
+
+
+def resolution_tasks(rule: str, resolution: HistogramResolution, seeds: range) -> list[EpisodeTask]:
+    """``rule`` at ``resolution`` on every tier of :data:`TIERS`, layout by layout; each episode is labelled
+    ``<tier>/<resolution>`` in the factor column, so resolutions and tiers never share an episode's key.
+
+    Raises:
+        ValueError: a rule not in :data:`RULES`, or settings a tier refuses.
+    """
+    if rule not in RULES:
+        raise ValueError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
+    settings = resolution.env_kwargs()
+    tasks = []
+    for name in TIERS:
+        check_agent_settings(rule, settings, name, version=SUITE_VERSION)
+        tasks += [
+            EpisodeTask(
+                rule,
+                f"{name}/{resolution.name}",
+                0.0,
+                seed,
+                env_id=tier(name, SUITE_VERSION).env_id,
+                env_kwargs=tuple(sorted(settings.items())),
+                bee_params=tuple(sorted(resolution.rule_parameters().items())),
+            )
+            for seed in seeds
+        ]
+    return tasks
+
+
+def failures(tasks: list[EpisodeTask], rows: Sequence[EpisodeRow]) -> np.ndarray | None:
+    """Failures (1, tasks) in the tasks' order (a failure: no success), or None while one is not flown."""
+    by_key = {(row["factor"], int(row["seed"])): row for row in rows_of(tasks, rows)}
+    found = [by_key.get((task.factor, task.seed)) for task in tasks]
+    if any(row is None for row in found):
+        return None
+    return np.array([[0.0 if row["success"] else 1.0 for row in found if row is not None]])
+
+
+@dataclass(frozen=True)
+class ResolutionRow:
+    """A rule at one resolution on one stage's layouts (both tiers pooled): its failure with a Wilson interval,
+    per tier, and against the rule's own resolution paired by (tier, layout) (None for that one)."""
+
+    stage: str
+    rule: str
+    resolution: str
+    episodes: int
+    failure: float
+    low: float
+    high: float
+    per_tier: dict[str, float]
+    versus_today: Comparison | None
+
+
+@dataclass(frozen=True)
+class RuleResolutionResult:
+    """What the study found: its rows, per rule the resolution picked (None: none) and whether the confirmation
+    bore it out (None: nothing to confirm, or not flown yet), the layouts per tier of each stage, how many
+    (rule, resolution) configurations were tried, and the rows still short of episodes."""
+
+    rows: list[ResolutionRow]
+    picks: dict[str, str | None]
+    confirmed: dict[str, bool | None]
+    layouts: dict[str, int]
+    configurations_tried: int
+    missing: list[str]
+
+
+def _row(
+    stage: str, rule: str, resolution: HistogramResolution, outcome: np.ndarray, today: np.ndarray | None
+):
+    total = outcome.size
+    low, high = wilson_interval(int(total - outcome.sum()), total)
+    per_tier = {
+        name: float(part.mean()) for name, part in zip(TIERS, np.split(outcome[0], len(TIERS)), strict=True)
+    }
+    versus = None if today is None else compare(resolution.name, outcome, TODAY.name, today)
+    # Wilson's interval is of the success rate; failure's is its mirror.
+    return ResolutionRow(
+        stage, rule, resolution.name, total, float(outcome.mean()), 1 - high, 1 - low, per_tier, versus
+    )
+
+
+def pick(rows: Sequence[ResolutionRow]) -> str | None:
+    """Of one rule's candidate rows, the resolution whose paired interval against the rule's own lies wholly below
+    0 with the largest drop (the coarser on a tie); None where no interval does."""
+    below = [row for row in rows if row.versus_today is not None and row.versus_today.high < 0.0]
+    if not below:
+        return None
+    return min(below, key=lambda row: row.versus_today.difference if row.versus_today else 0.0).resolution
+
+
+def _stage_rows(
+    stage: str,
+    rule: str,
+    resolutions: Sequence[HistogramResolution],
+    seeds: range,
+    flown: Sequence[EpisodeRow],
+) -> tuple[list[ResolutionRow], list[str]]:
+    """The rule's rows on a stage, its own resolution first; and those short of episodes."""
+    rows, missing = [], []
+    today = failures(resolution_tasks(rule, TODAY, seeds), flown)
+    for resolution in resolutions:
+        outcome = failures(resolution_tasks(rule, resolution, seeds), flown)
+        if outcome is None:
+            missing.append(f"{rule} at {resolution.name} ({stage})")
+            continue
+        rows.append(_row(stage, rule, resolution, outcome, None if resolution == TODAY else today))
+    return rows, missing
+
+
+def run_rule_resolution(
+    out: Path,
+    *,
+    search_layouts: int = SEARCH_LAYOUTS,
+    confirm_layouts: int = CONFIRM_LAYOUTS,
+    report_only: bool = False,
+) -> RuleResolutionResult:
+    """Fly (unless ``report_only``) the search, then the confirmation of each rule's pick, into
+    ``<out>/episodes.csv`` with one worker; compare and pick.
+
+    Raises:
+        ValueError: a layout count out of range, or an unwritable ``out``.
+    """
+    search_seeds = layout_seeds("search", search_layouts)
+    confirm_seeds = layout_seeds("confirmation", confirm_layouts)
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / EPISODES_FILE
+    resolutions = (TODAY, *CANDIDATES)
+    if not report_only:
+        tasks = [t for rule in RULES for r in resolutions for t in resolution_tasks(rule, r, search_seeds)]
+        execute(tasks, csv_path, workers=1, description="rule resolutions, search")
+    flown = read_records(csv_path) if csv_path.is_file() else []
+    rows, missing, picks = [], [], {}
+    for rule in RULES:
+        found, short = _stage_rows("search", rule, resolutions, search_seeds, flown)
+        rows += found
+        missing += short
+        picks[rule] = None if short else pick(found)
+    picked = [(rule, resolution_named(name)) for rule, name in picks.items() if name is not None]
+    if picked and not report_only:
+        tasks = [
+            t
+            for rule, r in picked
+            for t in (
+                *resolution_tasks(rule, TODAY, confirm_seeds),
+                *resolution_tasks(rule, r, confirm_seeds),
+            )
+        ]
+        execute(tasks, csv_path, workers=1, description="rule resolutions, confirmation")
+        flown = read_records(csv_path)
+    confirmed: dict[str, bool | None] = dict.fromkeys(RULES)
+    for rule, resolution in picked:
+        found, short = _stage_rows("confirmation", rule, (TODAY, resolution), confirm_seeds, flown)
+        rows += found
+        missing += short
+        comparison = found[-1].versus_today if not short else None
+        confirmed[rule] = None if comparison is None else comparison.high < 0.0
+    layouts = {"search": search_layouts, "confirmation": confirm_layouts}
+    return RuleResolutionResult(rows, picks, confirmed, layouts, len(RULES) * len(resolutions), missing)

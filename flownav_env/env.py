@@ -65,7 +65,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
 
     | Key               | Shape                   | Range                | Meaning                                   |
     |-------------------|-------------------------|----------------------|-------------------------------------------|
-    | ``depth_histogram``| (rows, cols, bins)     | [0, 1]               | per image sector (``histogram_sectors``, row 0 at the top, column 0 at the left), the fraction of its valid depth points in each depth bin (``depth_bin_edges``, m; beyond the last edge counts in the last bin); an empty sector is all zeros |
+    | ``depth_histogram``| (rows, cols, bins)     | [0, 1]               | per image sector (``histogram_sectors``, row 0 at the top, column 0 at the left), the fraction of its valid depth points in each depth bin (``depth_bin_edges``, m; beyond the last edge counts in the last bin); an empty sector is all zeros. Both resolutions are observation settings an agent may ask any tier for: the same depths binned otherwise, never another task (``tiers.AGENT_OBSERVATION_SETTINGS``) |
     | ``state``         | (7,)                    | see below            | what a real drone knows of itself         |
     | ``unresolved``    | (rows, cols)            | [0, 1]               | only with ``observe_unresolved=True``: per sector, the share of the tracked points that got no depth to count (too little parallax: far away, or near the focus of expansion); 0 where nothing was tracked |
     | ``point_counts``  | (rows, cols)            | [0, 1]               | only with ``observe_counts=True``: per sector, the confidence 1 − exp(−n/10) of the n points its histogram counts |
@@ -77,11 +77,6 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     | ``course``        | (9,)                    | [0, 1000]            | only with ``observe_layout=True``: goal line x, ``lateral_bound``, ``max_height`` (m), ``forward_speed``, ``max_lateral_speed``, ``max_vertical_speed`` (m/s), ``max_yaw_rate`` (rad/s), the drone's hull radius (m) and ``frame_rate`` (Hz) |
     | ``camera``        | (15,)                   | ±1000 m, [-1, 1], ±1e5 px | only with ``observe_layout=True``: the camera's true world position (m), world-from-camera rotation in OpenCV axes row by row, and horizontal focal length, principal point and image width (px) |
     | ``depth_bin_edges``| (bins + 1,)            | [0, 1000]            | only with ``observe_layout=True``: the histogram's ``depth_bin_edges`` (m) |
-
-    The histogram's resolution, ``histogram_sectors`` and ``depth_bin_edges``, is an observation setting: any
-    agent may ask any tier for another (the same estimated depths binned finer or coarser; the task stays the
-    tier's, :data:`flownav_env.tiers.AGENT_OBSERVATION_SETTINGS`), as the camera-limited planner's flow student
-    asks for 3 x 15 sectors and half-metre bins.
 
     ``state`` (clipped to the bounds of the space):
 

@@ -20,6 +20,9 @@ if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
 _LABEL_INCH_PER_CHAR = 0.075
 _TITLE_INCH_PER_CHAR = 0.1
 _PANEL_WIDTH_IN = 3.2
+# A wrapped title's every further line, and the least height that holds the title, one row and the axis label.
+_TITLE_LINE_IN = 0.25
+_MIN_HEIGHT_IN = 2.8
 
 
 def plot_suite(
@@ -41,7 +44,7 @@ def plot_suite(
     figure, axes = plt.subplots(
         1,
         max(len(tiers), 1),
-        figsize=(width, 0.35 * len(agents) + 1.2 + 0.25 * title.count("\n")),
+        figsize=(width, max(0.35 * len(agents) + 1.4 + _TITLE_LINE_IN * title.count("\n"), _MIN_HEIGHT_IN)),
         sharey=True,
         squeeze=False,
     )

@@ -382,5 +382,6 @@ def test_one_tier_figure_is_as_wide_as_its_longest_name(scored: dict[str, Path],
         warnings.simplefilter("error")
         plot_suite(rows, tmp_path / "long.png")
         plot_suite(published, tmp_path / "short.png")
+        plot_suite(rows[-1:], tmp_path / "one_row.png")  # a single (agent, tier) flight's page
     with Image.open(tmp_path / "long.png") as long_image, Image.open(tmp_path / "short.png") as short_image:
         assert long_image.width > short_image.width

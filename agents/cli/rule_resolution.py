@@ -1,6 +1,7 @@
 """``flownav rule-resolution``: the flow rules (``bee_robust``, ``bee_ttc``, ``vfh``) at finer depth histograms
-on suite v2's hard tiers, paired by layout against their own resolution on validation layouts, each pick confirmed
-on fresh ones (see :mod:`agents.studies.rule_resolution`). Flies with one worker; resumable: run it again after an
+on suite v2's hard tiers, paired by layout against their own resolution on validation layouts; then the refinement
+(the search's nearest rule at the stage's resolutions, on more, fresh layouts); each pick confirmed on fresh ones
+(see :mod:`agents.studies.rule_resolution`). Flies with one worker; resumable: run it again after an
 interruption, and it flies only the episodes ``--out`` lacks."""
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.studies.rule_resolution import CONFIRM_LAYOUTS, SEARCH_LAYOUTS
+from agents.studies.rule_resolution import CONFIRM_LAYOUTS, REFINE_LAYOUTS, SEARCH_LAYOUTS
 
 HELP = "the flow rules at finer depth histograms, chosen on validation layouts -> rule_resolution.md"
 
@@ -21,6 +22,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=SEARCH_LAYOUTS,
         help="validation layouts per tier the search flies every rule at every resolution on (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--refine-layouts",
+        type=int,
+        default=REFINE_LAYOUTS,
+        help="fresh validation layouts per tier the refinement flies its rule on at its resolutions "
+        "(default: %(default)s)",
     )
     parser.add_argument(
         "--confirm-layouts",
@@ -41,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
         Path(args.out),
         command.strip(),
         search_layouts=args.search_layouts,
+        refine_layouts=args.refine_layouts,
         confirm_layouts=args.confirm_layouts,
         report_only=args.report_only,
     )

@@ -25,7 +25,8 @@ Sub-ranges with one use each:
 | camera student recipes (validation) | ``CAMERA_STUDENT_RECIPE_SEED_START ..`` | recipes for the camera-limited planner's student compared per suite v2 tier (``flownav ablation --tiers T --suite-version 2``) |
 | camera student confirmation (validation) | ``CAMERA_STUDENT_CONFIRM_SEED_START ..`` | the recipe picked there flown again on fresh layouts, per suite v2 tier (``flownav ablation --tiers T --suite-version 2 --confirm``) |
 | rule resolutions (validation) | ``RULE_RESOLUTION_SEED_START ..`` (1,000) | the flow rules at finer depth histograms, per suite v2 hard tier, paired against their own resolution (``flownav rule-resolution``, ``results/rule_resolution/``) |
-| rule resolution confirmation (validation) | ``RULE_RESOLUTION_CONFIRM_SEED_START ..`` (1,000) | a resolution picked there flown again against the rule's own on fresh layouts |
+| rule resolution refinement (validation) | ``RULE_RESOLUTION_REFINE_SEED_START ..`` (1,000) | the search's nearest rule at its nearest resolution and at the finer bins alone, on fresh layouts, paired against its own resolution |
+| rule resolution confirmation (validation) | ``RULE_RESOLUTION_CONFIRM_SEED_START ..`` (1,000) | a resolution picked by the search or the refinement flown again against the rule's own on fresh layouts |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -92,7 +93,10 @@ CAMERA_STUDENT_CONFIRM_SEED_START = 973_000
 RULE_RESOLUTION_SEED_START = 974_000
 # Fresh validation layouts on which a resolution picked on the ones above is confirmed: past their 1,000.
 RULE_RESOLUTION_CONFIRM_SEED_START = 975_000
-# How many layouts each of the two rule resolution ranges holds (the next use starts past them).
+# Fresh validation layouts on which the rule resolution study's second stage (the refinement) flies: past the
+# confirmation's 1,000.
+RULE_RESOLUTION_REFINE_SEED_START = 976_000
+# How many layouts each of the three rule resolution ranges holds (the next use starts past them).
 RULE_RESOLUTION_LAYOUTS = 1_000
 # Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's
 # camera student's.

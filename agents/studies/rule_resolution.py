@@ -6,10 +6,15 @@ gains and its law read in shares of the view (:mod:`agents.policies.view_bands`)
 (:data:`TODAY`) and each of :data:`CANDIDATES` on suite v2's hard tiers (:data:`TIERS`), on the same validation
 layouts from :data:`~agents.common.seeds.RULE_RESOLUTION_SEED_START`. A candidate is compared with the rule's own
 resolution paired by (tier, layout) (:func:`agents.analysis.paired.compare`); it is picked for the rule only where
-the interval of the difference lies wholly below 0, the largest drop among such. A pick is the best of several,
-so it flies again, with the rule's own resolution, on fresh layouts from
-:data:`~agents.common.seeds.RULE_RESOLUTION_CONFIRM_SEED_START`: confirmed only where that interval lies wholly
-below 0 too. Every episode goes to ``<out>/episodes.csv`` (resumable: a run flies only what it lacks).
+the interval of the difference lies wholly below 0, the largest drop among such.
+
+Three stages: the search above; the refinement, a second stage stated after the search and before it flew, which
+flies :data:`REFINE_RULE` at its own resolution and each of :data:`REFINE_CANDIDATES` on more, fresh layouts from
+:data:`~agents.common.seeds.RULE_RESOLUTION_REFINE_SEED_START` and picks by the same rule; and the confirmation:
+a pick (the search's, or for :data:`REFINE_RULE` the refinement's) is the best of several, so it flies again, with
+the rule's own resolution, on fresh layouts from :data:`~agents.common.seeds.RULE_RESOLUTION_CONFIRM_SEED_START`:
+confirmed only where that interval lies wholly below 0 too. Every episode goes to ``<out>/episodes.csv``
+(resumable: a run flies only what it lacks).
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from agents.common.folders import check_writable_folder
 from agents.common.seeds import (
     RULE_RESOLUTION_CONFIRM_SEED_START,
     RULE_RESOLUTION_LAYOUTS,
+    RULE_RESOLUTION_REFINE_SEED_START,
     RULE_RESOLUTION_SEED_START,
 )
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
@@ -46,15 +52,32 @@ CANDIDATES = (
     HistogramResolution((3, 15)),
     HistogramResolution((3, 15), FINE_BIN_EDGES),
 )
-# Per tier: 3 rules x 4 resolutions x 2 tiers x 25 = 600 searched, at most 3 x 2 x 2 x 25 = 300 confirming.
+SEARCH_RESOLUTIONS = (TODAY, *CANDIDATES)
+# The refinement, stated after the search and before it flew: the search picked nothing, and its nearest candidate
+# (bee_ttc at 3x15-9bins, -0.160 [-0.340, +0.020] on 25 layouts per tier) was short of power. It flies again on
+# twice the layouts, beside the student's bins at the rule's own columns, which tells the bins' share of a gain from
+# the columns' (3x15 with the default bins was +0.100).
+REFINE_RULE = "bee_ttc"
+REFINE_CANDIDATES = (
+    HistogramResolution((3, 15), FINE_BIN_EDGES),
+    HistogramResolution((3, 5), FINE_BIN_EDGES),
+)
+RESOLUTIONS = (*SEARCH_RESOLUTIONS, *(r for r in REFINE_CANDIDATES if r not in SEARCH_RESOLUTIONS))
+# Episodes: 3 rules x 4 resolutions x 2 tiers x 25 = 600 searched; 3 resolutions x 2 tiers x 50 = 300 refining;
+# 2 resolutions x 2 tiers x 50 = 200 confirming per pick.
 SEARCH_LAYOUTS = 25
-CONFIRM_LAYOUTS = 25
+REFINE_LAYOUTS = 50
+CONFIRM_LAYOUTS = 50
 EPISODES_FILE = "episodes.csv"
-STAGES = {"search": RULE_RESOLUTION_SEED_START, "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START}
+STAGES = {
+    "search": RULE_RESOLUTION_SEED_START,
+    "refinement": RULE_RESOLUTION_REFINE_SEED_START,
+    "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START,
+}
 
 
 def layout_seeds(stage: str, layouts: int) -> range:
-    """The first ``layouts`` validation layouts of ``stage`` (``search`` or ``confirmation``).
+    """The first ``layouts`` validation layouts of ``stage`` (``search``, ``refinement`` or ``confirmation``).
 
     Raises:
         ValueError: an unknown stage, or ``layouts`` not an integer in [1, RULE_RESOLUTION_LAYOUTS].
@@ -78,10 +101,10 @@ def resolution_named(name: str) -> HistogramResolution:
     Raises:
         ValueError: no resolution of the study has that name; the message lists them.
     """
-    for resolution in (TODAY, *CANDIDATES):
+    for resolution in RESOLUTIONS:
         if resolution.name == name:
             return resolution
-    names = ", ".join(r.name for r in (TODAY, *CANDIDATES))
+    names = ", ".join(r.name for r in RESOLUTIONS)
     raise ValueError(f"resolution must be one of {names}, got {name!r}")
 
 
@@ -140,12 +163,16 @@ class ResolutionRow:
 
 @dataclass(frozen=True)
 class RuleResolutionResult:
-    """What the study found: its rows, per rule the resolution picked (None: none) and whether the confirmation
-    bore it out (None: nothing to confirm, or not flown yet), the layouts per tier of each stage, how many
-    (rule, resolution) configurations were tried, and the rows still short of episodes."""
+    """What the study found: its rows, per rule the resolution the search picked (None: none), the refinement's
+    pick for :data:`REFINE_RULE` (None: none, or not flown yet), per rule the pick sent to the confirmation (the
+    search's, or the refinement's for :data:`REFINE_RULE`) and whether the confirmation bore it out (None: nothing
+    to confirm, or not flown yet), the layouts per tier of each stage, how many (rule, resolution) configurations
+    were tried, and the rows still short of episodes."""
 
     rows: list[ResolutionRow]
     picks: dict[str, str | None]
+    refined: str | None
+    chosen: dict[str, str | None]
     confirmed: dict[str, bool | None]
     layouts: dict[str, int]
     configurations_tried: int
@@ -199,50 +226,67 @@ def run_rule_resolution(
     out: Path,
     *,
     search_layouts: int = SEARCH_LAYOUTS,
+    refine_layouts: int = REFINE_LAYOUTS,
     confirm_layouts: int = CONFIRM_LAYOUTS,
     report_only: bool = False,
 ) -> RuleResolutionResult:
-    """Fly (unless ``report_only``) the search, then the confirmation of each rule's pick, into
+    """Fly (unless ``report_only``) the search, the refinement, then the confirmation of each pick, into
     ``<out>/episodes.csv`` with one worker; compare and pick.
 
     Raises:
         ValueError: a layout count out of range, or an unwritable ``out``.
     """
-    search_seeds = layout_seeds("search", search_layouts)
-    confirm_seeds = layout_seeds("confirmation", confirm_layouts)
+    seeds = {
+        "search": layout_seeds("search", search_layouts),
+        "refinement": layout_seeds("refinement", refine_layouts),
+        "confirmation": layout_seeds("confirmation", confirm_layouts),
+    }
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / EPISODES_FILE
-    resolutions = (TODAY, *CANDIDATES)
+    stage_configurations = {
+        "search": [(rule, r) for rule in RULES for r in SEARCH_RESOLUTIONS],
+        "refinement": [(REFINE_RULE, r) for r in (TODAY, *REFINE_CANDIDATES)],
+    }
     if not report_only:
-        tasks = [t for rule in RULES for r in resolutions for t in resolution_tasks(rule, r, search_seeds)]
-        execute(tasks, csv_path, workers=1, description="rule resolutions, search")
+        for stage, configurations in stage_configurations.items():
+            tasks = [t for rule, r in configurations for t in resolution_tasks(rule, r, seeds[stage])]
+            execute(tasks, csv_path, workers=1, description=f"rule resolutions, {stage}")
     flown = read_records(csv_path) if csv_path.is_file() else []
     rows, missing, picks = [], [], {}
     for rule in RULES:
-        found, short = _stage_rows("search", rule, resolutions, search_seeds, flown)
+        found, short = _stage_rows("search", rule, SEARCH_RESOLUTIONS, seeds["search"], flown)
         rows += found
         missing += short
         picks[rule] = None if short else pick(found)
-    picked = [(rule, resolution_named(name)) for rule, name in picks.items() if name is not None]
+    found, short = _stage_rows(
+        "refinement", REFINE_RULE, (TODAY, *REFINE_CANDIDATES), seeds["refinement"], flown
+    )
+    rows += found
+    missing += short
+    refined = None if short else pick(found)
+    chosen = {rule: refined if rule == REFINE_RULE else picks[rule] for rule in RULES}
+    picked = [(rule, resolution_named(name)) for rule, name in chosen.items() if name is not None]
     if picked and not report_only:
         tasks = [
             t
             for rule, r in picked
             for t in (
-                *resolution_tasks(rule, TODAY, confirm_seeds),
-                *resolution_tasks(rule, r, confirm_seeds),
+                *resolution_tasks(rule, TODAY, seeds["confirmation"]),
+                *resolution_tasks(rule, r, seeds["confirmation"]),
             )
         ]
         execute(tasks, csv_path, workers=1, description="rule resolutions, confirmation")
         flown = read_records(csv_path)
     confirmed: dict[str, bool | None] = dict.fromkeys(RULES)
     for rule, resolution in picked:
-        found, short = _stage_rows("confirmation", rule, (TODAY, resolution), confirm_seeds, flown)
+        found, short = _stage_rows("confirmation", rule, (TODAY, resolution), seeds["confirmation"], flown)
         rows += found
         missing += short
         comparison = found[-1].versus_today if not short else None
         confirmed[rule] = None if comparison is None else comparison.high < 0.0
-    layouts = {"search": search_layouts, "confirmation": confirm_layouts}
-    return RuleResolutionResult(rows, picks, confirmed, layouts, len(RULES) * len(resolutions), missing)
+    layouts = {"search": search_layouts, "refinement": refine_layouts, "confirmation": confirm_layouts}
+    # Each (rule, resolution) flown in any stage: the search's 12 and the refinement's resolutions it did not try.
+    tried = len({(rule, r) for configurations in stage_configurations.values() for rule, r in configurations})
+    return RuleResolutionResult(rows, picks, refined, chosen, confirmed, layouts, tried, missing)

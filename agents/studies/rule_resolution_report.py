@@ -7,13 +7,22 @@ from pathlib import Path
 from typing import TypedDict, Unpack
 
 from agents.common.folders import write_text_atomically
-from agents.common.seeds import RULE_RESOLUTION_CONFIRM_SEED_START, RULE_RESOLUTION_SEED_START
+from agents.common.seeds import (
+    RULE_RESOLUTION_CONFIRM_SEED_START,
+    RULE_RESOLUTION_REFINE_SEED_START,
+    RULE_RESOLUTION_SEED_START,
+)
 from agents.common.tables import today
 from agents.studies.rule_resolution import (
     CANDIDATES,
+    REFINE_CANDIDATES,
+    REFINE_RULE,
+    RESOLUTIONS,
     RULES,
+    SEARCH_RESOLUTIONS,
     TIERS,
     TODAY,
+    ResolutionRow,
     RuleResolutionResult,
     run_rule_resolution,
 )
@@ -30,6 +39,10 @@ def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dic
     nearest = min(
         compared, key=lambda row: row.versus_today.difference if row.versus_today else 0.0, default=None
     )
+
+    def stage(name: str) -> list[ResolutionRow]:
+        return [row for row in result.rows if row.stage == name]
+
     return {
         "generated": today(),
         "command": command,
@@ -38,12 +51,24 @@ def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dic
         "today": TODAY.name,
         "candidates": [resolution.name for resolution in CANDIDATES],
         "layouts": result.layouts,
-        "starts": {"search": RULE_RESOLUTION_SEED_START, "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START},
+        "starts": {
+            "search": RULE_RESOLUTION_SEED_START,
+            "refinement": RULE_RESOLUTION_REFINE_SEED_START,
+            "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START,
+        },
+        "search_tried": len(RULES) * len(SEARCH_RESOLUTIONS),
         "tried": result.configurations_tried,
         "episodes": sum(row.episodes for row in result.rows),
-        "search": [row for row in result.rows if row.stage == "search"],
-        "confirmation": [row for row in result.rows if row.stage == "confirmation"],
+        "search": stage("search"),
+        "refinement": stage("refinement"),
+        "confirmation": stage("confirmation"),
+        "search_done": not any(m.endswith("(search)") for m in result.missing),
+        "refinement_done": not any(m.endswith("(refinement)") for m in result.missing),
+        "refine_rule": REFINE_RULE,
+        "refine_candidates": [resolution.name for resolution in REFINE_CANDIDATES],
         "picks": result.picks,
+        "refined": result.refined,
+        "chosen": result.chosen,
         "confirmed": result.confirmed,
         "nearest": nearest,
         "missing": result.missing,
@@ -53,7 +78,7 @@ def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dic
 
 def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:
     """Each candidate minus the rule's own resolution, with its 95 % interval, a panel per rule: the search
-    filled, the confirmation hollow. Returns whether there was anything to draw (nothing is written if not)."""
+    filled (the search blue, the refinement green), the confirmation hollow. Returns whether there was anything to draw (nothing is written if not)."""
     compared = [row for row in result.rows if row.versus_today is not None]
     if not compared:
         return False
@@ -62,7 +87,9 @@ def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # only once the backend is chosen
 
-    names = [resolution.name for resolution in CANDIDATES]
+    names = [resolution.name for resolution in RESOLUTIONS if resolution != TODAY]
+    colours = {"search": "tab:blue", "refinement": "tab:green", "confirmation": "tab:orange"}
+    offsets = {"search": -0.2, "refinement": 0.0, "confirmation": 0.2}
     figure, axes = plt.subplots(
         1, len(RULES), figsize=(3.4 * len(RULES), 2.8), sharex=True, sharey=True, squeeze=False
     )
@@ -71,15 +98,15 @@ def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:
         for row in compared:
             if row.rule != rule or row.versus_today is None:
                 continue
-            y = names.index(row.resolution) + (0.15 if row.stage == "confirmation" else -0.15)
+            y = names.index(row.resolution) + offsets[row.stage]
             d = row.versus_today
-            filled = row.stage == "search"
+            filled = row.stage != "confirmation"
             axis.errorbar(
                 d.difference,
                 y,
                 xerr=[[d.difference - d.low], [d.high - d.difference]],
                 fmt="o",
-                color="tab:blue" if filled else "tab:orange",
+                color=colours[row.stage],
                 markerfacecolor=None if filled else "white",
                 capsize=3,
                 label=row.stage,
@@ -105,6 +132,7 @@ class StudyOptions(TypedDict, total=False):
     """The options of :func:`~agents.studies.rule_resolution.run_rule_resolution` that say how it flies."""
 
     search_layouts: int
+    refine_layouts: int
     confirm_layouts: int
     report_only: bool
 

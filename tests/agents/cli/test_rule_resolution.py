@@ -20,10 +20,18 @@ def test_report_only_writes_the_page_from_what_the_folder_holds(tmp_path: Path, 
     assert (tmp_path / "rule_resolution.md").is_file() and not (tmp_path / "episodes.csv").exists()
 
 
+def test_the_refinement_layouts_reach_the_page(tmp_path: Path, capsys) -> None:
+    assert main(["rule-resolution", "--out", str(tmp_path), "--refine-layouts", "3", "--report-only"]) == 0
+    out = capsys.readouterr().out
+    assert "on 3 fresh validation layouts per tier from 976,000 (`RULE_RESOLUTION_REFINE_SEED_START`)" in out
+    assert "- bee_ttc at 3x5-9bins (refinement)" in out
+
+
 @pytest.mark.parametrize(
     ("option", "value", "message"),
     [
         ("--search-layouts", "0", "search layouts must be an integer in [1, 1000], got 0"),
+        ("--refine-layouts", "0", "refinement layouts must be an integer in [1, 1000], got 0"),
         ("--confirm-layouts", "1001", "confirmation layouts must be an integer in [1, 1000], got 1001"),
     ],
 )

@@ -90,6 +90,7 @@ def test_the_rule_resolution_ranges_follow_the_camera_students_and_each_other_ap
         CAMERA_STUDENT_CONFIRM_SEED_START,
         RULE_RESOLUTION_CONFIRM_SEED_START,
         RULE_RESOLUTION_LAYOUTS,
+        RULE_RESOLUTION_REFINE_SEED_START,
         RULE_RESOLUTION_SEED_START,
         TIER_VALIDATION_SEEDS,
     )
@@ -97,5 +98,7 @@ def test_the_rule_resolution_ranges_follow_the_camera_students_and_each_other_ap
     # The camera student's confirmation took 973,000-973,999; the search's 1,000 and the confirmation's follow.
     assert RULE_RESOLUTION_SEED_START == CAMERA_STUDENT_CONFIRM_SEED_START + 1_000
     assert RULE_RESOLUTION_CONFIRM_SEED_START == RULE_RESOLUTION_SEED_START + RULE_RESOLUTION_LAYOUTS
-    last = RULE_RESOLUTION_CONFIRM_SEED_START + RULE_RESOLUTION_LAYOUTS - 1
+    # The refinement's 1,000 follow the confirmation's.
+    assert RULE_RESOLUTION_REFINE_SEED_START == RULE_RESOLUTION_CONFIRM_SEED_START + RULE_RESOLUTION_LAYOUTS
+    last = RULE_RESOLUTION_REFINE_SEED_START + RULE_RESOLUTION_LAYOUTS - 1
     assert last in TIER_VALIDATION_SEEDS and last < TEST_SEED_START

@@ -11,12 +11,18 @@ import pytest
 
 from agents.analysis.episode_record import EpisodeRecord
 from agents.analysis.records import read_records
-from agents.common.seeds import RULE_RESOLUTION_CONFIRM_SEED_START, RULE_RESOLUTION_SEED_START
+from agents.common.seeds import (
+    RULE_RESOLUTION_CONFIRM_SEED_START,
+    RULE_RESOLUTION_REFINE_SEED_START,
+    RULE_RESOLUTION_SEED_START,
+)
 from agents.evaluation import runner
 from agents.evaluation.episode_tasks import EpisodeTask
 from agents.policies.histogram_resolution import FINE_BIN_EDGES
 from agents.studies.rule_resolution import (
     CANDIDATES,
+    REFINE_CANDIDATES,
+    REFINE_RULE,
     RULES,
     TIERS,
     TODAY,
@@ -30,13 +36,17 @@ from agents.studies.rule_resolution import (
 FINE = "3x15-9bins"
 
 
-def _fake_flight(monkeypatch: pytest.MonkeyPatch, flown: list[EpisodeTask]) -> None:
-    """Episodes without MuJoCo: ``bee_ttc`` at the finer bins reaches the goal on every layout, every other
-    configuration on the even layouts only; the records carry the task's identity as the runner's do."""
+def _fake_flight(
+    monkeypatch: pytest.MonkeyPatch, flown: list[EpisodeTask], fine_from: int = RULE_RESOLUTION_SEED_START
+) -> None:
+    """Episodes without MuJoCo: ``bee_ttc`` at the finer bins reaches the goal on every layout from ``fine_from``,
+    every other configuration (and it before) on the even layouts only; the records carry the task's identity as
+    the runner's do."""
 
     def run_task(task: EpisodeTask, cache: object = None) -> EpisodeRecord:
         flown.append(task)
-        success = (task.agent == "bee_ttc" and task.factor.endswith(FINE)) or task.seed % 2 == 0
+        fine = task.agent == "bee_ttc" and task.factor.endswith(FINE) and task.seed >= fine_from
+        success = fine or task.seed % 2 == 0
         record = EpisodeRecord(
             task.agent, task.factor, task.level, task.seed, not success, success, False, False,
             10.0, 1.0, 10, 0.5, 10.0, 100.0, 0.1, 1.0,
@@ -63,34 +73,58 @@ def test_tasks_fly_each_tier_with_the_resolution_asked_and_matching_bins() -> No
     assert [r.name for r in (TODAY, *CANDIDATES)] == ["3x5", "3x10", "3x15", FINE]
 
 
-def test_a_pick_is_made_only_where_the_interval_lies_below_zero_then_confirmed_on_fresh_layouts(
+def test_the_refinement_flies_its_rule_at_the_student_bins_on_fresh_layouts_and_its_pick_is_confirmed(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     flown: list[EpisodeTask] = []
     _fake_flight(monkeypatch, flown)
-    result = run_rule_resolution(tmp_path, search_layouts=8, confirm_layouts=6)
+    result = run_rule_resolution(tmp_path, search_layouts=8, refine_layouts=10, confirm_layouts=6)
     search = len(RULES) * (1 + len(CANDIDATES)) * len(TIERS) * 8
-    assert len(flown) == search + 2 * len(TIERS) * 6  # the pick and the rule's own on the fresh layouts
+    refinement = (1 + len(REFINE_CANDIDATES)) * len(TIERS) * 10
+    assert (
+        len(flown) == search + refinement + 2 * len(TIERS) * 6
+    )  # the pick and the rule's own, fresh layouts
+    assert {t.agent for t in flown[search : search + refinement]} == {REFINE_RULE}
+    assert min(t.seed for t in flown[search : search + refinement]) == RULE_RESOLUTION_REFINE_SEED_START
     assert result.picks == {"bee_robust": None, "bee_ttc": FINE, "vfh": None}
+    assert result.refined == FINE and result.chosen == result.picks
     assert result.confirmed == {"bee_robust": None, "bee_ttc": True, "vfh": None}
-    assert result.configurations_tried == 12 and not result.missing
+    # The search's 12 and one resolution new in the refinement (the student's bins at 3x5).
+    assert result.configurations_tried == 13 and not result.missing
+    refining = [row for row in result.rows if row.stage == "refinement"]
+    assert [row.resolution for row in refining] == ["3x5", FINE, "3x5-9bins"]
+    assert refining[2].versus_today is not None and refining[2].versus_today.difference == 0.0
+    assert refining[1].episodes == 20 and refining[1].failure == 0.0
     confirming = [row for row in result.rows if row.stage == "confirmation"]
     assert [(row.rule, row.resolution) for row in confirming] == [("bee_ttc", "3x5"), ("bee_ttc", FINE)]
     row = confirming[-1]
     assert row.failure == 0.0 and row.per_tier == {"hard": 0.0, "hard_noisy": 0.0} and row.episodes == 12
     assert row.versus_today is not None and row.versus_today.difference == pytest.approx(-0.5)
-    assert min(t.seed for t in flown[search:]) == RULE_RESOLUTION_CONFIRM_SEED_START
+    assert min(t.seed for t in flown[search + refinement :]) == RULE_RESOLUTION_CONFIRM_SEED_START
     # Resumed: nothing is flown again, and the report reads the same episodes.
     flown.clear()
-    again = run_rule_resolution(tmp_path, search_layouts=8, confirm_layouts=6)
+    again = run_rule_resolution(tmp_path, search_layouts=8, refine_layouts=10, confirm_layouts=6)
     assert flown == [] and again.rows == result.rows
-    assert len(read_records(tmp_path / "episodes.csv")) == search + 24
+    assert len(read_records(tmp_path / "episodes.csv")) == search + refinement + 24
+
+
+def test_the_refinement_pick_is_confirmed_even_where_the_search_picked_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    flown: list[EpisodeTask] = []
+    # The finer bins help only from the refinement's layouts on: in the search every configuration ties.
+    _fake_flight(monkeypatch, flown, fine_from=RULE_RESOLUTION_CONFIRM_SEED_START)
+    result = run_rule_resolution(tmp_path, search_layouts=4, refine_layouts=10, confirm_layouts=6)
+    assert set(result.picks.values()) == {None} and result.refined == FINE
+    assert result.chosen == {"bee_robust": None, "bee_ttc": FINE, "vfh": None}
+    assert result.confirmed["bee_ttc"] is True
 
 
 def test_a_short_search_picks_nothing_and_lists_what_is_missing(tmp_path: Path) -> None:
     result = run_rule_resolution(tmp_path, search_layouts=3, report_only=True)
     assert result.rows == [] and set(result.picks.values()) == {None}
-    assert "bee_robust at 3x5 (search)" in result.missing and len(result.missing) == 12
+    assert "bee_robust at 3x5 (search)" in result.missing and len(result.missing) == 12 + 3
+    assert "bee_ttc at 3x5-9bins (refinement)" in result.missing and result.refined is None
 
 
 def test_pick_takes_the_largest_drop_among_intervals_below_zero() -> None:
@@ -118,8 +152,15 @@ def test_pick_takes_the_largest_drop_among_intervals_below_zero() -> None:
         (lambda: layout_seeds("search", 0), r"search layouts must be an integer in \[1, 1000\], got 0"),
         (lambda: layout_seeds("confirmation", 1001), r"confirmation layouts must be .*\[1, 1000\], got 1001"),
         (lambda: layout_seeds("search", True), r"search layouts must be an integer in \[1, 1000\], got True"),
-        (lambda: layout_seeds("test", 5), "stage must be one of search, confirmation, got 'test'"),
-        (lambda: resolution_named("3x7"), "resolution must be one of 3x5, 3x10, 3x15, 3x15-9bins, got '3x7'"),
+        (lambda: layout_seeds("refinement", -1), r"refinement layouts must be .*\[1, 1000\], got -1"),
+        (
+            lambda: layout_seeds("test", 5),
+            "stage must be one of search, refinement, confirmation, got 'test'",
+        ),
+        (
+            lambda: resolution_named("3x7"),
+            "resolution must be one of 3x5, 3x10, 3x15, 3x15-9bins, 3x5-9bins, got '3x7'",
+        ),
         (
             lambda: resolution_tasks("bee", TODAY, range(1)),
             "rule must be one of bee_robust, bee_ttc, vfh, got 'bee'",

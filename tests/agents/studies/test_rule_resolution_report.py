@@ -93,7 +93,10 @@ def test_the_page_words_each_comparison_from_its_interval_and_counts_what_was_tr
 def test_a_pick_the_fresh_layouts_do_not_bear_out_is_said_to_be_unconfirmed() -> None:
     text = _page(_result(confirmed=False))
     assert "- `bee_ttc` at 3x15-9bins: not confirmed" in text
-    assert "- `bee_ttc`: keeps 3x5; no rule entry asks for a finer histogram for it." in text
+    assert (
+        "- `bee_ttc`: keeps 3x5 (3x15-9bins, picked, was not confirmed on fresh layouts); no rule entry asks for "
+        "a finer histogram for it." in text
+    )
 
 
 def test_with_no_pick_nothing_is_confirmed_and_no_rule_asks_for_a_finer_histogram() -> None:

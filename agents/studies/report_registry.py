@@ -8,8 +8,7 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterator, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 
@@ -24,37 +23,10 @@ from agents.studies.ablation import compare_configs
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
+from agents.studies.report_entry import Report
+from agents.studies.reports_not_regenerated import NOT_REGENERATED
 from agents.studies.rule_resolution_report import write_rule_resolution
 from flownav_env.tiers import TIER_NAMES
-
-
-@dataclass(frozen=True)
-class Report:
-    """One Markdown file of ``results/``.
-
-    Attributes:
-        path: the report, relative to ``results/`` (``ablation/speed_1.5/ablation.md``).
-        name: what ``flownav reports --only`` calls it; empty for a report that is not regenerated.
-        command: the stand-alone command that rebuilds it from the committed data (what the report names).
-        inputs: glob patterns, relative to ``results/``, of the committed data it is built from; each must
-            match a file, or the report is skipped.
-        write: rebuilds the report (and its figures and tables) into the folder given, reading ``inputs``
-            there when ``staged``; None: not regenerated, ``reason`` says why.
-        staged: the writer reads its inputs from its own output folder, so they are copied there first.
-        reason: one line, why a report is not regenerated.
-    """
-
-    path: str
-    name: str = ""
-    command: str = ""
-    inputs: tuple[str, ...] = ()
-    write: Callable[[Report, Path], object] | None = None
-    staged: bool = True
-    reason: str = ""
-
-    @property
-    def regenerated(self) -> bool:
-        return self.write is not None
 
 
 @contextlib.contextmanager
@@ -195,13 +167,6 @@ def _ablation_report(
     )
 
 
-def _not_regenerated(reason: str, *paths: str) -> tuple[Report, ...]:
-    return tuple(Report(path, reason=reason) for path in paths)
-
-
-_PROSE = "hand-written prose"
-_STALE = "stale, kept for comparison as the code of its time wrote it (results/README.md)"
-
 REPORTS: tuple[Report, ...] = (
     Report(
         "leaderboard.md",
@@ -329,81 +294,5 @@ REPORTS: tuple[Report, ...] = (
         inputs=("rule_resolution/episodes.csv",),
         write=lambda report, folder: write_rule_resolution(folder, report.command, report_only=True),
     ),
-    Report(
-        "student_recipes_v2/hard/ablation.md",
-        reason="a pilot whose policies, but the pick's, were not shipped: flownav ablation wrote it from the run "
-        "folders its training left in runs/, which a checkout does not keep (the commands are in the report; its "
-        "episodes are committed beside it; the pick's seeds are results/policies/"
-        "ppo_flow_camera_student_fine_rounds6_hard/)",
-    ),
-    Report(
-        "student_recipes_v2/hard_stack/ablation.md",
-        reason="a pilot whose frame-stacked policies were not shipped: flownav ablation wrote it from the run folders "
-        "its training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
-        "are committed beside it)",
-    ),
-    Report(
-        "student_recipes_v2/hard_rounds12/ablation.md",
-        reason="a pilot whose twelve-round policies were not shipped: flownav ablation wrote it from the run folders "
-        "its training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
-        "are committed beside it)",
-    ),
-    Report(
-        "ablation/lever_lab_notes.md",
-        reason="the lever search's lab notebook, hand-written lever by lever as each was judged and kept as it was: its "
-        "figures are those of their day (the current ones are flow_gap.md's and ablation.md's)",
-    ),
-    *_not_regenerated(
-        _PROSE,
-        "README.md",
-        "camera_reference/README.md",
-        "student_recipes_v2/hard_confirmation/README.md",
-        "diagnostics/README.md",
-        "renderer_check/README.md",
-        "sweep_fast20/README.md",
-        "sweep_thesis_range/README.md",
-        "throughput/README.md",
-        "unfinished/README.md",
-    ),
-    Report(
-        "estimator_performance.md",
-        reason="a measurement by the code of its time: flownav bench estimator measures Table 3 and the targets "
-        "again, but no longer its section on per-point depth loops (estimator_performance_depth_stage.csv) nor "
-        "the full backward search (its ratio column and the flow stage's ratio derived from it)",
-    ),
-    *_not_regenerated(
-        "a measurement by the code of its time: flownav bench env measures steps/s, the stage split and the "
-        "targets again, but no longer its Default resolution and FAST threshold sections",
-        "env_performance.md",
-        "renderer_check/env_performance.md",
-    ),
-    Report(
-        "training_performance.md",
-        reason="a measurement by the code of its time: flownav bench recipe measures the minutes per seed and "
-        "states the quality again, but no longer the recorded minutes column nor its Seeds per hour section",
-    ),
-    Report(
-        "student_recipes_v2/recipe_speed/training_performance.md",
-        reason="a measurement by the code of its time: flownav bench recipe measures the camera student's minutes "
-        "per seed again (the command is in the report)",
-    ),
-    Report(
-        "depth_yield.md",
-        reason="a measurement by the code of its time: flownav bench yield flies the in-scene variants again, but "
-        "no longer its ICL-NUIM section",
-    ),
-    *_not_regenerated(
-        _STALE,
-        "sweep_fast20/sweep.md",
-        "sweep_thesis_range/sweep.md",
-        "sweep_thesis_range/benchmark.md",
-        "renderer_check/sweep.md",
-        "bee_tuning/ranking.md",
-    ),
-    *_not_regenerated(
-        "flownav tune has no report-only path: running it again resumes the study, which may fly episodes",
-        "tuning/bee/tuning.md",
-        "tuning/bee_robust/tuning.md",
-        "tuning/vfh/tuning.md",
-    ),
+    *NOT_REGENERATED,
 )

@@ -342,13 +342,12 @@ def student_recipe_reports(tier_names: Sequence[str]) -> dict[str, str]:
 
 def camera_student_recipe_reports() -> dict[str, str]:
     """The camera-limited planner's student's recipe comparisons and confirmations committed under
-    ``results/student_recipes_v2/`` (``hard``, ``hard_confirmation``), each folder → its ``ablation.md``, relative
-    to ``results/`` (as :func:`student_recipe_reports`' links, wherever the page is written)."""
+    ``results/student_recipes_v2/`` (``hard``, ``hard_confirmation``), each folder → its ``ablation.md``, and its
+    recipe's minutes per seed (``flownav bench recipe``'s ``training_performance.md``), relative to ``results/``
+    (as :func:`student_recipe_reports`' links, wherever the page is written)."""
     folder = RESULTS_DIR / CAMERA_STUDENT_RECIPES_DIR
-    return {
-        page.parent.name: page.relative_to(RESULTS_DIR).as_posix()
-        for page in sorted(folder.glob("*/ablation.md"))
-    }
+    pages = sorted([*folder.glob("*/ablation.md"), *folder.glob("*/training_performance.md")])
+    return {page.parent.name: page.relative_to(RESULTS_DIR).as_posix() for page in pages}
 
 
 def suite_page(values: Mapping[str, object]) -> str:

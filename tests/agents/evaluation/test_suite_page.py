@@ -13,6 +13,7 @@ from agents.analysis.paired import MIN_RANKED_SEEDS
 from agents.common.seeds import suite_seeds
 from agents.evaluation.suite_page import (
     STUDENT_RECIPES_DIR,
+    camera_student_recipe_reports,
     rank_suite,
     student_recipe_reports,
     suite_page,
@@ -168,6 +169,14 @@ def test_each_tiers_comparison_of_recipes_for_the_student_is_linked() -> None:
     assert "Recipes tried for the planner's flow student" in text
     assert "[`hard`](student_recipes/hard/ablation.md), [`noisy`](student_recipes/noisy/ablation.md)." in text
     assert "Recipes tried" not in suite_page(_values([]))
+
+
+def test_the_camera_students_committed_recipe_pages_and_its_minutes_per_seed_are_linked() -> None:
+    links = camera_student_recipe_reports()
+    assert links["hard"] == "student_recipes_v2/hard/ablation.md"
+    assert links["recipe_speed"] == "student_recipes_v2/recipe_speed/training_performance.md"
+    text = suite_page(_values([]) | {"recipe_reports": {"hard": "x.md"}, "camera_recipe_reports": links})
+    assert "[`recipe_speed`](student_recipes_v2/recipe_speed/training_performance.md)" in text
 
 
 def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_kept(tmp_path: Path) -> None:

@@ -222,6 +222,48 @@ def _stage_rows(
     return rows, missing
 
 
+def _searched(
+    seeds: dict[str, range], flown: Sequence[EpisodeRow]
+) -> tuple[list[ResolutionRow], list[str], dict[str, str | None], str | None]:
+    """The search's and the refinement's rows, those short of episodes, each rule's search pick and the
+    refinement's pick."""
+    rows, missing, picks = [], [], {}
+    for rule in RULES:
+        found, short = _stage_rows("search", rule, SEARCH_RESOLUTIONS, seeds["search"], flown)
+        rows += found
+        missing += short
+        picks[rule] = None if short else pick(found)
+    found, short = _stage_rows(
+        "refinement", REFINE_RULE, (TODAY, *REFINE_CANDIDATES), seeds["refinement"], flown
+    )
+    return rows + found, missing + short, picks, None if short else pick(found)
+
+
+def _confirmed(
+    picked: Sequence[tuple[str, HistogramResolution]], seeds: range, csv_path: Path, report_only: bool
+) -> tuple[list[ResolutionRow], list[str], dict[str, bool | None]]:
+    """Fly (unless ``report_only``) each pick and its rule's own resolution on the confirmation layouts; their
+    rows, those short of episodes, and per rule whether the pick is confirmed (None: nothing to confirm, or not
+    flown yet)."""
+    if picked and not report_only:
+        tasks = [
+            t
+            for rule, r in picked
+            for t in (*resolution_tasks(rule, TODAY, seeds), *resolution_tasks(rule, r, seeds))
+        ]
+        execute(tasks, csv_path, workers=1, description="rule resolutions, confirmation")
+    flown = read_records(csv_path) if csv_path.is_file() else []
+    rows, missing = [], []
+    confirmed: dict[str, bool | None] = dict.fromkeys(RULES)
+    for rule, resolution in picked:
+        found, short = _stage_rows("confirmation", rule, (TODAY, resolution), seeds, flown)
+        rows += found
+        missing += short
+        comparison = found[-1].versus_today if not short else None
+        confirmed[rule] = None if comparison is None else comparison.high < 0.0
+    return rows, missing, confirmed
+
+
 def run_rule_resolution(
     out: Path,
     *,
@@ -254,39 +296,15 @@ def run_rule_resolution(
             tasks = [t for rule, r in configurations for t in resolution_tasks(rule, r, seeds[stage])]
             execute(tasks, csv_path, workers=1, description=f"rule resolutions, {stage}")
     flown = read_records(csv_path) if csv_path.is_file() else []
-    rows, missing, picks = [], [], {}
-    for rule in RULES:
-        found, short = _stage_rows("search", rule, SEARCH_RESOLUTIONS, seeds["search"], flown)
-        rows += found
-        missing += short
-        picks[rule] = None if short else pick(found)
-    found, short = _stage_rows(
-        "refinement", REFINE_RULE, (TODAY, *REFINE_CANDIDATES), seeds["refinement"], flown
-    )
-    rows += found
-    missing += short
-    refined = None if short else pick(found)
+    rows, missing, picks, refined = _searched(seeds, flown)
     chosen = {rule: refined if rule == REFINE_RULE else picks[rule] for rule in RULES}
     picked = [(rule, resolution_named(name)) for rule, name in chosen.items() if name is not None]
-    if picked and not report_only:
-        tasks = [
-            t
-            for rule, r in picked
-            for t in (
-                *resolution_tasks(rule, TODAY, seeds["confirmation"]),
-                *resolution_tasks(rule, r, seeds["confirmation"]),
-            )
-        ]
-        execute(tasks, csv_path, workers=1, description="rule resolutions, confirmation")
-        flown = read_records(csv_path)
-    confirmed: dict[str, bool | None] = dict.fromkeys(RULES)
-    for rule, resolution in picked:
-        found, short = _stage_rows("confirmation", rule, (TODAY, resolution), seeds["confirmation"], flown)
-        rows += found
-        missing += short
-        comparison = found[-1].versus_today if not short else None
-        confirmed[rule] = None if comparison is None else comparison.high < 0.0
+    confirm_rows, confirm_missing, confirmed = _confirmed(
+        picked, seeds["confirmation"], csv_path, report_only
+    )
     layouts = {"search": search_layouts, "refinement": refine_layouts, "confirmation": confirm_layouts}
     # Each (rule, resolution) flown in any stage: the search's 12 and the refinement's resolutions it did not try.
     tried = len({(rule, r) for configurations in stage_configurations.values() for rule, r in configurations})
-    return RuleResolutionResult(rows, picks, refined, chosen, confirmed, layouts, tried, missing)
+    return RuleResolutionResult(
+        rows + confirm_rows, picks, refined, chosen, confirmed, layouts, tried, missing + confirm_missing
+    )

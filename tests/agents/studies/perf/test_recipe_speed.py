@@ -73,7 +73,8 @@ def test_two_tiny_recipes_are_timed_side_by_side_into_the_report(tmp_path: Path)
     )
     text = paths[0].read_text()
     assert "| old | 128 | 0 |" in text and "| tiny_new | 64 | 32 |" in text
-    assert "1.00 [1.00–1.00]" in text and "not flown" in text
+    assert "1.00 [1.00–1.00]" in text and "this page states no quality" in text
+    assert "- `tiny_new`: " in text and "min per seed → **within**" in text
     assert all(path.is_file() for path in paths)
 
 

@@ -11,6 +11,7 @@ bit for bit as when they were written in columns.
 
 from __future__ import annotations
 
+import functools
 import math
 from fractions import Fraction
 
@@ -32,10 +33,19 @@ def column_weights(cols: int, start: Fraction, stop: Fraction) -> np.ndarray:
         ValueError: ``cols`` is not a positive integer, or the band is not 0 <= start < stop <= 1.
     """
     _check_band(cols, start, stop)
-    low, high = Fraction(start) * cols, Fraction(stop) * cols
-    return np.array(
+    return _column_weights(cols, Fraction(start), Fraction(stop))
+
+
+# The bands' geometry depends only on the column count, so a rule computes it once per count, not every step
+# (Fraction arithmetic is slow); the cached arrays are read-only so that no caller can change them for the next.
+@functools.lru_cache(maxsize=64)
+def _column_weights(cols: int, start: Fraction, stop: Fraction) -> np.ndarray:
+    low, high = start * cols, stop * cols
+    weights = np.array(
         [float(max(min(high, Fraction(j + 1)) - max(low, Fraction(j)), Fraction(0))) for j in range(cols)]
     )
+    weights.setflags(write=False)
+    return weights
 
 
 def band_mean(per_column: np.ndarray, start: Fraction, stop: Fraction) -> np.ndarray:
@@ -61,13 +71,20 @@ def band_columns(cols: int, start: Fraction, stop: Fraction) -> np.ndarray:
         ValueError: as :func:`column_weights`.
     """
     _check_band(cols, start, stop)
+    return _band_columns(cols, Fraction(start), Fraction(stop))
+
+
+@functools.lru_cache(maxsize=64)
+def _band_columns(cols: int, start: Fraction, stop: Fraction) -> np.ndarray:
     centres = [Fraction(2 * j + 1, 2 * cols) for j in range(cols)]
     inside = [j for j, centre in enumerate(centres) if start <= centre <= stop]
-    if inside:
-        return np.array(inside)
-    middle = (Fraction(start) + Fraction(stop)) / 2
-    nearest = min(abs(centre - middle) for centre in centres)
-    return np.array([j for j, centre in enumerate(centres) if abs(centre - middle) == nearest])
+    if not inside:
+        middle = (start + stop) / 2
+        nearest = min(abs(centre - middle) for centre in centres)
+        inside = [j for j, centre in enumerate(centres) if abs(centre - middle) == nearest]
+    columns = np.array(inside)
+    columns.setflags(write=False)
+    return columns
 
 
 def triangle_kernel(cols: int, half_width: Fraction) -> np.ndarray:
@@ -82,10 +99,17 @@ def triangle_kernel(cols: int, half_width: Fraction) -> np.ndarray:
         raise ValueError(f"columns must be an integer >= 1, got {cols!r}")
     if not 0 < half_width <= 1:
         raise ValueError(f"a kernel's half-width must be in (0, 1] of the view, got {half_width}")
-    reach = Fraction(half_width) * cols  # in columns
+    return _triangle_kernel(cols, Fraction(half_width))
+
+
+@functools.lru_cache(maxsize=64)
+def _triangle_kernel(cols: int, half_width: Fraction) -> np.ndarray:
+    reach = half_width * cols  # in columns
     offsets = range(-math.ceil(reach) + 1, math.ceil(reach))
     weights = np.array([float(1 - Fraction(abs(k)) / reach) for k in offsets])
-    return weights / weights.sum()
+    kernel = weights / weights.sum()
+    kernel.setflags(write=False)
+    return kernel
 
 
 def smooth_across_columns(values: np.ndarray, kernel: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from pathlib import Path
 from agents.cli.arguments import add_workers_argument, announce_flight
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS
-from agents.policies import SUITE_AGENTS
+from agents.policies import suite_agents_of
 from flownav_env.tiers import SUITE_VERSION, SUITE_VERSIONS, TIER_NAMES
 
 HELP = "fly every agent on every tier's frozen test layouts; write the suite's leading table"
@@ -55,8 +55,8 @@ def add_suite_version_argument(parser: argparse.ArgumentParser) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--agents",
-        default=",".join(SUITE_AGENTS),
-        help=f"comma-separated agents, flown in this order (default: all, {', '.join(SUITE_AGENTS)})",
+        help="comma-separated agents, flown in this order (default: every agent the suite version flies; "
+        f"v{SUITE_VERSION}: {', '.join(suite_agents_of(SUITE_VERSION))})",
     )
     add_tier_arguments(parser)
     parser.add_argument(
@@ -71,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import run_suite
 
-    agents = [name.strip() for name in args.agents.split(",") if name.strip()]
+    names = args.agents if args.agents is not None else ",".join(suite_agents_of(args.suite_version))
+    agents = [name.strip() for name in names.split(",") if name.strip()]
     if not args.report_only:
         # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
         from agents.evaluation.suite import agent_runs, parse_tiers

@@ -35,6 +35,8 @@ class AgentEntry:
     suite_only: bool = False
     per_tier: bool = False
     retired: str = ""
+    # (suite version, why) for each suite version the suite does not fly this agent on.
+    not_flown_on: tuple[tuple[str, str], ...] = ()
 
     @property
     def privileged(self) -> bool:
@@ -52,9 +54,10 @@ def read_agent_table(path: Path = AGENTS_FILE) -> tuple[AgentEntry, ...]:
     entries = yaml.safe_load(path.read_text(encoding="utf-8"))["agents"]
     table = []
     for name, values in entries.items():
-        unknown = set(values) - {"kind", "sees", "suite_only", "per_tier", "retired"}
+        unknown = set(values) - {"kind", "sees", "suite_only", "per_tier", "retired", "not_flown_on"}
         if unknown:
             raise ValueError(f"{path}: agent {name!r} has unknown keys {sorted(unknown)}")
+        values = {**values, "not_flown_on": _not_flown_on(path, str(name), values.get("not_flown_on", {}))}
         for key, allowed in (("kind", get_args(Kind)), ("sees", get_args(Sight))):
             if values.get(key) not in allowed:
                 raise ValueError(
@@ -64,6 +67,19 @@ def read_agent_table(path: Path = AGENTS_FILE) -> tuple[AgentEntry, ...]:
             raise ValueError(f"{path}: agent {name!r} is per_tier, which only a learned agent can be")
         table.append(AgentEntry(name=str(name), **values))
     return tuple(table)
+
+
+def _not_flown_on(path: Path, name: str, versions: object) -> tuple[tuple[str, str], ...]:
+    """An entry's ``not_flown_on``: suite version (as written in quotes, ``"2"``) → why, each why a sentence."""
+    if not isinstance(versions, dict) or not all(
+        isinstance(version, str) and version.isdigit() and isinstance(why, str) and why.strip()
+        for version, why in versions.items()
+    ):
+        raise ValueError(
+            f'{path}: agent {name!r} not_flown_on must map suite versions (quoted, such as "2") to why, got '
+            f"{versions!r}"
+        )
+    return tuple(sorted(versions.items()))
 
 
 AGENT_TABLE = read_agent_table()

@@ -32,6 +32,7 @@ from agents.analysis.records import (
 )
 from agents.common.interrupts import stop_signals_interrupt
 from agents.common.machine import code_version
+from agents.common.process_pool import run_in_workers
 from agents.evaluation.agent_settings import episode_name, flown_settings, plan_settings
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
 from agents.evaluation.episode import EpisodeRecord, run_episode
@@ -291,7 +292,7 @@ def _await_other_runs(
 
 def _start_pool_worker() -> None:
     """Pool workers leave Ctrl-C to the parent, which stops them; else each prints its own traceback. SIGTERM,
-    how the parent's ``pool.terminate()`` stops them, ends the worker's outside agent processes first, as its
+    how the parent stops them (:func:`~agents.common.process_pool.run_in_workers`), ends the worker's outside agent processes first, as its
     normal exit does."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _end_pool_worker)
@@ -314,16 +315,14 @@ def _results(
         for task in todo:
             yield run_claimed_task(csv_path, task)
     else:
-        # forkserver: a forked child would inherit this process's GL state, which hangs EGL.
-        context = multiprocessing.get_context("forkserver")
-        pool = context.Pool(workers, initializer=_start_pool_worker)
-        try:
-            # Tasks are ordered by cell, so chunks keep each worker on one env for a while.
-            yield from pool.imap_unordered(functools.partial(run_claimed_task, csv_path), todo, chunksize=1)
-            pool.close()
-        finally:
-            pool.terminate()  # also on Ctrl-C or close(): no worker flies on unseen
-            pool.join()
+        # Tasks are ordered by cell, so each worker stays on one env for a while.
+        yield from run_in_workers(
+            functools.partial(run_claimed_task, csv_path),
+            todo,
+            workers,
+            initializer=_start_pool_worker,
+            describe=episode_name,
+        )
 
 
 def _ray_results(todo: list[EpisodeTask], address: str | None, workers: int) -> Iterator[EpisodeRecord]:

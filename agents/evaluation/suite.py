@@ -45,8 +45,8 @@ from agents.evaluation.suite_plot import plot_suite
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, SuiteRow
 from agents.evaluation.tier_bound import suite_bounds
 from agents.policies import (
-    SUITE_AGENTS,
     agent_env_kwargs,
+    check_flown_on,
     check_not_retired,
     default_runs,
     is_learned,
@@ -56,6 +56,7 @@ from agents.policies import (
     policy_file,
     runs_to_fly,
     split_agent_name,
+    suite_agents_of,
 )
 from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
@@ -267,10 +268,10 @@ def write_summary_csv(path: Path, table: Sequence[Mapping[str, object]]) -> None
     write_text_atomically(path, text.getvalue())
 
 
-def suite_agents() -> list[str]:
-    """Every agent the suite reports: all of :data:`~agents.policies.base.SUITE_AGENTS` but a learned agent with
-    no shipped policy yet (one being trained), which has no runs to report."""
-    return [agent for agent in SUITE_AGENTS if not is_learned(agent) or default_runs(agent)[0]]
+def suite_agents(version: str = SUITE_VERSION) -> list[str]:
+    """Every agent suite ``version`` reports: those it flies (:func:`~agents.policies.base.suite_agents_of`) but a
+    learned agent with no shipped policy yet (one being trained), which has no runs to report."""
+    return [agent for agent in suite_agents_of(version) if not is_learned(agent) or default_runs(agent)[0]]
 
 
 def suite_top_groups(
@@ -285,7 +286,7 @@ def suite_top_groups(
     path = Path(folder) / EPISODES_CSV
     if not path.is_file():
         raise FileNotFoundError(f"no suite episodes at {path}: flownav suite --out {folder}")
-    runs = {agent: agent_runs(agent) for agent in suite_agents()}
+    runs = {agent: agent_runs(agent) for agent in suite_agents(version)}
     tasks = [
         task
         for agent in runs
@@ -330,7 +331,10 @@ def run_suite(
     tier_names = parse_tiers(tiers)
     if workers < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")
-    runs = {agent: agent_runs(resolve_agent(check_not_retired(agent))) for agent in agents}
+    runs = {
+        agent: agent_runs(resolve_agent(check_flown_on(check_not_retired(agent), version)))
+        for agent in agents
+    }
     tasks = [
         task
         for agent in runs

@@ -27,7 +27,14 @@ from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
-from agents.policies import RETIRED_AGENTS, is_learned, is_per_tier, split_agent_name, trained_on
+from agents.policies import (
+    NOT_FLOWN_ON,
+    RETIRED_AGENTS,
+    is_learned,
+    is_per_tier,
+    split_agent_name,
+    trained_on,
+)
 from agents.policies.base import base_agent_name
 from agents.policies.trained_tiers import agent_tiers
 from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
@@ -293,6 +300,7 @@ def suite_values(
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),
+        "not_flown": dict(NOT_FLOWN_ON.get(version, {})),
         "chains": {name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
         "included_files": list(included_files),
         "not_counted": list(not_counted),

@@ -38,11 +38,17 @@ PRIVILEGED_AGENTS = agents_where(privileged=True)
 RETIRED_AGENTS = {entry.name: entry.retired for entry in AGENT_TABLE if entry.retired}
 # The agents the suite flies and ranks (with its references): every agent but the retired ones.
 SUITE_AGENTS = tuple(agent for agent in AGENT_NAMES if agent not in RETIRED_AGENTS)
+# Per suite version, the agents of the suite it does not fly, each with why (``not_flown_on`` in the table).
+NOT_FLOWN_ON: dict[str, dict[str, str]] = {
+    version: {entry.name: why for entry in AGENT_TABLE for v, why in entry.not_flown_on if v == version}
+    for version in sorted({v for entry in AGENT_TABLE for v, _ in entry.not_flown_on})
+}
 
 __all__ = [
     "AGENT_NAMES",
     "HISTORY_AGENTS",
     "LEARNED_AGENTS",
+    "NOT_FLOWN_ON",
     "PLANNERS",
     "PRIVILEGED_AGENTS",
     "REACTIVE_AGENTS",
@@ -53,11 +59,13 @@ __all__ = [
     "Agent",
     "AgentWrapper",
     "base_agent_name",
+    "check_flown_on",
     "check_not_retired",
     "is_learned",
     "is_per_tier",
     "seeded_agent_name",
     "split_agent_name",
+    "suite_agents_of",
 ]
 
 
@@ -72,6 +80,29 @@ def check_not_retired(name: str) -> str:
         raise ValueError(
             f"{name!r} is retired from the suite ({RETIRED_AGENTS[base]}); fly it with flownav evaluate, or "
             "name an agent of the suite"
+        )
+    return name
+
+
+def suite_agents_of(version: str) -> tuple[str, ...]:
+    """The agents suite ``version`` flies, in the table's order: :data:`SUITE_AGENTS` but those not flown on it."""
+    skipped = NOT_FLOWN_ON.get(version, {})
+    return tuple(agent for agent in SUITE_AGENTS if agent not in skipped)
+
+
+def check_flown_on(name: str, version: str) -> str:
+    """``name`` itself, unless it names an agent (or one of its training seeds) that suite ``version`` does not
+    fly.
+
+    Raises:
+        ValueError: such an agent, with why, and the versions that do fly it.
+    """
+    base = base_agent_name(name)
+    why = NOT_FLOWN_ON.get(version, {}).get(base)
+    if why is not None:
+        raise ValueError(
+            f"{name!r} is not flown on suite v{version} ({why}); name an agent of suite v{version}, or fly it on "
+            "another suite version with --suite-version"
         )
     return name
 

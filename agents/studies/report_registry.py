@@ -250,7 +250,7 @@ REPORTS: tuple[Report, ...] = (
         command="flownav suite --out results --report-only",
         inputs=("suite_episodes.csv", "suite_v2_calibration/*.csv"),
         write=lambda report, folder: run_suite(
-            suite_agents(), folder, report_only=True, command=report.command, version="2"
+            suite_agents("2"), folder, report_only=True, command=report.command, version="2"
         ),
     ),
     Report(
@@ -266,7 +266,7 @@ REPORTS: tuple[Report, ...] = (
         command="flownav suite --suite-version 1 --out results/suite_v1 --report-only",
         inputs=("suite_v1/suite_episodes.csv", "suite_v1/sensor_reading/*.csv", "suite_v1/lane/*.csv"),
         write=lambda report, folder: run_suite(
-            suite_agents(), folder, report_only=True, command=report.command, version="1"
+            suite_agents("1"), folder, report_only=True, command=report.command, version="1"
         ),
     ),
     Report(

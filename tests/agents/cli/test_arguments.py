@@ -10,7 +10,8 @@ import pytest
 
 from agents.cli import build_parser, main
 from agents.cli.arguments import DEFAULT_WORKERS, env_kwarg
-from agents.policies import HISTORY_AGENTS, SUITE_AGENTS
+from agents.policies import HISTORY_AGENTS, suite_agents_of
+from flownav_env.tiers import SUITE_VERSION
 
 
 @pytest.mark.parametrize(
@@ -52,7 +53,9 @@ def test_the_policies_folder_has_one_name_and_its_old_ones_still_work(
         assert f"{option} is an old spelling; use --policies-dir" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize(("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", SUITE_AGENTS)])
+@pytest.mark.parametrize(
+    ("command", "names"), [("leaderboard", HISTORY_AGENTS), ("suite", suite_agents_of(SUITE_VERSION))]
+)
 def test_help_never_cuts_an_agent_name(
     command: str, names: tuple[str, ...], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -43,8 +43,19 @@ def test_a_training_seed_on_a_rule_is_refused() -> None:
     [
         ("{kind: rule, sees: flow, colour: red}", r"agent 'x' has unknown keys \['colour'\]"),
         ("{kind: genius, sees: flow}", r"agent 'x' kind must be one of rule, learned, planner, got 'genius'"),
-        ("{kind: rule}", r"agent 'x' sees must be one of flow, nothing, true_depth, layout, camera_view, got None"),
-        ("{kind: rule, sees: flow, per_tier: true}", r"agent 'x' is per_tier, which only a learned agent can be"),
+        (
+            "{kind: rule}",
+            r"agent 'x' sees must be one of flow, nothing, true_depth, layout, camera_view, got None",
+        ),
+        (
+            "{kind: rule, sees: flow, per_tier: true}",
+            r"agent 'x' is per_tier, which only a learned agent can be",
+        ),
+        (
+            "{kind: learned, sees: true_depth, not_flown_on: {2: not needed}}",
+            r"agent 'x' not_flown_on must map suite versions \(quoted, such as \"2\"\) to why, got \{2: 'not needed'\}",
+        ),
+        ('{kind: rule, sees: flow, not_flown_on: ["2"]}', r"agent 'x' not_flown_on must map suite versions"),
     ],
 )
 def test_a_bad_entry_is_refused(tmp_path: Path, entry: str, message: str) -> None:
@@ -52,3 +63,10 @@ def test_a_bad_entry_is_refused(tmp_path: Path, entry: str, message: str) -> Non
     path.write_text(f"agents:\n  x: {entry}\n")
     with pytest.raises(ValueError, match=message):
         read_agent_table(path)
+
+
+def test_the_suite_versions_an_agent_is_not_flown_on_are_read_with_why(tmp_path: Path) -> None:
+    path = tmp_path / "agents.yaml"
+    path.write_text('agents:\n  x: {kind: learned, sees: true_depth, not_flown_on: {"2": not needed}}\n')
+    (entry,) = read_agent_table(path)
+    assert entry.not_flown_on == (("2", "not needed"),)

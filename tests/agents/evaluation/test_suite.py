@@ -107,13 +107,34 @@ def test_a_retired_agent_is_neither_flown_nor_reported_by_the_suite(tmp_path: Pa
     assert not (tmp_path / "out").exists()  # refused before anything is written
 
 
+def test_an_agent_a_suite_version_does_not_fly_is_refused_there_and_flown_on_the_others(
+    tmp_path: Path,
+) -> None:
+    from agents.policies import NOT_FLOWN_ON
+
+    skipped, why = next(iter(NOT_FLOWN_ON["2"].items()))
+    assert skipped not in suite_agents("2") and skipped in suite_agents("1")
+    for name in (skipped, f"{skipped}@0"):
+        with pytest.raises(
+            ValueError, match=re.escape(f"{name!r} is not flown on suite v2 ({why}); name an")
+        ):
+            run_suite([name], tmp_path / "out", tiers="hard", layouts=1, version="2")
+    assert not (tmp_path / "out").exists()  # refused before anything is written
+    # The command's default asks for what the version flies, so it never names one refused above.
+    from agents.cli import build_parser
+
+    assert build_parser().parse_args(["suite"]).agents is None
+
+
 def _row(agent: str, tier: str, failure: float, version: str = SUITE_VERSION) -> dict:
     row = {name: 0.0 for name in SUMMARY_COLUMNS}
     row.update(suite_version=version, tier=tier, env_id=TIERS[tier].env_id, agent=agent, runs=1, layouts=30)
     row.update(episodes=30, interval_over="layouts (Wilson)", failure_rate=failure, success_rate=1 - failure)
     low, high = max(failure - 0.1, 0.0), min(failure + 0.1, 1.0)
     # Every failure a collision: the exclusive outcomes' rates sum to 1, each inside its interval.
-    row.update(failure_low=low, failure_high=high, collision_rate=failure, collision_low=low, collision_high=high)
+    row.update(
+        failure_low=low, failure_high=high, collision_rate=failure, collision_low=low, collision_high=high
+    )
     row.update(success_low=1 - high, success_high=1 - low)
     row.update(env_kwargs=json.dumps(TIERS[tier].settings), privileged=False)
     return row
@@ -153,7 +174,9 @@ def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None
             "env_kwargs": '{"forward_speed":2.0,"obstacle_density":0.18}',
         }
     )
-    table = summarise_suite(rows, {"ppo_flow": ["ppo_flow@0", "ppo_flow@1"], "bee": ["bee"]}, ["hard"], layouts=2)
+    table = summarise_suite(
+        rows, {"ppo_flow": ["ppo_flow@0", "ppo_flow@1"], "bee": ["bee"]}, ["hard"], layouts=2
+    )
     assert [row["agent"] for row in table] == ["ppo_flow"]  # bee has not flown layout 2
     (row,) = table
     assert row["runs"] == 2 and row["episodes"] == 4 and row["failure_rate"] == 0.25
@@ -161,7 +184,9 @@ def test_summaries_pool_training_seeds_and_leave_out_unfinished_agents() -> None
     assert row["failure_low"] <= 0.25 <= row["failure_high"]
     assert row["privileged"] is False and row["env_kwargs"] == '{"forward_speed":2.0,"obstacle_density":0.18}'
     assert row["timeout_rate"] == 0.0
-    assert sum(row[f"{outcome}_rate"] for outcome in ("success", "collision", "out_of_bounds", "timeout")) == 1
+    assert (
+        sum(row[f"{outcome}_rate"] for outcome in ("success", "collision", "out_of_bounds", "timeout")) == 1
+    )
 
 
 def test_the_example_agent_is_scored_end_to_end_and_included_beside_the_published_rows(
@@ -326,10 +351,13 @@ def _agent_file(path: Path, settings: dict, privileged: bool = False) -> Path:
 
 
 @pytest.mark.parametrize("tier_name", ["clean", "noisy"])
-def test_an_agent_cannot_empty_the_field_on_a_tier_that_names_no_course(tier_name: str, tmp_path: Path) -> None:
+def test_an_agent_cannot_empty_the_field_on_a_tier_that_names_no_course(
+    tier_name: str, tmp_path: Path
+) -> None:
     agent = _agent_file(tmp_path / "empty_field.py", {"obstacle_density": 0.0})
     with pytest.raises(
-        ValueError, match=re.escape(f"asks for obstacle_density=0.0, but tier {tier_name} fixes obstacle_density=0.12")
+        ValueError,
+        match=re.escape(f"asks for obstacle_density=0.0, but tier {tier_name} fixes obstacle_density=0.12"),
     ):
         score(f"{agent}:make", tiers=tier_name, layouts=1, out=tmp_path / "out")
     assert not (tmp_path / "out" / "suite_episodes.csv").exists()  # refused before anything flew

@@ -20,7 +20,7 @@ from agents.evaluation.suite_page import (
     suite_values,
 )
 from agents.evaluation.suite_report import SUMMARY_COLUMNS
-from flownav_env.tiers import TIERS
+from flownav_env.tiers import SUITE_VERSION, TIERS
 
 
 def _row(agent: str, tier: str, matrix: np.ndarray, privileged: bool = False) -> dict:
@@ -115,7 +115,9 @@ def test_a_real_layout_is_checked_from_the_envs_privileged_keys() -> None:
     from agents.common.seeds import PLANNER_TUNING_SEED_START
     from agents.evaluation.tier_bound import layout_is_feasible
 
-    assert layout_is_feasible("hard", PLANNER_TUNING_SEED_START) is True  # the planner flies it without a miss
+    assert (
+        layout_is_feasible("hard", PLANNER_TUNING_SEED_START) is True
+    )  # the planner flies it without a miss
 
 
 def test_each_row_says_which_tiers_its_agent_trained_on() -> None:
@@ -193,7 +195,12 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
     # Seed 0 flies both hard layouts (one failed), seed 1 only one of them: only whole seeds are reported.
     for seed, layout, success in ((0, 10, True), (0, 11, False), (1, 10, True)):
         record = dataclasses.replace(
-            EPISODE, agent=f"{retired}@{seed}", factor="hard", seed=layout, success=success, collision=not success
+            EPISODE,
+            agent=f"{retired}@{seed}",
+            factor="hard",
+            seed=layout,
+            success=success,
+            collision=not success,
         )
         append_record(path, record)
     append_record(path, dataclasses.replace(EPISODE, factor="hard"))  # a suite agent: not reported here
@@ -205,3 +212,12 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
     assert "### Retired from the suite" in text
     assert f"- `{retired}`: {RETIRED_AGENTS[retired]}. `hard`: 0.50." in text
     assert "Retired from the suite" not in suite_page(_values([]))
+
+
+def test_the_agents_a_version_does_not_fly_are_listed_with_why() -> None:
+    from agents.policies import NOT_FLOWN_ON
+
+    text = suite_page(_values([]) | {"not_flown": {"ppo_x": "a reference no chain needs"}, "suite_version": "2"})
+    assert "### Not flown on suite v2" in text and "- `ppo_x`: a reference no chain needs." in text
+    assert "### Not flown on suite" not in suite_page(_values([]) | {"not_flown": {}})
+    assert _values([])["not_flown"] == NOT_FLOWN_ON.get(SUITE_VERSION, {})

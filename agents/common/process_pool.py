@@ -1,0 +1,157 @@
+"""Work items across worker processes, each with its own pipe: a worker that dies is noticed, and stopping the
+workers never waits without bound.
+
+``multiprocessing.Pool`` shares one task queue and one result queue, guarded by locks, between all its workers.
+A worker that dies mid-item loses that item and the pool waits for it forever; one stopped while it holds a
+queue's lock can leave ``Pool.terminate()`` waiting on that lock (CPython issues 66587 and 96995). Here each
+worker has a pipe of its own, the parent waits on every pipe and every worker's exit at once, and stopping is
+SIGTERM, a bounded wait, then SIGKILL.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+from collections.abc import Callable, Iterable, Iterator
+from multiprocessing.connection import Connection, wait
+from multiprocessing.process import BaseProcess
+from typing import Any, NoReturn, TypeVar
+
+Item = TypeVar("Item")
+Result = TypeVar("Result")
+_NONE_LEFT: Any = object()
+
+# How long a worker sent SIGTERM may take to end (its handler ends what it started) before it is killed.
+STOP_WAIT_S = 5.0
+
+
+class WorkerProcessDied(ChildProcessError):
+    """A worker process ended while it held an item, without sending its result: one line naming the item and
+    how the worker ended. An OSError: the machine's (or a library's) to fix, not the input's."""
+
+
+def _exit_words(exitcode: int | None) -> str:
+    if exitcode is not None and exitcode < 0 and -exitcode in signal.valid_signals():
+        return f"killed by {signal.Signals(-exitcode).name}"
+    return f"exit code {exitcode}"
+
+
+def _serve(
+    connection: Connection, function: Callable[[Any], Any], initializer: Callable[[], None] | None
+) -> None:
+    """A worker's loop: run ``function`` on each item the parent sends until it sends None or closes the pipe;
+    send back ``(True, result)`` or ``(False, exception)``."""
+    if initializer is not None:
+        initializer()
+    while True:
+        try:
+            item = connection.recv()
+        except (EOFError, OSError):
+            return
+        if item is None:
+            return
+        try:
+            reply: tuple[bool, Any] = (True, function(item))
+        except Exception as error:  # sent to the parent, which raises it there
+            reply = (False, error)
+        try:
+            connection.send(reply)
+        except Exception as error:  # a result or exception that does not pickle: say so as a line
+            connection.send((False, RuntimeError(f"{type(error).__name__}: {error} (sending {reply[1]!r})")))
+
+
+def run_in_workers(
+    function: Callable[[Item], Result],
+    items: Iterable[Item],
+    workers: int,
+    *,
+    initializer: Callable[[], None] | None = None,
+    describe: Callable[[Item], str] = repr,
+) -> Iterator[Result]:
+    """``function(item)`` for every item, in ``workers`` processes (forkserver: a forked child would inherit this
+    process's GL state, which hangs EGL), as each ends, in the order they end.
+
+    ``function``, ``initializer`` and the items must pickle. Closing the iterator (or an exception in it)
+    stops every worker: SIGTERM, :data:`STOP_WAIT_S`, then SIGKILL.
+
+    Raises:
+        Exception: the first exception ``function`` raised in a worker, as raised there.
+        WorkerProcessDied: a worker ended while it held an item; the message names the item (``describe``).
+    """
+    context = multiprocessing.get_context("forkserver")
+    todo = iter(items)
+    processes: list[BaseProcess] = []
+    held: dict[Connection, tuple[BaseProcess, Item]] = {}
+    try:
+        for _ in range(workers):
+            item = next(todo, _NONE_LEFT)
+            if item is _NONE_LEFT:
+                break
+            ours, theirs = context.Pipe()
+            process: BaseProcess = context.Process(
+                target=_serve, args=(theirs, function, initializer), daemon=True
+            )
+            process.start()
+            theirs.close()
+            processes.append(process)
+            _hand(ours, process, item, describe)
+            held[ours] = (process, item)
+        while held:
+            by_sentinel = {process.sentinel: connection for connection, (process, _) in held.items()}
+            for ready in wait([*held, *by_sentinel]):
+                connection = by_sentinel[ready] if isinstance(ready, int) else ready
+                if connection not in held:
+                    continue  # its pipe and its exit were both ready: handled once
+                process, item = held.pop(connection)
+                ok, value = _reply(connection, process, item, describe)
+                if not ok:
+                    raise value
+                following = next(todo, _NONE_LEFT)
+                if following is _NONE_LEFT:
+                    connection.send(None)  # done: the worker ends; one that already did needs no word
+                else:
+                    _hand(connection, process, following, describe)
+                    held[connection] = (process, following)
+                yield value
+    finally:
+        _stop(processes)
+        for connection in held:
+            connection.close()
+
+
+def _hand(connection: Connection, process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> None:
+    """Send ``item`` to the worker, or raise :class:`WorkerProcessDied` when it has ended."""
+    try:
+        connection.send(item)
+    except OSError:
+        _died(process, item, describe)
+
+
+def _reply(connection: Connection, process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> Any:
+    """The worker's reply about ``item``, or :class:`WorkerProcessDied` when it ended without one."""
+    try:
+        if connection.poll():
+            return connection.recv()
+    except (EOFError, OSError):
+        pass
+    _died(process, item, describe)
+
+
+def _died(process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> NoReturn:
+    process.join(STOP_WAIT_S)
+    raise WorkerProcessDied(
+        f"a worker process ended ({_exit_words(process.exitcode)}) before it finished {describe(item)}; the "
+        "run stopped and that one is not recorded"
+    )
+
+
+def _stop(processes: list[BaseProcess]) -> None:
+    """End every worker: SIGTERM (its handler ends what it started), a bounded wait, then SIGKILL."""
+    for process in processes:
+        if process.exitcode is None:
+            process.terminate()
+    for process in processes:
+        process.join(STOP_WAIT_S)
+        if process.exitcode is None:
+            process.kill()
+            process.join()

@@ -1,0 +1,68 @@
+"""Items across worker processes with a pipe each: every result comes back, a worker's exception is raised
+here, a worker that dies is named with its item instead of hanging the run, and stopping never waits without
+bound. The work is stdlib functions, so the forkserver's workers import nothing of the tests."""
+
+from __future__ import annotations
+
+import functools
+import math
+import multiprocessing
+import os
+import signal
+import time
+
+import pytest
+
+from agents.common import process_pool
+from agents.common.process_pool import WorkerProcessDied, run_in_workers
+
+
+def _no_children_left() -> bool:
+    return multiprocessing.active_children() == []
+
+
+def test_every_item_comes_back_once_from_two_workers() -> None:
+    results = list(run_in_workers(math.sqrt, [1.0, 4.0, 9.0, 16.0, 25.0], 2))
+    assert sorted(results) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert _no_children_left()
+
+
+def test_no_items_start_no_workers_and_more_workers_than_items_is_fine() -> None:
+    assert list(run_in_workers(math.sqrt, [], 2)) == []
+    assert list(run_in_workers(math.sqrt, [4.0], 3)) == [2.0]
+    assert _no_children_left()
+
+
+def test_an_exception_in_a_worker_is_raised_here_and_the_workers_stop() -> None:
+    with pytest.raises(ValueError, match="math domain error"):
+        list(run_in_workers(math.sqrt, [4.0, -1.0, 9.0], 2))
+    assert _no_children_left()
+
+
+@pytest.mark.parametrize(
+    ("function", "item", "how"),
+    [(os._exit, 9, "exit code 9"), (signal.raise_signal, signal.SIGKILL, "killed by SIGKILL")],
+)
+def test_a_worker_that_dies_is_named_with_its_item_instead_of_hanging(function, item, how: str) -> None:
+    started = time.monotonic()
+    with pytest.raises(WorkerProcessDied) as raised:
+        list(run_in_workers(function, [item], 2, describe=lambda x: f"item {x!r}"))
+    assert str(raised.value) == (
+        f"a worker process ended ({how}) before it finished item {item!r}; the run stopped and that one is not "
+        "recorded"
+    )
+    assert isinstance(raised.value, OSError) and time.monotonic() - started < 60
+    assert _no_children_left()
+
+
+def test_closing_early_stops_a_busy_worker_and_kills_one_that_ignores_sigterm(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(process_pool, "STOP_WAIT_S", 0.5)
+    ignore_sigterm = functools.partial(signal.signal, signal.SIGTERM, signal.SIG_IGN)
+    results = run_in_workers(time.sleep, [0.0, 60.0, 60.0], 2, initializer=ignore_sigterm)
+    assert next(results) is None  # time.sleep's result; the other worker now sleeps 60 s
+    started = time.monotonic()
+    results.close()
+    assert time.monotonic() - started < 20  # SIGTERM ignored, so killed after the wait; never the 60 s
+    assert _no_children_left()

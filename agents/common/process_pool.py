@@ -37,7 +37,7 @@ def _exit_words(exitcode: int | None) -> str:
 
 
 def _serve(
-    connection: Connection, function: Callable[[Any], Any], initializer: Callable[[], None] | None
+    connection: Connection, function: Callable[[Item], Result], initializer: Callable[[], None] | None
 ) -> None:
     """A worker's loop: run ``function`` on each item the parent sends until it sends None or closes the pipe;
     send back ``(True, result)`` or ``(False, exception)``."""
@@ -119,7 +119,7 @@ def run_in_workers(
             connection.close()
 
 
-def _hand(connection: Connection, process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> None:
+def _hand(connection: Connection, process: BaseProcess, item: Item, describe: Callable[[Item], str]) -> None:
     """Send ``item`` to the worker, or raise :class:`WorkerProcessDied` when it has ended."""
     try:
         connection.send(item)
@@ -127,7 +127,9 @@ def _hand(connection: Connection, process: BaseProcess, item: Any, describe: Cal
         _died(process, item, describe)
 
 
-def _reply(connection: Connection, process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> Any:
+def _reply(
+    connection: Connection, process: BaseProcess, item: Item, describe: Callable[[Item], str]
+) -> tuple[bool, Any]:
     """The worker's reply about ``item``, or :class:`WorkerProcessDied` when it ended without one."""
     try:
         if connection.poll():
@@ -137,7 +139,7 @@ def _reply(connection: Connection, process: BaseProcess, item: Any, describe: Ca
     _died(process, item, describe)
 
 
-def _died(process: BaseProcess, item: Any, describe: Callable[[Any], str]) -> NoReturn:
+def _died(process: BaseProcess, item: Item, describe: Callable[[Item], str]) -> NoReturn:
     process.join(STOP_WAIT_S)
     raise WorkerProcessDied(
         f"a worker process ended ({_exit_words(process.exitcode)}) before it finished {describe(item)}; the "

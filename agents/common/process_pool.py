@@ -1,11 +1,18 @@
 """Work items across worker processes, each with its own pipe: a worker that dies is noticed, and stopping the
 workers never waits without bound.
 
-``multiprocessing.Pool`` shares one task queue and one result queue, guarded by locks, between all its workers.
-A worker that dies mid-item loses that item and the pool waits for it forever; one stopped while it holds a
-queue's lock can leave ``Pool.terminate()`` waiting on that lock (CPython issues 66587 and 96995). Here each
-worker has a pipe of its own, the parent waits on every pipe and every worker's exit at once, and stopping is
-SIGTERM, a bounded wait, then SIGKILL.
+``multiprocessing.Pool`` shares one task queue, guarded by a semaphore, between its workers, and
+``Pool.terminate()`` sends SIGTERM and then joins each worker without a time limit. A worker whose SIGTERM handler
+is Python code (ours ends its outside agents' processes) can miss that SIGTERM: when the signal lands just before
+the worker blocks on the queue's semaphore, the handler is due to run at the next bytecode, but the worker sleeps
+in ``sem_wait`` and never reaches one, so it lives on and ``terminate()`` waits for it forever. Seen here with
+``py-spy``: the parent in ``Pool._terminate_pool`` joining a worker asleep in ``SemLock.__enter__`` with its
+SIGTERM handler installed; that is how a test of a run stopped by an outside agent's exit timed out in CI. A
+worker that dies mid-item also loses that item, and the pool then waits for it forever.
+
+Here each worker has a pipe of its own, and the parent waits on every pipe and every worker's exit at once. To
+stop, the parent closes the pipes (an idle worker reads their end and returns), sends SIGTERM, waits at most
+:data:`STOP_WAIT_S`, then sends SIGKILL: nothing waits without bound.
 """
 
 from __future__ import annotations
@@ -39,8 +46,8 @@ def _exit_words(exitcode: int | None) -> str:
 def _serve(
     connection: Connection, function: Callable[[Item], Result], initializer: Callable[[], None] | None
 ) -> None:
-    """A worker's loop: run ``function`` on each item the parent sends until it sends None or closes the pipe;
-    send back ``(True, result)`` or ``(False, exception)``."""
+    """A worker's loop: run ``function`` on each item the parent sends until it closes the pipe; send back
+    ``(True, result)`` or ``(False, exception)``."""
     if initializer is not None:
         initializer()
     while True:
@@ -48,14 +55,14 @@ def _serve(
             item = connection.recv()
         except (EOFError, OSError):
             return
-        if item is None:
-            return
         try:
             reply: tuple[bool, Any] = (True, function(item))
         except Exception as error:  # sent to the parent, which raises it there
             reply = (False, error)
         try:
             connection.send(reply)
+        except OSError:  # the parent closed the pipe: it is stopping
+            return
         except Exception as error:  # a result or exception that does not pickle: say so as a line
             connection.send((False, RuntimeError(f"{type(error).__name__}: {error} (sending {reply[1]!r})")))
 
@@ -81,6 +88,7 @@ def run_in_workers(
     context = multiprocessing.get_context("forkserver")
     todo = iter(items)
     processes: list[BaseProcess] = []
+    connections: list[Connection] = []
     held: dict[Connection, tuple[BaseProcess, Item]] = {}
     try:
         for _ in range(workers):
@@ -94,6 +102,7 @@ def run_in_workers(
             process.start()
             theirs.close()
             processes.append(process)
+            connections.append(ours)
             _hand(ours, process, item, describe)
             held[ours] = (process, item)
         while held:
@@ -108,15 +117,15 @@ def run_in_workers(
                     raise value
                 following = next(todo, _NONE_LEFT)
                 if following is _NONE_LEFT:
-                    connection.send(None)  # done: the worker ends; one that already did needs no word
+                    connection.close()  # done: the worker reads the end of its pipe and returns
                 else:
                     _hand(connection, process, following, describe)
                     held[connection] = (process, following)
                 yield value
     finally:
-        _stop(processes)
-        for connection in held:
+        for connection in connections:
             connection.close()
+        _stop(processes)
 
 
 def _hand(connection: Connection, process: BaseProcess, item: Item, describe: Callable[[Item], str]) -> None:

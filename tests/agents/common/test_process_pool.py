@@ -66,3 +66,18 @@ def test_closing_early_stops_a_busy_worker_and_kills_one_that_ignores_sigterm(
     results.close()
     assert time.monotonic() - started < 20  # SIGTERM ignored, so killed after the wait; never the 60 s
     assert _no_children_left()
+
+
+def test_workers_done_with_their_items_end_by_themselves_without_a_signal(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # They ignore SIGTERM here and the wait before SIGKILL is long: only reading the end of their pipe ends them.
+    monkeypatch.setattr(process_pool, "STOP_WAIT_S", 120.0)
+    ignore_sigterm = functools.partial(signal.signal, signal.SIGTERM, signal.SIG_IGN)
+    started = time.monotonic()
+    assert sorted(run_in_workers(math.sqrt, [1.0, 4.0, 9.0], 2, initializer=ignore_sigterm)) == [
+        1.0,
+        2.0,
+        3.0,
+    ]
+    assert time.monotonic() - started < 60 and _no_children_left()

@@ -16,6 +16,9 @@ import pytest
 from agents.common import process_pool
 from agents.common.process_pool import WorkerProcessDied, run_in_workers
 
+# A worker initializer that makes SIGTERM do nothing: only closing its pipe or SIGKILL ends such a worker.
+IGNORE_SIGTERM = functools.partial(signal.signal, signal.SIGTERM, signal.SIG_IGN)
+
 
 def _no_children_left() -> bool:
     return multiprocessing.active_children() == []
@@ -59,8 +62,7 @@ def test_closing_early_stops_a_busy_worker_and_kills_one_that_ignores_sigterm(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     monkeypatch.setattr(process_pool, "STOP_WAIT_S", 0.5)
-    ignore_sigterm = functools.partial(signal.signal, signal.SIGTERM, signal.SIG_IGN)
-    results = run_in_workers(time.sleep, [0.0, 60.0, 60.0], 2, initializer=ignore_sigterm)
+    results = run_in_workers(time.sleep, [0.0, 60.0, 60.0], 2, initializer=IGNORE_SIGTERM)
     assert next(results) is None  # time.sleep's result; the other worker now sleeps 60 s
     started = time.monotonic()
     results.close()
@@ -73,9 +75,8 @@ def test_workers_done_with_their_items_end_by_themselves_without_a_signal(
 ) -> None:
     # They ignore SIGTERM here and the wait before SIGKILL is long: only reading the end of their pipe ends them.
     monkeypatch.setattr(process_pool, "STOP_WAIT_S", 120.0)
-    ignore_sigterm = functools.partial(signal.signal, signal.SIGTERM, signal.SIG_IGN)
     started = time.monotonic()
-    assert sorted(run_in_workers(math.sqrt, [1.0, 4.0, 9.0], 2, initializer=ignore_sigterm)) == [
+    assert sorted(run_in_workers(math.sqrt, [1.0, 4.0, 9.0], 2, initializer=IGNORE_SIGTERM)) == [
         1.0,
         2.0,
         3.0,

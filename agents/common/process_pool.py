@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import multiprocessing
 import signal
+import time
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
@@ -125,7 +126,7 @@ def run_in_workers(
     finally:
         for connection in connections:
             connection.close()
-        _stop(processes)
+        stop_processes(processes)
 
 
 def _hand(connection: Connection, process: BaseProcess, item: Item, describe: Callable[[Item], str]) -> None:
@@ -156,13 +157,15 @@ def _died(process: BaseProcess, item: Item, describe: Callable[[Item], str]) -> 
     )
 
 
-def _stop(processes: list[BaseProcess]) -> None:
-    """End every worker: SIGTERM (its handler ends what it started), a bounded wait, then SIGKILL."""
-    for process in processes:
-        if process.exitcode is None:
-            process.terminate()
-    for process in processes:
-        process.join(STOP_WAIT_S)
+def stop_processes(processes: Iterable[BaseProcess], wait_s: float = STOP_WAIT_S) -> None:
+    """End every process still running: SIGTERM (its handler ends what it started), a wait of at most ``wait_s``
+    in all, then SIGKILL for any left."""
+    running = [process for process in processes if process.exitcode is None]
+    for process in running:
+        process.terminate()
+    deadline = time.monotonic() + wait_s
+    for process in running:
+        process.join(max(0.0, deadline - time.monotonic()))
         if process.exitcode is None:
             process.kill()
             process.join()

@@ -28,6 +28,7 @@ import yaml
 
 from agents.common.folders import write_text_atomically
 from agents.common.interrupts import ignore_ctrl_c, stop_signals_interrupt
+from agents.common.process_pool import stop_processes
 from agents.common.seeds import MAX_RUN_SEED
 from agents.training.outputs import RunFiles
 from agents.training.parking import discard, park, parked_files, restore
@@ -244,6 +245,9 @@ def train_seeds(
 
 # How often the parent of seeds side by side looks for one that died without reporting.
 RESULT_POLL_S = 5.0
+# How long a seed sent SIGTERM after an error in the parent's own loop may take to park its run (a model and its
+# record written) before it is killed: a save takes seconds, so this only bounds a seed that hangs.
+SEED_STOP_WAIT_S = 60.0
 
 
 def _died(job: SeedJob, exit_code: int | None) -> str:
@@ -336,10 +340,10 @@ class _SeedProcesses:
         self.stopping = self.stopping or error is not None
 
     def terminate_running(self) -> None:
-        """Only processes left after an error in the loop itself are still running here."""
-        for process in self.running.values():
-            process.terminate()
-            process.join()
+        """Only processes left after an error in the loop itself are still running here: each is sent SIGTERM
+        (it parks its run as an interruption does) and killed if it has not ended within
+        :data:`SEED_STOP_WAIT_S`, so an error here never leaves the command waiting without bound."""
+        stop_processes(self.running.values(), wait_s=SEED_STOP_WAIT_S)
 
     def policies(self) -> list[Path]:
         """Every seed's policy in job order; else the first error (a failure before an interruption), or

@@ -82,3 +82,32 @@ def test_workers_done_with_their_items_end_by_themselves_without_a_signal(
         3.0,
     ]
     assert time.monotonic() - started < 60 and _no_children_left()
+
+
+def _sleep_deaf_to_sigterm() -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    time.sleep(60)
+
+
+def test_stop_processes_kills_what_ignores_sigterm_within_one_shared_wait() -> None:
+    # Fork: the target is this module's function, so nothing is pickled or imported.
+    context = multiprocessing.get_context("fork")
+    deaf = [context.Process(target=_sleep_deaf_to_sigterm) for _ in range(2)]
+    hearing = context.Process(target=time.sleep, args=(60,))
+    for process in [*deaf, hearing]:
+        process.start()
+    time.sleep(0.5)  # the deaf ones have set their handler
+    started = time.monotonic()
+    process_pool.stop_processes([*deaf, hearing], wait_s=1.0)
+    # One wait of 1 s for all of them, not 1 s each; SIGTERM ends the one that hears it, SIGKILL the others.
+    assert time.monotonic() - started < 1.9
+    assert [process.exitcode for process in deaf] == [-signal.SIGKILL, -signal.SIGKILL]
+    assert hearing.exitcode == -signal.SIGTERM
+
+
+def test_stop_processes_leaves_ended_processes_alone() -> None:
+    ended = multiprocessing.get_context("fork").Process(target=time.sleep, args=(0,))
+    ended.start()
+    ended.join()
+    process_pool.stop_processes([ended], wait_s=0.0)
+    assert ended.exitcode == 0

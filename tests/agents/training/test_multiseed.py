@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import itertools
 import json
+import multiprocessing
 import re
+import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -19,6 +22,7 @@ from agents.common.seeds import (
     checkpoint_selection_seed,
     training_env_seed,
 )
+from agents.training import multiseed
 from agents.training.multiseed import finished, parse_seeds, seed_jobs, train_seeds
 from agents.training.outputs import RunFiles
 
@@ -280,3 +284,21 @@ def test_sigterm_saves_every_seed_side_by_side_and_starts_no_other(tmp_path: Pat
     for files in seeds:
         assert json.loads(files.record.read_text())["sessions"][-1]["interrupted"] is True
     assert not (runs_dir / "stopped" / "seed_2").exists()
+
+
+def _sleep_deaf_to_sigterm() -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    time.sleep(60)
+
+
+def test_seeds_left_running_after_an_error_in_the_loop_are_ended_within_the_bound(monkeypatch) -> None:
+    monkeypatch.setattr(multiseed, "SEED_STOP_WAIT_S", 0.5)
+    seeds = multiseed._SeedProcesses([], parallel=2)
+    deaf = multiprocessing.get_context("fork").Process(target=_sleep_deaf_to_sigterm)  # a seed that hangs
+    deaf.start()
+    time.sleep(0.5)  # its handler is set
+    seeds.running[0] = deaf
+    started = time.monotonic()
+    seeds.terminate_running()
+    assert time.monotonic() - started < 2.0
+    assert deaf.exitcode == -signal.SIGKILL

@@ -11,10 +11,12 @@ into ``results/lane/<agent>_<tier>.csv``. Suite v1's own episodes predate that f
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TypedDict
 
 from agents.analysis.records import read_records
+from agents.evaluation.episode_tasks import TieredRow
 from flownav_env.tiers import TIER_NAMES, TIERS_BY_VERSION, tier_value
 
 # Where the lane flights lie, beside the suite's report.
@@ -25,7 +27,9 @@ LANE_VERSION = "1"
 
 def lane_edge(tier_name: str) -> float:
     """How far sideways (m) a drone of ``tier_name`` is past every capsule surface: the lane's inner edge."""
-    width, radius = (float(tier_value(tier_name, key, LANE_VERSION)) for key in ("field_width", "obstacle_radius"))
+    width, radius = (
+        float(tier_value(tier_name, key, LANE_VERSION)) for key in ("field_width", "obstacle_radius")
+    )
     return width / 2.0 + radius
 
 
@@ -65,3 +69,40 @@ def lane_values(folder: Path) -> list[LaneRow]:
         }
         for (agent, name), found in sorted(extents.items(), key=lambda item: (item[0][0], order[item[0][1]]))
     ]
+
+
+class SidewaysRow(TypedDict):
+    """One tier of :func:`sideways_extent`: the successes that recorded how far sideways the drone went, how many
+    of them went past the capsule field's edge, the farthest (m), the field's edge and the lateral bound (m)."""
+
+    tier: str
+    successes: int
+    past_field: int
+    widest: float
+    field_edge: float
+    bound: float
+
+
+def sideways_extent(rows: Iterable[TieredRow], version: str) -> list[SidewaysRow]:
+    """Per tier of suite ``version`` that ``rows`` flew, in suite order, how far sideways its successes went against the capsule field's half-width: a success past the field's edge passed
+    capsules it never had to avoid, which a closed field (suite v2) leaves no room for."""
+    extents: dict[str, list[float]] = {}
+    for row in rows:
+        extent = row.get("max_abs_lateral_m")
+        if row["success"] and extent is not None and not math.isnan(extent):
+            extents.setdefault(row["tier"], []).append(float(extent))
+    order = {name: index for index, name in enumerate(TIER_NAMES)}
+    result: list[SidewaysRow] = []
+    for name in sorted(extents, key=order.__getitem__):
+        edge = float(tier_value(name, "field_width", version)) / 2.0
+        result.append(
+            {
+                "tier": name,
+                "successes": len(extents[name]),
+                "past_field": sum(extent > edge for extent in extents[name]),
+                "widest": max(extents[name]),
+                "field_edge": edge,
+                "bound": float(tier_value(name, "lateral_bound", version)),
+            }
+        )
+    return result

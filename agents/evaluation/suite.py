@@ -30,6 +30,7 @@ from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
+from agents.evaluation.lane import sideways_extent
 from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.reference_chain import reference_chain
@@ -383,6 +384,7 @@ def _report_values(
         bounds=suite_bounds(failures, bests, seeds, version),
         gains=learning_gains(failures, rankings),
         chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
+        sideways=sideways_extent(rows, version),
         **beside_suite(out, tier_names, out / EPISODES_CSV, seeds),
         version=version,
     )

@@ -22,7 +22,7 @@ from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
 from agents.evaluation.episode_tasks import TieredRow, with_tier
-from agents.evaluation.lane import LANE_DIR, LaneRow, lane_values
+from agents.evaluation.lane import LANE_DIR, LaneRow, SidewaysRow, lane_values
 from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
@@ -244,6 +244,7 @@ def suite_values(
     recipe_reports: Mapping[str, str] | None = None,
     camera_recipe_reports: Mapping[str, str] | None = None,
     lanes: Sequence[LaneRow] = (),
+    sideways: Sequence[SidewaysRow] = (),
     retired: Sequence[RetiredAgent] = (),
     version: str = SUITE_VERSION,
     chains: Mapping[str, Sequence[ChainLink]] | None = None,
@@ -297,6 +298,7 @@ def suite_values(
         "camera_reference": CAMERA_VIEW_REFERENCE,
         "camera_margin": CAMERA_MARGIN,
         "lanes": list(lanes),
+        "sideways": list(sideways),
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),

@@ -1,5 +1,6 @@
 """The capsule-free lane: its edge per tier, the count of episodes past it per agent and tier from flights that
-record how far sideways they went, and suite.md's section in both verdicts."""
+record how far sideways they went, and suite.md's section in both verdicts; and, for any suite version, how far
+sideways each tier's successes went against its field's edge."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 from helpers import EPISODE
 
 from agents.analysis.records import append_record
-from agents.evaluation.lane import lane_edge, lane_values
+from agents.evaluation.lane import lane_edge, lane_values, sideways_extent
 from agents.evaluation.suite_page import beside_suite, suite_page, suite_values
 from flownav_env.tiers import TIERS, tier_value
 
@@ -27,11 +28,19 @@ RECORD = replace(
 )
 
 
-def _page(lanes: list) -> str:
-    """suite.md with no agent flown, the lane rows ``lanes`` beside it."""
+def _page(lanes: list, sideways: list | None = None) -> str:
+    """suite.md with no agent flown, the lane rows ``lanes`` and the ``sideways`` rows beside it."""
     return suite_page(
         suite_values(
-            [], {}, command="c", layouts=range(1), machine="m", missing=[], generated="today", lanes=lanes
+            [],
+            {},
+            command="c",
+            layouts=range(1),
+            machine="m",
+            missing=[],
+            generated="today",
+            lanes=lanes,
+            sideways=sideways or [],
         )
     )
 
@@ -74,3 +83,38 @@ def test_the_suite_page_says_whether_any_agent_entered_the_lane(tmp_path: Path) 
     assert "| `bee_ttc` | 1 of 2 (5.00 m) |" in text
     assert "1 of 1 agents entered the lane on at least one tier. An agent there flies past capsules" in text
     assert "## The capsule-free lane" not in _page([])
+
+
+def _tiered(tier: str, success: bool, extent: float) -> dict:
+    return {"tier": tier, "success": success, "max_abs_lateral_m": extent}
+
+
+def test_successes_past_the_field_edge_are_counted_per_tier_of_the_version() -> None:
+    rows = [
+        _tiered("hard", True, 5.5),
+        _tiered("clean", True, 3.0),
+        _tiered("clean", True, 4.6),  # past v1's edge (4 m), inside v2's (6 m)
+        _tiered("clean", False, 7.0),  # a failure: out of bounds is not a success's extent
+        _tiered("clean", True, math.nan),  # not recorded
+        {"tier": "clean", "success": True, "max_abs_lateral_m": None},  # predates the column
+    ]
+    v2 = sideways_extent(rows, "2")
+    assert [(r["tier"], r["successes"], r["past_field"], r["widest"]) for r in v2] == [
+        ("clean", 2, 0, 4.6),
+        ("hard", 1, 0, 5.5),
+    ]
+    assert v2[0]["field_edge"] == 6.0 and v2[0]["bound"] == 6.0
+    v1 = sideways_extent(rows, "1")
+    assert [(r["tier"], r["past_field"]) for r in v1] == [("clean", 1), ("hard", 1)]
+    assert v1[0]["field_edge"] == 4.0
+    assert sideways_extent([], "2") == []
+
+
+def test_the_suite_page_says_whether_any_success_went_past_the_field() -> None:
+    closed = sideways_extent([_tiered("clean", True, 5.9)], "2")
+    text = _page([], closed)
+    assert "| `clean` | 1 | 5.900 | 6.0 | 6.0 | 0 |" in text
+    assert "No success on any tier went past the field's edge." in text
+    text = _page([], sideways_extent([_tiered("clean", True, 5.9), _tiered("hard", True, 4.5)], "1"))
+    assert "2 successes went past the field's edge: this field leaves a lane." in text
+    assert "How far sideways the successes went" not in _page([])

@@ -71,12 +71,19 @@ def lane_values(folder: Path) -> list[LaneRow]:
     ]
 
 
+# How close to the field's edge (m) a success counts as flying along it: a drone there meets capsules from one
+# side only, about half the field's density, a strip worth watching even where the field is closed.
+NEAR_EDGE_M = 1.0
+
+
 class SidewaysRow(TypedDict):
     """One tier of :func:`sideways_extent`: the successes that recorded how far sideways the drone went, how many
-    of them went past the capsule field's edge, the farthest (m), the field's edge and the lateral bound (m)."""
+    of them came within :data:`NEAR_EDGE_M` of the capsule field's edge and how many went past it, the farthest
+    (m), the field's edge and the lateral bound (m)."""
 
     tier: str
     successes: int
+    near_edge: int
     past_field: int
     widest: float
     field_edge: float
@@ -99,6 +106,7 @@ def sideways_extent(rows: Iterable[TieredRow], version: str) -> list[SidewaysRow
             {
                 "tier": name,
                 "successes": len(extents[name]),
+                "near_edge": sum(extent > edge - NEAR_EDGE_M for extent in extents[name]),
                 "past_field": sum(extent > edge for extent in extents[name]),
                 "widest": max(extents[name]),
                 "field_edge": edge,

@@ -22,7 +22,7 @@ from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
 from agents.evaluation.episode_tasks import TieredRow, with_tier
-from agents.evaluation.lane import LANE_DIR, LaneRow, SidewaysRow, lane_values
+from agents.evaluation.lane import LANE_DIR, NEAR_EDGE_M, LaneRow, SidewaysRow, lane_values
 from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
@@ -299,6 +299,7 @@ def suite_values(
         "camera_margin": CAMERA_MARGIN,
         "lanes": list(lanes),
         "sideways": list(sideways),
+        "near_edge_m": NEAR_EDGE_M,
         "lane_dir": LANE_DIR,
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),

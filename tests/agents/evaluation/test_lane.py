@@ -99,9 +99,9 @@ def test_successes_past_the_field_edge_are_counted_per_tier_of_the_version() -> 
         {"tier": "clean", "success": True, "max_abs_lateral_m": None},  # predates the column
     ]
     v2 = sideways_extent(rows, "2")
-    assert [(r["tier"], r["successes"], r["past_field"], r["widest"]) for r in v2] == [
-        ("clean", 2, 0, 4.6),
-        ("hard", 1, 0, 5.5),
+    assert [(r["tier"], r["successes"], r["near_edge"], r["past_field"], r["widest"]) for r in v2] == [
+        ("clean", 2, 0, 0, 4.6),
+        ("hard", 1, 1, 0, 5.5),  # within NEAR_EDGE_M of v2's edge
     ]
     assert v2[0]["field_edge"] == 6.0 and v2[0]["bound"] == 6.0
     v1 = sideways_extent(rows, "1")
@@ -113,7 +113,7 @@ def test_successes_past_the_field_edge_are_counted_per_tier_of_the_version() -> 
 def test_the_suite_page_says_whether_any_success_went_past_the_field() -> None:
     closed = sideways_extent([_tiered("clean", True, 5.9)], "2")
     text = _page([], closed)
-    assert "| `clean` | 1 | 5.900 | 6.0 | 6.0 | 0 |" in text
+    assert "| `clean` | 1 | 5.900 | 6.0 | 6.0 | 1 (1.00) | 0 |" in text
     assert "No success on any tier went past the field's edge." in text
     text = _page([], sideways_extent([_tiered("clean", True, 5.9), _tiered("hard", True, 4.5)], "1"))
     assert "2 successes went past the field's edge: this field leaves a lane." in text

@@ -278,8 +278,9 @@ def suite_agents(version: str = SUITE_VERSION) -> list[str]:
 def suite_top_groups(
     folder: Path, layouts: int = SUITE_LAYOUTS, version: str = SUITE_VERSION
 ) -> list[dict[str, Any]]:
-    """Per tier flown in full, in suite order: its best ranked agent with its failure, and its top group, from
-    ``folder``'s suite episodes (the ranking of ``suite.md``).
+    """Per tier with any agent flown in full, in suite order: its best ranked agent with its failure, its top
+    group, and whether every agent of the suite has flown it in full (``complete``), from ``folder``'s suite
+    episodes (the ranking of ``suite.md``).
 
     Raises:
         FileNotFoundError: no suite episodes in ``folder``.
@@ -304,6 +305,7 @@ def suite_top_groups(
             "best": ranking.best,
             "best_failure": failure[(name, ranking.best)],
             "top_group": list(ranking.top_group),
+            "complete": all((name, agent) in failure for agent in runs),
         }
         for name, ranking in rankings.items()
     ]

@@ -25,6 +25,7 @@ from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, loa
 from agents.studies.benchmark_sweep import sweep_values
 from agents.studies.wording import display_name, join_words, render_report, span
 from flownav_env.settings import EnvSettings
+from flownav_env.tiers import TIER_NAMES
 
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
@@ -107,7 +108,13 @@ def leaderboard_values(data: BenchmarkData) -> Values:
         "winner_closes": (flow - winner) / (flow - ttc),
         "oracle_reactive": data.oracle_reactive,
         "suite_top": data.suite_top,
+        "suite_complete": _suite_complete(data.suite_top),
     }
+
+
+def _suite_complete(top_groups: list[dict[str, Any]]) -> bool:
+    """Whether every agent of the suite has flown every tier in full."""
+    return len(top_groups) == len(TIER_NAMES) and all(tier["complete"] for tier in top_groups)
 
 
 def _validation_order(data: BenchmarkData) -> list[str]:

@@ -124,6 +124,7 @@ def test_there_are_the_base_recipe_and_its_variants() -> None:
         "ppo_flow_camera_student_fine",
         "ppo_flow_camera_student_fine_rounds12",
         "ppo_flow_camera_student_fine_rounds6",
+        "ppo_flow_camera_student_fine_rounds6_finetune",
         "ppo_flow_camera_student_fine_rounds6_oracle",
         "ppo_flow_camera_student_fine_rounds6_stack4",
         "ppo_flow_camera_student_rounds6",

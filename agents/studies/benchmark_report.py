@@ -112,7 +112,7 @@ def leaderboard_values(data: BenchmarkData) -> Values:
     }
 
 
-def _suite_complete(top_groups: list[dict[str, Any]]) -> bool:
+def _suite_complete(top_groups: list[dict[str, object]]) -> bool:
     """Whether every agent of the suite has flown every tier in full."""
     return len(top_groups) == len(TIER_NAMES) and all(tier["complete"] for tier in top_groups)
 

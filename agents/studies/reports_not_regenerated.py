@@ -29,11 +29,14 @@ NOT_REGENERATED: tuple[Report, ...] = (
         "its training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
         "are committed beside it)",
     ),
-    Report(
-        "student_recipes_v2/clean/ablation.md",
-        reason="a pilot whose fine-tuned policies were not shipped: flownav ablation wrote it from the run folders "
-        "its training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
-        "are committed beside it)",
+    *(
+        Report(
+            f"student_recipes_v2/{tier_name}/ablation.md",
+            reason="a pilot whose policies were not shipped: flownav ablation wrote it from the run folders its "
+            "training left in runs/, which a checkout does not keep (the commands are in the report; its episodes "
+            "are committed beside it)",
+        )
+        for tier_name in ("clean", "noisy")
     ),
     Report(
         "ablation/lever_lab_notes.md",

@@ -15,6 +15,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TypedDict
 
+from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.evaluation.episode_tasks import TieredRow
 from flownav_env.tiers import TIER_NAMES, TIERS_BY_VERSION, tier_value
@@ -46,6 +47,12 @@ class LaneRow(TypedDict):
     bound: float
 
 
+def recorded_extent(row: EpisodeRow) -> float | None:
+    """How far sideways (m) the row's drone went; None where the row predates that record or lacks it."""
+    extent = row.get("max_abs_lateral_m")
+    return None if extent is None or math.isnan(extent) else float(extent)
+
+
 def lane_values(folder: Path) -> list[LaneRow]:
     """Per (agent, tier) flown into ``folder``'s CSVs, in agent then tier order: the episodes that recorded
     their sideways extent, how many entered the lane, the farthest one (m), and the lane's edges (m)."""
@@ -53,10 +60,9 @@ def lane_values(folder: Path) -> list[LaneRow]:
     extents: dict[tuple[str, str], list[float]] = {}
     for path in sorted(Path(folder).glob("*.csv")):
         for row in read_records(path):
-            extent = row.get("max_abs_lateral_m")
-            if row["env_id"] in tiers_by_env and extent is not None and not math.isnan(extent):
-                extents.setdefault((row["agent"], tiers_by_env[row["env_id"]]), []).append(float(extent))
-    order = {name: index for index, name in enumerate(TIER_NAMES)}
+            extent = recorded_extent(row)
+            if row["env_id"] in tiers_by_env and extent is not None:
+                extents.setdefault((row["agent"], tiers_by_env[row["env_id"]]), []).append(extent)
     return [
         {
             "agent": agent,
@@ -67,7 +73,9 @@ def lane_values(folder: Path) -> list[LaneRow]:
             "edge": lane_edge(name),
             "bound": float(tier_value(name, "lateral_bound", LANE_VERSION)),
         }
-        for (agent, name), found in sorted(extents.items(), key=lambda item: (item[0][0], order[item[0][1]]))
+        for (agent, name), found in sorted(
+            extents.items(), key=lambda item: (item[0][0], TIER_NAMES.index(item[0][1]))
+        )
     ]
 
 
@@ -91,16 +99,16 @@ class SidewaysRow(TypedDict):
 
 
 def sideways_extent(rows: Iterable[TieredRow], version: str) -> list[SidewaysRow]:
-    """Per tier of suite ``version`` that ``rows`` flew, in suite order, how far sideways its successes went against the capsule field's half-width: a success past the field's edge passed
-    capsules it never had to avoid, which a closed field (suite v2) leaves no room for."""
+    """Per tier of suite ``version`` that ``rows`` flew, in suite order, how far sideways its successes went
+    against the capsule field's half-width: a success past the field's edge passed capsules it never had to
+    avoid, which a closed field (suite v2) leaves no room for."""
     extents: dict[str, list[float]] = {}
     for row in rows:
-        extent = row.get("max_abs_lateral_m")
-        if row["success"] and extent is not None and not math.isnan(extent):
-            extents.setdefault(row["tier"], []).append(float(extent))
-    order = {name: index for index, name in enumerate(TIER_NAMES)}
+        extent = recorded_extent(row)
+        if row["success"] and extent is not None:
+            extents.setdefault(row["tier"], []).append(extent)
     result: list[SidewaysRow] = []
-    for name in sorted(extents, key=order.__getitem__):
+    for name in sorted(extents, key=TIER_NAMES.index):
         edge = float(tier_value(name, "field_width", version)) / 2.0
         result.append(
             {

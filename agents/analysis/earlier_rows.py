@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 
 from agents.analysis.episode_record import EpisodeRow, episode_outcome
 
-ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version", "max_abs_lateral_m")
+ADDED_FIELDS = ("mean_depth_outlier_share", "suite_version", "max_abs_lateral_m", "isolation", "cpu")
 """Columns added since episodes carried their identities, oldest first; each sits after the earlier ones at the
 end of the record, so an earlier file's header is today's with the later additions left out."""
 

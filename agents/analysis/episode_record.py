@@ -72,6 +72,12 @@ class EpisodeRecord:
     # The farthest the drone went sideways of the course axis (m): whether it left the capsule field for the
     # free lane beside it (agents/evaluation/lane.py); NaN when not measured.
     max_abs_lateral_m: float = math.nan
+    # How the agent was kept apart from the scorer (agents.policies.agent_limits: "sandbox", "process, no
+    # sandbox"); "" for FlowNav's own agents, which fly in the scoring process.
+    isolation: str = ""
+    # The CPU the episode flew on, vendor and widest vector instruction set (agents.common.machine.cpu_signature):
+    # a learned policy's floats, and so its closed-loop episodes, differ between them.
+    cpu: str = ""
 
 
 class EpisodeRow(TypedDict):
@@ -103,6 +109,8 @@ class EpisodeRow(TypedDict):
     mean_depth_outlier_share: float | None
     suite_version: str | None
     max_abs_lateral_m: float | None
+    isolation: str | None
+    cpu: str | None
 
 
 class PooledRow(EpisodeRow, total=False):

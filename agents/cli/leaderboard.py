@@ -70,12 +70,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the published suite table --include adds to (default: results/suite.csv for the current version, "
         "results/suite_v1/suite.csv for --suite-version 1)",
     )
+    parser.add_argument(
+        "--verify",
+        action="store_true",
+        help="with --include: fly again, here and now, a sample of each included file's episodes with the agent "
+        "its score_runs.json names (as flownav verify does), and mark the rows verified only where they match",
+    )
     add_suite_version_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.include:
         return _include(args)
+    if args.verify:
+        raise ValueError("--verify goes with --include score.csv: it re-flies the included files' episodes")
 
     agents = [name.strip() for name in args.agents.split(",") if name.strip()]
     if not args.report_only:
@@ -105,6 +113,23 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _verify_included(paths: list[str]) -> dict[Path, str] | None:
+    """Each included file re-flown here (:func:`agents.evaluation.verify.verify`), as its mark; None, with the
+    mismatch printed, where one does not match."""
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+    from agents.evaluation.included import agent_to_verify
+    from agents.evaluation.verify import verify
+
+    marks = {}
+    for path in dict.fromkeys(Path(name) for name in paths):
+        result = verify(path, agent_to_verify(path))
+        print(f"{path}: {result.line()}")
+        if result.mismatch:
+            return None
+        marks[path] = f"verified (re-flown in this command: {result.checked} episodes)"
+    return marks
+
+
 def _include(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.included import included_suite
@@ -115,8 +140,11 @@ def _include(args: argparse.Namespace) -> int:
     out = Path(args.out)
     check_writable_folder(out)
     command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    verified_now = _verify_included(args.include) if args.verify else {}
+    if verified_now is None:
+        return 1
     text, rows, rankings, _ = included_suite(
-        suite_path, args.include, command=command.strip(), version=version
+        suite_path, args.include, command=command.strip(), version=version, verified_now=verified_now
     )
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomically(out / "suite_with_included.md", text)

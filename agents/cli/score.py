@@ -32,7 +32,9 @@ from agents.policies.agent_limits import (
     DEFAULT_AGENT_CPU_S,
     DEFAULT_AGENT_MEMORY_GIB,
     DEFAULT_STEP_TIMEOUT_S,
+    NO_SANDBOX_OPTION,
     STEP_TIMEOUT_OPTION,
+    UNLISTED_POLICY_OPTION,
     AgentLimits,
 )
 from agents.policies.sb3_models import SB3_ALGORITHMS, sb3_model_name
@@ -41,7 +43,9 @@ HELP = "score any agent on the suite's frozen test layouts (a row per tier)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_agent_spec_arguments(parser, "a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent")
+    add_agent_spec_arguments(
+        parser, "a FlowNav agent, my_pkg.my_module:make_agent, or path/to/file.py:make_agent"
+    )
     parser.add_argument(
         "--name",
         help="the agent's name in score.csv, tables and figures (default: a file's stem and callable, e.g. "
@@ -65,6 +69,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_agent_limit_arguments(parser)
     parser.add_argument(
+        UNLISTED_POLICY_OPTION,
+        action="store_true",
+        help="score a FlowNav agent with a --policy its folder's MANIFEST.sha256 does not list with its hash; its "
+        "rows are named for the file, never as the published agent (without this it is refused)",
+    )
+    parser.add_argument(
         "--robustness",
         action="store_true",
         help="also fly the agent's failure-versus-error curve for each sensor factor of configs/sweep.yaml, on "
@@ -82,7 +92,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_agent_limit_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--agent-memory`` and ``--agent-cpu``: what an outside agent's process may use."""
+    """``--agent-memory``, ``--agent-cpu`` and ``--no-sandbox``: what an outside agent's process may use, and
+    where."""
     parser.add_argument(
         AGENT_MEMORY_OPTION,
         type=float,
@@ -99,11 +110,17 @@ def add_agent_limit_arguments(parser: argparse.ArgumentParser) -> None:
         help="the CPU time an outside agent's process may use over the run; past it the process is killed and "
         "the run stops, naming the episode (default: %(default)s)",
     )
+    parser.add_argument(
+        NO_SANDBOX_OPTION,
+        action="store_true",
+        help="fly an outside agent in a plain process of its own, without the sandbox (bubblewrap) that keeps it "
+        "from your files, the scorer's memory and the network; its episode rows say so",
+    )
 
 
 def agent_limits(args: argparse.Namespace) -> AgentLimits:
-    """The :class:`AgentLimits` of ``--agent-memory`` and ``--agent-cpu``."""
-    return AgentLimits(args.agent_memory, args.agent_cpu)
+    """The :class:`AgentLimits` of ``--agent-memory``, ``--agent-cpu`` and ``--no-sandbox``."""
+    return AgentLimits(args.agent_memory, args.agent_cpu, sandboxed=not args.no_sandbox)
 
 
 def agent_and_policy(args: argparse.Namespace) -> tuple[str, str | None]:
@@ -165,6 +182,7 @@ def run(args: argparse.Namespace) -> int:
         step_timeout_s=args.step_timeout,
         version=args.suite_version,
         agent_limits=agent_limits(args),
+        unlisted_policy=args.unlisted_policy,
         **common,
     )
     print("\n".join(tier_tables(rows)))

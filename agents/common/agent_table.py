@@ -7,6 +7,7 @@ Pure: it imports no policy, no env, no simulator, so the analysis of committed r
 from __future__ import annotations
 
 import difflib
+import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, get_args
@@ -158,3 +159,19 @@ def is_learned(name: str) -> bool:
     """
     base = split_agent_name(name)[0]
     return base in AGENTS and AGENTS[base].kind == "learned"
+
+
+def name_key(name: str) -> str:
+    """``name`` as a person reads it: NFKC-normalised, casefolded, with whitespace and invisible (format)
+    characters such as U+200B left out; two names with the same key look alike."""
+    text = unicodedata.normalize("NFKC", str(name))
+    return "".join(ch for ch in text if not ch.isspace() and unicodedata.category(ch) != "Cf").casefold()
+
+
+def published_name_like(name: str) -> str | None:
+    """The agent of ``configs/agents.yaml`` whose name ``name`` reads as (``Bee_Robust``, ``bee_robust `` and
+    ``bee_robust`` + U+200B all read as ``bee_robust``; so does a training seed of it, ``bee_robust@1``), or None
+    where it reads as none."""
+    key = name_key(name)
+    base = key.partition(TRAIN_SEED_MARK)[0]
+    return next((entry.name for entry in AGENT_TABLE if name_key(entry.name) in (key, base)), None)

@@ -20,6 +20,26 @@ def cpu_model() -> str:
     return platform.processor() or platform.machine() or "unknown CPU"
 
 
+# The vector instruction sets a policy's float kernels pick between, widest first: the one a CPU has decides
+# the order of its sums, so a learned policy's actions differ in their last bits between them.
+VECTOR_SETS = ("avx512f", "avx2", "avx", "sse4_2", "asimd", "neon")
+
+
+def cpu_signature() -> str:
+    """The CPU's vendor, architecture and widest vector instruction set (``AuthenticAMD x86_64 avx2``): what
+    decides whether a learned policy's episodes re-fly bit for bit on another machine."""
+    fields: dict[str, str] = {}
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.is_file():
+        for line in cpuinfo.read_text().splitlines():
+            name, _, value = line.partition(":")
+            fields.setdefault(name.strip(), value.strip())
+    vendor = fields.get("vendor_id") or fields.get("CPU implementer") or "unknown vendor"
+    flags = set((fields.get("flags") or fields.get("Features") or "").split())
+    vector = next((name for name in VECTOR_SETS if name in flags), "no vector set")
+    return f"{vendor} {platform.machine() or 'unknown architecture'} {vector}"
+
+
 def available_cores() -> int:
     """Logical cores this process may use."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)

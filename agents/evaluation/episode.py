@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.analysis.episode_record import EpisodeRecord
+from agents.evaluation.plausibility import implausibility
 from agents.policies import Agent, predict_location
 
 __all__ = ["EpisodeRecord", "run_episode"]
@@ -31,7 +32,7 @@ def run_episode(
     """Fly one episode of ``env`` with ``agent`` from ``reset(seed=seed)`` to termination or truncation."""
     observation, info = env.reset(seed=seed)
     position = info["position"]
-    path_length, total_return, steps, widest = 0.0, 0.0, 0, 0.0
+    path_length, total_return, steps, widest, fastest = 0.0, 0.0, 0, 0.0, 0.0
     valid_points, depth_errors, outlier_shares = [], [], []
     terminated = truncated = False
     # As SB3's evaluate_policy: an agent with memory gets its state back and is told where an episode starts.
@@ -55,7 +56,9 @@ def run_episode(
         steps += 1
         total_return += float(reward)
         new_position = info["position"]
-        path_length += float(np.linalg.norm(new_position - position))
+        step_length = float(np.linalg.norm(new_position - position))
+        path_length += step_length
+        fastest = max(fastest, step_length)
         position = new_position
         widest = max(widest, abs(float(position[1])))
         valid_points.append(info["points_valid"])
@@ -64,7 +67,7 @@ def run_episode(
             outlier_shares.append(info["depth_outlier_share"])
     check_own_progress(env, info, episode)
     frame_rate = env.get_wrapper_attr("frame_rate")
-    return EpisodeRecord(
+    record = EpisodeRecord(
         agent=label,
         factor=factor,
         level=float(level),
@@ -84,6 +87,12 @@ def run_episode(
         mean_depth_outlier_share=float(np.mean(outlier_shares)) if outlier_shares else math.nan,
         max_abs_lateral_m=widest,
     )
+    problem = implausibility(record, env.get_wrapper_attr("settings"), fastest)
+    if problem:
+        raise ValueError(
+            f"{episode}: not a flight the physics allows ({problem}); nothing was recorded of it"
+        )
+    return record
 
 
 # How far short of the goal line (m) a success's final position may lie: none, but for rounding.

@@ -32,6 +32,7 @@ from agents.evaluation.suite_report import (
 )
 from agents.evaluation.verification_record import verification_mark
 from agents.policies import split_agent_name
+from agents.policies.agent_limits import ISOLATION_PROCESS, NO_SANDBOX_OPTION
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 
@@ -85,15 +86,52 @@ def _source(
     for row in table:
         row["included"] = included
     whole = {(row["tier"], row["agent"]) for row in table}
-    missing = [(str(row["agent"]), str(row["tier"])) for row in rows if (row["tier"], row["agent"]) not in whole]
+    missing = [
+        (str(row["agent"]), str(row["tier"])) for row in rows if (row["tier"], row["agent"]) not in whole
+    ]
     failures = {name: tier_failures(episodes, runs, name, seeds) for name in tiers}
     return table, failures, missing
 
 
+def included_mark(score_csv: Path, verified_now: Mapping[Path, str]) -> str:
+    """How the included rows of ``score_csv`` are marked: verified in this command (``verified_now``), verified
+    by a signed record beside them, or self-reported; and whether any of its episodes flew without the sandbox."""
+    mark = verified_now.get(Path(score_csv)) or verification_mark(Path(score_csv))
+    episodes = Path(score_csv).parent / EPISODES_CSV
+    if episodes.is_file() and any(row["isolation"] == ISOLATION_PROCESS for row in read_records(episodes)):
+        mark += f"; flown without the sandbox ({NO_SANDBOX_OPTION})"
+    return mark
+
+
+def agent_to_verify(score_csv: Path) -> str:
+    """The agent whose rows ``score_csv`` holds, as ``flownav score`` was given it (a file's or module's full spec,
+    a model's ``<algo>:<zip>``, a FlowNav name), read from the ``score_runs.json`` beside it.
+
+    Raises:
+        ValueError: rows of several agents, or none with recorded runs.
+    """
+    rows = read_suite_csv(Path(score_csv), SUITE_VERSION)
+    names = sorted({str(row["agent"]) for row in rows})
+    runs = read_score_runs(Path(score_csv).parent)
+    if len(names) != 1 or names[0] not in runs:
+        raise ValueError(
+            f"--verify: {score_csv} must hold the rows of one agent with its runs in score_runs.json beside it (as "
+            f"flownav score writes), got agents {names}: verify it with flownav verify instead"
+        )
+    flown = runs[names[0]]
+    return flown[0] if len(flown) == 1 else split_agent_name(flown[0])[0]
+
+
 def included_suite(
-    suite_csv: Path, score_csvs: Sequence[str | Path], *, command: str, version: str = SUITE_VERSION
+    suite_csv: Path,
+    score_csvs: Sequence[str | Path],
+    *,
+    command: str,
+    version: str = SUITE_VERSION,
+    verified_now: Mapping[Path, str] | None = None,
 ) -> tuple[str, list[SuiteRow], dict[str, TierRanking], list[Path]]:
-    """The published suite (of suite ``version``) with the agents of ``score_csvs`` ranked among its agents.
+    """The published suite (of suite ``version``) with the agents of ``score_csvs`` ranked among its agents;
+    ``verified_now`` marks the files re-flown in this command.
 
     Returns:
         The page's text, the table's rows (an included one with ``included`` true), each tier's ranking, and
@@ -112,8 +150,9 @@ def included_suite(
             "flownav score --layouts 2 or more"
         )
     table, failures, missing = _source(Path(suite_csv), published, layouts, version, included=False)
+    marks = {path: included_mark(path, verified_now or {}) for path in files}
     for path in files:
-        mark = verification_mark(path)
+        mark = marks[path]
         rows, matrices, not_whole = _source(
             path, read_suite_csv(path, version), layouts, version, included=mark
         )
@@ -131,7 +170,7 @@ def included_suite(
         missing=[],
         not_counted=[(markdown_cell(agent), name) for agent, name in missing],
         generated=today(),
-        included_files=[(markdown_cell(path), verification_mark(path)) for path in files],
+        included_files=[(markdown_cell(path), marks[path]) for path in files],
         figure="suite_with_included.png",
         version=version,
     )

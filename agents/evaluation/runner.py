@@ -31,7 +31,7 @@ from agents.analysis.records import (
     repair_episodes_header,
 )
 from agents.common.interrupts import stop_signals_interrupt
-from agents.common.machine import code_version
+from agents.common.machine import code_version, cpu_signature
 from agents.common.process_pool import run_in_workers
 from agents.evaluation.agent_settings import episode_name, flown_settings, plan_settings
 from agents.evaluation.claims import CLAIMED, MINE, claim_episode, release_claim, release_claims
@@ -108,6 +108,12 @@ def _code_version() -> str:
     return code_version()
 
 
+@functools.cache
+def _cpu_signature() -> str:
+    """This machine's CPU (:func:`~agents.common.machine.cpu_signature`), read once."""
+    return cpu_signature()
+
+
 def run_task(task: EpisodeTask, cache: FlightCache = WORKER_CACHE) -> EpisodeRecord:
     """Fly the task's episode (in whatever process this runs) with ``cache``'s env and agent; the record
     carries the task's identity and the code version of the process that flew it.
@@ -125,7 +131,12 @@ def run_task(task: EpisodeTask, cache: FlightCache = WORKER_CACHE) -> EpisodeRec
     identity = task.identity()
     identity["env_kwargs"] = canonical_json(settings)  # what flew, as it flew
     return dataclasses.replace(
-        record, **identity, code_version=_code_version(), suite_version=task.suite_version
+        record,
+        **identity,
+        code_version=_code_version(),
+        suite_version=task.suite_version,
+        isolation=agent.limits.isolation if isinstance(agent, IsolatedAgent) else "",
+        cpu=_cpu_signature(),
     )
 
 

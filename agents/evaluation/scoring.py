@@ -9,6 +9,7 @@ from pathlib import Path
 
 from agents.analysis.records import overwrite_hint, start_new_file
 from agents.common.folders import check_writable_folder
+from agents.common.manifest import manifest_problem
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.evaluation.runner import execute
 from agents.evaluation.suite import (
@@ -22,7 +23,7 @@ from agents.evaluation.suite import (
     write_summary_csv,
 )
 from agents.evaluation.suite_report import SCORE_CSV, SuiteRow, other_agents_rows, write_score_runs
-from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
+from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, UNLISTED_POLICY_OPTION, AgentLimits
 from agents.policies.external import check_display_name, display_name
 from flownav_env.tiers import SUITE_VERSION
 
@@ -43,6 +44,7 @@ def score(
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
     version: str = SUITE_VERSION,
     agent_limits: AgentLimits | None = None,
+    unlisted_policy: bool = False,
 ) -> list[SuiteRow]:
     """Fly ``agent`` on suite ``version`` and return its rows (:data:`SUMMARY_COLUMNS`), one per tier.
 
@@ -64,7 +66,9 @@ def score(
         overwrite: move ``suite_episodes.csv`` to ``suite_episodes.csv.bak-<time>`` first and start afresh.
         step_timeout_s: the most an outside agent's ``predict`` may take per call (0: no limit); past it the
             run stops with one line naming the episode, and that episode is not recorded.
-        agent_limits: the memory and CPU time an outside agent's process may use.
+        agent_limits: the memory and CPU time an outside agent's process may use, and whether it is sandboxed.
+        unlisted_policy: score a FlowNav agent with a ``policy`` its folder's ``MANIFEST.sha256`` does not list
+            with this hash; its rows are then named for the file, never as the published agent.
 
     Raises:
         ValueError: a bad agent, tier, layout count, folder or name; an agent that needs an observation key or
@@ -72,7 +76,15 @@ def score(
     """
     tier_names = parse_tiers(tiers)
     agent = resolve_agent(agent, trust_pickle=trust_pickle)
-    shown = check_display_name(display_name(agent) if name is None else name, agent)
+    default_name = display_name(agent)
+    if policy is not None and (problem := manifest_problem(Path(policy))) is not None:
+        if not unlisted_policy:
+            raise ValueError(
+                f"--policy: {problem}; its rows would stand under {agent}'s name: pass {UNLISTED_POLICY_OPTION} to "
+                "score it anyway, under a name that says so"
+            )
+        default_name = f"{agent} ({Path(policy).name}, unlisted)"
+    shown = check_display_name(default_name if name is None else name, agent)
     runs = {agent: agent_runs(agent, policy)}
     tasks = suite_tasks(
         runs, tier_names, layouts, policies={agent: policy}, trust_pickle=trust_pickle, version=version

@@ -12,11 +12,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict, cast
 
+from agents.common.agent_table import published_name_like
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import SUITE_LAYOUTS
 from agents.common.tables import markdown_cell, markdown_table
 from agents.evaluation.verification_record import verification_mark
-from agents.policies.base import AGENT_NAMES, PRIVILEGED_AGENTS
+from agents.policies.base import PRIVILEGED_AGENTS
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
 
 if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
@@ -41,7 +42,6 @@ SUMMARY_COLUMNS = [
     "env_kwargs",
     "privileged",
 ]
-
 
 
 class SuiteRow(TypedDict):
@@ -241,10 +241,10 @@ def read_included(
         if not found:
             raise ValueError(f"{path} holds no rows: flownav score writes one per tier it flew whole")
         for row in found:
-            if row["agent"] in AGENT_NAMES:
+            if (like := published_name_like(row["agent"])) is not None:
                 raise ValueError(
-                    f"{path}: agent {row['agent']!r} is a published agent's name: its rows would replace the "
-                    "published ones; score yours under another (flownav score --name)"
+                    f"{path}: agent {row['agent']!r} reads as the published agent {like!r}: its rows would pass for "
+                    "that agent's; score yours under another name (flownav score --name)"
                 )
             key = (row["tier"], row["agent"])
             if key in seen:
@@ -369,5 +369,3 @@ def _included_mark(row: Mapping[str, object]) -> str:
     if not mark:
         return ""
     return f" (included, {mark})" if isinstance(mark, str) else " (included)"
-
-

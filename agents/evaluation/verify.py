@@ -18,6 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.analysis.detection import (
+    DEFAULT_CHANGED_SHARE,
+    DEFAULT_POWER,
+    DISCORDANCE_ALPHA,
+    detection_power,
+    detection_sample_size,
+    discordance_p_value,
+)
+from agents.common.machine import cpu_signature
 from agents.evaluation.agent_settings import plan_settings
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow
 from agents.evaluation.runner import FlightCache, run_task
@@ -35,26 +44,55 @@ from agents.policies.agent_process import end_agent_processes
 from flownav_env.task import episode_outcome
 from flownav_env.tiers import SUITE_VERSION
 
-# Episodes flown again per tier by default.
-DEFAULT_SAMPLE = 10
+# The CPU this process flies on (an episode row records the one it flew on).
+CPU = cpu_signature()
 # score.csv keeps rates to 4 decimals (suite.write_summary_csv).
 RATE_DECIMALS = 4
 
 
 @dataclass(frozen=True)
 class Verification:
-    """What ``verify`` found: the episodes flown again (``checked``, of ``sampled``) and the first that did not
-    match (``mismatch``, one line; "" when all did)."""
+    """What ``verify`` found: the episodes flown again (``checked``, of ``sampled``, drawn from ``total``), the
+    first that did not match (``mismatch``, one line; "" when all did), and of those flown on another CPU than
+    this one (``other_cpu``) how many ended as the file says (``agreed_other_cpu``) and the p-value that the file
+    fails less often than the agent does (``p_value``)."""
 
     checked: int
     sampled: int
+    total: int = 0
     mismatch: str = ""
+    other_cpu: int = 0
+    agreed_other_cpu: int = 0
+    p_value: float = 1.0
+    changed_share: float = DEFAULT_CHANGED_SHARE
+    power: float = DEFAULT_POWER
+
+    @property
+    def exact(self) -> bool:
+        """Whether every episode flown again was flown on this CPU, so each was compared bit for bit."""
+        return self.other_cpu == 0
 
     def line(self) -> str:
-        """``verified k/k``, or the first mismatch."""
+        """``verified k/k`` and how, or the first mismatch."""
         if self.mismatch:
             return f"not verified: {self.mismatch}"
-        return f"verified {self.checked}/{self.sampled}"
+        caught = (
+            f"a file with {self.changed_share * 100:g} % of its {self.total:,} episodes changed is caught "
+            f"{100 * detection_power(self.total, _changed(self.total, self.changed_share), self.sampled):.0f} % of "
+            "the time"
+        )
+        if self.exact:
+            return f"verified {self.checked}/{self.sampled}: each ends as the file says ({caught})"
+        return (
+            f"verified {self.checked}/{self.sampled}, {self.other_cpu} of them statistically: the file flew them on "
+            f"another CPU than this one ({CPU}), where a learned policy's floats differ; {self.agreed_other_cpu} of "
+            f"{self.other_cpu} end as the file says, and the file does not fail less often than a re-flight "
+            f"(p = {self.p_value:.2f}); those on this CPU each end as the file says ({caught})"
+        )
+
+
+def _changed(total: int, share: float) -> int:
+    return max(1, math.ceil(share * total - 1e-9))
 
 
 def outcome_of(row: Mapping[str, object]) -> str:
@@ -68,7 +106,9 @@ def verify(
     *,
     policy: str | None = None,
     trust_pickle: bool = False,
-    sample: int = DEFAULT_SAMPLE,
+    sample: int | None = None,
+    changed_share: float = DEFAULT_CHANGED_SHARE,
+    power: float = DEFAULT_POWER,
     episodes_csv: str | Path | None = None,
     step_timeout_s: float = 0.0,
     agent_limits: AgentLimits | None = None,
@@ -83,7 +123,9 @@ def verify(
             ``<algo>:<model.zip>``).
         policy: a learned agent's policy file, if not the shipped one.
         trust_pickle: allow unpickling a policy zip without its config (runs its code).
-        sample: episodes per tier to fly again (all, where a tier has fewer).
+        sample: episodes to fly again, drawn from all of the file's (default: as many as catch a file with
+            ``changed_share`` of its episodes changed with probability ``power``).
+        changed_share, power: what the default sample is sized to catch.
         episodes_csv: the episodes file (default: ``suite_episodes.csv`` beside ``score_csv``).
         step_timeout_s, agent_limits: as ``flownav score``'s.
         version: the suite version the rows are of.
@@ -93,8 +135,9 @@ def verify(
             file that holds none of the agent's episodes.
         FileNotFoundError: no such file.
     """
-    if isinstance(sample, bool) or not isinstance(sample, int) or sample < 1:
+    if sample is not None and (isinstance(sample, bool) or not isinstance(sample, int) or sample < 1):
         raise ValueError(f"--sample must be an integer >= 1, got {sample!r}")
+    detection_sample_size(1, changed_share, power)  # a bad share or power fails before anything flies
     score_csv = Path(score_csv)
     rows = read_suite_csv(score_csv, version)
     if not rows:
@@ -129,8 +172,11 @@ def verify(
         )
     mismatch = _rates_mismatch(rows, episodes, runs, score_csv, version)
     if mismatch:
-        return Verification(0, 0, mismatch)
-    return _fly_sample(tasks, episodes, sample, step_timeout_s, agent_limits or AgentLimits())
+        return Verification(0, 0, mismatch=mismatch)
+    total = sum(len(found) for found in episodes.values())
+    size = sample if sample is not None else detection_sample_size(total, changed_share, power)
+    found = _fly_sample(tasks, episodes, size, step_timeout_s, agent_limits or AgentLimits())
+    return replace(found, total=total, changed_share=changed_share, power=power)
 
 
 def _rates_mismatch(
@@ -167,32 +213,51 @@ def _fly_sample(
     step_timeout_s: float,
     limits: AgentLimits,
 ) -> Verification:
-    """Fly ``sample`` episodes per tier, drawn here with a fresh seed, and compare each one's outcome."""
+    """Fly ``sample`` of all the file's episodes, drawn here with a fresh seed, and compare each one's outcome:
+    exactly where the file flew it on this CPU, by its success against the file's otherwise."""
     draw = np.random.default_rng(secrets.randbits(128))
-    chosen: list[tuple[EpisodeTask, TieredRow]] = []
+    pairs: list[tuple[EpisodeTask, TieredRow]] = []
     for tier, tier_tasks in tasks.items():
         recorded = {(row["agent"], int(row["seed"])): row for row in episodes[tier]}
-        pairs = [(task, recorded[(task.agent, task.seed)]) for task in tier_tasks]
-        picks = draw.choice(len(pairs), size=min(sample, len(pairs)), replace=False)
-        chosen += [pairs[index] for index in sorted(picks)]
+        pairs += [
+            (task, recorded[(task.agent, task.seed)])
+            for task in tier_tasks
+            if (task.agent, task.seed) in recorded
+        ]
+    picks = sorted(draw.choice(len(pairs), size=min(sample, len(pairs)), replace=False))
+    chosen = [pairs[index] for index in picks]
     flown = plan_settings(
         [replace(task, step_timeout_s=step_timeout_s, agent_limits=limits) for task, _ in chosen]
     )
     cache = FlightCache()
-    checked = 0
+    checked = other = agreed = file_better = file_worse = 0
     try:
         for task, (_, row) in zip(flown, chosen, strict=True):
             again = vars(run_task(task, cache))
             said, now = outcome_of(row), outcome_of(again)
-            if said != now:
-                return Verification(
-                    checked,
-                    len(chosen),
-                    f"the episode of {task.agent} on tier {task.tier}, layout seed {task.seed}: the file says "
-                    f"{said}, flown again it ends in {now}",
-                )
             checked += 1
+            if row.get("cpu") != CPU:  # another CPU, or a file from before episodes recorded theirs
+                other += 1
+                agreed += said == now
+                file_better += said == "success" and now != "success"
+                file_worse += said != "success" and now == "success"
+            elif said != now:
+                return Verification(
+                    checked - 1,
+                    len(chosen),
+                    mismatch=f"the episode of {task.agent} on tier {task.tier}, layout seed {task.seed}: the file "
+                    f"says {said}, flown again on the CPU it was flown on it ends in {now}",
+                )
     finally:
         cache.clear()
         end_agent_processes()
-    return Verification(checked, len(chosen))
+    p_value = discordance_p_value(file_better, file_worse)
+    if p_value < DISCORDANCE_ALPHA:
+        return Verification(
+            checked,
+            len(chosen),
+            mismatch=f"of {other} episodes the file flew on another CPU, {file_better} it records as successes fail "
+            f"when flown again here and only {file_worse} the other way: the file fails less often than its agent "
+            f"(p = {p_value:.3f})",
+        )
+    return Verification(checked, len(chosen), other_cpu=other, agreed_other_cpu=agreed, p_value=p_value)

@@ -16,6 +16,15 @@ AGENT_MEMORY_OPTION = "--agent-memory"
 # The CPU time an outside agent's process may use over its life (RLIMIT_CPU); it lives as long as the run.
 DEFAULT_AGENT_CPU_S = 3600.0
 AGENT_CPU_OPTION = "--agent-cpu"
+# Flies an outside agent without its sandbox (agents.policies.sandbox).
+NO_SANDBOX_OPTION = "--no-sandbox"
+# Scores a FlowNav agent with a policy file its folder's MANIFEST.sha256 does not list.
+UNLISTED_POLICY_OPTION = "--unlisted-policy"
+# What an episode row records of how its agent was kept apart from the scorer: an outside agent in its sandbox,
+# an outside agent in a plain process of its own (--no-sandbox), or "" for FlowNav's own agents, which run in the
+# scoring process.
+ISOLATION_SANDBOX = "sandbox"
+ISOLATION_PROCESS = "process, no sandbox"
 
 
 class PredictTimeout(ValueError):
@@ -34,10 +43,12 @@ def timeout_message(agent: str, episode: str, limit_s: float) -> str:
 
 @dataclass(frozen=True)
 class AgentLimits:
-    """The memory (GiB of address space) and CPU time (seconds) an outside agent's process may use."""
+    """The memory (GiB of address space) and CPU time (seconds) an outside agent's process may use, and whether
+    it runs in the sandbox (:mod:`agents.policies.sandbox`; off only by an explicit ``--no-sandbox``)."""
 
     memory_gib: float = DEFAULT_AGENT_MEMORY_GIB
     cpu_s: float = DEFAULT_AGENT_CPU_S
+    sandboxed: bool = True
 
     def __post_init__(self) -> None:
         for option, value in ((AGENT_MEMORY_OPTION, self.memory_gib), (AGENT_CPU_OPTION, self.cpu_s)):
@@ -47,6 +58,13 @@ class AgentLimits:
                 or not (math.isfinite(value) and value > 0)
             ):
                 raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
+        if type(self.sandboxed) is not bool:
+            raise ValueError(f"sandboxed must be True or False, got {self.sandboxed!r}")
+
+    @property
+    def isolation(self) -> str:
+        """How an outside agent flown under these limits is kept apart, as its episode rows record it."""
+        return ISOLATION_SANDBOX if self.sandboxed else ISOLATION_PROCESS
 
     @property
     def memory_bytes(self) -> int:

@@ -22,8 +22,10 @@ import socket
 import struct
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
@@ -34,6 +36,13 @@ from agents.policies.agent_limits import (
     AgentLimits,
     PredictTimeout,
     timeout_message,
+)
+from agents.policies.sandbox import (
+    agent_paths,
+    check_sandbox,
+    make_undumpable,
+    sandbox_command,
+    sandbox_environment,
 )
 
 # How long an agent's process may take to import and build the agent before it answers.
@@ -46,6 +55,8 @@ DECLARED, ACTION, ERROR = b"d", b"a", b"e"
 EXIT_WAIT_S = 5.0
 # The dimensions an action may have ((3,) or a (1, 3) batch).
 MAX_ACTION_DIMS = 4
+# How a shell, and bubblewrap, report a child ended by signal N: exit status 128 + N.
+SIGNAL_EXIT_BASE = 128
 
 
 class AgentProcessEnded(ValueError):
@@ -65,8 +76,9 @@ class AgentDeclarations:
 
 
 def check_plain_settings(agent: str, settings: object) -> dict[str, Any]:
-    """``settings`` if it maps setting names to values of exactly ``bool``, ``int``, ``float`` or ``str`` (a
-    subclass could compare equal to anything).
+    """``settings`` if it maps setting names to plain values: exactly ``bool``, ``int``, ``float`` or ``str`` (a
+    subclass could compare equal to anything), or a list or tuple of ``int`` and ``float`` (the histogram's
+    ``histogram_sectors`` and ``depth_bin_edges``), which is returned as a tuple, the type the env's settings use.
 
     Raises:
         ValueError: one line naming the agent and the first setting that is not such a value.
@@ -75,13 +87,18 @@ def check_plain_settings(agent: str, settings: object) -> dict[str, Any]:
         raise ValueError(
             f"agent {agent}: env_settings must map env setting names to values, got {settings!r}"
         )
+    checked: dict[str, Any] = {}
     for key, value in settings.items():
-        if type(value) not in (bool, int, float, str):
+        if type(value) in (list, tuple) and all(type(item) in (int, float) for item in value):
+            checked[key] = tuple(value)
+        elif type(value) in (bool, int, float, str):
+            checked[key] = value
+        else:
             raise ValueError(
                 f"agent {agent}: env_settings[{key!r}] is a {type(value).__name__}, not a plain bool, int, float "
-                "or str"
+                "or str, nor a list of numbers"
             )
-    return dict(settings)
+    return checked
 
 
 class IsolatedAgent:
@@ -102,6 +119,7 @@ class IsolatedAgent:
         self._process: subprocess.Popen[bytes] | None = None
         self._connection: Connection | None = None
         self._declared: AgentDeclarations | None = None
+        self.log_path: Path | None = None
 
     def declarations(self) -> AgentDeclarations:
         """What the agent declares, as its first process in this process said (it is started if it never ran):
@@ -158,6 +176,10 @@ class IsolatedAgent:
             )
         return action, None
 
+    def declared_predict_location(self) -> str | None:
+        """Where the agent's own ``predict`` is written (``path/to/file.py:LINE``), as its process declared it."""
+        return (self._declared.predict_at or None) if self._declared is not None else None
+
     def close(self) -> None:
         """End the agent's process and every process it started (its process group)."""
         process, connection = self._process, self._connection
@@ -167,11 +189,15 @@ class IsolatedAgent:
         if process is not None:
             _kill_group(process)
             process.wait()
+        if self.log_path is not None and self.log_path.is_file() and self.log_path.stat().st_size == 0:
+            self.log_path.unlink()
         _RUNNING.pop(id(self), None)
 
     def _ensure_started(self) -> None:
         if self._process is not None:
             return
+        # Nothing of the same user, sandboxed or not, may read or write this process's memory through /proc.
+        make_undumpable()
         ours, theirs = socket.socketpair()
         command = [
             sys.executable,
@@ -183,15 +209,27 @@ class IsolatedAgent:
             str(self.limits.memory_bytes),
             str(self.limits.cpu_s),
         ]
-        # The agent's process imports what this one does: the same FlowNav, and the user's modules.
-        path = os.pathsep.join(entry or os.getcwd() for entry in sys.path)
-        self._process = subprocess.Popen(
-            command,
-            pass_fds=(theirs.fileno(),),
-            stdin=subprocess.DEVNULL,
-            start_new_session=True,  # a process group of its own: killed as one
-            env={**os.environ, "PYTHONPATH": path},
-        )
+        if self.limits.sandboxed:
+            check_sandbox()
+            readable, import_from = agent_paths(self.spec)
+            command = sandbox_command(command, readable, python_path=import_from)
+            environment = sandbox_environment(import_from)
+        else:
+            # The agent's process imports what this one does: the same FlowNav, and the user's modules.
+            path = os.pathsep.join(entry or os.getcwd() for entry in sys.path)
+            environment = {**os.environ, "PYTHONPATH": path}
+        # What the agent prints goes to a file of its own, never to the user's terminal.
+        self.log_path = _new_log_path()
+        with open(self.log_path, "wb") as log:
+            self._process = subprocess.Popen(
+                command,
+                pass_fds=(theirs.fileno(),),
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=log,
+                start_new_session=True,  # a process group of its own: killed as one
+                env=environment,
+            )
         theirs.close()
         self._connection = Connection(ours.detach())
         _RUNNING[id(self)] = self
@@ -259,9 +297,14 @@ class IsolatedAgent:
                 pass
         self.close()
         how = why or (_exit_description(process, self.limits) if process is not None else "it was closed")
+        output = (
+            f"; what it printed is in {self.log_path}"
+            if self.log_path is not None and self.log_path.is_file()
+            else ""
+        )
         raise AgentProcessEnded(
             f"agent {self.spec}'s process ended {when}{self._in_episode()} ({how}); the run stopped and that "
-            "episode is not recorded"
+            f"episode is not recorded{output}"
         )
 
     def _in_episode(self) -> str:
@@ -273,9 +316,18 @@ def _text(body: bytes) -> str:
     return " ".join(body.decode(errors="replace").split())[:MAX_ERROR_CHARS]
 
 
+def _new_log_path() -> Path:
+    """A new file in this user's temporary folder for what an agent's process prints."""
+    descriptor, name = tempfile.mkstemp(prefix="flownav-agent-", suffix=".log")
+    os.close(descriptor)
+    return Path(name)
+
+
 def _exit_description(process: subprocess.Popen[bytes], limits: AgentLimits) -> str:
     """How ``process`` (already waited for) ended, with the limit that ended it where one did."""
     status = process.returncode
+    if status is not None and limits.sandboxed and SIGNAL_EXIT_BASE < status < SIGNAL_EXIT_BASE + 65:
+        status = SIGNAL_EXIT_BASE - status  # the sandbox exits 128 + N for an agent ended by signal N
     if status is None or status >= 0:
         return f"it exited with status {status}"
     number = -status

@@ -5,7 +5,7 @@ kind (read from ``configs/agents.yaml`` by :mod:`agents.common.agent_table`)."""
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -139,6 +139,9 @@ def predict_location(agent: Agent) -> str | None:
     under any :class:`AgentWrapper`), for an error about what it returned; None where Python cannot say."""
     while isinstance(agent, AgentWrapper):
         agent = agent.agent
+    declared = getattr(agent, "declared_predict_location", None)
+    if callable(declared):  # an agent in another process says where its predict is written
+        return cast("str | None", declared())
     try:
         method = inspect.unwrap(type(agent).predict)
         return f"{inspect.getsourcefile(method)}:{inspect.getsourcelines(method)[1]}"

@@ -29,8 +29,9 @@ from typing import Any, NoReturn
 
 import numpy as np
 
+from agents.common.agent_table import published_name_like
 from agents.policies.agent_process import isolated_agent
-from agents.policies.base import AGENT_NAMES, Agent, AgentWrapper, predict_location
+from agents.policies.base import Agent, AgentWrapper, predict_location
 from agents.policies.observation_keys import OBSERVATION_KEY_SETTINGS
 from agents.policies.sb3_models import is_sb3_model_name
 
@@ -191,10 +192,11 @@ def check_display_name(name: str, agent: str) -> str:
         raise ValueError(
             f"--name {name!r}: a display name is one line of text without '|' or backticks, e.g. my_agent"
         )
-    if name in AGENT_NAMES and name != agent:
+    like = published_name_like(str(name))
+    if like is not None and name != agent:
         raise ValueError(
-            f"--name {name!r} is a FlowNav agent's name: its rows would replace that agent's published ones; "
-            "choose another"
+            f"--name {name!r} reads as the FlowNav agent {like!r} (names are compared after NFKC, casefolding and "
+            "leaving out whitespace and invisible characters): its rows would pass for that agent's; choose another"
         )
     return str(name).strip()
 

@@ -16,6 +16,7 @@ from agents.analysis.csv_file import sealed_line
 from agents.analysis.statistics import wilson_interval
 from agents.cli import main
 from agents.common.seeds import suite_seeds
+from agents.common.signing import key_path
 from agents.evaluation.suite_report import OUTCOMES
 from agents.evaluation.verification_record import VERIFICATION_JSON, verification_mark
 from agents.evaluation.verify import Verification
@@ -46,7 +47,9 @@ def test_honest_rows_are_verified_and_included_as_verified(
     assert verification_mark(score_csv) == "self-reported"
     assert main(["verify", str(score_csv), "--agent", AGENT]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0] == "verified 1/1"
+    assert out[0].startswith(
+        "verified 1/1: each ends as the file says (a file with 2 % of its 1 episodes changed"
+    )
     record = json.loads((copy / VERIFICATION_JSON).read_text())
     assert record["episodes_reflown"] == 1
     assert verification_mark(score_csv) == "verified (1 episodes re-flown)"
@@ -109,7 +112,7 @@ def test_an_episode_edited_to_another_outcome_is_named(
     (line,) = capsys.readouterr().out.splitlines()
     assert line.startswith(
         f"not verified: the episode of {AGENT} on tier clean, layout seed {suite_seeds(1)[0]}: the file says "
-        f"{said}, flown again it ends in "
+        f"{said}, flown again on the CPU it was flown on it ends in "
     )
     assert not line.endswith(said)
 
@@ -131,5 +134,46 @@ def test_another_agents_file_is_refused(copy: Path, capsys: pytest.CaptureFixtur
 
 
 def test_a_verification_line_says_what_was_checked() -> None:
-    assert Verification(3, 3).line() == "verified 3/3"
-    assert Verification(1, 3, "x differs").line() == "not verified: x differs"
+    assert Verification(3, 3, total=300).line() == (
+        "verified 3/3: each ends as the file says (a file with 2 % of its 300 episodes changed is caught 6 % of "
+        "the time)"
+    )
+    assert Verification(1, 3, mismatch="x differs").line() == "not verified: x differs"
+    statistically = Verification(4, 4, total=300, other_cpu=4, agreed_other_cpu=3, p_value=1.0).line()
+    assert "4 of them statistically: the file flew them on another CPU" in statistically
+    assert "3 of 4 end as the file says" in statistically
+
+
+def test_a_verification_record_not_signed_with_this_users_key_is_self_reported(
+    copy: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    score_csv = copy / "score.csv"
+    assert main(["verify", str(score_csv), "--agent", AGENT]) == 0
+    signed = json.loads((copy / VERIFICATION_JSON).read_text())
+    by_hand = {**signed, "episodes_reflown": 40}  # the hashes right, the signature now wrong
+    (copy / VERIFICATION_JSON).write_text(json.dumps(by_hand))
+    assert verification_mark(score_csv) == "self-reported"
+    unsigned = {key: value for key, value in signed.items() if key != "signature"}
+    (copy / VERIFICATION_JSON).write_text(json.dumps(unsigned))
+    assert verification_mark(score_csv) == "self-reported"
+    (copy / VERIFICATION_JSON).write_text(json.dumps(signed))
+    assert verification_mark(score_csv) == "verified (1 episodes re-flown)"
+    key_path().write_bytes(b"another user's key, 32 bytes....")  # the same record under another key
+    assert verification_mark(score_csv) == "self-reported"
+
+
+def test_episodes_flown_on_another_cpu_are_compared_statistically(
+    copy: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    episodes_csv = copy / "suite_episodes.csv"
+    header, line = episodes_csv.read_text().splitlines()[:2]
+    names = next(csv.reader([header]))
+    row = dict(zip(names, next(csv.reader([line])), strict=True))
+    row["cpu"] = "GenuineIntel x86_64 a CPU this is not"
+    episodes_csv.write_text(header + "\n" + sealed_line([row[name] for name in names[:-1]]))
+    assert main(["verify", str(copy / "score.csv"), "--agent", AGENT]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("verified 1/1, 1 of them statistically: the file flew them on another CPU")
+    assert verification_mark(copy / "score.csv") == (
+        "verified (1 episodes re-flown, 1 of them on another CPU, compared statistically)"
+    )

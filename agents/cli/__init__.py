@@ -31,6 +31,7 @@ COMMANDS = {
     "suite": "agents.cli.suite",
     "score": "agents.cli.score",
     "verify": "agents.cli.verify",
+    "reflight": "agents.cli.reflight",
     "describe": "agents.cli.describe",
     "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",

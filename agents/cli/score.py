@@ -196,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
         from agents.studies.robustness import robustness, summary_lines
 
         summary = robustness(
-            resolve_agent(agent, trust_pickle=args.trust_pickle),
+            resolve_agent(agent, trust_pickle=args.trust_pickle, limits=agent_limits(args)),
             Path(args.out),
             factors=args.factors,
             layouts=args.robustness_layouts,

@@ -75,7 +75,7 @@ def score(
             setting a tier does not give.
     """
     tier_names = parse_tiers(tiers)
-    agent = resolve_agent(agent, trust_pickle=trust_pickle)
+    agent = resolve_agent(agent, trust_pickle=trust_pickle, limits=agent_limits)
     default_name = display_name(agent)
     if policy is not None and (problem := manifest_problem(Path(policy))) is not None:
         if not unlisted_policy:

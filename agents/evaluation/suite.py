@@ -24,6 +24,7 @@ from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import RUNS_INTERVAL, runs_interval
 from agents.analysis.records import read_records
+from agents.analysis.reflights import REFLIGHT_CSV, read_reflights, summarise_reflights
 from agents.analysis.statistics import wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
@@ -59,6 +60,7 @@ from agents.policies import (
     split_agent_name,
     suite_agents_of,
 )
+from agents.policies.agent_limits import AgentLimits
 from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
@@ -243,7 +245,7 @@ def _flown_settings(rows: Sequence[EpisodeRow], runs: Sequence[str]) -> str:
     return flown.pop()
 
 
-def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
+def resolve_agent(agent: str, *, trust_pickle: bool = False, limits: AgentLimits | None = None) -> str:
     """The name records keep for ``agent``: an outside agent's spec made absolute, after loading it once so
     that a bad one fails before anything flies.
 
@@ -254,7 +256,7 @@ def resolve_agent(agent: str, *, trust_pickle: bool = False) -> str:
     split_agent_name(agent)
     if is_external_name(agent):
         agent = agent if is_sb3_model_name(agent) else canonical_spec(agent)
-        load_agent(agent, trust_pickle=trust_pickle)
+        load_agent(agent, trust_pickle=trust_pickle, limits=limits)
     return agent
 
 
@@ -387,6 +389,7 @@ def _report_values(
         gains=learning_gains(failures, rankings),
         chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
         sideways=sideways_extent(rows, version),
+        reflights=summarise_reflights(read_reflights(out / REFLIGHT_CSV)),
         **beside_suite(out, tier_names, out / EPISODES_CSV, seeds),
         version=version,
     )

@@ -17,6 +17,7 @@ import numpy as np
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, Comparison, TierRanking, compare, rank_tier
 from agents.analysis.records import read_records
+from agents.analysis.reflights import ReflightSummary
 from agents.common.jinja_reports import render
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import LANE_SEED_START
@@ -251,6 +252,7 @@ def suite_values(
     included_files: Sequence[tuple[str, str]] = (),
     figure: str = "suite.png",
     not_counted: Sequence[tuple[str, str]] = (),
+    reflights: Sequence[ReflightSummary] = (),
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
@@ -278,6 +280,7 @@ def suite_values(
         "generated": generated,
         "command": command,
         "machine": machine,
+        "reflights": list(reflights),
         "first_layout": layouts.start,
         "last_layout": layouts.stop - 1,
         "layouts": len(layouts),

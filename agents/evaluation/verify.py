@@ -139,20 +139,13 @@ def verify(
         raise ValueError(f"--sample must be an integer >= 1, got {sample!r}")
     detection_sample_size(1, changed_share, power)  # a bad share or power fails before anything flies
     score_csv = Path(score_csv)
-    rows = read_suite_csv(score_csv, version)
-    if not rows:
-        raise ValueError(f"{score_csv} holds no rows: flownav score writes one per tier it flew whole")
-    names = sorted({row["agent"] for row in rows})
-    if len(names) > 1:
-        raise ValueError(
-            f"{score_csv} holds rows of {len(names)} agents ({', '.join(names)}): verify one at a time"
-        )
+    rows = _one_agents_rows(score_csv, version)
     episodes_path = Path(episodes_csv) if episodes_csv else score_csv.parent / EPISODES_CSV
     if not episodes_path.is_file():
         raise FileNotFoundError(
             f"no episodes file at {episodes_path}: flownav score writes it beside score.csv"
         )
-    agent = resolve_agent(agent, trust_pickle=trust_pickle)
+    agent = resolve_agent(agent, trust_pickle=trust_pickle, limits=agent_limits)
     runs = {agent: agent_runs(agent, policy)}
     tasks: dict[str, list[EpisodeTask]] = {}
     for row in rows:
@@ -177,6 +170,23 @@ def verify(
     size = sample if sample is not None else detection_sample_size(total, changed_share, power)
     found = _fly_sample(tasks, episodes, size, step_timeout_s, agent_limits or AgentLimits())
     return replace(found, total=total, changed_share=changed_share, power=power)
+
+
+def _one_agents_rows(score_csv: Path, version: str) -> list[SuiteRow]:
+    """The rows of ``score_csv``, all of one agent.
+
+    Raises:
+        ValueError: no rows, or rows of several agents.
+    """
+    rows = read_suite_csv(score_csv, version)
+    if not rows:
+        raise ValueError(f"{score_csv} holds no rows: flownav score writes one per tier it flew whole")
+    names = sorted({row["agent"] for row in rows})
+    if len(names) > 1:
+        raise ValueError(
+            f"{score_csv} holds rows of {len(names)} agents ({', '.join(names)}): verify one at a time"
+        )
+    return rows
 
 
 def _rates_mismatch(

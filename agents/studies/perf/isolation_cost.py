@@ -1,9 +1,10 @@
-"""What running an outside agent in a process of its own costs per env step (``flownav bench isolation``).
+"""What running an outside agent apart from the scorer costs per env step (``flownav bench isolation``).
 
-The same agent flies the same env in blocks of steps, alternately loaded here (as before isolation) and in its
-own process (:class:`~agents.policies.agent_process.IsolatedAgent`, as ``flownav score`` flies it); each repeat's
-cost is the ratio of the two blocks' time per step, quoted as a median over repeats, so that a machine shared with
-other jobs shifts both sides alike. The target: under 10 % of a step.
+The same agent flies the same env in blocks of steps, in turn loaded here (as before isolation), in a plain
+process of its own (``--no-sandbox``) and in its sandbox (:class:`~agents.policies.agent_process.IsolatedAgent`,
+as ``flownav score`` flies it), the order rotating between repeats; each repeat's cost is the ratio of a block's
+time per step to the in-process block's, quoted as a median over repeats, so that a machine shared with other jobs
+shifts every side alike. The target: under 10 % of a step.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from agents.common.locations import REPO_ROOT
 from agents.common.tables import markdown_table, write_csv
 from agents.policies import Agent
+from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import IsolatedAgent
 from agents.policies.external import canonical_spec, load_external_agent
 from flownav_env.tiers import tier
@@ -53,11 +55,15 @@ def time_per_predict(agent: Agent, observation: dict[str, np.ndarray], calls: in
     return (time.perf_counter() - began) / calls
 
 
+# The sides measured, in the order of the first repeat: in process, in a plain process, in the sandbox.
+SIDES = ("in_process", "own_process", "sandbox")
+
+
 def measure_isolation_cost(
     agent: str = DEFAULT_AGENT, *, tier_name: str = "clean", steps: int = 100, repeats: int = 5, seed: int = 0
 ) -> list[dict[str, Any]]:
-    """Per repeat: ms per step with ``agent`` loaded here and in its own process, and their ratio; and ms per
-    ``predict`` alone on each side; the two sides alternate which goes first.
+    """Per repeat: ms per step with ``agent`` loaded here, in a plain process of its own and in its sandbox, and
+    each one's ratio to in process; and ms per ``predict`` alone on each side; the sides rotate which goes first.
 
     Raises:
         ValueError: fewer than 1 step or repeat, or an agent that does not load.
@@ -67,32 +73,45 @@ def measure_isolation_cost(
     spec = canonical_spec(agent)
     spec_tier = tier(tier_name)
     env = gym.make(spec_tier.env_id, **spec_tier.settings)
-    here, apart = load_external_agent(spec), IsolatedAgent(spec)
+    apart, sandboxed = IsolatedAgent(spec, limits=AgentLimits(sandboxed=False)), IsolatedAgent(spec)
+    fliers: dict[str, Agent] = {
+        "in_process": load_external_agent(spec),
+        "own_process": apart,
+        "sandbox": sandboxed,
+    }
     rows = []
     try:
-        time_per_step(env, apart, 5, seed)  # both warmed up: the process started, the first frames rendered
-        time_per_step(env, here, 5, seed)
+        for flier in fliers.values():  # each warmed up: the processes started, the first frames rendered
+            time_per_step(env, flier, 5, seed)
         observation, _ = env.reset(seed=seed)
         for repeat in range(repeats):
-            order = [("in_process", here), ("own_process", apart)]
-            if repeat % 2:
-                order.reverse()
-            timings = {name: time_per_step(env, flier, steps, seed + repeat) for name, flier in order}
-            predicts = {name: time_per_predict(flier, observation, steps) for name, flier in order}
-            rows.append(
-                {
-                    "repeat": repeat,
-                    "in_process_ms": 1e3 * timings["in_process"],
-                    "own_process_ms": 1e3 * timings["own_process"],
-                    "ratio": timings["own_process"] / timings["in_process"],
-                    "predict_in_process_ms": 1e3 * predicts["in_process"],
-                    "predict_own_process_ms": 1e3 * predicts["own_process"],
-                }
-            )
+            order = [*SIDES[repeat % len(SIDES) :], *SIDES[: repeat % len(SIDES)]]
+            timings = {name: time_per_step(env, fliers[name], steps, seed + repeat) for name in order}
+            predicts = {name: time_per_predict(fliers[name], observation, steps) for name in order}
+            row: dict[str, Any] = {"repeat": repeat}
+            row.update({f"{name}_ms": 1e3 * timings[name] for name in SIDES})
+            row.update({f"{name}_ratio": timings[name] / timings["in_process"] for name in SIDES[1:]})
+            row.update({f"predict_{name}_ms": 1e3 * predicts[name] for name in SIDES})
+            rows.append(row)
     finally:
         apart.close()
+        sandboxed.close()
         env.close()
     return rows
+
+
+def _side_sentence(rows: list[dict[str, Any]], name: str, words: str) -> str:
+    """What flying the agent on side ``name`` (in ``words``) costs, in a sentence of medians over ``rows``."""
+    step = statistics.median(row["in_process_ms"] for row in rows)
+    ratio = statistics.median(row[f"{name}_ratio"] for row in rows)
+    verdict = "within" if ratio - 1.0 <= TARGET_OVERHEAD else "over"
+    added = statistics.median(row[f"predict_{name}_ms"] - row["predict_in_process_ms"] for row in rows)
+    return (
+        f"In {words}: median ratio of time per step to in process {ratio:.3f} ({100 * (ratio - 1):+.1f} %), "
+        f"{verdict} the target of {100 * TARGET_OVERHEAD:.0f} %; a `predict` alone, with no step around it, "
+        f"takes {added:.3f} ms more ({100 * added / step:.1f} % of the median step in process, {step:.2f} ms), "
+        "a figure less shaken by other jobs on the machine than the ratio of whole steps."
+    )
 
 
 def run_isolation_benchmark(
@@ -107,36 +126,27 @@ def run_isolation_benchmark(
     write_csv(
         csv_path, [{k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()} for row in rows]
     )
-    ratio = statistics.median(row["ratio"] for row in rows)
-    verdict = "within" if ratio - 1.0 <= TARGET_OVERHEAD else "over"
-    added = statistics.median(row["predict_own_process_ms"] - row["predict_in_process_ms"] for row in rows)
-    step = statistics.median(row["in_process_ms"] for row in rows)
+    sentences = [
+        _side_sentence(rows, name, words)
+        for name, words in (("own_process", "a plain process of its own"), ("sandbox", "its sandbox"))
+    ]
+    headers = ["repeat", *(f"{name.replace('_', ' ')} (ms/step)" for name in SIDES)]
+    headers += [f"{name.replace('_', ' ')} ratio" for name in SIDES[1:]]
+    headers += [f"predict {name.replace('_', ' ')} (ms)" for name in SIDES]
     lines = [
-        "# The cost of flying an outside agent in its own process",
+        "# The cost of flying an outside agent apart from the scorer",
         "",
-        f"{len(rows)} alternated repeats of {steps} steps of `{agent}` on the clean tier. Median ratio of time per "
-        f"step, own process / in process: {ratio:.3f} ({100 * (ratio - 1):+.1f} %), {verdict} the target of "
-        f"{100 * TARGET_OVERHEAD:.0f} %. A `predict` alone, with no step around it, takes {added:.3f} ms more in "
-        f"its own process (median over repeats): {100 * added / step:.1f} % of the median step in process "
-        f"({step:.2f} ms), a figure less shaken by other jobs on the machine than the ratio of whole steps.",
+        f"{len(rows)} repeats of {steps} steps of `{Path(agent.rpartition(':')[0]).name}` on the clean tier, the "
+        f"order of the three sides rotating between repeats. {' '.join(sentences)}",
         "",
         markdown_table(
-            [
-                "repeat",
-                "in process (ms/step)",
-                "own process (ms/step)",
-                "ratio",
-                "predict in process (ms)",
-                "predict own process (ms)",
-            ],
+            headers,
             [
                 [
                     row["repeat"],
-                    f"{row['in_process_ms']:.2f}",
-                    f"{row['own_process_ms']:.2f}",
-                    f"{row['ratio']:.3f}",
-                    f"{row['predict_in_process_ms']:.3f}",
-                    f"{row['predict_own_process_ms']:.3f}",
+                    *(f"{row[f'{name}_ms']:.2f}" for name in SIDES),
+                    *(f"{row[f'{name}_ratio']:.3f}" for name in SIDES[1:]),
+                    *(f"{row[f'predict_{name}_ms']:.3f}" for name in SIDES),
                 ]
                 for row in rows
             ],

@@ -45,7 +45,7 @@ def test_rows_round_trip_with_their_identity_and_checksum(tmp_path: Path) -> Non
 def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     # Committed leaderboard, ablation and tuning CSVs predate mean_depth_outlier_share: resuming into them must
     # neither be refused nor fly their episodes again.
-    added = ["mean_depth_outlier_share", "suite_version", "max_abs_lateral_m"]
+    added = ["mean_depth_outlier_share", "suite_version", "max_abs_lateral_m", "isolation", "cpu"]
     assert [*PREVIOUS_CSV_FIELDS[:-1], *added, "row_crc"] == CSV_FIELDS
     append_record(tmp_path / "new.csv", replace(RECORD, mean_depth_outlier_share=0.25))
     assert read_records(tmp_path / "new.csv")[0]["mean_depth_outlier_share"] == 0.25
@@ -63,7 +63,8 @@ def test_a_file_from_before_the_outlier_share_keeps_its_columns_when_resumed(tmp
 
 def test_a_file_from_before_the_suite_version_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     before_suite = EARLIER_CSV_FIELDS[1]
-    assert before_suite == [name for name in CSV_FIELDS if name not in ("suite_version", "max_abs_lateral_m")]
+    later = ("suite_version", "max_abs_lateral_m", "isolation", "cpu")
+    assert before_suite == [name for name in CSV_FIELDS if name not in later]
     old = tmp_path / "old.csv"
     values = [str(getattr(RECORD, name)) for name in before_suite[:-1]]
     old.write_text(",".join(before_suite) + "\r\n" + sealed_line(values), newline="")
@@ -79,7 +80,9 @@ def test_a_file_from_before_the_suite_version_keeps_its_columns_when_resumed(tmp
 
 def test_a_suite_file_from_before_the_lateral_extent_keeps_its_columns_when_resumed(tmp_path: Path) -> None:
     before_lateral = EARLIER_CSV_FIELDS[2]
-    assert before_lateral == [name for name in CSV_FIELDS if name != "max_abs_lateral_m"]
+    assert before_lateral == [
+        name for name in CSV_FIELDS if name not in ("max_abs_lateral_m", "isolation", "cpu")
+    ]
     old = tmp_path / "suite.csv"
     values = [str(getattr(RECORD, name)) for name in before_lateral[:-1]]
     old.write_text(",".join(before_lateral) + "\r\n" + sealed_line(values), newline="")
@@ -165,7 +168,10 @@ def test_processes_appending_to_a_new_csv_at_once_write_one_header_and_whole_row
             b"name,score\r\nalice,3\r\n",
             r"foreign.csv is not a FlowNav episodes CSV: its header starts 'name,score'",
         ),
-        (b"\x89PNG\r\n\x1a\n\x00\xff\xfe", r"foreign.csv is not an episodes CSV \(its first line is not UTF-8 text"),
+        (
+            b"\x89PNG\r\n\x1a\n\x00\xff\xfe",
+            r"foreign.csv is not an episodes CSV \(its first line is not UTF-8 text",
+        ),
         (None, r"foreign.csv is a directory, not an episodes CSV"),
     ],
 )
@@ -287,7 +293,9 @@ def test_an_episode_key_reads_typed_rows_and_text_alike() -> None:
         (0.5, None, "an episode's seed is an integer, got None"),
     ],
 )
-def test_an_episode_key_refuses_a_level_or_seed_that_is_not_a_number(level: object, seed: object, message: str) -> None:
+def test_an_episode_key_refuses_a_level_or_seed_that_is_not_a_number(
+    level: object, seed: object, message: str
+) -> None:
     row = {"agent": "bee", "factor": "clean", "level": level, "seed": seed}
     with pytest.raises(ValueError, match=f"^{message}$"):
         episode_key(row)

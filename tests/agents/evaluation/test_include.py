@@ -12,6 +12,7 @@ import pytest
 
 from agents.analysis.records import read_records
 from agents.cli import main
+from agents.evaluation.included import included_mark
 from agents.evaluation.progress import PROGRESS_PREFIX
 from agents.evaluation.suite_plot import plot_label, plot_suite
 from agents.evaluation.suite_report import (
@@ -88,10 +89,12 @@ def test_name_sets_the_rows_agent_without_flying_again(scored: dict[str, Path]) 
 @pytest.mark.parametrize(
     ("name", "message"),
     [
-        (
-            "bee_ttc",
-            "--name 'bee_ttc' is a FlowNav agent's name: its rows would replace that agent's published ones",
-        ),
+        ("bee_ttc", "--name 'bee_ttc' reads as the FlowNav agent 'bee_ttc' (names are compared after NFKC"),
+        ("bee_robust ", "--name 'bee_robust ' reads as the FlowNav agent 'bee_robust'"),
+        ("bee_robust\u200b", "--name 'bee_robust\\u200b' reads as the FlowNav agent 'bee_robust'"),
+        ("Bee_Robust", "--name 'Bee_Robust' reads as the FlowNav agent 'bee_robust'"),
+        ("ｂｅｅ_ｔｔｃ", "reads as the FlowNav agent 'bee_ttc'"),  # fullwidth letters: NFKC
+        ("ppo_flow@2", "--name 'ppo_flow@2' reads as the FlowNav agent 'ppo_flow'"),
         ("my|agent", "--name 'my|agent': a display name is one line of text without '|' or backticks"),
         (" ", "--name ' ': a display name is one line of text"),
     ],
@@ -226,8 +229,10 @@ def _set(**values: str):
     [
         (
             _set(agent="bee_ttc"),
-            "agent 'bee_ttc' is a published agent's name: its rows would replace the published",
+            "agent 'bee_ttc' reads as the published agent 'bee_ttc': its rows would pass for that agent's",
         ),
+        (_set(agent="Bee_Robust"), "agent 'Bee_Robust' reads as the published agent 'bee_robust'"),
+        (_set(agent="bee_robust\u200b"), "reads as the published agent 'bee_robust'"),
         (
             _set(agent="planner"),
             "line 2: planner reads privileged data, but its row is not marked privileged",
@@ -385,3 +390,32 @@ def test_one_tier_figure_is_as_wide_as_its_longest_name(scored: dict[str, Path],
         plot_suite(rows[-1:], tmp_path / "one_row.png")  # a single (agent, tier) flight's page
     with Image.open(tmp_path / "long.png") as long_image, Image.open(tmp_path / "short.png") as short_image:
         assert long_image.width > short_image.width
+
+
+def test_include_verify_re_flies_in_the_same_command_and_marks_only_then(
+    scored: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    copy = Path(shutil.copytree(scored["mine"], tmp_path / "mine"))
+    assert include(scored, tmp_path / "plain", copy / "score.csv") == 0
+    assert "self-reported" in (tmp_path / "plain" / "suite_with_included.md").read_text()
+    argv = ["leaderboard", "--suite", str(scored["published"]), "--out", str(tmp_path / "checked")]
+    assert main([*argv, "--include", str(copy / "score.csv"), "--verify"]) == 0
+    out = capsys.readouterr().out
+    assert f"{copy / 'score.csv'}: verified 2/2: each ends as the file says" in out
+    page = (tmp_path / "checked" / "suite_with_included.md").read_text()
+    assert "verified (re-flown in this command: 2 episodes)" in page
+
+
+def test_rows_flown_without_the_sandbox_say_so(tmp_path: Path) -> None:
+    out = tmp_path / "bare"
+    argv = ["score", "--agent", f"{EXAMPLE}:make_agent", "--tiers", "clean", "--layouts", "1"]
+    assert main([*argv, "--workers", "1", "--out", str(out), "--no-sandbox"]) == 0
+    (episode,) = read_records(out / "suite_episodes.csv")
+    assert episode["isolation"] == "process, no sandbox" and episode["cpu"]
+    assert included_mark(out / "score.csv", {}) == "self-reported; flown without the sandbox (--no-sandbox)"
+
+
+def test_sandboxed_rows_say_so(scored: dict[str, Path]) -> None:
+    episodes = read_records(scored["mine"] / "suite_episodes.csv")
+    assert {episode["isolation"] for episode in episodes} == {"sandbox"}
+    assert included_mark(scored["mine"] / "score.csv", {}) == "self-reported"

@@ -70,19 +70,22 @@ def test_loading_a_model_refuses_each_way_of_calling_code(ppo_zip: Path, form: s
     assert not marker.exists()
 
 
+@pytest.mark.parametrize("sandboxed", [True, False])
 def test_a_trusted_payload_that_breaks_the_load_is_one_line_naming_the_file(
-    ppo_zip: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    ppo_zip: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], sandboxed: bool
 ) -> None:
     marker = tmp_path / "pwned"
     crafted = with_policy_kwargs(
         ppo_zip, tmp_path / "crafted.zip", PAYLOADS["STACK_GLOBAL+REDUCE"](TORCH_LAYERS, marker)
     )
-    assert main(score(crafted, "ppo", tmp_path / "out", "--trust-pickle")) == 2
+    extra = () if sandboxed else ("--no-sandbox",)
+    assert main(score(crafted, "ppo", tmp_path / "out", "--trust-pickle", *extra)) == 2
     error = one_error_line(capsys)
-    # SB3 gets an open file where its keyword arguments should be, and fails on it: said in one line.
+    # SB3 gets something other than its keyword arguments, and fails on it: said in one line.
     prefix = f"flownav score: error: {crafted} could not be loaded as a ppo model (unpickled, as --trust-pickle asked): "
     assert error.startswith(prefix) and re.match(r"\w+: \S", error[len(prefix) :]), error
-    assert marker.exists()  # trusting the file is what let it run
+    # Trusting the file is what let its code run: in the sandbox it could not write the user's files.
+    assert marker.exists() == (not sandboxed)
 
 
 def test_algo_must_be_the_algorithm_the_zip_records(

@@ -20,6 +20,7 @@ from agents.analysis.episode_record import EpisodeRow, episode_outcome
 from agents.analysis.reflights import Reflight
 from agents.common.machine import cpu_signature
 from agents.evaluation.episode_tasks import EpisodeTask
+from agents.evaluation.progress import episode_progress
 from agents.evaluation.runner import FlightCache, run_task
 from agents.evaluation.suite import agent_runs, suite_rows, suite_tasks
 
@@ -83,6 +84,7 @@ def reflight(chosen: Sequence[tuple[EpisodeTask, EpisodeRow]], agent: str) -> li
     cpu = cpu_signature()
     cache = FlightCache()
     found = []
+    progress = episode_progress([task for task, _ in chosen], f"reflight {agent}")
     try:
         for task, row in chosen:
             again = dataclasses.asdict(run_task(task, cache))
@@ -98,6 +100,8 @@ def reflight(chosen: Sequence[tuple[EpisodeTask, EpisodeRow]], agent: str) -> li
                     _outcome(row) == _outcome(again),
                 )
             )
+            progress.update(task.factor)
     finally:
+        progress.close()
         cache.clear()
     return found

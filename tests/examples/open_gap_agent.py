@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-# The observation's histogram counts tracked points per (sector row, sector column, depth bin); the first
-# bins are the nearest depths (flownav_env.settings: depth_bin_edges).
+# The observation's histogram holds, per (sector row, sector column), the fraction of the sector's valid depth
+# points in each depth bin; the first bins are the nearest depths (flownav_env.settings: depth_bin_edges).
 NEAR_BINS = 2
 
 

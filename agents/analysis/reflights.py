@@ -68,7 +68,8 @@ def write_reflights(path: Path, rows: Sequence[Reflight]) -> None:
 @dataclass(frozen=True)
 class ReflightSummary:
     """An agent's re-flights on one CPU: how many, how many identical, how many with the same outcome, and the
-    measured numbers that differed with how often (``path_length_m: 3``)."""
+    measured numbers that differed with how often (``path_length_m: 3``), and the code versions its rows were flown
+    by."""
 
     agent: str
     cpu: str
@@ -76,6 +77,7 @@ class ReflightSummary:
     identical: int
     same_outcome: int
     differed: str = ""
+    code_versions: str = ""
 
 
 def summarise_reflights(rows: Sequence[Reflight]) -> list[ReflightSummary]:
@@ -91,6 +93,7 @@ def summarise_reflights(rows: Sequence[Reflight]) -> list[ReflightSummary]:
             sum(row.identical for row in found),
             sum(row.same_outcome for row in found),
             _differed(found),
+            "; ".join(sorted({_short_version(row.code_version) for row in found})),
         )
         for (agent, cpu), found in groups.items()
     ]
@@ -102,3 +105,9 @@ def _differed(rows: Sequence[Reflight]) -> str:
         for name in filter(None, row.differs.split(",")):
             counts[name] = counts.get(name, 0) + 1
     return ", ".join(f"{name}: {count}" for name, count in counts.items())
+
+
+def _short_version(code_version: str) -> str:
+    """``commit `abc1234` with uncommitted changes in ...`` as ``abc1234 + uncommitted changes``."""
+    commit = code_version.partition("`")[2].partition("`")[0] or code_version or "unknown"
+    return f"{commit} + uncommitted changes" if "uncommitted" in code_version else commit

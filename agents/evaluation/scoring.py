@@ -25,6 +25,7 @@ from agents.evaluation.suite import (
 from agents.evaluation.suite_report import SCORE_CSV, SuiteRow, other_agents_rows, write_score_runs
 from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, UNLISTED_POLICY_OPTION, AgentLimits
 from agents.policies.external import check_display_name, display_name
+from agents.policies.sandbox import make_undumpable
 from flownav_env.tiers import SUITE_VERSION
 
 
@@ -75,6 +76,7 @@ def score(
             setting a tier does not give.
     """
     tier_names = parse_tiers(tiers)
+    make_undumpable()  # the process that writes the rows, too: closed to other processes of this user
     agent = resolve_agent(agent, trust_pickle=trust_pickle, limits=agent_limits)
     default_name = display_name(agent)
     if policy is not None and (problem := manifest_problem(Path(policy))) is not None:

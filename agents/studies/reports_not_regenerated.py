@@ -78,6 +78,11 @@ NOT_REGENERATED: tuple[Report, ...] = (
         "per seed again (the command is in the report)",
     ),
     Report(
+        "isolation_cost.md",
+        reason="a measurement of time, not a report from data: flownav bench isolation measures it again (the "
+        "command is in the report)",
+    ),
+    Report(
         "depth_yield.md",
         reason="a measurement by the code of its time: flownav bench yield flies the in-scene variants again, but "
         "no longer its ICL-NUIM section",

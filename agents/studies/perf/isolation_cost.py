@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -101,7 +102,7 @@ def measure_isolation_cost(
     return rows
 
 
-def _side_sentence(rows: list[dict[str, Any]], name: str, words: str) -> str:
+def _side_sentence(rows: Sequence[Mapping[str, float]], name: str, words: str) -> str:
     """What flying the agent on side ``name`` (in ``words``) costs, in a sentence of medians over ``rows``."""
     step = statistics.median(row["in_process_ms"] for row in rows)
     ratio = statistics.median(row[f"{name}_ratio"] for row in rows)

@@ -231,7 +231,7 @@ def trained_on(name: str, path: str | Path | None = None) -> str:
     config = load_config(config_path, TrainConfig)
     drawn = [
         f"{setting} {bounds[0]:g}-{bounds[1]:g}"
-        for setting, bounds in dataclasses.asdict(config.randomize).items()
+        for setting, bounds in config.randomize.ranges().items()
         if bounds
     ]
     return config.env_id + (f", {', '.join(drawn)} drawn per episode" if drawn else "")

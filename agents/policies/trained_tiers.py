@@ -119,7 +119,7 @@ def config_tiers(config_path: str | Path, version: str = SUITE_VERSION) -> tuple
     if found is None:
         return ()
     env = {**found[1].settings, **dict(config.env)}
-    return tiers_covered(env, dataclasses.asdict(config.randomize), version)
+    return tiers_covered(env, config.randomize.ranges(), version)
 
 
 def agent_tiers(name: str, version: str = SUITE_VERSION) -> tuple[str, ...]:

@@ -9,7 +9,6 @@ workers ignore SIGINT; only the main process handles it, ends learning and saves
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import asdict
 from typing import Any
 
 import gymnasium as gym
@@ -36,7 +35,7 @@ def make_env_factory(
     gained a field would otherwise break every later seed).
     """
     env_id, env_kwargs = config.env_id, {"depth_error_info": False, **config.env, **(teacher_settings or {})}
-    ranges = {name: list(bounds) for name, bounds in asdict(config.randomize).items() if bounds}
+    ranges = {name: list(bounds) for name, bounds in config.randomize.ranges().items() if bounds}
     # Slow episodes need the time to reach the goal: the limit of the slowest speed drawn.
     slowest = {"forward_speed": min(ranges["forward_speed"])} if "forward_speed" in ranges else {}
     limit = episode_step_limit(env_id, {**config.env, **slowest}) if slowest else None

@@ -3,13 +3,14 @@ randomisation and the run itself (``configs/ppo_*.yaml``)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import asdict, dataclass, field, fields, make_dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.common.seeds import MAX_RUN_SEED
 from agents.common.yaml_config import Bounds, checked_field, field_range, from_mapping, interval, within
 from flownav_env.privileged import PRIVILEGED_KEYS
+from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS
 from flownav_env.settings_check import setting_check
 from flownav_env.tiers import TIERS_BY_VERSION, tier, tier_of_env_id
 
@@ -60,32 +61,41 @@ class ImitationParams:
     teacher_params: dict[str, float] = field(default_factory=dict)
 
 
-@dataclass
-class Randomization:
-    """Per-episode uniform ranges [low, high] of the sensor and course variables; empty = fixed."""
+# What training may draw afresh each episode: every sensor setting the env declares and the course's speed and
+# density (flownav_env.settings), so a sensor setting the env gains is one training can vary without an edit here.
+RANDOMIZED_FIELDS = SENSOR_FIELDS + COURSE_FIELDS
 
-    rotation_error: list[float] = env_setting_field("rotation_error", default_factory=list)
-    translation_error: list[float] = env_setting_field("translation_error", default_factory=list)
-    attitude_jitter_deg: list[float] = env_setting_field("attitude_jitter_deg", default_factory=list)
-    brightness: list[float] = env_setting_field("brightness", default_factory=list)
-    rotation_bias: list[float] = env_setting_field("rotation_bias", default_factory=list)
-    translation_bias: list[float] = env_setting_field("translation_bias", default_factory=list)
-    rotation_drift: list[float] = env_setting_field("rotation_drift", default_factory=list)
-    translation_drift: list[float] = env_setting_field("translation_drift", default_factory=list)
-    rotation_noise_deg: list[float] = env_setting_field("rotation_noise_deg", default_factory=list)
-    translation_noise_m: list[float] = env_setting_field("translation_noise_m", default_factory=list)
-    imu_time_offset_ms: list[float] = env_setting_field("imu_time_offset_ms", default_factory=list)
-    depth_noise: list[float] = env_setting_field("depth_noise", default_factory=list)
-    depth_outliers: list[float] = env_setting_field("depth_outliers", default_factory=list)
-    depth_dropout: list[float] = env_setting_field("depth_dropout", default_factory=list)
-    # The course, drawn before each reset (the time limit is set for the slowest speed).
-    forward_speed: list[float] = env_setting_field("forward_speed", default_factory=list)
-    obstacle_density: list[float] = env_setting_field("obstacle_density", default_factory=list)
+
+class RandomizationRanges:
+    """Per-episode uniform ranges [low, high] of the sensor and course variables; empty = fixed. The fields, one
+    per name of :data:`RANDOMIZED_FIELDS`, each a ``list[float]`` checked against the env's rule for its setting,
+    are made by :func:`_randomization_class`."""
+
+    def ranges(self) -> dict[str, list[float]]:
+        """Every variable's range, by name (an empty list where it is fixed)."""
+        return {name: list(getattr(self, name)) for name in RANDOMIZED_FIELDS}
 
     def validate(self) -> None:
-        for name, bounds in asdict(self).items():
+        for name, bounds in self.ranges().items():
             if bounds and (len(bounds) != 2 or bounds[0] > bounds[1]):
                 raise ValueError(f"key 'randomize.{name}' must be [low, high] with low <= high, got {bounds}")
+
+
+def _randomization_class() -> type[RandomizationRanges]:
+    """The dataclass of :class:`RandomizationRanges` with a field for each name of :data:`RANDOMIZED_FIELDS`."""
+    fields_ = [
+        (name, list[float], env_setting_field(name, default_factory=list)) for name in RANDOMIZED_FIELDS
+    ]
+    made = make_dataclass("Randomization", fields_, bases=(RandomizationRanges,))
+    made.__module__ = __name__
+    made.__doc__ = RandomizationRanges.__doc__
+    return made
+
+
+if TYPE_CHECKING:
+    Randomization = RandomizationRanges
+else:
+    Randomization = _randomization_class()
 
 
 @dataclass

@@ -3,6 +3,8 @@ seed, checked against the settings' ranges, with a time limit long enough for th
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -11,6 +13,7 @@ import flownav_env  # noqa: F401
 from agents.training.envs import make_env_factory
 from agents.training.train_config import Randomization, TrainConfig
 from agents.training.wrappers import SensorRandomization
+from flownav_env.settings import COURSE_FIELDS, SENSOR_FIELDS
 
 SMALL = {"camera_width": 64, "camera_height": 48, "depth_error_info": False}
 
@@ -69,3 +72,30 @@ def test_training_envs_get_the_time_limit_of_the_slowest_speed() -> None:
     plain = make_env_factory(TrainConfig(name="plain", env=dict(SMALL)), 0)()
     assert plain.spec.max_episode_steps == 400
     plain.close()
+
+
+def test_training_may_randomise_every_sensor_and_course_setting_the_env_declares() -> None:
+    assert [item.name for item in fields(Randomization)] == [*SENSOR_FIELDS, *COURSE_FIELDS]
+    assert "translation_noise_correlation_s" in SENSOR_FIELDS  # the field the hand-written list once missed
+
+
+def test_the_velocity_errors_correlation_time_is_drawn_per_episode() -> None:
+    config = TrainConfig(
+        name="t", env=dict(SMALL), randomize=Randomization(translation_noise_correlation_s=[0.5, 2.0])
+    )
+    env = make_env_factory(config, 0)()
+    try:
+        drawn = set()
+        for episode in range(3):
+            env.reset(seed=11 if episode == 0 else None)
+            drawn.add(env.unwrapped.settings.translation_noise_correlation_s)
+    finally:
+        env.close()
+    assert len(drawn) == 3 and all(0.5 <= value <= 2.0 for value in drawn)
+
+
+def test_a_reversed_range_is_one_line() -> None:
+    with pytest.raises(
+        ValueError, match=r"^key 'randomize.translation_noise_correlation_s' must be \[low, high\]"
+    ):
+        Randomization(translation_noise_correlation_s=[2.0, 0.5]).validate()

@@ -87,8 +87,15 @@ def _v1_tiers() -> dict[str, Tier]:
         for spec in (
             Tier("clean", "FlowNav-v0", why="the env's defaults, for continuity with the 300-layout history"),
             Tier("hard", "FlowNavHard-v0", course=HARD_COURSE, why="a faster flight through a denser field"),
-            Tier("noisy", "FlowNavNoisy-v0", sensor=realistic_sensor(), why="the default course, datasheet errors"),
-            Tier("hard_noisy", "FlowNavHardNoisy-v0", course=HARD_COURSE, sensor=realistic_sensor(), why="both"),
+            Tier(
+                "noisy",
+                "FlowNavNoisy-v0",
+                sensor=realistic_sensor(),
+                why="the default course, datasheet errors",
+            ),
+            Tier(
+                "hard_noisy", "FlowNavHardNoisy-v0", course=HARD_COURSE, sensor=realistic_sensor(), why="both"
+            ),
         )
     }
 
@@ -101,9 +108,26 @@ def _v2_tiers() -> dict[str, Tier]:
         spec.name: spec
         for spec in (
             Tier("clean", "FlowNav-v1", course=clean, why="the env's defaults over a closed field"),
-            Tier("hard", "FlowNavHard-v1", course=hard, why="twice the distance per frame, a 2-s mean free path"),
-            Tier("noisy", "FlowNavNoisy-v1", course=clean, sensor=sensor, why="motion told as a flight stack does"),
-            Tier("hard_noisy", "FlowNavHardNoisy-v1", course=hard, sensor=sensor, why="the hard course, told so"),
+            Tier(
+                "hard",
+                "FlowNavHard-v1",
+                course=hard,
+                why="twice the distance per frame, a 2-s mean free path",
+            ),
+            Tier(
+                "noisy",
+                "FlowNavNoisy-v1",
+                course=clean,
+                sensor=sensor,
+                why="motion told as a flight stack does",
+            ),
+            Tier(
+                "hard_noisy",
+                "FlowNavHardNoisy-v1",
+                course=hard,
+                sensor=sensor,
+                why="the hard course, told so",
+            ),
         )
     }
 

@@ -92,9 +92,7 @@ def run_rates(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
     return sorted(table, key=lambda r: (r["agent"], -1 if r["train_seed"] == "" else r["train_seed"]))
 
 
-def success_outcomes(
-    rows: Iterable[EpisodeRow], runs: Sequence[str], layouts: Sequence[int]
-) -> np.ndarray:
+def success_outcomes(rows: Iterable[EpisodeRow], runs: Sequence[str], layouts: Sequence[int]) -> np.ndarray:
     """Success (1) or failure (0) of every run on every layout: (runs, layouts).
 
     Raises:

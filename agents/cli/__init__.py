@@ -53,7 +53,7 @@ LEADING_TABLE_EPILOG = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``flownav`` parser: one subcommand per module of :data:`COMMANDS` that is installed.
+    """The ``flownav`` parser: one subcommand per module of :data:`COMMANDS`.
 
     Returns:
         The parser; each subcommand's parsed arguments carry its ``run`` as ``handler``.
@@ -64,8 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"flownav {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, module_name in COMMANDS.items():
-        if importlib.util.find_spec(module_name) is None:
-            continue
+        # Every command module ships with FlowNav: one that does not import is a broken install, said as it is.
         module = importlib.import_module(module_name)
         # The docstrings are reStructuredText for the API docs; a terminal gets them as plain paragraphs.
         sub = commands.add_parser(

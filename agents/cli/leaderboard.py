@@ -1,7 +1,8 @@
 """``flownav leaderboard``: every agent on the same clean test layouts, learned agents over all their shipped
 training seeds; writes the clean tier's 300-layout history table (see :mod:`agents.evaluation.leaderboard`). The
-leading table is the suite's, ``results/suite.md`` (``flownav suite``): its layouts are others (seeds from
-2,000,000 against this table's from 1,000,000), so the two give the clean tier different rates.
+leading table is the suite's, ``results/suite.md`` (``flownav suite``): its layouts are others (seeds
+from the suite's own frozen range in ``agents/common/seeds.py``, ``SUITE_SEED_STARTS``, against this table's from
+1,000,000), so the two give the clean tier different rates.
 
 With ``--include score.csv`` (repeatable) it flies nothing: it sets the rows ``flownav score`` wrote beside the
 published suite table (``results/suite.csv``) and ranks them as ``suite.md`` ranks (privileged references

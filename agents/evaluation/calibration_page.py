@@ -179,7 +179,8 @@ def check_values(folder: Path, command: str, physics: FrozenPhysics) -> dict[str
         "free_path_s": physics.hard_free_path_s,
         "hard_speed": hard["forward_speed"],
         "hard_density": hard["obstacle_density"],
-        "free_path_m": 1.0 / (hard["obstacle_density"] * 2 * (physics.capsule_radius_m + physics.hull_radius_m)),
+        "free_path_m": 1.0
+        / (hard["obstacle_density"] * 2 * (physics.capsule_radius_m + physics.hull_radius_m)),
         "field_width": hard["field_width"],
         "lateral_bound": hard["lateral_bound"],
         "reading": readings[physics.flight_stack_reading][0],

@@ -230,7 +230,9 @@ def _sweep(results: Path) -> dict[str, Any]:
     cells: dict[tuple[str, str, float], list[PooledRow]] = {}
     for r in rows:
         cells.setdefault((r["agent"], r["factor"], float(r["level"])), []).append(r)
-    baseline = pool_every_seed(baseline_of_flown_runs(read_records(results / "leaderboard_episodes.csv"), flown))
+    baseline = pool_every_seed(
+        baseline_of_flown_runs(read_records(results / "leaderboard_episodes.csv"), flown)
+    )
     clean = [r for r in baseline if r["factor"] == "clean"]
     return {
         "sweep_rows": rows,

@@ -103,9 +103,7 @@ def _factor_rows(
     return rows
 
 
-def baseline_of_flown_runs(
-    baseline: Sequence[EpisodeRow], flown: Sequence[EpisodeRow]
-) -> list[EpisodeRow]:
+def baseline_of_flown_runs(baseline: Sequence[EpisodeRow], flown: Sequence[EpisodeRow]) -> list[EpisodeRow]:
     """The ``baseline`` episodes (the clean table's, not yet pooled) of the runs ``flown`` holds, by their names
     (``ppo_flow@3``): a sweep cell's rise is over the clean rate of the training runs that flew it, and a
     learned agent may have shipped more seeds since, which join the clean table but not a committed sweep."""

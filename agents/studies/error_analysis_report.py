@@ -103,9 +103,7 @@ def plot_dose_response(
     plt.close(figure)
 
 
-def report_values(
-    rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()
-) -> dict[str, Any]:
+def report_values(rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()) -> dict[str, Any]:
     """Every value of ``templates/error_analysis.md.j2`` from a sweep's episodes (``rows``) and the clean table's
     (``baseline``), the fits among them."""
     quality = cell_quality(rows)

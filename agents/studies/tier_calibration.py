@@ -47,6 +47,7 @@ def tier(name: str) -> Tier:
     """The tier ``name`` of the calibrated version."""
     return tier_of_version(name, CALIBRATED_VERSION)
 
+
 CANDIDATE_COURSES = tuple(
     {"forward_speed": speed, "obstacle_density": density}
     for speed in (1.5, 2.0, 2.5)

@@ -63,7 +63,9 @@ FILTERS = {
     "num": num,
     "pct": pct,
     # A comparison's note on the learned agents in it that pooled too few training seeds to rank (or "").
-    "provisional": lambda comparison: provisional_note(comparison) if hasattr(comparison, "agent_runs") else "",
+    "provisional": lambda comparison: (
+        provisional_note(comparison) if hasattr(comparison, "agent_runs") else ""
+    ),
 }
 
 

@@ -211,9 +211,12 @@ def test_a_sector_grid_gives_the_functions_results_from_one_located_frame() -> N
     np.testing.assert_array_equal(
         grid.fraction(sector, selected, valid), sector_fraction(points, selected, valid, IMAGE_SIZE, (3, 4))
     )
-    np.testing.assert_array_equal(grid.counts(sector, valid), sector_counts(points, valid, IMAGE_SIZE, (3, 4)))
     np.testing.assert_array_equal(
-        grid.near_depth(sector, depth, valid, 0.2), sector_near_depth(points, depth, valid, IMAGE_SIZE, (3, 4), 0.2)
+        grid.counts(sector, valid), sector_counts(points, valid, IMAGE_SIZE, (3, 4))
+    )
+    np.testing.assert_array_equal(
+        grid.near_depth(sector, depth, valid, 0.2),
+        sector_near_depth(points, depth, valid, IMAGE_SIZE, (3, 4), 0.2),
     )
     assert grid.shape == (3, 4, 3) and not grid.bin_edges.flags.writeable
     with pytest.raises(ValueError, match=r"^bin_edges must be strictly increasing, got \[0.0, 2.0, 1.0\]$"):

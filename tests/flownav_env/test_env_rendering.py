@@ -58,7 +58,9 @@ def test_estimator_depth_on_env_frames_matches_depth_buffer_on_obstacles() -> No
     depth_buffer = env._camera.render_depth(physics.data, physics.camera_id)
     env.step(np.zeros(3))
     second = cv2.cvtColor(env._camera.render(physics.data, physics.camera_id), cv2.COLOR_RGB2GRAY)
-    rotation, translation = flownav_env.camera_convention.camera_motion_between(*first_pose, *physics.camera_pose())
+    rotation, translation = flownav_env.camera_convention.camera_motion_between(
+        *first_pose, *physics.camera_pose()
+    )
     obstacle_ids = set(physics.obstacle_geoms.tolist())
     env.close()
 

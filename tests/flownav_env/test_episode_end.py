@@ -14,14 +14,22 @@ from flownav_env.task import EPISODE_OUTCOMES, episode_outcome
 SIDEWAYS = np.array([0.0, 1.0, 0.0], np.float32)
 
 
-@pytest.mark.parametrize(("collision", "out_of_bounds", "success"), itertools.product([False, True], repeat=3))
+@pytest.mark.parametrize(
+    ("collision", "out_of_bounds", "success"), itertools.product([False, True], repeat=3)
+)
 def test_every_combination_of_flags_is_exactly_one_outcome(
     collision: bool, out_of_bounds: bool, success: bool
 ) -> None:
     ended = episode_outcome(collision, out_of_bounds, success)
     assert ended in EPISODE_OUTCOMES
     expected = (
-        "collision" if collision else "out_of_bounds" if out_of_bounds else "success" if success else "timeout"
+        "collision"
+        if collision
+        else "out_of_bounds"
+        if out_of_bounds
+        else "success"
+        if success
+        else "timeout"
     )
     assert ended == expected
 

@@ -70,7 +70,9 @@ def test_pipeline_order_motion_and_draws() -> None:
 
 
 def test_pipeline_needs_a_first_frame() -> None:
-    with pytest.raises(ValueError, match=r"^a sequence's first frame must go through start\(\) before motion\(\)$"):
+    with pytest.raises(
+        ValueError, match=r"^a sequence's first frame must go through start\(\) before motion\(\)$"
+    ):
         SensorPipeline().motion(SensorSettings(), np.random.default_rng(), (np.eye(3), np.zeros(3)))
 
 

@@ -129,7 +129,9 @@ def test_a_lagged_attitude_is_the_interpolation_back_toward_the_previous_frame()
     current = rotation_from_vector(np.array([0.0, 0.0, 0.3]))
     assert lagged_attitude(previous, current, 0.0) is current
     np.testing.assert_allclose(lagged_attitude(previous, current, 1.0), previous, atol=1e-12)
-    np.testing.assert_allclose(lagged_attitude(previous, current, 5.0), previous, atol=1e-12)  # capped at a frame
+    np.testing.assert_allclose(
+        lagged_attitude(previous, current, 5.0), previous, atol=1e-12
+    )  # capped at a frame
     halfway = vector_from_rotation(lagged_attitude(previous, current, 0.25))
     np.testing.assert_allclose(halfway, [0.0, 0.0, 0.25], atol=1e-12)
 

@@ -191,7 +191,9 @@ def test_depth_errors_are_on_only_when_one_is_set() -> None:
 
 def test_estimator_arguments_are_checked_by_value_when_the_settings_are_made() -> None:
     # Values too, not only names: a config's estimator_kwargs fail at the check, before any env is built.
-    with pytest.raises(ValueError, match=r"^fast_threshold must be an integer with 1 <= fast_threshold <= 255"):
+    with pytest.raises(
+        ValueError, match=r"^fast_threshold must be an integer with 1 <= fast_threshold <= 255"
+    ):
         EnvSettings(estimator_kwargs={"fast_threshold": 0})
     with pytest.raises(ValueError, match=r"^estimator_kwargs has unknown keys \['wind'\]; allowed: method, "):
         EnvSettings(estimator_kwargs={"wind": 1})

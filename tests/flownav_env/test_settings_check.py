@@ -96,7 +96,9 @@ def test_an_unknown_keyword_names_itself_and_the_known_settings() -> None:
         FlowNavEnv(rotation_eror=0.1)
     with pytest.raises(ValueError, match=r"unknown setting 'nonsense'; known: attitude_jitter_deg, "):
         gym.make("FlowNav-v0", nonsense=1)
-    with pytest.raises(ValueError, match=r"^settings must be a flownav_env\.settings\.EnvSettings or None, got str"):
+    with pytest.raises(
+        ValueError, match=r"^settings must be a flownav_env\.settings\.EnvSettings or None, got str"
+    ):
         FlowNavEnv("corridor")
 
 

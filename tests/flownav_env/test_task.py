@@ -15,7 +15,12 @@ from flownav_env.settings import EnvSettings
 from flownav_env.task import FlowNavTask, StepOutcome
 
 SMALL = {"camera_width": 64, "camera_height": 48}
-ALL_KEYS = {"observe_unresolved": True, "observe_counts": True, "observe_nearness": True, "observe_approach": True}
+ALL_KEYS = {
+    "observe_unresolved": True,
+    "observe_counts": True,
+    "observe_nearness": True,
+    "observe_approach": True,
+}
 
 
 def _record(calls: list[str], name: str, function):
@@ -93,4 +98,6 @@ def test_the_task_ends_and_rewards_an_outcome() -> None:
         "reward_clearance": pytest.approx(-1.0),
     }
     cruise = StepOutcome(False, False, False, np.array([1.0, 0.0, 1.0]), 0.1, math.inf, math.inf)
-    assert not cruise.terminated and FlowNavTask.reward(settings, cruise, np.zeros(3))["reward_clearance"] == 0.0
+    assert (
+        not cruise.terminated and FlowNavTask.reward(settings, cruise, np.zeros(3))["reward_clearance"] == 0.0
+    )

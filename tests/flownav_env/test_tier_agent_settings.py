@@ -39,7 +39,9 @@ def test_any_other_setting_is_refused_on_every_tier(name: str, setting: str, val
     fixed = tier_value(name, setting)
     with pytest.raises(
         ValueError,
-        match=re.escape(f"agent mine asks for {setting}={value!r}, but tier {name} fixes {setting}={fixed!r}"),
+        match=re.escape(
+            f"agent mine asks for {setting}={value!r}, but tier {name} fixes {setting}={fixed!r}"
+        ),
     ):
         check_agent_settings("mine", {setting: value}, name)
 
@@ -47,14 +49,18 @@ def test_any_other_setting_is_refused_on_every_tier(name: str, setting: str, val
 @pytest.mark.parametrize("source", ["oracle", "oracle_valid"])
 def test_true_depths_only_for_an_agent_declared_privileged(source: str) -> None:
     assert privileged_requests({"obs_source": source, "observe_approach": True}) == {"obs_source": source}
-    with pytest.raises(ValueError, match=re.escape(f"agent mine asks for obs_source={source!r}, privileged data")):
+    with pytest.raises(
+        ValueError, match=re.escape(f"agent mine asks for obs_source={source!r}, privileged data")
+    ):
         check_agent_settings("mine", {"obs_source": source}, "noisy")
     check_agent_settings("mine", {"obs_source": source}, "noisy", privileged=True)
 
 
 def test_the_capsule_layout_only_for_an_agent_declared_privileged() -> None:
     assert privileged_requests({"observe_layout": True, "observe_counts": True}) == {"observe_layout": True}
-    with pytest.raises(ValueError, match=re.escape("agent mine asks for observe_layout=True, privileged data")):
+    with pytest.raises(
+        ValueError, match=re.escape("agent mine asks for observe_layout=True, privileged data")
+    ):
         check_agent_settings("mine", {"observe_layout": True}, "hard")
     check_agent_settings("mine", {"observe_layout": True}, "hard", privileged=True)
     check_agent_settings("mine", {"observe_layout": False}, "hard")
@@ -70,7 +76,9 @@ def test_the_tier_fixes_the_defaults_it_does_not_name() -> None:
 def test_flown_settings_must_hold_the_tiers_and_nothing_an_agent_may_not_choose() -> None:
     hard = dict(TIERS["hard"].settings)
     check_flown_settings("mine", {**hard, "observe_unresolved": True}, "hard")
-    with pytest.raises(ValueError, match=re.escape("agent mine was flown on tier hard with forward_speed=1.0")):
+    with pytest.raises(
+        ValueError, match=re.escape("agent mine was flown on tier hard with forward_speed=1.0")
+    ):
         check_flown_settings("mine", {**hard, "forward_speed": 1.0}, "hard")
     with pytest.raises(ValueError, match=re.escape("with obstacle_density='the default'")):
         check_flown_settings("mine", {k: v for k, v in hard.items() if k != "obstacle_density"}, "hard")

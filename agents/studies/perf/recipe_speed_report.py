@@ -210,7 +210,11 @@ def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: R
         "quality_flown": any(row["meets_quality"] != "" for row in rows),
         "seed_budget": f"{SEED_BUDGET_MINUTES:g}",
         "budgets": [
-            {"recipe": r["recipe"], "minutes": r["minutes_per_seed"], "within": float(r["minutes_per_seed"]) <= SEED_BUDGET_MINUTES}
+            {
+                "recipe": r["recipe"],
+                "minutes": r["minutes_per_seed"],
+                "within": float(r["minutes_per_seed"]) <= SEED_BUDGET_MINUTES,
+            }
             for r in rows
         ],
         "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),

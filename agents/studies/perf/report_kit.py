@@ -96,7 +96,9 @@ class RunFacts:
         return f"{self.elapsed_s / 60:.1f}"
 
 
-def table(rows: Iterable[Mapping[str, object]], columns: Mapping[str, str] | Sequence[tuple[str, str]]) -> str:
+def table(
+    rows: Iterable[Mapping[str, object]], columns: Mapping[str, str] | Sequence[tuple[str, str]]
+) -> str:
     """A Markdown table with one column per ``header: format`` entry (pairs where headers repeat); each cell is
     ``format.format_map(row)``."""
     pairs = list(columns.items()) if isinstance(columns, Mapping) else list(columns)

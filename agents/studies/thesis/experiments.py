@@ -54,8 +54,13 @@ def _play(
     try:
         settings = PlaybackSettings(seed=config.seed)
         return run_playback(
-            path, world, settings, config.estimator, component_variants=component_variants, progress=progress,
-            description=label
+            path,
+            world,
+            settings,
+            config.estimator,
+            component_variants=component_variants,
+            progress=progress,
+            description=label,
         )
     finally:
         world.close()

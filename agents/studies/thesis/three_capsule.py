@@ -112,8 +112,14 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
     def play(settings: dict[str, Any], label: str, residuals: bool = False, error: float = 0.0) -> RunResult:
         playback = PlaybackSettings(seed=config.seed, **settings)
         return run_playback(
-            path, world, playback, config.estimator, keep_residuals=residuals, attitude_error=error,
-            progress=progress, description=label
+            path,
+            world,
+            playback,
+            config.estimator,
+            keep_residuals=residuals,
+            attitude_error=error,
+            progress=progress,
+            description=label,
         )
 
     try:

@@ -23,6 +23,8 @@ ANALYSIS = (
     "agents.analysis.statistics",
     "agents.analysis.weaving",
 )
+
+
 @pytest.mark.parametrize("module", ANALYSIS)
 def test_importing_the_analysis_loads_no_simulator(module: str) -> None:
     assert flight_modules_loaded_by(module) == []

@@ -135,5 +135,10 @@ def test_a_comparison_names_the_learned_agents_it_rests_on_too_few_seeds_of() ->
     assert provisional_note(c) == f"; provisional: `ppo_oracle` ({MIN_RANKED_SEEDS - 7} training seeds)"
     assert provisional_note(compare("ppo_flow@all", enough, "bee_ttc", rule)) == ""
     both = provisional_note(compare("ppo_flow", enough[:1], "ppo_robust@all", few))
-    assert both == f"; provisional: `ppo_flow` (1 training seed) and `ppo_robust` ({MIN_RANKED_SEEDS - 7} training seeds)"
-    assert provisional_note(compare("my_agent.py:make", rule, "bee", rule)) == ""  # rules and outside agents: one run
+    assert (
+        both
+        == f"; provisional: `ppo_flow` (1 training seed) and `ppo_robust` ({MIN_RANKED_SEEDS - 7} training seeds)"
+    )
+    assert (
+        provisional_note(compare("my_agent.py:make", rule, "bee", rule)) == ""
+    )  # rules and outside agents: one run

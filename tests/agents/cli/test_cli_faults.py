@@ -25,7 +25,9 @@ def unwritable_folder() -> Path:
     pytest.skip("no unwritable folder on this machine")
 
 
-def test_evaluate_refuses_an_unwritable_out_before_flying(capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
+def test_evaluate_refuses_an_unwritable_out_before_flying(
+    capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
     def fly(*_args, **_kwargs):
         raise AssertionError("an episode was flown before the output folder was checked")
 
@@ -34,7 +36,9 @@ def test_evaluate_refuses_an_unwritable_out_before_flying(capsys: pytest.Capture
     code = cli.main(["evaluate", "--agent", "straight", "--layouts", "1", "--out", str(out)])
     error = capsys.readouterr().err.strip()
     assert code == 2
-    assert error.startswith("flownav evaluate: error: cannot write to the output folder /sys/flownav_test_output")
+    assert error.startswith(
+        "flownav evaluate: error: cannot write to the output folder /sys/flownav_test_output"
+    )
     assert len(error.splitlines()) == 1
 
 
@@ -47,7 +51,10 @@ def test_sweep_refuses_an_unwritable_out_before_flying(capsys: pytest.CaptureFix
 @pytest.mark.parametrize(
     ("error", "line"),
     [
-        (OSError(errno.ENOSPC, "No space left on device", "runs/x.csv"), "No space left on device: runs/x.csv"),
+        (
+            OSError(errno.ENOSPC, "No space left on device", "runs/x.csv"),
+            "No space left on device: runs/x.csv",
+        ),
         (OSError(errno.EFBIG, "File too large", "runs/big.npz"), "File too large: runs/big.npz"),
         (OSError(errno.EROFS, "Read-only file system"), "Read-only file system"),
     ],
@@ -64,7 +71,9 @@ def test_a_write_error_is_one_line_naming_the_file_and_exit_1(
     assert capsys.readouterr().err == f"flownav curves: error: {line}\n"
 
 
-def test_leaderboard_refuses_too_few_layouts_before_flying(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+def test_leaderboard_refuses_too_few_layouts_before_flying(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     code = cli.main(["leaderboard", "--agents", "straight", "--layouts", "3", "--out", str(tmp_path)])
     assert code == 2
     assert "--layouts must be >= 30 (one block of layouts for the intervals over runs), got 3" in (
@@ -73,13 +82,17 @@ def test_leaderboard_refuses_too_few_layouts_before_flying(capsys: pytest.Captur
     assert not (tmp_path / "leaderboard_episodes.csv").exists()
 
 
-def test_a_config_path_that_is_a_directory_says_so(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+def test_a_config_path_that_is_a_directory_says_so(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     code = cli.main(["sweep", "--config", str(tmp_path), "--out", str(tmp_path / "out")])
     assert code == 2
     assert f"config {tmp_path} is a directory: give the path of a YAML file" in capsys.readouterr().err
 
 
-def test_defaults_that_read_committed_inputs_resolve_against_the_repository(tmp_path: Path, monkeypatch) -> None:
+def test_defaults_that_read_committed_inputs_resolve_against_the_repository(
+    tmp_path: Path, monkeypatch
+) -> None:
     monkeypatch.chdir(tmp_path)
     parser = cli.build_parser()
     sweep = parser.parse_args(["sweep"])
@@ -100,7 +113,9 @@ def test_no_command_writes_into_results_unless_out_names_it() -> None:
                 checked += 1
                 default = Path(os.path.abspath(action.default))
                 assert not default.is_relative_to(RESULTS_DIR), f"flownav {name} --out defaults to {default}"
-                assert Path(action.default).parts[0] == "runs", f"flownav {name} --out defaults to {action.default}"
+                assert Path(action.default).parts[0] == "runs", (
+                    f"flownav {name} --out defaults to {action.default}"
+                )
     assert checked >= 8
 
 
@@ -126,5 +141,7 @@ def test_evaluate_unpickles_a_bare_policy_zip_only_with_trust_pickle(
     error = capsys.readouterr().err
     assert "has no training config beside it" in error and "--trust-pickle" in error
     assert not out.exists() or not read_records(out)
-    assert cli.main([*command, "--trust-pickle", "--env", "camera_width=96", "--env", "camera_height=72"]) == 0
+    assert (
+        cli.main([*command, "--trust-pickle", "--env", "camera_width=96", "--env", "camera_height=72"]) == 0
+    )
     assert len(read_records(out)) == 1

@@ -32,6 +32,8 @@ def test_the_page_states_the_physics_it_is_handed(tmp_path: Path) -> None:
 
 
 def test_a_tier_the_physics_lacks_is_refused_by_name() -> None:
-    physics = FrozenPhysics((TierFacts("clean", "FlowNav-v1", "", {}),), 0.1, 0.1, 1.0, 0.05, {}, "3d_speed", 1.0, ())
+    physics = FrozenPhysics(
+        (TierFacts("clean", "FlowNav-v1", "", {}),), 0.1, 0.1, 1.0, 0.05, {}, "3d_speed", 1.0, ()
+    )
     with pytest.raises(ValueError, match=r"^no tier 'hard'; the tiers are clean$"):
         physics.tier("hard")

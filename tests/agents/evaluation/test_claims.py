@@ -32,7 +32,9 @@ from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.runner import execute
 
 SMALL = (("camera_height", 72), ("camera_width", 96))
-TASKS = [EpisodeTask("straight", "clean", 0.0, TEST_SEED_START + k, "FlowNavSingle-v0", SMALL) for k in range(4)]
+TASKS = [
+    EpisodeTask("straight", "clean", 0.0, TEST_SEED_START + k, "FlowNavSingle-v0", SMALL) for k in range(4)
+]
 
 
 def record_of(task: EpisodeTask, steps: int = 10) -> EpisodeRecord:
@@ -103,7 +105,9 @@ def test_an_expired_claim_counts_for_nothing(tmp_path: Path) -> None:
     path = tmp_path / "episodes.csv"
     identity = identity_of(TASKS[0])
     old = time.time() - claims.CLAIM_EXPIRY_S - 1
-    claims_path(path).write_text(f"{socket.gethostname()} {os.getppid()} {old:.0f} {identity_digest(identity)}\n")
+    claims_path(path).write_text(
+        f"{socket.gethostname()} {os.getppid()} {old:.0f} {identity_digest(identity)}\n"
+    )
     assert claim_episode(path, identity) == MINE
 
 

@@ -41,7 +41,9 @@ class GoalMover(StraightAgent):
 def test_a_success_needs_the_drones_own_progress_to_the_goal_line() -> None:
     env = gym.make("FlowNav-v0", **SMALL)
     try:
-        with pytest.raises(ValueError, match=r"layout 0: a success at x = 0\.\d+ m, short of the goal line at 20\.00 m"):
+        with pytest.raises(
+            ValueError, match=r"layout 0: a success at x = 0\.\d+ m, short of the goal line at 20\.00 m"
+        ):
             run_episode(env, GoalMover(env), seed=0, label="goal_mover")
     finally:
         env.close()

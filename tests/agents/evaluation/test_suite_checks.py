@@ -33,11 +33,18 @@ def _fly(path: Path, seeds: range, failed: set[int], **fields: object) -> None:
 
 def test_each_reference_passes_a_tier_only_at_or_under_the_feasible_failure(tmp_path: Path) -> None:
     _fly(tmp_path / "planner_FlowNav-v1.csv", range(970_000, 970_050), set(), env_id="FlowNav-v1")
-    _fly(tmp_path / "planner_FlowNavHard-v1.csv", range(970_000, 970_050), {970_003, 970_004}, env_id="FlowNavHard-v1")
+    _fly(
+        tmp_path / "planner_FlowNavHard-v1.csv",
+        range(970_000, 970_050),
+        {970_003, 970_004},
+        env_id="FlowNavHard-v1",
+    )
     rows = {(row["tier"], row["agent"]): row for row in check_rows(tmp_path, frozen_physics().tiers)}
     clean, hard = rows[("clean", "planner")], rows[("hard", "planner")]
     assert (clean["layouts"], clean["failure"], clean["passes"]) == (50, 0.0, True)
-    assert hard["failure"] == pytest.approx(0.04) and hard["failure"] > FEASIBLE_FAILURE and not hard["passes"]
+    assert (
+        hard["failure"] == pytest.approx(0.04) and hard["failure"] > FEASIBLE_FAILURE and not hard["passes"]
+    )
     assert clean["widest_m"] == pytest.approx(4.2) and clean["first_seed"] == 970_000
     assert rows[("noisy", "planner")]["layouts"] == 0  # not yet flown, listed as such
     assert not passing(list(rows.values()))
@@ -52,7 +59,12 @@ def test_the_sensitivity_table_pairs_other_readings_with_the_frozen_one_by_layou
     _fly(frozen, range(971_000, 971_010), {971_000}, agent="bee_ttc")
     _fly(other, range(971_000, 971_012), {971_000, 971_001, 971_002}, agent="bee_ttc")
     (row,) = sensitivity_rows(tmp_path, frozen_physics())
-    assert (row["agent"], row["env_id"], row["tau"], row["layouts"]) == ("bee_ttc", "FlowNavNoisy-v1", 1.0, 10)
+    assert (row["agent"], row["env_id"], row["tau"], row["layouts"]) == (
+        "bee_ttc",
+        "FlowNavNoisy-v1",
+        1.0,
+        10,
+    )
     assert row["frozen_failure"] == pytest.approx(0.1) and row["failure"] == pytest.approx(0.3)
     assert row["comparison"].difference == pytest.approx(0.2)
 

@@ -217,7 +217,9 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
 def test_the_agents_a_version_does_not_fly_are_listed_with_why() -> None:
     from agents.policies import NOT_FLOWN_ON
 
-    text = suite_page(_values([]) | {"not_flown": {"ppo_x": "a reference no chain needs"}, "suite_version": "2"})
+    text = suite_page(
+        _values([]) | {"not_flown": {"ppo_x": "a reference no chain needs"}, "suite_version": "2"}
+    )
     assert "### Not flown on suite v2" in text and "- `ppo_x`: a reference no chain needs." in text
     assert "### Not flown on suite" not in suite_page(_values([]) | {"not_flown": {}})
     assert _values([])["not_flown"] == NOT_FLOWN_ON.get(SUITE_VERSION, {})

@@ -89,7 +89,10 @@ def test_a_sweep_of_no_factors_flies_the_clean_cell_and_plots_it(tmp_path: Path)
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--agents", "ppo_flow", "--refly"], r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)"),
+        (
+            ["--agents", "ppo_flow", "--refly"],
+            r"--refly: 'ppo_flow' is not an agent of .*sweep.yaml \(straight, bee\)",
+        ),
         (["--agents", "bee", "--refly", "--report-only"], "cannot be combined with --report-only"),
         (["--compare-with", "nowhere.csv"], "--compare-with: no episodes CSV at nowhere.csv"),
     ],

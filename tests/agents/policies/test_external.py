@@ -100,15 +100,24 @@ def test_bad_agents_are_one_clear_error(agent_file: Path, spec: str, message: st
 
 def test_an_agent_reading_a_key_the_env_lacks_is_told_which_setting_gives_it(agent_file: Path) -> None:
     agent = load_agent(f"{agent_file}:Greedy")
-    with pytest.raises(ValueError, match="reads observation key 'approach', which this env does not give: declare"):
+    with pytest.raises(
+        ValueError, match="reads observation key 'approach', which this env does not give: declare"
+    ):
         agent.predict({"depth_histogram": np.zeros((3, 5, 8), np.float32)})
 
 
-def test_evaluate_scores_an_agent_written_outside_flownav(agent_file: Path, tmp_path: Path, monkeypatch) -> None:
+def test_evaluate_scores_an_agent_written_outside_flownav(
+    agent_file: Path, tmp_path: Path, monkeypatch
+) -> None:
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "episodes.csv"
     command = ["evaluate", "--agent", "my_agent.py:make_agent", "--layouts", "1", "--out", str(out)]
-    assert main([*command, "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]) == 0
+    assert (
+        main(
+            [*command, "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]
+        )
+        == 0
+    )
     (row,) = read_records(out)
     assert row["agent"] == f"{agent_file}:make_agent"  # absolute, so workers elsewhere find it
     assert json.loads(row["env_kwargs"])["observe_nearness"] is True

@@ -161,7 +161,9 @@ def test_the_winner_loads_by_name_and_flies_run_episodes_seed_by_seed() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", UnverifiedPolicyWarning)
         agent = load_agent(WINNER)  # was a FileNotFoundError: no single results/policies/<agent>.zip
-    shipped = sorted(int(path.stem.removeprefix("seed_")) for path in (POLICIES_DIR / WINNER).glob("seed_*.zip"))
+    shipped = sorted(
+        int(path.stem.removeprefix("seed_")) for path in (POLICIES_DIR / WINNER).glob("seed_*.zip")
+    )
     assert len(shipped) >= 10 and agent.run_names == [f"{WINNER}@{k}" for k in shipped]
     env = gym.make("FlowNavSingle-v0", **agent_env_kwargs(WINNER), **SMALL)
     flown = []

@@ -28,7 +28,10 @@ def saved_model(algo: str, directory: Path, **env_settings: bool) -> Path:
     from stable_baselines3 import A2C, SAC
 
     env = gym.make("FlowNavSingle-v0", **SMALL, **env_settings)
-    options = {"sac": (SAC, {"learning_starts": 0, "buffer_size": 64, "batch_size": 4}), "a2c": (A2C, {"n_steps": 4})}
+    options = {
+        "sac": (SAC, {"learning_starts": 0, "buffer_size": 64, "batch_size": 4}),
+        "a2c": (A2C, {"n_steps": 4}),
+    }
     algorithm_class, extra = options[algo]
     model = algorithm_class("MultiInputPolicy", env, seed=0, policy_kwargs={"net_arch": [8]}, **extra)
     model.learn(8)
@@ -72,7 +75,9 @@ def test_policy_kwargs_naming_other_code_are_refused_without_trust_pickle(tmp_pa
             content = source.read(item)
             if item.filename == "data":
                 data = json.loads(content)
-                data["policy_kwargs"] = {":serialized:": base64.b64encode(pickle.dumps({"x": RunsCode()})).decode()}
+                data["policy_kwargs"] = {
+                    ":serialized:": base64.b64encode(pickle.dumps({"x": RunsCode()})).decode()
+                }
                 content = json.dumps(data).encode()
             target.writestr(item, content)
     with pytest.raises(ValueError, match=r"policy_kwargs are pickled .* pass --trust-pickle"):
@@ -83,7 +88,16 @@ def test_policy_kwargs_naming_other_code_are_refused_without_trust_pickle(tmp_pa
 def test_evaluate_scores_a_model_given_by_policy_and_algo(tmp_path: Path) -> None:
     path = saved_model("sac", tmp_path)
     out = tmp_path / "episodes.csv"
-    options = ["--layouts", "1", "--tiers", "FlowNavSingle-v0", "--env", "camera_width=96", "--env", "camera_height=72"]
+    options = [
+        "--layouts",
+        "1",
+        "--tiers",
+        "FlowNavSingle-v0",
+        "--env",
+        "camera_width=96",
+        "--env",
+        "camera_height=72",
+    ]
     assert main(["evaluate", "--policy", str(path), "--algo", "sac", "--out", str(out), *options]) == 0
     (row,) = read_records(out)
     assert row["agent"] == f"sac:{path.resolve()}"
@@ -94,7 +108,10 @@ def test_evaluate_scores_a_model_given_by_policy_and_algo(tmp_path: Path) -> Non
     ("arguments", "message"),
     [
         (["--algo", "sac"], "--algo goes with --policy model.zip and without --agent"),
-        (["--algo", "sac", "--agent", "bee", "--policy", "x.zip"], "--algo goes with --policy model.zip and without"),
+        (
+            ["--algo", "sac", "--agent", "bee", "--policy", "x.zip"],
+            "--algo goes with --policy model.zip and without",
+        ),
         ([], "give --agent \\(or --policy model.zip --algo ALGO\\)"),
     ],
 )
@@ -109,7 +126,19 @@ def test_a_saved_model_is_scored_on_the_suite(algo: str, tmp_path: Path) -> None
 
     path = saved_model(algo, tmp_path)
     out = tmp_path / "score"
-    argv = ["score", "--policy", str(path), "--algo", algo, "--tiers", "hard", "--layouts", "1", "--workers", "1"]
+    argv = [
+        "score",
+        "--policy",
+        str(path),
+        "--algo",
+        algo,
+        "--tiers",
+        "hard",
+        "--layouts",
+        "1",
+        "--workers",
+        "1",
+    ]
     assert main([*argv, "--out", str(out)]) == 0
     (row,) = read_suite_csv(out / "score.csv")
     assert row["agent"] == display_name(sb3_model_name(algo, path)) == f"{algo}:{path.stem}"

@@ -35,7 +35,9 @@ def test_observation_settings_do_not_change_the_task():
 
 
 def test_an_unknown_setting_is_refused_in_one_line():
-    with pytest.raises(ValueError, match=r"not FlowNav env settings: wind_speed; settings are .*forward_speed"):
+    with pytest.raises(
+        ValueError, match=r"not FlowNav env settings: wind_speed; settings are .*forward_speed"
+    ):
         tiers_covered({"wind_speed": 3.0}, {})
 
 
@@ -52,7 +54,11 @@ def test_v1_trained_agents_cover_no_tier_of_the_closed_field():
 
 
 def test_an_env_id_outside_the_tiers_covers_none(tmp_path: Path):
-    text = (CONFIGS_DIR / "ppo_flow.yaml").read_text().replace("env_id: FlowNav-v0", "env_id: FlowNavPlayback-v0")
+    text = (
+        (CONFIGS_DIR / "ppo_flow.yaml")
+        .read_text()
+        .replace("env_id: FlowNav-v0", "env_id: FlowNavPlayback-v0")
+    )
     assert "FlowNavPlayback-v0" in text
     path = tmp_path / "other.yaml"
     path.write_text(text)

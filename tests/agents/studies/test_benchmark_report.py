@@ -126,7 +126,10 @@ def test_a_comparison_is_worded_from_its_paired_interval(low: float, high: float
     reading = f"paired by layout, the winner − `bee_ttc` = {found.difference:+.3f} [{low:+.3f}, {high:+.3f}]: {expected}"
     assert _phrase("reading(c)", c=found) == reading
     few = dataclasses.replace(found, agent_runs=MIN_RANKED_SEEDS - 5)
-    assert _phrase("reading(c)", c=few) == f"{reading}; provisional: `{WINNER}` ({MIN_RANKED_SEEDS - 5} training seeds)"
+    assert (
+        _phrase("reading(c)", c=few)
+        == f"{reading}; provisional: `{WINNER}` ({MIN_RANKED_SEEDS - 5} training seeds)"
+    )
     flow_truth = expected.replace("the winner", "flow").replace("`bee_ttc`", "truth")
     assert _phrase('verdict(c, "flow", "truth")', c=found) == flow_truth
 
@@ -309,8 +312,7 @@ def test_the_committed_comparisons_are_paired_tests_on_the_leading_tables_layout
 def test_the_readme_says_whether_the_suite_is_flown_whole() -> None:
     values = report_values(load_benchmark_data(RESULTS_DIR))
     whole, partial = (
-        render_report("readme_results.md.j2", {**values, "suite_complete": flown})
-        for flown in (True, False)
+        render_report("readme_results.md.j2", {**values, "suite_complete": flown}) for flown in (True, False)
     )
     assert "every agent over all its training seeds on\nevery tier. Its top groups are the agents" in whole
     assert "under way" not in whole and "so far" not in whole

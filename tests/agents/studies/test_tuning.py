@@ -185,7 +185,9 @@ def _trial(number: int, failures: int, episodes: int = 150) -> TrialResult:
         for i in range(episodes)
     ]
     failures = tuple(float(i < failures) for i in range(episodes))
-    return TrialResult(number, dict.fromkeys(SEARCH_SPACES["bee"], 0.1 * number), summarise(rows)[0], failures)
+    return TrialResult(
+        number, dict.fromkeys(SEARCH_SPACES["bee"], 0.1 * number), summarise(rows)[0], failures
+    )
 
 
 def test_the_verdict_is_the_paired_test_on_the_final_layouts() -> None:

@@ -104,7 +104,9 @@ def test_train_refuses_a_tier_without_seeds(tmp_path: Path, capsys: pytest.Captu
 
 
 @pytest.mark.parametrize("path", CAMERA_STUDENT_RECIPES, ids=lambda p: p.stem)
-def test_the_camera_student_recipes_ask_no_tier_for_privileged_data_but_the_true_depth_twin(path: Path) -> None:
+def test_the_camera_student_recipes_ask_no_tier_for_privileged_data_but_the_true_depth_twin(
+    path: Path,
+) -> None:
     recipe = load_config(path, TrainConfig)
     assert recipe.per_tier and recipe.imitation.teacher == "planner_camera"
     check_teacher(recipe.imitation.teacher, recipe.env, str(path), recipe.imitation.teacher_params)

@@ -74,7 +74,11 @@ def test_an_interrupt_while_learning_checkpoints_and_lets_the_outputs_be_written
         guard.end(selected="last: 96 steps")
     assert workers.closed and checkpoints.saved == [96] and guard.status == INTERRUPTED
     session = _session(files)
-    assert (session["status"], session["interrupted"], session["steps_this_session"]) == (INTERRUPTED, True, 96)
+    assert (session["status"], session["interrupted"], session["steps_this_session"]) == (
+        INTERRUPTED,
+        True,
+        96,
+    )
 
 
 def test_a_finished_session_checkpoints_once_and_records_its_end(tmp_path: Path) -> None:
@@ -149,9 +153,13 @@ def test_a_failure_before_the_record_closes_the_workers_and_writes_nothing(tmp_p
 
 def test_learning_before_the_session_is_started_is_refused(tmp_path: Path) -> None:
     with run_guard(RunFiles.of(tmp_path, "run")) as guard:
-        with pytest.raises(RuntimeError, match=r"the session's record is not started: call RunGuard.start first"):
+        with pytest.raises(
+            RuntimeError, match=r"the session's record is not started: call RunGuard.start first"
+        ):
             guard.learn(lambda: None, CallbackList([]))
-        with pytest.raises(RuntimeError, match=r"the session's record is not started: call RunGuard.start first"):
+        with pytest.raises(
+            RuntimeError, match=r"the session's record is not started: call RunGuard.start first"
+        ):
             guard.teacher_start(dict)
 
 
@@ -182,4 +190,6 @@ def test_the_model_gets_every_hyperparameter_of_the_ppo_block(tmp_path: Path) ->
     assert model.clip_range(1.0) == ppo["clip_range"]
     assert model.policy.net_arch == {"pi": [12, 8], "vf": [12, 8]} or model.policy.net_arch == [12, 8]
     assert math.isclose(float(model.policy.log_std.detach()[0]), -0.5)
-    assert hyperparameters(config.ppo).startswith("learning_rate=0.001, n_steps=48, batch_size=24, n_epochs=3")
+    assert hyperparameters(config.ppo).startswith(
+        "learning_rate=0.001, n_steps=48, batch_size=24, n_epochs=3"
+    )

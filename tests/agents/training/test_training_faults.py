@@ -39,16 +39,22 @@ def test_checking_a_writable_folder_leaves_nothing_behind(tmp_path: Path) -> Non
 
 def test_a_folder_that_takes_no_files_is_refused_in_one_line(tmp_path: Path, monkeypatch) -> None:
     (tmp_path / "a_file").write_text("")
-    with pytest.raises(ValueError, match=r"^output folder .*a_file is a file, not a folder: pick another --x$"):
+    with pytest.raises(
+        ValueError, match=r"^output folder .*a_file is a file, not a folder: pick another --x$"
+    ):
         check_writable_folder(tmp_path / "a_file", "--x")
-    with pytest.raises(ValueError, match=r"^cannot write to the output folder .*a_file/sub \(Not a directory\)$"):
+    with pytest.raises(
+        ValueError, match=r"^cannot write to the output folder .*a_file/sub \(Not a directory\)$"
+    ):
         check_writable_folder(tmp_path / "a_file" / "sub")
 
     def read_only(self, *args, **kwargs):  # root writes into a chmod 555 folder: refuse as a read-only mount
         raise OSError(errno.EROFS, "Read-only file system", str(self))
 
     monkeypatch.setattr(Path, "open", read_only)
-    with pytest.raises(ValueError, match=r"output folder .*ro \(Read-only file system\): pick another --runs-dir"):
+    with pytest.raises(
+        ValueError, match=r"output folder .*ro \(Read-only file system\): pick another --runs-dir"
+    ):
         check_writable_folder(tmp_path / "ro", "--runs-dir")
     assert list(tmp_path.iterdir()) == [tmp_path / "a_file"]  # no probe, no folder left
 
@@ -109,7 +115,9 @@ def test_a_full_disk_mid_run_ends_in_one_line_keeps_the_checkpoints_and_closes_t
     files = RunFiles.of(runs_dir, "full")
     error = capsys.readouterr().err.strip()
     assert code == 1
-    assert error == f"flownav train: error: No space left on device: {files.checkpoints / 'full_128_steps.zip'}"
+    assert (
+        error == f"flownav train: error: No space left on device: {files.checkpoints / 'full_128_steps.zip'}"
+    )
     assert [p.name for p in files.checkpoints.iterdir()] == ["full_64_steps.zip"]  # kept; no partial file
     assert not multiprocessing.active_children()  # the env workers were closed
     session = json.loads(files.record.read_text())["sessions"][-1]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TypedDict
 
 from agents.common.agent_table import AGENTS, base_agent_name
@@ -78,6 +78,14 @@ class EpisodeRecord:
     # The CPU the episode flew on, vendor and widest vector instruction set (agents.common.machine.cpu_signature):
     # a learned policy's floats, and so its closed-loop episodes, differ between them.
     cpu: str = ""
+
+
+# The numbers an episode's flight measured (the other fields say what flew it, where, and how it ended).
+MEASURED_FIELDS = tuple(
+    item.name
+    for item in fields(EpisodeRecord)
+    if item.type in ("float", "int") and item.name not in ("level", "seed")
+)
 
 
 class EpisodeRow(TypedDict):

@@ -16,26 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.analysis.episode_record import EpisodeRow, episode_outcome
+from agents.analysis.episode_record import MEASURED_FIELDS, EpisodeRow, episode_outcome
 from agents.analysis.reflights import Reflight
 from agents.common.machine import cpu_signature
 from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.progress import episode_progress
 from agents.evaluation.runner import FlightCache, run_task
 from agents.evaluation.suite import agent_runs, suite_rows, suite_tasks
-
-# The numbers an episode's row measures: equal to the last bit, or the episode did not re-fly exactly.
-MEASURED = (
-    "progress_m",
-    "time_s",
-    "steps",
-    "min_clearance_m",
-    "path_length_m",
-    "mean_points_valid",
-    "median_depth_error",
-    "episode_return",
-    "max_abs_lateral_m",
-)
 
 
 def _outcome(row: object) -> str:
@@ -47,7 +34,7 @@ def _differs(recorded: EpisodeRow, again: dict[str, object]) -> str:
     """The measured numbers of ``again`` that are not ``recorded``'s to the last bit, comma-joined (NaN equals NaN;
     a column the row predates is not compared)."""
     names = []
-    for name in MEASURED:
+    for name in MEASURED_FIELDS:
         said = recorded.get(name)
         if said is None:
             continue

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import processes_with
 
 from agents.analysis.records import read_records
 from agents.cli import main
@@ -130,19 +131,6 @@ if episode_start is not None and episode_start.any():
     assert kinds > 100 and env_kinds == []  # it searched a live process, and found no env in it
 
 
-def _processes_with(marker: str) -> list[int]:
-    found = []
-    for name in os.listdir("/proc"):
-        try:
-            if name.isdigit() and marker in Path(f"/proc/{name}/cmdline").read_bytes().decode(
-                errors="replace"
-            ):
-                found.append(int(name))
-        except OSError:
-            continue
-    return found
-
-
 def test_processes_an_agent_started_end_with_the_run(tmp_path: Path) -> None:
     marker = str(800000 + os.getpid() % 99999)
     body = f"""
@@ -152,9 +140,9 @@ if episode_start is not None and episode_start.any():
     agent = agent_file(tmp_path, body)
     assert main(score_args(agent, tmp_path / "out", "--workers", "1")) == 0
     deadline = time.monotonic() + 10
-    while _processes_with(f"sleep\0{marker}") and time.monotonic() < deadline:
+    while processes_with(f"sleep\0{marker}") and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert _processes_with(f"sleep\0{marker}") == []
+    assert processes_with(f"sleep\0{marker}") == []
 
 
 def test_an_agent_past_its_memory_limit_is_one_line(

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import processes_with
 
 from agents.common.signing import key_path, signing_key
 from agents.policies.agent_limits import AgentLimits
@@ -191,19 +192,6 @@ except OSError:
     assert "verified 10/10" not in captured.out + captured.err
 
 
-def _processes_with(marker: str) -> list[int]:
-    found = []
-    for name in os.listdir("/proc"):
-        try:
-            if name.isdigit() and marker in Path(f"/proc/{name}/cmdline").read_bytes().decode(
-                errors="replace"
-            ):
-                found.append(int(name))
-        except OSError:
-            continue
-    return found
-
-
 @pytest.mark.parametrize("sandboxed", [True, False])
 def test_a_double_forked_setsid_daemon_ends_with_the_agent(tmp_path: Path, sandboxed: bool) -> None:
     marker = str(900000 + os.getpid() % 99999)
@@ -218,9 +206,9 @@ time.sleep(0.5)
     limits = AgentLimits(sandboxed=sandboxed)
     assert outcome(attacker(tmp_path, body), limits) == "none"
     deadline = time.monotonic() + 10
-    while _processes_with(f"sleep\0{marker}") and time.monotonic() < deadline:
+    while processes_with(f"sleep\0{marker}") and time.monotonic() < deadline:
         time.sleep(0.1)
-    survivors = _processes_with(f"sleep\0{marker}")
+    survivors = processes_with(f"sleep\0{marker}")
     if sandboxed:
         assert survivors == []  # the sandbox's PID namespace ended with the agent
     else:

@@ -200,6 +200,8 @@ def run(args: argparse.Namespace) -> int:
             Path(args.out),
             factors=args.factors,
             layouts=args.robustness_layouts,
+            agent_limits=agent_limits(args),
+            step_timeout_s=args.step_timeout,
             **common,
         )
         print("\n".join(summary_lines(summary)))

@@ -38,6 +38,7 @@ from agents.evaluation.episode_tasks import rows_of
 from agents.evaluation.runner import execute
 from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_every_seed
 from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
+from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
 from agents.policies.base import is_learned, split_agent_name
 from agents.studies.error_analysis import neutral_level, tolerance_table
 from agents.studies.wording import render_report
@@ -149,6 +150,8 @@ def robustness(
     backend: str = "local",
     address: str | None = None,
     config_path: Path = SWEEP_CONFIG,
+    agent_limits: AgentLimits | None = None,
+    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
 ) -> list[dict[str, object]]:
     """Fly ``agent``'s robustness curves into ``out`` and return their summary (:data:`SUMMARY_COLUMNS`).
 
@@ -161,6 +164,8 @@ def robustness(
         policy: a learned agent's policy file, if not the shipped ones; trust_pickle: allow unpickling it.
         workers, backend, address: where episodes fly, as for the sweep.
         config_path: the sweep config whose factors, levels and layouts are used.
+        agent_limits, step_timeout_s: an outside agent's memory, CPU time and sandbox, and the most its
+            ``predict`` may take, as ``flownav score``'s.
 
     Raises:
         ValueError: an unknown factor, a layout count outside [1, the sweep's], or an unwritable ``out``.
@@ -178,7 +183,14 @@ def robustness(
         tasks = [replace(task, policy=policy or task.policy, trust_pickle=trust_pickle) for task in tasks]
     csv_path = out / EPISODES_CSV
     execute(
-        tasks, csv_path, backend=backend, workers=workers, address=address, description=f"robustness {agent}"
+        tasks,
+        csv_path,
+        backend=backend,
+        workers=workers,
+        address=address,
+        description=f"robustness {agent}",
+        step_timeout_s=step_timeout_s,
+        agent_limits=agent_limits,
     )
     rows = pool_every_seed(rows_of(tasks, read_records(csv_path)))
     table = summarise(rows)

@@ -96,6 +96,8 @@ def test_an_outside_agents_curves_are_flown_resumed_and_summarised(tmp_path: Pat
     )
     assert (out / "robustness.png").stat().st_size > 0
     assert len(read_records(out / "robustness_episodes.csv")) == 3
+    # The curves fly under the command's own limits, the sandbox included.
+    assert {row["isolation"] for row in read_records(out / "robustness_episodes.csv")} == {"sandbox"}
     assert main(argv) == 0  # again: resumes and flies nothing
     assert len(read_records(out / "robustness_episodes.csv")) == 3
 

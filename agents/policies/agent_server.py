@@ -28,6 +28,8 @@ from agents.policies.base import Agent
 from agents.policies.external import describe_error, is_external_name, load_external_agent, resolve_external
 from agents.policies.sb3_models import is_sb3_model_name, load_sb3_model
 
+# The largest file an agent's process may write (what it prints goes to a log file).
+MAX_FILE_BYTES = 64 * 2**20
 # prctl(PR_SET_PDEATHSIG): the signal Linux sends this process when the one that started it ends.
 PR_SET_PDEATHSIG = 1
 
@@ -36,6 +38,9 @@ def limit_self(memory_bytes: int, cpu_s: float) -> None:
     """Cap this process's address space and CPU time (inherited by any process it starts), and end it with the
     process that started it (Linux)."""
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
+    # No file it writes, its log of what it prints included, grows past this: a write beyond fails (EFBIG).
+    resource.setrlimit(resource.RLIMIT_FSIZE, (MAX_FILE_BYTES, MAX_FILE_BYTES))
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     # SIGXCPU at the limit, SIGKILL a second later if the agent ignores it; the agent cannot raise either.
     cpu = max(1, int(cpu_s))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))

@@ -36,8 +36,10 @@ INSTALL_HINT = (
 )
 # The unprivileged user and group the agent runs as inside its user namespace.
 NOBODY = 65534
-# The scratch folder inside the sandbox: a private tmpfs, empty at start, gone at the end.
+# The scratch folder inside the sandbox: a private tmpfs, empty at start, gone at the end, and bounded (a tmpfs
+# lives in memory, which the address-space limit does not count).
 SCRATCH = "/tmp"
+SCRATCH_BYTES = 256 * 2**20
 # Environment variables passed into the sandbox when set here: none is a secret, and some OpenBLAS builds crash
 # on some CPUs without the first two.
 PASSED_ENVIRONMENT = (
@@ -165,6 +167,8 @@ def sandbox_command(
         "/proc",
         "--dev",
         "/dev",
+        "--size",
+        str(SCRATCH_BYTES),
         "--tmpfs",
         SCRATCH,
     ]

@@ -232,6 +232,31 @@ if "FLOWNAV_SCORER_SECRET" in os.environ or "HOSTNAME" in os.environ:
     assert outcome(attacker(tmp_path, body)) == "none"
 
 
+def test_the_agents_scratch_space_and_files_are_bounded(tmp_path: Path) -> None:
+    body = """
+chunk = b"x" * 2**20
+try:
+    with open("/tmp/one_big_file", "wb") as handle:
+        for _ in range(80):
+            handle.write(chunk)
+    breach("wrote an 80 MiB file")
+except OSError:
+    pass
+os.remove("/tmp/one_big_file")
+written = 0
+try:
+    for index in range(12):
+        with open(f"/tmp/part_{index}", "wb") as handle:
+            for _ in range(30):
+                handle.write(chunk)
+                written += 1
+    breach(f"filled {written} MiB of its scratch space")
+except OSError:
+    pass
+"""
+    assert outcome(attacker(tmp_path, body)) == "none"
+
+
 def test_without_the_sandbox_the_same_attack_gets_through(tmp_path: Path) -> None:
     """The attacks above are live: without the sandbox the environment one succeeds (shown here so that a
     sandbox that silently stopped working would fail the tests above, not pass them)."""

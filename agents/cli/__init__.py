@@ -32,6 +32,7 @@ COMMANDS = {
     "score": "agents.cli.score",
     "verify": "agents.cli.verify",
     "reflight": "agents.cli.reflight",
+    "decision-log": "agents.cli.decision_log",
     "describe": "agents.cli.describe",
     "confirm": "agents.cli.confirm",
     "error-analysis": "agents.cli.error_analysis",

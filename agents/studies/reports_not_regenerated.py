@@ -78,6 +78,11 @@ NOT_REGENERATED: tuple[Report, ...] = (
         "per seed again (the command is in the report)",
     ),
     Report(
+        "decision_log.md",
+        reason="read from the repository's history as well as its files: flownav decision-log --out results writes "
+        "it again (tests/agents/studies/test_decision_log.py checks it against git where the history is there)",
+    ),
+    Report(
         "isolation_cost.md",
         reason="a measurement of time, not a report from data: flownav bench isolation measures it again (the "
         "command is in the report)",

@@ -30,12 +30,14 @@ from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
+from agents.evaluation.calibration_page import sensitivity_rows
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
 from agents.evaluation.lane import sideways_extent
 from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
+from agents.evaluation.suite_checks import frozen_physics
 from agents.evaluation.suite_page import (
     beside_suite,
     rank_suite,
@@ -357,6 +359,34 @@ def run_suite(
     return text.splitlines()
 
 
+# Where suite v2's calibration flights lie beside the suite's episodes, the sensitivity to the velocity reading
+# among them; the reading the noisy tiers would have had at suite v1's harsher choice.
+CALIBRATION_DIRS = {"2": "suite_v2_calibration"}
+HARSHER_READING = ("per_axis", 1.0)
+
+
+def velocity_reading_values(out: Path, version: str) -> dict[str, Any]:
+    """What ``suite.md`` says of the noisy tiers' velocity reading: the frozen reading in words, and each agent
+    flown at suite v1's per-axis reading beside the frozen one on the same validation layouts (empty where this
+    version has no calibration flights beside it)."""
+    folder = Path(out) / CALIBRATION_DIRS.get(version, "")
+    if version not in CALIBRATION_DIRS or not folder.is_dir():
+        return {}
+    physics = frozen_physics(version)
+    harsher_words = physics.velocity_readings[HARSHER_READING[0]][0]
+    rows = [
+        row
+        for row in sensitivity_rows(folder, physics)
+        if row["reading"] == harsher_words and row["tau"] == HARSHER_READING[1]
+    ]
+    return {
+        "frozen": physics.velocity_readings[physics.flight_stack_reading][0],
+        "harsher": harsher_words,
+        "rows": rows,
+        "page": f"{CALIBRATION_DIRS[version]}/calibration.md",
+    }
+
+
 def _report_values(
     rows: Sequence[TieredRow],
     runs: Mapping[str, Sequence[str]],
@@ -390,6 +420,7 @@ def _report_values(
         chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
         sideways=sideways_extent(rows, version),
         reflights=summarise_reflights(read_reflights(out / REFLIGHT_CSV)),
+        velocity_reading=velocity_reading_values(out, version),
         **beside_suite(out, tier_names, out / EPISODES_CSV, seeds),
         version=version,
     )

@@ -253,6 +253,7 @@ def suite_values(
     figure: str = "suite.png",
     not_counted: Sequence[tuple[str, str]] = (),
     reflights: Sequence[ReflightSummary] = (),
+    velocity_reading: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
@@ -281,6 +282,7 @@ def suite_values(
         "command": command,
         "machine": machine,
         "reflights": list(reflights),
+        "velocity_reading": dict(velocity_reading or {}),
         "first_layout": layouts.start,
         "last_layout": layouts.stop - 1,
         "layouts": len(layouts),

@@ -248,7 +248,12 @@ REPORTS: tuple[Report, ...] = (
         "suite.md",
         name="suite",
         command="flownav suite --out results --report-only",
-        inputs=("suite_episodes.csv", "suite_v2_calibration/*.csv", "suite_reflight.csv"),
+        inputs=(
+            "suite_episodes.csv",
+            "suite_v2_calibration/*.csv",
+            "suite_v2_calibration/sensitivity/*.csv",
+            "suite_reflight.csv",
+        ),
         write=lambda report, folder: run_suite(
             suite_agents("2"), folder, report_only=True, command=report.command, version="2"
         ),

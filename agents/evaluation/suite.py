@@ -39,6 +39,7 @@ from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
 from agents.evaluation.suite_checks import frozen_physics
 from agents.evaluation.suite_page import (
+    VelocityReading,
     beside_suite,
     rank_suite,
     suite_page,
@@ -365,26 +366,26 @@ CALIBRATION_DIRS = {"2": "suite_v2_calibration"}
 HARSHER_READING = ("per_axis", 1.0)
 
 
-def velocity_reading_values(out: Path, version: str) -> dict[str, Any]:
+def velocity_reading_values(out: Path, version: str) -> VelocityReading | None:
     """What ``suite.md`` says of the noisy tiers' velocity reading: the frozen reading in words, and each agent
-    flown at suite v1's per-axis reading beside the frozen one on the same validation layouts (empty where this
+    flown at suite v1's per-axis reading beside the frozen one on the same validation layouts (None where this
     version has no calibration flights beside it)."""
     folder = Path(out) / CALIBRATION_DIRS.get(version, "")
     if version not in CALIBRATION_DIRS or not folder.is_dir():
-        return {}
+        return None
     physics = frozen_physics(version)
     harsher_words = physics.velocity_readings[HARSHER_READING[0]][0]
-    rows = [
+    rows = tuple(
         row
         for row in sensitivity_rows(folder, physics)
         if row["reading"] == harsher_words and row["tau"] == HARSHER_READING[1]
-    ]
-    return {
-        "frozen": physics.velocity_readings[physics.flight_stack_reading][0],
-        "harsher": harsher_words,
-        "rows": rows,
-        "page": f"{CALIBRATION_DIRS[version]}/calibration.md",
-    }
+    )
+    return VelocityReading(
+        frozen=physics.velocity_readings[physics.flight_stack_reading][0],
+        harsher=harsher_words,
+        rows=rows,
+        page=f"{CALIBRATION_DIRS[version]}/calibration.md",
+    )
 
 
 def _report_values(

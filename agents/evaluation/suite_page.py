@@ -9,6 +9,7 @@ tier's headroom.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
@@ -230,6 +231,18 @@ def reading_values(folder: Path) -> list[SensorReading]:
     return found
 
 
+@dataclass(frozen=True)
+class VelocityReading:
+    """What ``suite.md`` says of the noisy tiers' velocity reading: the frozen reading and the harsher one in words,
+    the sensitivity rows of the agents flown at both (``calibration_page.sensitivity_rows``), and the page they are
+    from."""
+
+    frozen: str
+    harsher: str
+    rows: tuple[Mapping[str, object], ...]
+    page: str
+
+
 def suite_values(
     table: Sequence[SuiteRow],
     rankings: Mapping[str, TierRanking],
@@ -253,7 +266,7 @@ def suite_values(
     figure: str = "suite.png",
     not_counted: Sequence[tuple[str, str]] = (),
     reflights: Sequence[ReflightSummary] = (),
-    velocity_reading: Mapping[str, Any] | None = None,
+    velocity_reading: VelocityReading | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
@@ -282,7 +295,7 @@ def suite_values(
         "command": command,
         "machine": machine,
         "reflights": list(reflights),
-        "velocity_reading": dict(velocity_reading or {}),
+        "velocity_reading": velocity_reading,
         "first_layout": layouts.start,
         "last_layout": layouts.stop - 1,
         "layouts": len(layouts),

@@ -30,16 +30,14 @@ from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
-from agents.evaluation.calibration_page import sensitivity_rows
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
 from agents.evaluation.lane import sideways_extent
 from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
-from agents.evaluation.suite_checks import frozen_physics
+from agents.evaluation.suite_checks import velocity_reading_values
 from agents.evaluation.suite_page import (
-    VelocityReading,
     beside_suite,
     rank_suite,
     suite_page,
@@ -358,34 +356,6 @@ def run_suite(
     text = suite_page(_report_values(rows, runs, tier_names, layouts, version, out, command))
     write_text_atomically(out / "suite.md", text)
     return text.splitlines()
-
-
-# Where suite v2's calibration flights lie beside the suite's episodes, the sensitivity to the velocity reading
-# among them; the reading the noisy tiers would have had at suite v1's harsher choice.
-CALIBRATION_DIRS = {"2": "suite_v2_calibration"}
-HARSHER_READING = ("per_axis", 1.0)
-
-
-def velocity_reading_values(out: Path, version: str) -> VelocityReading | None:
-    """What ``suite.md`` says of the noisy tiers' velocity reading: the frozen reading in words, and each agent
-    flown at suite v1's per-axis reading beside the frozen one on the same validation layouts (None where this
-    version has no calibration flights beside it)."""
-    folder = Path(out) / CALIBRATION_DIRS.get(version, "")
-    if version not in CALIBRATION_DIRS or not folder.is_dir():
-        return None
-    physics = frozen_physics(version)
-    harsher_words = physics.velocity_readings[HARSHER_READING[0]][0]
-    rows = tuple(
-        row
-        for row in sensitivity_rows(folder, physics)
-        if row["reading"] == harsher_words and row["tau"] == HARSHER_READING[1]
-    )
-    return VelocityReading(
-        frozen=physics.velocity_readings[physics.flight_stack_reading][0],
-        harsher=harsher_words,
-        rows=rows,
-        page=f"{CALIBRATION_DIRS[version]}/calibration.md",
-    )
 
 
 def _report_values(

@@ -9,7 +9,6 @@ tier's headroom.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
@@ -27,6 +26,7 @@ from agents.evaluation.episode_tasks import TieredRow, with_tier
 from agents.evaluation.lane import LANE_DIR, NEAR_EDGE_M, LaneRow, SidewaysRow, lane_values
 from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
+from agents.evaluation.suite_checks import VelocityReading
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
 from agents.policies import (
@@ -229,18 +229,6 @@ def reading_values(folder: Path) -> list[SensorReading]:
                 }
             )
     return found
-
-
-@dataclass(frozen=True)
-class VelocityReading:
-    """What ``suite.md`` says of the noisy tiers' velocity reading: the frozen reading and the harsher one in words,
-    the sensitivity rows of the agents flown at both (``calibration_page.sensitivity_rows``), and the page they are
-    from."""
-
-    frozen: str
-    harsher: str
-    rows: tuple[Mapping[str, object], ...]
-    page: str
 
 
 def suite_values(

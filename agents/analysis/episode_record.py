@@ -26,6 +26,11 @@ def episode_outcome(collision: bool, out_of_bounds: bool, success: bool) -> str:
     return "success" if success else "timeout"
 
 
+def row_outcome(row: Mapping[str, object]) -> str:
+    """The one way the episode of a row (read, or a record as a mapping) ended, by :func:`episode_outcome`."""
+    return episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
+
+
 @dataclass
 class EpisodeRecord:
     """What one episode came to, and what defined it; one CSV row.

@@ -16,18 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.analysis.episode_record import MEASURED_FIELDS, EpisodeRow, episode_outcome
+from agents.analysis.episode_record import MEASURED_FIELDS, EpisodeRow, row_outcome
 from agents.analysis.reflights import Reflight
 from agents.common.machine import cpu_signature
 from agents.evaluation.episode_tasks import EpisodeTask
 from agents.evaluation.progress import episode_progress
 from agents.evaluation.runner import FlightCache, run_task
 from agents.evaluation.suite import agent_runs, suite_rows, suite_tasks
-
-
-def _outcome(row: object) -> str:
-    values = row if isinstance(row, dict) else vars(row)
-    return episode_outcome(bool(values["collision"]), bool(values["out_of_bounds"]), bool(values["success"]))
 
 
 def _differs(recorded: EpisodeRow, again: dict[str, object]) -> str:
@@ -84,7 +79,7 @@ def reflight(chosen: Sequence[tuple[EpisodeTask, EpisodeRow]], agent: str) -> li
                     cpu,
                     str(row.get("code_version") or ""),
                     _differs(row, again),
-                    _outcome(row) == _outcome(again),
+                    row_outcome(row) == row_outcome(again),
                 )
             )
             progress.update(task.factor)

@@ -26,6 +26,7 @@ from agents.analysis.detection import (
     detection_sample_size,
     discordance_p_value,
 )
+from agents.analysis.episode_record import row_outcome
 from agents.common.machine import cpu_signature
 from agents.evaluation.agent_settings import plan_settings
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow
@@ -41,7 +42,6 @@ from agents.evaluation.suite import (
 from agents.evaluation.suite_report import OUTCOMES, SuiteRow, outcome_interval, read_suite_csv
 from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import end_agent_processes
-from flownav_env.task import episode_outcome
 from flownav_env.tiers import SUITE_VERSION
 
 # The CPU this process flies on (an episode row records the one it flew on).
@@ -93,11 +93,6 @@ class Verification:
 
 def _changed(total: int, share: float) -> int:
     return max(1, math.ceil(share * total - 1e-9))
-
-
-def outcome_of(row: Mapping[str, object]) -> str:
-    """The one way an episode ended (:func:`flownav_env.task.episode_outcome`)."""
-    return episode_outcome(bool(row["collision"]), bool(row["out_of_bounds"]), bool(row["success"]))
 
 
 def verify(
@@ -244,7 +239,7 @@ def _fly_sample(
     try:
         for task, (_, row) in zip(flown, chosen, strict=True):
             again = vars(run_task(task, cache))
-            said, now = outcome_of(row), outcome_of(again)
+            said, now = row_outcome(row), row_outcome(again)
             checked += 1
             if row.get("cpu") != CPU:  # another CPU, or a file from before episodes recorded theirs
                 other += 1

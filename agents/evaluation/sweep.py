@@ -36,6 +36,7 @@ from agents.common.seeds import TEST_SEED_START
 from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.runner import execute
+from agents.evaluation.sweep_factors import SWEEP_FACTORS, factor_settings
 from agents.evaluation.sweep_report import (
     comparison_markdown,
     plot_collision_vs_error,
@@ -45,33 +46,18 @@ from agents.evaluation.sweep_report import (
 from agents.policies import (
     LEARNED_AGENTS,
     is_learned,
+    is_per_tier,
     policy_file,
     shipped_seed_runs,
     split_agent_name,
 )
-from flownav_env.settings_check import check_env_kwargs, check_setting
+from flownav_env.settings_check import check_env_kwargs
+from flownav_env.tiers import tier_of_env_id
 
 # ``ppo_flow@all`` in a sweep's agents: every shipped training seed of ppo_flow, in turn over the layouts.
 ALL_SEEDS = "@all"
 # What the sweep offers when its CSV cannot be resumed: its own --overwrite, or --refly for a retrained agent.
 SWEEP_REMEDY = f"{overwrite_hint('folder')}; after retraining an agent, --agents AGENT --refly flies just its episodes again"
-SWEEP_FACTORS = (
-    "rotation_error",
-    "translation_error",
-    "attitude_jitter_deg",
-    "brightness",
-    "forward_speed",
-    "obstacle_density",
-    "rotation_bias",
-    "translation_bias",
-    "rotation_drift",
-    "translation_drift",
-    "rotation_noise_deg",
-    "translation_noise_m",
-    "depth_noise",
-    "depth_outliers",
-    "depth_dropout",
-)
 
 
 @dataclass
@@ -123,7 +109,7 @@ class SweepConfig:
             for index, level in enumerate(levels):
                 # At load, not when a worker reaches the cell thousands of episodes later.
                 try:
-                    check_setting(factor, level)
+                    factor_settings(factor, level)
                 except ValueError as error:
                     raise ValueError(f"key 'factors.{factor}[{index}]': {error}") from None
 
@@ -180,13 +166,23 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     passes = [seeds[start : start + config.seed_block] for start in range(0, len(seeds), config.seed_block)]
     cells: list[tuple[str, float, dict[str, object]]] = [("clean", 0.0, dict(config.env))]
     for factor, levels in config.factors.items():
-        cells += [(factor, float(level), {**config.env, factor: level}) for level in levels]
+        cells += [
+            (factor, float(level), {**config.env, **factor_settings(factor, level)}) for level in levels
+        ]
     rotations = {agent: seed_rotation(config, agent) for agent in agents}
+    tier = tier_of_env_id(config.env_id)
 
     def task(agent: str, factor: str, level: float, kwargs: Mapping[str, object], seed: int) -> EpisodeTask:
         runs = rotations[agent]
         name = runs[(seed - config.seed_start) % len(runs)]
-        policy = str(policy_file(name, directory=config.policy_folder())) if is_learned(name) else None
+        # An agent learned once per tier flies the policy of the tier the sweep flies (on an id that is no
+        # tier's, its first tier's: the tiers' recipe is one).
+        tier_name = tier[1].name if tier is not None and is_per_tier(name) else None
+        policy = (
+            str(policy_file(name, directory=config.policy_folder(), tier=tier_name))
+            if is_learned(name)
+            else None
+        )
         settings = tuple((setting, kwargs[setting]) for setting in sorted(kwargs))
         return EpisodeTask(name, factor, level, seed, config.env_id, settings, policy)
 

@@ -30,9 +30,12 @@ def test_shipped_configs_load() -> None:
     for experiment in sorted((root / "experiments").glob("*.yaml")):
         config = load_config(experiment, TrainConfig)
         assert config.name == experiment.stem and check_env_kwargs(config.env, str(experiment)) == config.env
-    sweep = load_config(root / "sweep.yaml", SweepConfig)
+    sweep = load_config(root / "sweep_v2.yaml", SweepConfig)
     assert set(sweep.factors) == set(SWEEP_FACTORS)  # the benchmark sweep covers every error model
     assert all(len(levels) >= 2 for levels in sweep.factors.values())
+    # v0's sweep keeps its factors, each of which the v2 sweep flies at the same levels.
+    for factor, levels in load_config(root / "sweep.yaml", SweepConfig).factors.items():
+        assert set(levels) <= set(sweep.factors[factor])
     for sweep in sorted(root.glob("sweep_*.yaml")):
         config = load_config(sweep, SweepConfig)
         assert check_env_kwargs(config.env, str(sweep)) == config.env

@@ -23,7 +23,7 @@ class ToleranceScan(TypedDict):
     first that doubles the clean rate and the first that breaks (None: none does), and the worst level."""
 
     levels: list[float]
-    tolerated_level: float
+    tolerated_level: float | None
     doubling_level: float | None
     worst_level: float
     worst_failure: float

@@ -18,14 +18,21 @@ HELP = (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--episodes",
-        default=str(RESULTS_DIR / "sweep_episodes.csv"),
-        help="the sweep's episodes CSV (default: the repository's results/sweep_episodes.csv)",
+        action="append",
+        help="a sweep's episodes CSV, repeatable: one per suite tier it flew (default: the repository's "
+        "results/sweep_episodes.csv)",
     )
     parser.add_argument(
         "--baseline",
-        default=str(RESULTS_DIR / "leaderboard_episodes.csv"),
-        help="the clean table's episodes, the breaking points' reference (default: the repository's "
-        "results/leaderboard_episodes.csv; '' for the sweep's own clean cells)",
+        help="the clean episodes, the breaking points' reference: the suite's (results/suite_episodes.csv) for a "
+        "sweep on the current suite's tiers, else the clean table's (default: results/leaderboard_episodes.csv); "
+        "'' for the sweep's own clean cells (default: by the episodes' task)",
+    )
+    parser.add_argument(
+        "--compare-with",
+        nargs=2,
+        metavar=("EPISODES_CSV", "BASELINE_CSV"),
+        help="an earlier sweep's episodes and its clean table's: each clean-tier tolerance is set beside it",
     )
     parser.add_argument(
         "--out",
@@ -36,11 +43,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.studies.error_analysis_report import write_error_analysis_from
+    from agents.studies.error_analysis_report import default_baseline, write_error_analysis_from
 
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    baseline = Path(args.baseline) if args.baseline else None
-    print(
-        "\n".join(write_error_analysis_from(Path(args.episodes), Path(args.out), command.strip(), baseline))
+    episodes = [Path(path) for path in args.episodes or [RESULTS_DIR / "sweep_episodes.csv"]]
+    baseline = default_baseline(episodes) if args.baseline is None else args.baseline
+    compare = None if args.compare_with is None else (Path(args.compare_with[0]), Path(args.compare_with[1]))
+    lines = write_error_analysis_from(
+        episodes, Path(args.out), command.strip(), Path(baseline) if baseline else None, compare_with=compare
     )
+    print("\n".join(lines))
     return 0

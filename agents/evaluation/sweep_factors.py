@@ -13,6 +13,7 @@ keep comparing with that sweep's.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 
 from flownav_env.sensor_specs import (
@@ -66,6 +67,10 @@ COMPOSITE_FACTORS: Mapping[str, Callable[[float], dict[str, float]]] = {
     "velocity_correlation_s": _velocity_correlation,
 }
 SWEEP_FACTORS = SETTING_FACTORS + tuple(COMPOSITE_FACTORS)
+# Where a composite factor's tolerance scan starts: the level that does nothing. The velocity error does nothing at
+# σ = 0; its correlation time is flown at the tier's σ, so no τ does nothing and every level is scanned on one
+# side, from the smallest (a white error, τ = 0, is already an error).
+COMPOSITE_NEUTRAL: Mapping[str, float] = {"velocity_error_m_s": 0.0, "velocity_correlation_s": -math.inf}
 
 
 def factor_settings(factor: str, level: float) -> dict[str, float]:

@@ -18,6 +18,7 @@ from collections.abc import Mapping, Sequence
 from agents.analysis.episode_record import EpisodeRow, is_flow_agent
 from agents.analysis.statistics import failure
 from agents.analysis.tolerance_rows import CleanFields, ToleranceRow, ToleranceScan
+from agents.evaluation.sweep_factors import COMPOSITE_NEUTRAL
 from agents.policies.base import LEARNED_AGENTS, base_agent_name
 from flownav_env.settings import EnvSettings
 from flownav_env.settings_check import setting_range
@@ -34,7 +35,10 @@ NOT_TESTED = "not tested"
 
 
 def neutral_level(factor: str) -> float:
-    """The level at which ``factor`` does nothing: its env default (1 for brightness, the default speed...)."""
+    """The level at which ``factor`` does nothing: its env default (1 for brightness, the default speed...), or a
+    composite factor's (:data:`~agents.evaluation.sweep_factors.COMPOSITE_NEUTRAL`; −inf where none does)."""
+    if factor in COMPOSITE_NEUTRAL:
+        return COMPOSITE_NEUTRAL[factor]
     fields = dataclasses.fields(EnvSettings)
     defaults = {item.name: item.default for item in fields if isinstance(item.default, int | float)}
     if factor not in defaults:
@@ -151,7 +155,8 @@ def _scan_outward(
     worst = max(rates, key=lambda r: r[1])
     return ToleranceScan(
         levels=[r[0] for r in rates],
-        tolerated_level=tolerated,
+        # None: not even the first level is tolerated, on a factor where no level does nothing.
+        tolerated_level=tolerated if math.isfinite(tolerated) else None,
         doubling_level=doubled,
         worst_level=worst[0],
         worst_failure=worst[1],

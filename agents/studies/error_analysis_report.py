@@ -26,6 +26,7 @@ from agents.analysis.records import read_records
 from agents.analysis.tolerance_rows import ToleranceRow
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.common.folders import check_writable_folder
+from agents.common.locations import RESULTS_DIR
 from agents.common.tables import today
 from agents.evaluation.sweep import pool_every_seed
 from agents.studies.error_analysis import (
@@ -34,8 +35,19 @@ from agents.studies.error_analysis import (
     tolerance_table,
     unbroken_kind,
 )
+from agents.studies.error_analysis_tiers import (
+    BEST_LEARNED,
+    FULL_CELL_LAYOUTS,
+    cell_counts,
+    paired_cells,
+    rows_by_tier,
+    sideways_cells,
+    tier_baseline,
+    tolerance_shifts,
+)
 from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
+from flownav_env.tiers import SUITE_VERSION, tier_of_env_id
 
 
 def _range_text(row: ToleranceRow) -> str:
@@ -144,31 +156,145 @@ def write_error_analysis(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    values = report_values(rows, baseline)
+    values = {
+        **report_values(rows, baseline),
+        "figure": "dose_response.png",
+        "clean_text": "the agent's 300-layout clean table (`leaderboard_episodes.csv`, pooled over training seeds)",
+    }
     if values["fits"]:
-        plot_dose_response(rows, values["fits"], values["quality"], out / "dose_response.png")
-    text = render_report("error_analysis.md.j2", {**values, "generated": today(), "command": command})
+        plot_dose_response(rows, values["fits"], values["quality"], out / values["figure"])
+    text = render_report(
+        "error_analysis.md.j2",
+        {"values": values, "episodes": len(rows), "generated": today(), "command": command},
+    )
     (out / "error_analysis.md").write_text(text)
     return text.split("\n")[:-1]
 
 
 def write_error_analysis_from(
-    episodes: Path, out: Path, command: str, baseline: Path | None = None
+    episodes: Sequence[Path],
+    out: Path,
+    command: str,
+    baseline: Path | None = None,
+    *,
+    compare_with: tuple[Path, Path] | None = None,
 ) -> list[str]:
-    """:func:`write_error_analysis` from a sweep's episodes CSV, each learned agent pooled over its seeds, and
-    the clean table's of the same training runs (``baseline``; None: each agent's clean cell in the sweep).
+    """The error report from sweep episodes CSVs, each learned agent pooled over its seeds: on the current
+    suite's tiers, :func:`write_tiered_error_analysis` (``baseline``: the suite's episodes; ``compare_with``: an
+    earlier sweep's episodes and its clean table), else :func:`write_error_analysis` (``baseline``: the clean
+    table of the same training runs). ``baseline`` None: each agent's clean cell in the sweep.
 
     Raises:
-        FileNotFoundError: ``episodes`` or ``baseline`` missing.
-        ValueError: ``episodes`` holds no readable episode.
+        FileNotFoundError: an episodes, baseline or comparison file missing.
+        ValueError: the files hold no readable episode.
     """
-    if not Path(episodes).is_file():
-        raise FileNotFoundError(f"--episodes {episodes}: no such file (fly a sweep first: flownav sweep)")
-    flown = read_records(Path(episodes))
+    flown = []
+    for path in episodes:
+        if not Path(path).is_file():
+            raise FileNotFoundError(f"--episodes {path}: no such file (fly a sweep first: flownav sweep)")
+        flown += read_records(Path(path))
     rows = pool_every_seed(flown)
     if not rows:
-        raise ValueError(f"--episodes {episodes} holds no readable episode")
-    if baseline is not None and not Path(baseline).is_file():
-        raise FileNotFoundError(f"--baseline {baseline}: no such file (flownav leaderboard writes it)")
-    clean = pool_every_seed(baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline else [])
-    return write_error_analysis(rows, out, command, clean)
+        raise ValueError(f"--episodes {', '.join(map(str, episodes))} holds no readable episode")
+    named: dict[str, Path | None] = {"--baseline": baseline}
+    if compare_with is not None:
+        named.update({"--compare-with": compare_with[0], "--compare-with's baseline": compare_with[1]})
+    for name, given in named.items():
+        if given is not None and not Path(given).is_file():
+            raise FileNotFoundError(f"{name} {given}: no such file")
+    clean = baseline_of_flown_runs(read_records(Path(baseline)), flown) if baseline else []
+    if not on_current_suite(rows):
+        return write_error_analysis(rows, out, command, pool_every_seed(clean))
+    earlier = None
+    if compare_with is not None:
+        before = read_records(compare_with[0])
+        earlier = (
+            pool_every_seed(before),
+            pool_every_seed(baseline_of_flown_runs(read_records(compare_with[1]), before)),
+        )
+    return write_tiered_error_analysis(rows, out, command, pool_every_seed(clean), earlier)
+
+
+def default_baseline(episodes: Sequence[Path]) -> Path:
+    """The clean episodes a sweep's breaking points are read against by default: the suite's on the current
+    suite's tiers, else the clean table's (``results/leaderboard_episodes.csv``)."""
+    rows = [row for path in episodes if Path(path).is_file() for row in read_records(Path(path))]
+    return RESULTS_DIR / (
+        "suite_episodes.csv" if rows and on_current_suite(rows) else "leaderboard_episodes.csv"
+    )
+
+
+def on_current_suite(rows: Sequence[EpisodeRow]) -> bool:
+    """Whether every row flew a tier of the current suite version (a tiered report), not an older task."""
+    return all(
+        (found := tier_of_env_id(row["env_id"] or "")) is not None and found[0] == SUITE_VERSION
+        for row in rows
+    )
+
+
+def tier_values(
+    tier: str, rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow], figure: str
+) -> dict[str, Any]:
+    """One tier's part of the tiered report: the single sweep's sections (:func:`report_values`) with the
+    figure's file name, each cell paired by layout against clean, and its successes' sideways extent."""
+    paired = paired_cells(rows)
+    return {
+        "tier": tier,
+        "env_id": rows[0]["env_id"],
+        "counts": cell_counts(rows),
+        "sections": {
+            **report_values(rows, baseline),
+            "figure": figure,
+            "clean_text": f"the agent's rate on the suite's {tier} tier (`suite_episodes.csv`: its 300 frozen "
+            "layouts, pooled over training seeds)",
+        },
+        "agents": sorted({cell.agent for cell in paired}),
+        "paired": {(cell.factor, cell.level, cell.agent): cell for cell in paired},
+        "cells": sorted({(cell.factor, cell.level) for cell in paired}),
+        "sideways": sideways_cells(rows, tier, SUITE_VERSION),
+    }
+
+
+def write_tiered_error_analysis(
+    rows: Sequence[EpisodeRow],
+    out: Path,
+    command: str,
+    suite_rows: Sequence[EpisodeRow],
+    earlier: tuple[Sequence[EpisodeRow], Sequence[EpisodeRow]] | None = None,
+) -> list[str]:
+    """Write ``error_analysis.md`` and a dose-response figure per tier into ``out`` from a sweep flown on suite
+    tiers (``rows``, learned agents pooled over their seeds), each tier's breaking points against the suite's
+    clean rates on it (``suite_rows``); with ``earlier`` (an earlier sweep's episodes and its clean table's),
+    each clean-tier tolerance beside that sweep's. Returns the report's lines."""
+    out = Path(out)
+    check_writable_folder(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tiers = []
+    for tier, members in rows_by_tier(rows).items():
+        figure = "dose_response.png" if tier == "clean" else f"dose_response_{tier}.png"
+        values = tier_values(tier, members, tier_baseline(suite_rows, members[0]["env_id"]), figure)
+        if values["sections"]["fits"]:
+            plot_dose_response(
+                members, values["sections"]["fits"], values["sections"]["quality"], out / figure
+            )
+        tiers.append(values)
+    shifts = []
+    if earlier is not None and tiers:
+        before = tolerance_table(*earlier)
+        shifts = tolerance_shifts(tiers[0]["sections"]["table"], before)
+    text = render_report(
+        "error_analysis_tiers.md.j2",
+        {
+            "tiers": tiers,
+            "episodes": len(rows),
+            "full_cell": FULL_CELL_LAYOUTS,
+            "shifts": shifts,
+            "moved": [s for s in shifts if s.moved != "same"],
+            "best_label": BEST_LEARNED,
+            "earlier_episodes": 0 if earlier is None else len(earlier[0]),
+            "generated": today(),
+            "command": command,
+        },
+    )
+    (out / "error_analysis.md").write_text(text)
+    return text.split("\n")[:-1]

@@ -20,10 +20,11 @@ import numpy as np
 
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
-from agents.analysis.paired import Comparison, compare, runs_interval, verdict
+from agents.analysis.paired import Comparison, compare, provisional_note, runs_interval, verdict
 from agents.analysis.records import read_records
 from agents.analysis.statistics import runs_failure
 from agents.analysis.validation_rows import ConfirmationResult, SearchRecord
+from agents.common.agent_table import AGENTS
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
@@ -55,9 +56,10 @@ Row = tuple[str, np.ndarray, np.ndarray]  # where, flow's failures, truth's fail
 Bar = tuple[str, Cell | None, Cell | None]  # where, flow's failure, truth's failure (None: not flown)
 
 
-def gap(flow: np.ndarray, truth: np.ndarray) -> Comparison:
-    """Flow minus truth, paired by layout: both (runs, layouts) of failures on the same layouts."""
-    return compare("flow", flow, "truth", truth)
+def gap(flow: np.ndarray, truth: np.ndarray, names: tuple[str, str] = ("flow", "truth")) -> Comparison:
+    """Flow minus truth, paired by layout: both (runs, layouts) of failures on the same layouts; ``names``, the
+    two agents, let a reading say which one rests on few training seeds."""
+    return compare(names[0], flow, names[1], truth)
 
 
 def _cell(matrix: np.ndarray) -> Cell:
@@ -78,15 +80,18 @@ def _rate_cell(rate: Rate) -> Cell:
     return (rate.rate, rate.low, rate.high)
 
 
-def gap_row(label: str, flow: np.ndarray, truth: np.ndarray) -> list[str]:
-    """A table row: each agent's failure with its interval, flow minus truth paired by layout, its verdict."""
-    found = gap(flow, truth)
+def gap_row(
+    label: str, flow: np.ndarray, truth: np.ndarray, names: tuple[str, str] = ("flow", "truth")
+) -> list[str]:
+    """A table row: each agent's failure with its interval, flow minus truth paired by layout, its verdict, marked
+    provisional where a learned agent among ``names`` pooled fewer training seeds than a ranked one needs."""
+    found = gap(flow, truth, names)
     cells = [f"{rate:.2f} [{low:.2f}, {high:.2f}]" for rate, low, high in (_cell(flow), _cell(truth))]
     return [
         label,
         *cells,
         f"{found.difference:+.3f} [{found.low:+.3f}, {found.high:+.3f}]",
-        verdict(found, "flow", "truth"),
+        verdict(found, "flow", "truth") + provisional_note(found),
     ]
 
 
@@ -96,9 +101,9 @@ def gap_table(
     """The gap per row; with ``ceiling`` (row label → the planner's failures, one run), its failure beside."""
     header = [where, f"`{flow}` (flow)", f"`{truth}` (true depths)", "flow − truth [95 % CI]", "reading"]
     if ceiling is None:
-        return markdown_table(header, [gap_row(*row) for row in rows]) if rows else ""
+        return markdown_table(header, [gap_row(*row, (flow, truth)) for row in rows]) if rows else ""
     cells = {label: "{:.2f} [{:.2f}, {:.2f}]".format(*_cell(found)) for label, found in ceiling.items()}
-    body = [[*gap_row(*row), cells.get(row[0], "not flown")] for row in rows]
+    body = [[*gap_row(*row, (flow, truth)), cells.get(row[0], "not flown")] for row in rows]
     return markdown_table([*header, "`planner` (the ceiling)"], body) if rows else ""
 
 
@@ -146,6 +151,7 @@ def _student_values(results: Path, policies_dir: Path) -> dict[str, object]:
         "student": student,
         "student_truth": twin,
         "student_truth_seeds": len(shipped_seed_runs(twin, policies_dir)),
+        "student_not_flown": not_flown_here(student, twin),
         "student_suite_table": gap_table(
             student,
             twin,
@@ -183,6 +189,17 @@ def selection_values(result: ConfirmationResult, search: SearchRecord) -> dict[s
     }
 
 
+def not_flown_here(*agents: str) -> dict[str, str]:
+    """Why each of ``agents`` that the suite version this page reads does not fly is left off it (the agent
+    table's ``not_flown_on``), by agent."""
+    return {
+        agent: why
+        for agent in agents
+        for version, why in AGENTS[agent].not_flown_on
+        if version == READ_SUITE_VERSION
+    }
+
+
 def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dict[str, object]:
     flow, truth = choices().plain
     clean = data.validation["clean"]
@@ -190,6 +207,7 @@ def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dic
         "plain_steps": [data.training[a].config["total_timesteps"] for a in (flow, truth)],
         "plain_validation": [clean[flow], clean[truth]],
         "plain_suite_table": gap_table(flow, truth, _suite_rows(results, flow, truth, policies_dir), "tier"),
+        "plain_not_flown": not_flown_here(flow, truth),
     }
 
 

@@ -190,10 +190,42 @@ REPORTS: tuple[Report, ...] = (
         command="flownav error-analysis --episodes results/sweep_episodes.csv --out results",
         inputs=("sweep_episodes.csv", "leaderboard_episodes.csv"),
         write=lambda report, folder: write_error_analysis_from(
-            RESULTS_DIR / "sweep_episodes.csv",
+            [RESULTS_DIR / "sweep_episodes.csv"],
             folder,
             report.command,
             RESULTS_DIR / "leaderboard_episodes.csv",
+        ),
+        staged=False,
+    ),
+    *(
+        Report(
+            f"sweep_v2/{tier}/sweep.md",
+            name=f"sweep-v2-{tier}",
+            command=f"flownav sweep --config {config} --out results/sweep_v2/{tier} --report-only",
+            inputs=(f"sweep_v2/{tier}/sweep_episodes.csv",),
+            write=partial(_sweep, config=config),
+        )
+        for tier, config in (("clean", "configs/sweep_v2.yaml"), ("hard", "configs/sweep_v2_hard.yaml"))
+    ),
+    Report(
+        "sweep_v2/error_analysis.md",
+        name="error-analysis-v2",
+        command="flownav error-analysis --episodes results/sweep_v2/clean/sweep_episodes.csv "
+        "--episodes results/sweep_v2/hard/sweep_episodes.csv --baseline results/suite_episodes.csv "
+        "--compare-with results/sweep_episodes.csv results/leaderboard_episodes.csv --out results/sweep_v2",
+        inputs=(
+            "sweep_v2/clean/sweep_episodes.csv",
+            "sweep_v2/hard/sweep_episodes.csv",
+            "suite_episodes.csv",
+            "sweep_episodes.csv",
+            "leaderboard_episodes.csv",
+        ),
+        write=lambda report, folder: write_error_analysis_from(
+            [RESULTS_DIR / "sweep_v2" / tier / "sweep_episodes.csv" for tier in ("clean", "hard")],
+            folder,
+            report.command,
+            RESULTS_DIR / "suite_episodes.csv",
+            compare_with=(RESULTS_DIR / "sweep_episodes.csv", RESULTS_DIR / "leaderboard_episodes.csv"),
         ),
         staged=False,
     ),

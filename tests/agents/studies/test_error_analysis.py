@@ -322,7 +322,15 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
     assert best_learned_flow_agent(table) == "ppo_flow@all"
     values = report_values(rows)
     assert values["best"] == "ppo_flow@all"
-    text = render_report("error_analysis.md.j2", {**values, "generated": "today", "command": "test"})
+    text = render_report(
+        "error_analysis.md.j2",
+        {
+            "values": {**values, "figure": "f.png", "clean_text": "c"},
+            "episodes": 0,
+            "generated": "today",
+            "command": "test",
+        },
+    )
     reasons = {(r["factor"], r["side"]) for r in table if r["agent"] == "ppo_flow@all"}
     assert "- `brightness` (above): flown to the end of the setting's range [0.0, 4.0]" in text
     assert "- `obstacle_density` (below): this direction makes the task easier" in text
@@ -361,7 +369,7 @@ def test_the_clean_baseline_holds_only_the_training_runs_the_sweep_flew(tmp_path
         append_record(
             baseline, dataclasses.replace(template, agent="ppo_flow@3", seed=row["seed"], success=False)
         )
-    write_error_analysis_from(episodes, tmp_path, "flownav error-analysis", baseline)
+    write_error_analysis_from([episodes], tmp_path, "flownav error-analysis", baseline)
     rate = sum(not row["success"] for row in clean) / len(clean)
     text = (tmp_path / "error_analysis.md").read_text()
     assert f"| clean failure |  | {rate:.2f} [" in text and f"], {len(clean)} episodes |" in text

@@ -14,12 +14,12 @@ from typing import Any
 import gymnasium as gym
 
 import flownav_env  # noqa: F401  (registers the env ids that LoadedPolicy.make_env makes)
+from agents.common.agent_table import AGENTS
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
 from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import isolated_agent
 from agents.policies.base import (
-    PRIVILEGED_AGENTS,
     Agent,
     is_learned,
     is_per_tier,
@@ -209,13 +209,14 @@ def trained_on(name: str, path: str | Path | None = None) -> str:
 
 def is_privileged(name: str) -> bool:
     """Whether the agent ``name`` is declared privileged (it may read what a tier's sensor does not give, and is
-    a reference, never ranked): a shipped agent of :data:`~agents.policies.base.PRIVILEGED_AGENTS`, or an outside
-    agent with ``privileged = True``. Reactive rules and stable-baselines3 model files never are."""
+    a reference, never ranked): a declared agent that sees more than the tier's sensor (for a shipped one,
+    :data:`~agents.policies.base.PRIVILEGED_AGENTS`), or an outside agent with ``privileged = True``. Reactive
+    rules and stable-baselines3 model files never are."""
     if is_sb3_model_name(name):
         return False
     if is_external_name(name):
         return external_privileged(name)
-    return split_agent_name(name)[0] in PRIVILEGED_AGENTS
+    return AGENTS[split_agent_name(name)[0]].privileged
 
 
 def load_agent(

@@ -15,6 +15,8 @@ from agents.common.agent_entry import AgentEntry, EnvValue, SearchRange
 from agents.common.agent_table import AGENTS, agents_where, split_agent_name
 from agents.policies.base import Agent
 from agents.policies.planner import PlannerAgent
+from flownav_env.settings import SETTING_NAMES
+from flownav_env.settings_check import unknown_setting_message
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
@@ -116,9 +118,13 @@ def requested_env_kwargs(name: str) -> dict[str, EnvValue]:
     """The env settings the rule or planner ``name`` asks for beyond the env's defaults (its entry's ``env``).
 
     Raises:
-        ValueError: ``name`` is not built from a class.
+        ValueError: ``name`` is not built from a class, or asks for a setting the env does not have.
     """
-    return dict(_built_entry(name).env)
+    settings = dict(_built_entry(name).env)
+    for setting in settings:
+        if setting not in SETTING_NAMES:
+            raise ValueError(f"agent {name!r} env: {unknown_setting_message(setting)}")
+    return settings
 
 
 def search_space(name: str) -> dict[str, SearchRange]:

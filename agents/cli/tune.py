@@ -12,14 +12,15 @@ import argparse
 from pathlib import Path
 
 from agents.cli.arguments import add_old_spellings, add_tier_argument, env_id_of
+from agents.common.agent_table import agents_where
 from agents.common.locations import SCRATCH_DIR
 from flownav_env.tiers import TIER_NAMES
 
 HELP = "tune a reactive agent on training seeds (TPE search, then finalists on fresh layouts; resumable)"
 
-# Kept in step with agents.studies.tuning_study.TUNABLE_AGENTS (a test checks), without importing optuna
-# and the agents for `flownav --help`.
-TUNABLE_AGENTS = ("bee", "bee_robust", "vfh")
+# The agents with a search_space in configs/agents.yaml, read from the table alone (no optuna, no agent class)
+# so that `flownav --help` stays quick.
+TUNABLE_AGENTS = agents_where(tunable=True)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

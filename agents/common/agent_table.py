@@ -8,91 +8,104 @@ from __future__ import annotations
 
 import difflib
 import unicodedata
-from dataclasses import dataclass
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Literal, get_args
 
 import yaml
 
+from agents.common.agent_entry import PRIVILEGED_SIGHTS, AgentEntry, Kind, Sight, agent_entry
 from agents.common.locations import CONFIGS_DIR
 
+__all__ = [
+    "AGENTS",
+    "AGENTS_FILE",
+    "AGENT_TABLE",
+    "PRIVILEGED_SIGHTS",
+    "TRAIN_SEED_MARK",
+    "AgentEntry",
+    "Kind",
+    "Sight",
+    "agents_where",
+    "base_agent_name",
+    "is_learned",
+    "is_per_tier",
+    "kind_of",
+    "name_key",
+    "published_name_like",
+    "read_agent_table",
+    "register_agent",
+    "seeded_agent_name",
+    "split_agent_name",
+    "unregister_agent",
+]
+
 AGENTS_FILE = CONFIGS_DIR / "agents.yaml"
-Kind = Literal["rule", "learned", "planner"]
-Sight = Literal["flow", "nothing", "true_depth", "layout", "camera_view"]
-# What a privileged agent sees beyond what a tier's sensor gives.
-PRIVILEGED_SIGHTS: tuple[Sight, ...] = ("true_depth", "layout", "camera_view")
 # A learned agent's training seed k is named "<agent>@<k>" (ppo_flow@3): its policy is
 # results/policies/<agent>/seed_<k>.zip, and episode records keep the seeds apart by name.
 TRAIN_SEED_MARK = "@"
-
-
-@dataclass(frozen=True)
-class AgentEntry:
-    """One agent of ``configs/agents.yaml``: its name, kind, what it sees, and its place in the suite."""
-
-    name: str
-    kind: Kind
-    sees: Sight
-    suite_only: bool = False
-    per_tier: bool = False
-    retired: str = ""
-    # (suite version, why) for each suite version the suite does not fly this agent on.
-    not_flown_on: tuple[tuple[str, str], ...] = ()
-
-    @property
-    def privileged(self) -> bool:
-        """Whether it reads what a tier's sensor does not give (a reference, never ranked)."""
-        return self.sees in PRIVILEGED_SIGHTS
 
 
 def read_agent_table(path: Path = AGENTS_FILE) -> tuple[AgentEntry, ...]:
     """The agents of ``path``, in its order.
 
     Raises:
-        ValueError: an entry with an unknown key, kind or sight (the message names the agent, the value and the
-            allowed ones).
+        ValueError: an entry with an unknown key, kind or sight, or bad code keys (the message names the agent,
+            the value and the allowed ones; :func:`~agents.common.agent_entry.agent_entry`).
     """
     entries = yaml.safe_load(path.read_text(encoding="utf-8"))["agents"]
-    table = []
-    for name, values in entries.items():
-        unknown = set(values) - {"kind", "sees", "suite_only", "per_tier", "retired", "not_flown_on"}
-        if unknown:
-            raise ValueError(f"{path}: agent {name!r} has unknown keys {sorted(unknown)}")
-        values = {**values, "not_flown_on": _not_flown_on(path, str(name), values.get("not_flown_on", {}))}
-        for key, allowed in (("kind", get_args(Kind)), ("sees", get_args(Sight))):
-            if values.get(key) not in allowed:
-                raise ValueError(
-                    f"{path}: agent {name!r} {key} must be one of {', '.join(allowed)}, got {values.get(key)!r}"
-                )
-        if values.get("per_tier") and values["kind"] != "learned":
-            raise ValueError(f"{path}: agent {name!r} is per_tier, which only a learned agent can be")
-        table.append(AgentEntry(name=str(name), **values))
-    return tuple(table)
+    return tuple(agent_entry(str(path), str(name), values) for name, values in entries.items())
 
 
-def _not_flown_on(path: Path, name: str, versions: object) -> tuple[tuple[str, str], ...]:
-    """An entry's ``not_flown_on``: suite version (as written in quotes, ``"2"``) → why, each why a sentence."""
-    if not isinstance(versions, dict) or not all(
-        isinstance(version, str) and version.isdigit() and isinstance(why, str) and why.strip()
-        for version, why in versions.items()
-    ):
-        raise ValueError(
-            f'{path}: agent {name!r} not_flown_on must map suite versions (quoted, such as "2") to why, got '
-            f"{versions!r}"
-        )
-    return tuple(sorted(versions.items()))
-
-
+# The shipped agents, in configs/agents.yaml's order.
 AGENT_TABLE = read_agent_table()
+# Every declared agent by name: the shipped ones, then any registered since (register_agent).
 AGENTS = {entry.name: entry for entry in AGENT_TABLE}
 
 
-def agents_where(*, kind: Kind | None = None, privileged: bool | None = None) -> tuple[str, ...]:
-    """The names of the agents of ``kind`` (any when None), privileged or not (either when None), in order."""
+def register_agent(name: str, values: Mapping[str, object]) -> AgentEntry:
+    """Declare the agent ``name`` in this process as ``configs/agents.yaml`` would (``values`` are an entry's
+    keys: ``{"kind": "rule", "sees": "flow", "class": "my_module:MyRule", ...}``): every name-to-class map, the
+    env settings it asks for and the tunable agents are read from :data:`AGENTS`, so it can be flown, tuned and
+    ranked at once. The module-level name tuples of :mod:`agents.policies.base` (the suite's agents, the
+    history's) are the shipped table's and leave it out; so do worker processes, which re-import the table: fly
+    it in this process (``workers=1``).
+
+    Raises:
+        ValueError: a name already declared, or a bad entry (as :func:`read_agent_table`).
+    """
+    if name in AGENTS:
+        raise ValueError(f"agent {name!r} is already declared; declared agents: {', '.join(AGENTS)}")
+    entry = agent_entry("register_agent", name, values)
+    AGENTS[name] = entry
+    return entry
+
+
+def unregister_agent(name: str) -> None:
+    """Take back an agent :func:`register_agent` declared.
+
+    Raises:
+        ValueError: ``name`` is a shipped agent of ``configs/agents.yaml``, or was never registered.
+    """
+    registered = [agent for agent in AGENTS if agent not in {entry.name for entry in AGENT_TABLE}]
+    if name not in registered:
+        raise ValueError(
+            f"only an agent declared with register_agent can be unregistered ({', '.join(registered) or 'none'}), "
+            f"got {name!r}"
+        )
+    del AGENTS[name]
+
+
+def agents_where(
+    *, kind: Kind | None = None, privileged: bool | None = None, tunable: bool | None = None
+) -> tuple[str, ...]:
+    """The names of the declared agents of ``kind`` (any when None), privileged or not, tunable or not (either
+    when None), in order."""
     return tuple(
         entry.name
-        for entry in AGENT_TABLE
-        if (kind is None or entry.kind == kind) and (privileged is None or entry.privileged == privileged)
+        for entry in AGENTS.values()
+        if (kind is None or entry.kind == kind)
+        and (privileged is None or entry.privileged == privileged)
+        and (tunable is None or entry.tunable == tunable)
     )
 
 
@@ -174,4 +187,4 @@ def published_name_like(name: str) -> str | None:
     where it reads as none."""
     key = name_key(name)
     base = key.partition(TRAIN_SEED_MARK)[0]
-    return next((entry.name for entry in AGENT_TABLE if name_key(entry.name) in (key, base)), None)
+    return next((agent for agent in AGENTS if name_key(agent) in (key, base)), None)

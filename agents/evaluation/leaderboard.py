@@ -41,6 +41,7 @@ from agents.analysis.paired import (
 )
 from agents.analysis.records import read_records
 from agents.analysis.statistics import wilson_interval
+from agents.common.agent_table import AGENTS, Kind, agents_where
 from agents.common.folders import check_writable_folder
 from agents.common.locations import POLICIES_DIR
 from agents.common.machine import code_version
@@ -49,16 +50,17 @@ from agents.common.tables import markdown_table, today, write_csv
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.provenance import machine_summary
 from agents.evaluation.runner import execute
-from agents.policies import (
-    LEARNED_AGENTS,
-    PRIVILEGED_AGENTS,
-    REACTIVE_AGENTS,
-    is_learned,
-    policy_file,
-    shipped_seed_runs,
-)
+from agents.policies import is_learned, policy_file, shipped_seed_runs
 
 MIN_EPISODES = 300
+
+
+def _is(agent: str, kind: Kind, *, privileged: bool | None = None) -> bool:
+    """Whether ``agent`` is exactly the name of a declared agent of ``kind`` (a training seed's run name is
+    none), privileged or not (either when None): read from the table when asked, so that an agent declared with
+    :func:`~agents.common.agent_table.register_agent` is ranked as the shipped ones are."""
+    entry = AGENTS.get(agent)
+    return entry is not None and entry.kind == kind and privileged in (None, entry.privileged)
 
 
 def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -> dict[str, list[str]]:
@@ -70,9 +72,9 @@ def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -
     """
     runs: dict[str, list[str]] = {}
     for agent in agents:
-        if agent in REACTIVE_AGENTS:
+        if _is(agent, "rule"):
             runs[agent] = [agent]
-        elif agent in LEARNED_AGENTS:
+        elif _is(agent, "learned"):
             names = shipped_seed_runs(agent, policies_dir)
             if not names:
                 print(
@@ -82,7 +84,8 @@ def leaderboard_runs(agents: Sequence[str], policies_dir: Path = POLICIES_DIR) -
             runs[agent] = names
         else:
             raise ValueError(
-                f"agent must be one of {', '.join(REACTIVE_AGENTS + LEARNED_AGENTS)}, got {agent!r}"
+                f"agent must be one of {', '.join(agents_where(kind='rule') + agents_where(kind='learned'))}, "
+                f"got {agent!r}"
             )
     return runs
 
@@ -152,8 +155,8 @@ def improvements(
 ) -> list[dict[str, Any]]:
     """P(learned run beats reactive agent) for every learned × reactive pair (straight left out), with its
     stratified-bootstrap interval."""
-    learned = [agent for agent in runs if agent in LEARNED_AGENTS]
-    reactive = [agent for agent in runs if agent in REACTIVE_AGENTS and agent != "straight"]
+    learned = [agent for agent in runs if _is(agent, "learned")]
+    reactive = [agent for agent in runs if _is(agent, "rule") and agent != "straight"]
     scores = {
         agent: block_scores(success_outcomes(rows, runs[agent], layouts), block)
         for agent in learned + reactive
@@ -178,7 +181,7 @@ def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> No
     label_inches = 0.075 * max((len(label) for label in labels), default=0)
     figure, axis = plt.subplots(figsize=(max(7.5, 5.5 + label_inches), 0.55 * len(table) + 1.4))
     for y, row in enumerate(table):
-        colour = "tab:blue" if row["agent"] in LEARNED_AGENTS else "tab:gray"
+        colour = "tab:blue" if _is(row["agent"], "learned") else "tab:gray"
         axis.errorbar(
             row["failure_rate"],
             y,
@@ -304,10 +307,8 @@ def against_best_reactive(
 ) -> list[Comparison]:
     """Each learned agent but the privileged ones against the reactive agent (``straight`` aside) with the
     lowest failure rate, paired by layout (:func:`agents.analysis.paired.compare`)."""
-    reactive = [r for r in table if r["agent"] in REACTIVE_AGENTS and r["agent"] != "straight"]
-    learned = [
-        r["agent"] for r in table if r["agent"] in LEARNED_AGENTS and r["agent"] not in PRIVILEGED_AGENTS
-    ]
+    reactive = [r for r in table if _is(r["agent"], "rule") and r["agent"] != "straight"]
+    learned = [r["agent"] for r in table if _is(r["agent"], "learned", privileged=False)]
     if not reactive or not learned:
         return []
     best = min(reactive, key=lambda r: r["failure_rate"])["agent"]

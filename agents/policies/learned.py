@@ -7,20 +7,19 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any
 
 import gymnasium as gym
 
 import flownav_env  # noqa: F401  (registers the env ids that LoadedPolicy.make_env makes)
+from agents.common.agent_table import AGENTS
 from agents.common.locations import POLICIES_DIR
 from agents.common.yaml_config import load_config
 from agents.policies.agent_limits import AgentLimits
 from agents.policies.agent_process import isolated_agent
 from agents.policies.base import (
-    PRIVILEGED_AGENTS,
     Agent,
     is_learned,
     is_per_tier,
@@ -34,14 +33,7 @@ from agents.policies.external import (
     is_external_name,
 )
 from agents.policies.loading import load_policy_file, training_config_beside
-from agents.policies.planner import PLANNER_ENV_KWARGS, PlannerAgent
-from agents.policies.planner_camera import (
-    CAMERA_PLANNER_ENV_KWARGS,
-    CameraPlannerAgent,
-    ObservedCameraPlannerAgent,
-)
-from agents.policies.reactive import BeeAgent, StraightAgent
-from agents.policies.robust import REACTIVE_ENV_KWARGS, BeeRobustAgent, BeeTTCAgent, VFHAgent
+from agents.policies.registry import is_built, requested_env_kwargs, rule_agent
 from agents.policies.sb3_models import (
     is_sb3_model_name,
     sb3_model_env_settings,
@@ -51,29 +43,7 @@ from agents.policies.training_seeds import TrainingSeedsAgent
 from agents.training.train_config import TrainConfig, tier_run_name
 from flownav_env.tiers import TIER_NAMES
 
-if TYPE_CHECKING:
-    from _typeshed import DataclassInstance
-
-    class RuleAgent(Agent, DataclassInstance, Protocol):
-        """An agent that is a dataclass of its gains (a reactive rule, the planner)."""
-
-
 _SEED_FILE = re.compile(r"^seed_(\d+)\.zip$")
-# The planners (agents.policies.base.PLANNERS) by name: each a dataclass of its parameters.
-PLANNER_CLASSES: dict[str, type[PlannerAgent]] = {
-    "planner": PlannerAgent,
-    "planner_camera": CameraPlannerAgent,
-    "planner_camera_observed": ObservedCameraPlannerAgent,
-}
-# The agents that are a dataclass of their gains, built with a caller's gains over the defaults (the straight
-# flight, whose gains hold its height, takes none).
-_GAIN_AGENTS: dict[str, Callable[..., RuleAgent]] = {
-    "bee": BeeAgent,
-    "bee_robust": BeeRobustAgent,
-    "bee_ttc": BeeTTCAgent,
-    "vfh": VFHAgent,
-    **PLANNER_CLASSES,
-}
 
 POLICY_OPTION_HELP = (
     "PPO policy .zip (default: the agent's shipped training seeds, results/policies/<agent>/seed_<k>.zip in "
@@ -202,17 +172,17 @@ def runs_to_fly(name: str, policy: str | Path | None = None) -> tuple[list[str],
 def agent_env_kwargs(name: str, path: str | Path | None = None) -> dict[str, Any]:
     """The env kwargs an agent must be evaluated with, whatever the sensor cell: for a learned agent, the
     ``env`` section of the training config saved beside its ``.zip`` (an oracle policy flies on oracle
-    observations, a policy trained at another resolution keeps it); for a reactive agent, what it reads beyond
-    the defaults (:data:`~agents.policies.robust.REACTIVE_ENV_KWARGS`; the planner's privileged keys,
-    :data:`~agents.policies.planner.PLANNER_ENV_KWARGS`); empty when no config copy exists. A sweep cell's own kwargs go on top of these.
+    observations, a policy trained at another resolution keeps it); for a rule or a planner, what it reads
+    beyond the defaults (its entry's ``env`` in ``configs/agents.yaml``:
+    :func:`~agents.policies.registry.requested_env_kwargs`; the planners' privileged keys); empty when no config
+    copy exists. A sweep cell's own kwargs go on top of these.
     """
     if is_sb3_model_name(name):
         return sb3_model_env_settings(name)
     if is_external_name(name):
         return dict(external_env_settings(name))
     if not is_learned(name):
-        base = split_agent_name(name)[0]
-        return dict({**REACTIVE_ENV_KWARGS, **PLANNER_ENV_KWARGS, **CAMERA_PLANNER_ENV_KWARGS}.get(base, {}))
+        return dict(requested_env_kwargs(split_agent_name(name)[0]))
     config_path = policy_file(name, path).with_suffix(".yaml")
     if not config_path.is_file():
         return {}
@@ -239,13 +209,14 @@ def trained_on(name: str, path: str | Path | None = None) -> str:
 
 def is_privileged(name: str) -> bool:
     """Whether the agent ``name`` is declared privileged (it may read what a tier's sensor does not give, and is
-    a reference, never ranked): a shipped agent of :data:`~agents.policies.base.PRIVILEGED_AGENTS`, or an outside
-    agent with ``privileged = True``. Reactive rules and stable-baselines3 model files never are."""
+    a reference, never ranked): a declared agent that sees more than the tier's sensor (for a shipped one,
+    :data:`~agents.policies.base.PRIVILEGED_AGENTS`), or an outside agent with ``privileged = True``. Reactive
+    rules and stable-baselines3 model files never are."""
     if is_sb3_model_name(name):
         return False
     if is_external_name(name):
         return external_privileged(name)
-    return split_agent_name(name)[0] in PRIVILEGED_AGENTS
+    return AGENTS[split_agent_name(name)[0]].privileged
 
 
 def load_agent(
@@ -290,8 +261,8 @@ def load_agent(
         agent = isolated_agent(name, trust_pickle=trust_pickle, limits=limits)
         agent.declarations()  # started now: one that does not load fails here
         return agent
-    if name == "straight" or name in _GAIN_AGENTS:
-        return _rule_agent(name, bee_params)
+    if is_built(name):
+        return rule_agent(name, bee_params)
     if is_learned(name):
         if policy_path is None and train_seed is None:
             return _shipped_agent(base, trust_pickle)
@@ -300,13 +271,6 @@ def load_agent(
             raise FileNotFoundError(f"policy file for agent {name!r} not found: {path} (train it first)")
         return load_policy_file(path, trust_pickle=trust_pickle)
     raise AssertionError(f"agent {base!r} is in AGENT_NAMES but has no constructor here")
-
-
-def _rule_agent(name: str, gains: Mapping[str, float]) -> RuleAgent:
-    """The reactive agent or the planner ``name``, with ``gains`` over its defaults."""
-    if name == "straight":
-        return StraightAgent()
-    return _GAIN_AGENTS[name](**gains)
 
 
 def _shipped_agent(agent: str, trust_pickle: bool) -> Agent:
@@ -349,7 +313,7 @@ def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
     if is_external_name(name):
         return {**external_parameters(name), **overrides}
     try:
-        agent = _rule_agent(name, overrides)
+        agent = rule_agent(name, overrides)
     except TypeError as error:  # an unknown field: the dataclass names it
         raise ValueError(f"agent {name!r} has no such parameter: {error}") from None
     return dataclasses.asdict(agent)

@@ -22,8 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 
-# What the planner needs the env to observe (the runner adds it to every cell).
-PLANNER_ENV_KWARGS: dict[str, dict[str, bool]] = {"planner": {"observe_layout": True}}
+# What the planner needs the env to observe is its entry's ``env`` in configs/agents.yaml (observe_layout).
 # The privileged keys it reads (flownav_env.privileged), the layout first.
 PLANNER_KEYS = ("layout", "layout_mask", "true_state", "course")
 

@@ -29,10 +29,6 @@ import numpy as np
 from agents.policies.camera_view import column_rays, resolved_capsules, seen_capsules
 from agents.policies.planner import NEAR_X_M, PLANNER_KEYS, PlannerAgent, unbatched_keys
 
-CAMERA_PLANNER_ENV_KWARGS: dict[str, dict[str, bool]] = {
-    "planner_camera": {"observe_layout": True},
-    "planner_camera_observed": {"observe_layout": True},
-}
 # The privileged keys they read, the layout first (flownav_env.privileged).
 CAMERA_PLANNER_KEYS = (*PLANNER_KEYS, "camera", "depth_bin_edges")
 # Indices into the env's ``camera`` key (flownav_env.privileged.CAMERA_FIELDS).

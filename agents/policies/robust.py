@@ -11,7 +11,8 @@
   density per image column, smoothed across columns, thresholded into free and blocked columns, steering to
   the free column nearest the goal.
 
-Both read ``unresolved`` when the observation has it: :data:`REACTIVE_ENV_KWARGS` asks the env for it.
+All read ``unresolved`` when the observation has it: their entries in ``configs/agents.yaml`` ask the env for it
+(``env: {observe_unresolved: true}``).
 """
 
 from __future__ import annotations
@@ -26,13 +27,6 @@ from agents.policies.reactive import BeeAgent, bin_nearness, check_bins, heights
 from agents.policies.view_bands import smooth_across_columns, triangle_kernel
 from estimator import DEFAULT_BIN_EDGES
 from flownav_env.observation import exponential_average
-
-# What these agents need the env to observe, beyond its defaults (the runner adds it to every cell).
-REACTIVE_ENV_KWARGS: dict[str, dict[str, bool]] = {
-    "bee_robust": {"observe_unresolved": True},
-    "bee_ttc": {"observe_unresolved": True},
-    "vfh": {"observe_unresolved": True},
-}
 
 
 def _histograms(observation: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, bool]:

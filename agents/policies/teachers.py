@@ -18,8 +18,9 @@ from typing import Any, cast
 import numpy as np
 
 from agents.policies.base import PLANNERS, REACTIVE_AGENTS, Agent
-from agents.policies.learned import PLANNER_CLASSES, agent_env_kwargs, load_agent
+from agents.policies.learned import agent_env_kwargs, load_agent
 from agents.policies.planner import PlannerAgent
+from agents.policies.registry import planner_class
 from flownav_env.tiers import privileged_requests
 
 TEACHERS = REACTIVE_AGENTS + PLANNERS
@@ -39,7 +40,7 @@ class PlannerTeacher:
             raise ValueError(f"a planner teacher must be one of {', '.join(PLANNERS)}, got {name!r}")
         self.name = name
         self.params = dict(params or {})
-        self.planner_class = PLANNER_CLASSES[name]
+        self.planner_class = planner_class(name)
         # Its own opt-in, so that a planner reading more keys than the map's brings them to the training envs.
         self.privileged_settings: Mapping[str, object] = privileged_requests(agent_env_kwargs(name))
         self.planners: list[PlannerAgent] = []
@@ -113,8 +114,8 @@ def check_teacher_params(name: str, params: Mapping[str, float], source: str) ->
         )
     if name not in PLANNERS:
         return
-    planner_class = PLANNER_CLASSES[name]
-    defaults = {item.name: item.default for item in fields(planner_class)}
+    planner = planner_class(name)
+    defaults = {item.name: item.default for item in fields(planner)}
     for key, value in params.items():
         if key not in defaults:
             raise ValueError(
@@ -131,7 +132,7 @@ def check_teacher_params(name: str, params: Mapping[str, float], source: str) ->
         if not fits:
             raise ValueError(f"{source}: key 'imitation.teacher_params.{key}' must be {what}, got {value!r}")
     try:
-        planner_class(**_planner_arguments(params))
+        planner(**_planner_arguments(params))
     except ValueError as error:
         raise ValueError(f"{source}: key 'imitation.teacher_params': {error}") from error
 

@@ -23,11 +23,11 @@ import numpy as np
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import start_new_file
 from agents.common.folders import check_writable_folder
+from agents.policies.registry import search_space
 from agents.studies.perf.report_kit import saved_figure
 from agents.studies.tuning_study import (
     MIN_FINAL_EPISODES,
     SAMPLER_SEED,
-    SEARCH_SPACES,
     Budget,
     TrialResult,
     check_agent,
@@ -82,7 +82,7 @@ def tune(
     """Run (or resume) the study for ``agent`` and write its outputs to ``out``.
 
     Args:
-        agent: one of :data:`~agents.studies.tuning_study.TUNABLE_AGENTS`.
+        agent: a tunable agent (:func:`~agents.policies.registry.tunable_agents`: one with a ``search_space``).
         out: output folder; its ``episodes.csv`` is resumed when it holds episodes of the same settings.
         budget: trials, episodes per trial, finalists, final episodes (default: :class:`Budget`'s).
         env_id: env to tune on.
@@ -147,7 +147,7 @@ def report_text(
         "command": command,
         "env_kwargs": dict(env_kwargs),
         "sampler_seed": sampler_seed,
-        "space": SEARCH_SPACES[result.agent],
+        "space": search_space(result.agent),
         "defaults": default_params(result.agent),
         "search_seeds": search_seeds,
         "final_seeds": final_seeds,

@@ -3,7 +3,8 @@
 Two stages, both on training seeds only (:mod:`agents.common.seeds`), so that no layout a report is scored on
 ever helped pick a gain:
 
-* **search**: an optuna TPE study over the agent's :data:`SEARCH_SPACES`, seeded so it is reproducible. Every
+* **search**: an optuna TPE study over the agent's search space (its ``search_space`` in ``configs/agents.yaml``,
+  :func:`~agents.policies.registry.search_space`), seeded so it is reproducible. Every
   trial flies the same layouts (common random numbers: trials differ by their gains, not by their luck with
   layouts), scored by failure rate, ties broken by fewer collisions. Trial 0 is the agent's current defaults,
   so the search starts from what is shipped and the report can compare against it.
@@ -29,29 +30,7 @@ from agents.analysis.statistics import CellSummary, summarise
 from agents.common.seeds import VALIDATION_SEED_START
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.runner import execute
-from agents.policies import BeeAgent, BeeRobustAgent, VFHAgent
-
-# name -> (low, high, log scale). Written once: the study, the report and the tests read it from here. A
-# parameter whose dataclass default is an int is searched over the integers.
-_BEE_SPACE = {
-    "centring_gain": (0.1, 4.0, True),
-    "frontal_gain": (0.5, 10.0, True),
-    "frontal_threshold": (0.03, 1.0, True),  # nearness (1/m): looming starts between 33 m and 1 m
-    "yaw_gain": (0.01, 2.0, True),
-}
-SEARCH_SPACES: dict[str, dict[str, tuple[float, float, bool]]] = {
-    "bee": _BEE_SPACE,
-    "bee_robust": {**_BEE_SPACE, "quantile": (0.05, 1.0, False), "smoothing": (0.1, 1.0, False)},
-    "vfh": {
-        "safe_distance_m": (1.0, 13.0, True),
-        "threshold": (0.01, 0.5, True),
-        "lateral_gain": (0.2, 4.0, True),
-        "yaw_gain": (0.1, 4.0, True),
-        "obstacle_rows": (1, 3, False),
-    },
-}
-AGENT_CLASSES: dict[str, type] = {"bee": BeeAgent, "bee_robust": BeeRobustAgent, "vfh": VFHAgent}
-TUNABLE_AGENTS = tuple(SEARCH_SPACES)
+from agents.policies.registry import agent_class, search_space, tunable_agents
 
 MIN_FINAL_EPISODES = 100  # fewer leaves the finalists' intervals too wide to tell them apart
 SEARCH_SEED_START = 0  # search layouts first, final layouts right after: both far below the validation seeds
@@ -118,17 +97,28 @@ class TrialResult:
 
 
 def check_agent(agent: str) -> None:
-    """Raises: ValueError: ``agent`` has no search space."""
-    if agent not in SEARCH_SPACES:
-        raise ValueError(f"--agent must be one of {', '.join(TUNABLE_AGENTS)}, got {agent!r}")
+    """Raises: ValueError: ``agent`` has no search space (the message lists the tunable agents)."""
+    if agent not in tunable_agents():
+        raise ValueError(f"--agent must be one of {', '.join(tunable_agents())}, got {agent!r}")
 
 
 def default_params(agent: str) -> dict[str, float]:
-    """The agent's current dataclass defaults for the searched parameters: trial 0, the baseline to beat."""
+    """The agent's current dataclass defaults for the searched parameters: trial 0, the baseline to beat.
+
+    Raises:
+        ValueError: ``agent`` is not tunable, or a searched gain's default is not a number.
+    """
     check_agent(agent)
-    fields = dataclasses.fields(AGENT_CLASSES[agent])
+    fields = dataclasses.fields(agent_class(agent))
     defaults = {item.name: item.default for item in fields if isinstance(item.default, int | float)}
-    return {name: defaults[name] for name in SEARCH_SPACES[agent]}
+    space = search_space(agent)
+    not_numbers = [name for name in space if name not in defaults]
+    if not_numbers:
+        raise ValueError(
+            f"agent {agent!r} search_space names {', '.join(not_numbers)}, whose defaults are not numbers; "
+            f"numeric gains: {', '.join(defaults)}"
+        )
+    return {name: defaults[name] for name in space}
 
 
 def distributions(agent: str) -> dict[str, Any]:
@@ -143,7 +133,7 @@ def distributions(agent: str) -> dict[str, Any]:
             if isinstance(defaults[name], int)
             else FloatDistribution(low, high, log=log)
         )
-        for name, (low, high, log) in SEARCH_SPACES[agent].items()
+        for name, (low, high, log) in search_space(agent).items()
     }
 
 

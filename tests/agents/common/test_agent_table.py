@@ -11,6 +11,7 @@ from agents.common.agent_table import (
     agents_where,
     is_learned,
     read_agent_table,
+    register_agent,
     seeded_agent_name,
     split_agent_name,
 )
@@ -56,6 +57,41 @@ def test_a_training_seed_on_a_rule_is_refused() -> None:
             r"agent 'x' not_flown_on must map suite versions \(quoted, such as \"2\"\) to why, got \{2: 'not needed'\}",
         ),
         ('{kind: rule, sees: flow, not_flown_on: ["2"]}', r"agent 'x' not_flown_on must map suite versions"),
+        (
+            "{kind: rule, sees: flow}",
+            r"agent 'x' is a rule, so its class must be written package.module:ClassName, got None$",
+        ),
+        (
+            "{kind: planner, sees: layout, class: planner.py}",
+            r"agent 'x' is a planner, so its class must be written package.module:ClassName, got 'planner.py'$",
+        ),
+        (
+            "{kind: learned, sees: flow, class: 'a.b:C', env: {observe_unresolved: true}}",
+            r"agent 'x' is learned \(its policy is a file\), so it takes none of class, env, search_space, "
+            r"fixed_gains, got class, env$",
+        ),
+        (
+            "{kind: rule, sees: flow, class: 'a.b:C', env: [observe_unresolved]}",
+            r"agent 'x' env must map env settings to values \(such as observe_unresolved: true\), got "
+            r"\['observe_unresolved'\]$",
+        ),
+        (
+            "{kind: rule, sees: flow, class: 'a.b:C', search_space: {gain: [2.0, 1.0, log]}}",
+            r"agent 'x' search_space gain must be \[low, high, log or linear\] with low < high, got "
+            r"\[2.0, 1.0, 'log'\]$",
+        ),
+        (
+            "{kind: rule, sees: flow, class: 'a.b:C', search_space: {gain: [0.1, 1.0, logarithmic]}}",
+            r"agent 'x' search_space gain must be \[low, high, log or linear\] with low < high, got",
+        ),
+        (
+            "{kind: rule, sees: flow, class: 'a.b:C', search_space: {}}",
+            r"agent 'x' search_space must map gains to \[low, high, log or linear\], got \{\}$",
+        ),
+        (
+            "{kind: rule, sees: flow, class: 'a.b:C', fixed_gains: 'yes'}",
+            r"agent 'x' fixed_gains must be true or false, got 'yes'$",
+        ),
     ],
 )
 def test_a_bad_entry_is_refused(tmp_path: Path, entry: str, message: str) -> None:
@@ -70,3 +106,22 @@ def test_the_suite_versions_an_agent_is_not_flown_on_are_read_with_why(tmp_path:
     path.write_text('agents:\n  x: {kind: learned, sees: true_depth, not_flown_on: {"2": not needed}}\n')
     (entry,) = read_agent_table(path)
     assert entry.not_flown_on == (("2", "not needed"),)
+
+
+def test_a_registered_entry_is_checked_as_the_table_checks_one() -> None:
+    with pytest.raises(
+        ValueError, match=r"^register_agent: agent 'x' kind must be one of rule, learned, planner"
+    ):
+        register_agent("x", {"kind": "genius", "sees": "flow"})
+    assert "x" not in AGENTS
+
+
+def test_the_table_reads_each_rules_class_env_and_search_space(tmp_path: Path) -> None:
+    path = tmp_path / "agents.yaml"
+    path.write_text(
+        "agents:\n  x:\n    kind: rule\n    sees: flow\n    class: a.b:C\n    env: {observe_unresolved: true}\n"
+        "    search_space: {gain: [0.1, 2.0, log], rows: [1, 3, linear]}\n"
+    )
+    (entry,) = read_agent_table(path)
+    assert entry.class_path == "a.b:C" and entry.env == (("observe_unresolved", True),) and entry.tunable
+    assert entry.search_space == (("gain", (0.1, 2.0, True)), ("rows", (1, 3, False)))

@@ -17,10 +17,9 @@ from agents.evaluation import runner
 from agents.evaluation.episode import EpisodeRecord
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json
 from agents.evaluation.runner import EpisodesInterrupted
+from agents.policies.registry import search_space, tunable_agents
 from agents.studies.tuning import TuningResult, comparison, report_text, tune
 from agents.studies.tuning_study import (
-    SEARCH_SPACES,
-    TUNABLE_AGENTS,
     Budget,
     TrialResult,
     default_params,
@@ -62,14 +61,14 @@ def study_of(result: TuningResult) -> list:
 def test_search_spaces_hold_the_defaults_and_match_the_command_line() -> None:
     from agents.cli.tune import TUNABLE_AGENTS as CLI_AGENTS
 
-    assert CLI_AGENTS == TUNABLE_AGENTS == ("bee", "bee_robust", "vfh")
-    for agent in TUNABLE_AGENTS:
+    assert CLI_AGENTS == tunable_agents() == ("bee", "bee_robust", "vfh")
+    for agent in tunable_agents():
         defaults = default_params(agent)
-        for name, (low, high, _) in SEARCH_SPACES[agent].items():
+        for name, (low, high, _) in search_space(agent).items():
             assert low <= defaults[name] <= high, (agent, name)
     assert type(distributions("vfh")["obstacle_rows"]).__name__ == "IntDistribution"
-    assert {"quantile", "smoothing"} <= set(SEARCH_SPACES["bee_robust"]) and set(SEARCH_SPACES["bee"]) < set(
-        SEARCH_SPACES["bee_robust"]
+    assert {"quantile", "smoothing"} <= set(search_space("bee_robust")) and set(search_space("bee")) < set(
+        search_space("bee_robust")
     )
 
 
@@ -185,9 +184,7 @@ def _trial(number: int, failures: int, episodes: int = 150) -> TrialResult:
         for i in range(episodes)
     ]
     failures = tuple(float(i < failures) for i in range(episodes))
-    return TrialResult(
-        number, dict.fromkeys(SEARCH_SPACES["bee"], 0.1 * number), summarise(rows)[0], failures
-    )
+    return TrialResult(number, dict.fromkeys(search_space("bee"), 0.1 * number), summarise(rows)[0], failures)
 
 
 def test_the_verdict_is_the_paired_test_on_the_final_layouts() -> None:
@@ -220,7 +217,7 @@ def test_a_real_study_writes_every_output(tmp_path: Path) -> None:
     rows = read_records(tmp_path / "episodes.csv")
     assert len(rows) == 2 * 2 + 2 * len(result.finals) and {row["agent"] for row in rows} == {"vfh"}
     best = json.loads((tmp_path / "best.json").read_text())
-    assert best == result.winner.params and set(best) == set(SEARCH_SPACES["vfh"])
+    assert best == result.winner.params and set(best) == set(search_space("vfh"))
     assert isinstance(best["obstacle_rows"], int)
     from agents.policies import VFHAgent
 

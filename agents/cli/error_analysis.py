@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from agents.studies.error_analysis_report import default_baseline, write_error_analysis_from
 
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    episodes = [Path(path) for path in args.episodes or [RESULTS_DIR / "sweep_episodes.csv"]]
+    episodes = episode_files(args)
     baseline = default_baseline(episodes) if args.baseline is None else args.baseline
     compare = None if args.compare_with is None else (Path(args.compare_with[0]), Path(args.compare_with[1]))
     lines = write_error_analysis_from(
@@ -54,3 +54,9 @@ def run(args: argparse.Namespace) -> int:
     )
     print("\n".join(lines))
     return 0
+
+
+def episode_files(args: argparse.Namespace) -> list[Path]:
+    """The sweep episodes CSVs the command reads: each ``--episodes`` given, else the repository's
+    ``results/sweep_episodes.csv`` (a default outside argparse, since an appending option adds to its default)."""
+    return [Path(path) for path in args.episodes or [RESULTS_DIR / "sweep_episodes.csv"]]

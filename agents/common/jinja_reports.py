@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import jinja2
 import jinja2.meta
@@ -58,7 +58,12 @@ def environment(package: str) -> jinja2.Environment:
 
 
 def render(
-    package: str, template: str, values: Mapping[str, object], *, every_value_used: bool = False
+    package: str,
+    template: str,
+    values: Mapping[str, object],
+    *,
+    every_value_used: bool = False,
+    filters: Mapping[str, Callable[..., object]] | None = None,
 ) -> str:
     """``package``'s ``templates/<template>`` rendered with ``values``.
 
@@ -68,6 +73,7 @@ def render(
         values: what it names.
         every_value_used: also fail on a value the template never names: for a writer that computes its
             values for this one template, a value left unused means the template drifted from its data.
+        filters: the package's own filters beside :data:`FILTERS` (added to its environment once given).
 
     Raises:
         jinja2.TemplateNotFound: no such template.
@@ -80,7 +86,9 @@ def render(
             raise ValueError(
                 f"template {template!r}: value {unused[0]!r} is not used by the template (drifted?)"
             )
-    return environment(package).get_template(template).render(**values)
+    made = environment(package)
+    made.filters.update(filters or {})
+    return made.get_template(template).render(**values)
 
 
 def names_in(source: str) -> frozenset[str]:

@@ -30,6 +30,7 @@ from agents.evaluation.suite_report import (
     read_score_runs,
     read_suite_csv,
 )
+from agents.evaluation.suite_sections import page_sections
 from agents.evaluation.verification_record import verification_mark
 from agents.policies import split_agent_name
 from agents.policies.agent_limits import ISOLATION_PROCESS, NO_SANDBOX_OPTION
@@ -161,6 +162,9 @@ def included_suite(
         for name, found in matrices.items():
             failures.setdefault(name, {}).update(found)
     rankings = rank_suite(table, failures)
+    folder = Path(suite_csv).parent
+    seeds = list(suite_seeds(layouts, version))
+    published_runs = _runs_of(folder, list(dict.fromkeys(str(row["agent"]) for row in published)))
     values = suite_values(
         table,
         rankings,
@@ -172,6 +176,10 @@ def included_suite(
         generated=today(),
         included_files=[(markdown_cell(path), marks[path]) for path in files],
         figure="suite_with_included.png",
+        # The published page's sections, with the included agents among the failures they are read from.
+        **page_sections(
+            folder, _episodes(folder, published_runs, seeds, version), failures, rankings, seeds, version
+        ),
         version=version,
     )
     return suite_page(values), table, rankings, files

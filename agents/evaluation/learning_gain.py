@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from agents.analysis.paired import Comparison, TierRanking, compare
+from agents.common.agent_table import kind_of
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE
-from agents.policies.base import REACTIVE_AGENTS, is_learned
+from agents.policies.base import REACTIVE_AGENTS
 
 # How close to the camera-limited reference a learned flow agent should come on every tier: the benchmark's
 # stated goal for learning from the camera, judged by the whole interval of the difference.
@@ -57,7 +58,8 @@ def learning_gain(tier: str, failures: Mapping[str, np.ndarray], ranking: TierRa
     (runs, layouts) and its :class:`~agents.analysis.paired.TierRanking`; None where either kind has no ranked
     agent."""
     ranked = [ranking.best, *(c.agent for c in ranking.comparisons)]
-    learned = _best(failures, [name for name in ranked if is_learned(name)])
+    # kind_of, not is_learned: an included outside agent's name need not be a FlowNav agent's (its kind is unknown).
+    learned = _best(failures, [name for name in ranked if kind_of(name) == "learned"])
     rule = _best(failures, [name for name in ranked if name in REACTIVE_AGENTS])
     if learned is None or rule is None:
         return None

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agents.analysis.paired import Comparison, compare
+from agents.analysis.paired import Comparison, compare, provisional_note
 from agents.policies import REACTIVE_AGENTS, is_learned, is_privileged
 from agents.policies.base import PLANNERS
 
@@ -35,6 +35,12 @@ class ChainLink:
     agent: str
     failure: float
     cost: Comparison | None
+
+    @property
+    def provisional(self) -> str:
+        """The mark of a cost that rests on a learned agent with fewer training seeds than a ranked one needs
+        (``"; provisional: ..."``), on either side; empty otherwise."""
+        return "" if self.cost is None else provisional_note(self.cost)
 
 
 def _best(failures: Mapping[str, np.ndarray], keep: Callable[[str], bool]) -> str | None:

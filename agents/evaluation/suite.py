@@ -24,21 +24,15 @@ from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import RUNS_INTERVAL, runs_interval
 from agents.analysis.records import read_records
-from agents.analysis.reflights import REFLIGHT_CSV, read_reflights, summarise_reflights
 from agents.analysis.statistics import wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
-from agents.evaluation.lane import sideways_extent
-from agents.evaluation.learning_gain import learning_gains
 from agents.evaluation.provenance import machine_summary
-from agents.evaluation.reference_chain import reference_chain
 from agents.evaluation.runner import execute
-from agents.evaluation.suite_checks import velocity_reading_values
 from agents.evaluation.suite_page import (
-    beside_suite,
     rank_suite,
     suite_page,
     suite_values,
@@ -46,7 +40,7 @@ from agents.evaluation.suite_page import (
 )
 from agents.evaluation.suite_plot import plot_suite
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, SuiteRow
-from agents.evaluation.tier_bound import suite_bounds
+from agents.evaluation.suite_sections import EPISODES_CSV, page_sections
 from agents.policies import (
     agent_env_kwargs,
     check_flown_on,
@@ -66,7 +60,6 @@ from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
-EPISODES_CSV = "suite_episodes.csv"
 # Where each suite version's published files lie under results/: the current version at the top, earlier ones as
 # history in their own folder.
 SUITE_RESULTS_FOLDERS = {"1": "suite_v1", "2": "."}
@@ -377,7 +370,6 @@ def _report_values(
     seeds = list(suite_seeds(layouts, version))
     failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
     rankings = rank_suite(table, failures)
-    bests = {name: ranking.best for name, ranking in rankings.items()}
     return suite_values(
         table,
         rankings,
@@ -386,12 +378,6 @@ def _report_values(
         machine=machine_summary(),
         missing=missing,
         generated=today(),
-        bounds=suite_bounds(failures, bests, seeds, version),
-        gains=learning_gains(failures, rankings),
-        chains={name: reference_chain(failures[name]) for name in tier_names if failures[name]},
-        sideways=sideways_extent(rows, version),
-        reflights=summarise_reflights(read_reflights(out / REFLIGHT_CSV)),
-        velocity_reading=velocity_reading_values(out, version),
-        **beside_suite(out, tier_names, out / EPISODES_CSV, seeds),
+        **page_sections(out, rows, failures, rankings, seeds, version),
         version=version,
     )

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
+from agents.analysis.decision_rows import AgentDecision
+from agents.analysis.family import FamilyCorrection, correct_family
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, Comparison, TierRanking, compare, rank_tier
 from agents.analysis.records import read_records
@@ -255,6 +257,7 @@ def suite_values(
     not_counted: Sequence[tuple[str, str]] = (),
     reflights: Sequence[ReflightSummary] = (),
     velocity_reading: VelocityReading | None = None,
+    decisions: Mapping[str, Sequence[AgentDecision]] | None = None,
 ) -> dict[str, Any]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
@@ -284,6 +287,7 @@ def suite_values(
         "machine": machine,
         "reflights": list(reflights),
         "velocity_reading": velocity_reading,
+        "decisions": {agent: list(rows) for agent, rows in (decisions or {}).items()},
         "first_layout": layouts.start,
         "last_layout": layouts.stop - 1,
         "layouts": len(layouts),
@@ -311,10 +315,31 @@ def suite_values(
         "retired": list(retired),
         "not_flown": dict(NOT_FLOWN_ON.get(version, {})),
         "chains": {name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
+        "secondary": secondary_family(bounds or {}, chains or {}, gains),
         "included_files": list(included_files),
         "not_counted": list(not_counted),
         "figure": figure,
     }
+
+
+def secondary_family(
+    bounds: Mapping[str, TierBound], chains: Mapping[str, Sequence[ChainLink]], gains: Sequence[LearningGain]
+) -> FamilyCorrection:
+    """The page's secondary comparisons (what each tier allows, the chain's steps, learning against the rules and
+    against the camera-limited reference) corrected as one family; the ranking has its own correction."""
+    family = [(f"`{name}`: best − planner", bound["gap"]) for name, bound in bounds.items()]
+    family += [
+        (f"`{name}`: {link.knows}", link.cost)
+        for name, links in chains.items()
+        if len(links) > 1
+        for link in links
+        if link.cost is not None
+    ]
+    for gain in gains:
+        family.append((f"`{gain.tier}`: learned − rule", gain.comparison))
+        if gain.camera is not None:
+            family.append((f"`{gain.tier}`: learned − camera-limited reference", gain.camera))
+    return correct_family(family)
 
 
 def beside_suite(
@@ -369,4 +394,4 @@ def camera_student_recipe_reports() -> dict[str, str]:
 
 def suite_page(values: Mapping[str, object]) -> str:
     """``suite.md``'s text from :func:`suite_values`."""
-    return render("agents.evaluation", "suite.md.j2", values)
+    return render("agents.evaluation", "suite.md.j2", values, filters={"cell": markdown_cell})

@@ -8,6 +8,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from agents.analysis.paired import MIN_RANKED_SEEDS
+from agents.common.agent_table import kind_of
 from agents.evaluation.suite_report import HEADROOM_FAILURE, SuiteRow
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
@@ -36,7 +38,7 @@ def plot_suite(
     import matplotlib.pyplot as plt  # only once the backend is chosen
 
     tiers = [name for name in TIER_NAMES if any(r["tier"] == name for r in rows)]
-    agents = sorted({r["agent"] for r in rows}, key=lambda a: a.lower())
+    agents = figure_order(rows)
     labels = [plot_label(agent, rows) for agent in agents]
     longest = max((len(line) for label in labels for line in label.split("\n")), default=0)
     width = _PANEL_WIDTH_IN * max(len(tiers), 1) + _LABEL_INCH_PER_CHAR * longest
@@ -51,6 +53,7 @@ def plot_suite(
     for axis, name in zip(axes[0], tiers, strict=False):
         _plot_tier(axis, name, rows, agents, None if top_groups is None else top_groups.get(name, ()))
     axes[0][0].set_yticks(range(len(agents)), labels)
+    axes[0][0].invert_yaxis()  # the first agent at the top, as the tables read
     for tick, agent in zip(axes[0][0].get_yticklabels(), agents, strict=True):
         if any(r.get("included") for r in rows if r["agent"] == agent):
             tick.set_color("tab:red")
@@ -58,6 +61,26 @@ def plot_suite(
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def figure_order(rows: Sequence[SuiteRow]) -> list[str]:
+    """The figure's agents top to bottom in the order the page's tables list them: ranked agents, then
+    provisional ones (learned, too few training seeds), then privileged references, each group by its mean
+    failure rate over the tiers shown (the panels share one axis, so one order serves every tier)."""
+    by_agent: dict[str, list[SuiteRow]] = {}
+    for row in rows:
+        by_agent.setdefault(row["agent"], []).append(row)
+
+    def place(agent: str) -> tuple[int, float, str]:
+        mine = by_agent[agent]
+        group = (
+            2
+            if any(r["privileged"] for r in mine)
+            else int(kind_of(agent) == "learned" and min(r["runs"] for r in mine) < MIN_RANKED_SEEDS)
+        )
+        return group, sum(r["failure_rate"] for r in mine) / len(mine), agent
+
+    return sorted(by_agent, key=place)
 
 
 def _plot_title(rows: Sequence[Mapping[str, object]], *, ranked: bool) -> str:

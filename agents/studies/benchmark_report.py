@@ -18,14 +18,19 @@ from agents.analysis.episode_record import is_flow_agent
 from agents.common.folders import check_writable_folder
 from agents.common.jinja_reports import rate
 from agents.common.locations import CONFIGS_DIR, REPO_ROOT
-from agents.common.seeds import ABLATION_SEED_START, TEST_SEED_START, VALIDATION_SEED_START
+from agents.common.seeds import (
+    ABLATION_SEED_START,
+    SUITE_SEED_STARTS,
+    TEST_SEED_START,
+    VALIDATION_SEED_START,
+)
 from agents.common.tables import markdown_table, today
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
 from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
 from agents.studies.benchmark_sweep import sweep_values
 from agents.studies.wording import display_name, join_words, render_report, span
 from flownav_env.settings import EnvSettings
-from flownav_env.tiers import TIER_NAMES
+from flownav_env.tiers import TIER_NAMES, tier
 
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
@@ -236,6 +241,9 @@ def setup_values(data: BenchmarkData) -> Values:
     return {
         "env": {f.name: f.default for f in dataclasses.fields(EnvSettings)},
         "seed_starts": (VALIDATION_SEED_START, TEST_SEED_START, ABLATION_SEED_START),
+        "suite_starts": SUITE_SEED_STARTS,
+        # The history table's task: suite v1's clean tier.
+        "env_id": tier("clean", "1").env_id,
         "ppo": data.training["ppo_flow"].config,
         "ppo_minutes": span([m for a in learned for m in data.training[a].minutes]),
         "ppo_cores": "/".join(map(str, sorted({n for a in learned for n in data.training[a].cores}))),

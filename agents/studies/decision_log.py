@@ -19,6 +19,7 @@ from pathlib import Path
 
 import yaml
 
+from agents.analysis.decision_rows import DECISION_CSV, AgentDecision, write_decision_rows
 from agents.common.agent_table import base_agent_name
 from agents.common.locations import CONFIGS_DIR, REPO_ROOT, RESULTS_DIR
 from agents.common.tables import today
@@ -156,4 +157,21 @@ def write_decision_log(out: Path = RESULTS_DIR, command: str = "flownav decision
     path = Path(out) / PAGE
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")
+    write_decision_rows(Path(out) / DECISION_CSV, agent_decisions(logged))
     return path
+
+
+def agent_decisions(logged: Sequence[LoggedDecision]) -> list[AgentDecision]:
+    """Per governed agent, each logged choice with the test rows visible when it was made (what ``suite.md``
+    shows beside the agent)."""
+    return [
+        AgentDecision(
+            agent=agent,
+            decision=entry.decision.id,
+            commit=entry.decision.commit,
+            date=entry.date,
+            visible="; ".join(f"{name} {count:,}" for name, count in sorted(entry.visible.items())) or "none",
+        )
+        for entry in logged
+        for agent in entry.decision.governs
+    ]

@@ -97,8 +97,10 @@ def test_defaults_that_read_committed_inputs_resolve_against_the_repository(
     parser = cli.build_parser()
     sweep = parser.parse_args(["sweep"])
     assert Path(sweep.config) == REPO_ROOT / "configs" / "sweep.yaml" and Path(sweep.config).is_file()
-    analysis = parser.parse_args(["error-analysis"])
-    assert Path(analysis.episodes) == RESULTS_DIR / "sweep_episodes.csv" and Path(analysis.episodes).is_file()
+    from agents.cli.error_analysis import episode_files
+
+    (episodes,) = episode_files(parser.parse_args(["error-analysis"]))
+    assert episodes == RESULTS_DIR / "sweep_episodes.csv" and episodes.is_file()
 
 
 def test_no_command_writes_into_results_unless_out_names_it() -> None:

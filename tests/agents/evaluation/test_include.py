@@ -419,3 +419,38 @@ def test_sandboxed_rows_say_so(scored: dict[str, Path]) -> None:
     episodes = read_records(scored["mine"] / "suite_episodes.csv")
     assert {episode["isolation"] for episode in episodes} == {"sandbox"}
     assert included_mark(scored["mine"] / "score.csv", {}) == "self-reported"
+
+
+def test_the_included_page_holds_the_published_pages_sections(
+    scored: dict[str, Path], tmp_path: Path
+) -> None:
+    assert include(scored, tmp_path / "board", scored["mine"] / "score.csv") == 0
+    text = (tmp_path / "board" / "suite_with_included.md").read_text()
+    for heading in ("## What each tier allows", "## From the map to flow", "## Learning against the rules"):
+        assert heading in text
+
+
+def test_the_figure_lists_agents_as_the_tables_do() -> None:
+    from agents.evaluation.suite_plot import figure_order
+
+    def row(agent: str, failure: float, runs: int = 1, privileged: bool = False) -> dict:
+        return {"agent": agent, "failure_rate": failure, "runs": runs, "privileged": privileged}
+
+    rows = [
+        row("planner", 0.0, privileged=True),
+        row("ppo_oracle", 0.05, runs=5, privileged=True),
+        row("ppo_flow_course_approach_curriculum_slow", 0.1, runs=5),  # learned, too few seeds: provisional
+        row("vfh", 0.4),
+        row("bee", 0.2),
+        row("ppo_flow", 0.3, runs=10),
+        row("outside.module:make_agent", 0.25),  # an outside agent's name is ranked, never refused
+    ]
+    assert figure_order(rows) == [
+        "bee",
+        "outside.module:make_agent",
+        "ppo_flow",
+        "vfh",
+        "ppo_flow_course_approach_curriculum_slow",
+        "planner",
+        "ppo_oracle",
+    ]

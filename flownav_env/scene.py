@@ -29,11 +29,11 @@ PARKED_GROUP = 3
 # The drone's own geoms and rotor sites: the onboard camera sits inside the hull and sees none of them, but a
 # software rasteriser still transforms every triangle, so the onboard camera leaves this group out.
 DRONE_GROUP = 2
-# Capsule tessellation (slices around, stacks per cap). MuJoCo's 28 x 16 made the capsules 70 % of a software
-# frame; 16 x 8 halves the frame with the silhouette within 1 cm of the true 0.5 m circle, which at the env's
-# resolutions (offscreen buffers up to 320 px wide) left the estimator's depth error unchanged
-# (results/throughput/README.md). Wider frames resolve the facets (at 640x480 the capsule depth error of the
-# thesis replication doubled), so they keep MuJoCo's mesh.
+# Capsule tessellation (slices around, stacks per cap). A software rasteriser pays per triangle, and MuJoCo's
+# 28 x 16 made the capsules most of a frame's time; 16 x 8 keeps the silhouette within 1 cm of the true 0.5 m
+# circle, which at the env's resolutions (offscreen buffers up to 320 px wide) left the estimator's depth error
+# unchanged (results/throughput/README.md has the timings and errors). Wider frames resolve the facets (the thesis
+# replication's capsule depth error at 640x480 grew with the coarse mesh), so they keep MuJoCo's mesh.
 COARSE_MESH_MAX_WIDTH = 320
 CAPSULE_MESH = {"coarse": (16, 8), "fine": (28, 16)}
 

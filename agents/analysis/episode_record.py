@@ -96,7 +96,9 @@ MEASURED_FIELDS = tuple(
 class EpisodeRow(TypedDict):
     """One row of an episodes CSV as read (:func:`agents.analysis.records.read_records`): the fields of
     :class:`EpisodeRecord`, typed, and None where the file predates the column (unknown:
-    :func:`agents.analysis.earlier_rows.upgrade_row`). A test keeps the two in step."""
+    :func:`agents.analysis.earlier_rows.upgrade_row`). The fields are written out again because mypy reads a
+    TypedDict's keys, like a dataclass's fields, only from the class's own body; a test keeps the two in step,
+    names, order and types."""
 
     agent: str
     factor: str

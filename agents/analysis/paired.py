@@ -251,17 +251,3 @@ def rank_tier(
     )
     top = (best, *(c.agent for c in sorted(comparisons, key=lambda c: c.difference) if not c.separated))
     return TierRanking(best, comparisons, top, left_out)
-
-
-def refuse_privileged(agents: Sequence[str], privileged: Sequence[str]) -> None:
-    """Refuse a ranking that would hold a privileged agent.
-
-    Raises:
-        ValueError: one line naming the first privileged agent.
-    """
-    for name in agents:
-        if name in privileged:
-            raise ValueError(
-                f"agent {name} is privileged (it reads what the tier's sensor does not give): it is a "
-                "reference, listed apart, and cannot be ranked"
-            )

@@ -38,6 +38,7 @@ COMMANDS = {
     "error-analysis": "agents.cli.error_analysis",
     "ablation": "agents.cli.ablation",
     "rule-resolution": "agents.cli.rule_resolution",
+    "camera-reference": "agents.cli.camera_reference",
     "tune": "agents.cli.tune",
     "video": "agents.cli.video",
     "replicate": "agents.cli.replicate",

@@ -22,6 +22,7 @@ shared with other jobs shifts both sides alike.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
 
 from agents.cli.arguments import add_seed_start_argument
@@ -39,7 +40,7 @@ HELP = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Register the ``estimator`` and ``env`` sub-subcommands and their options."""
+    """Register one sub-subcommand per benchmark and their options."""
     targets = parser.add_subparsers(dest="target", required=True, metavar="TARGET")
 
     estimator = targets.add_parser(
@@ -134,70 +135,88 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen benchmark and write its files; returns the process exit code."""
-    if args.target == "estimator":
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.studies.perf.estimator_speed_report import run_estimator_benchmark
-
-        paths = run_estimator_benchmark(
-            frames=args.frames,
-            thresholds=args.thresholds,
-            repeats=args.repeats,
-            width=args.width,
-            height=args.height,
-            layout=args.layout,
-            seed=args.seed_start,
-            out_dir=args.out,
-            progress=not args.no_progress,
-        )
-    elif args.target == "yield":
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.studies.perf.depth_yield import DEFAULT_SETTINGS, run_depth_yield
-
-        paths = run_depth_yield(
-            args.frames,
-            args.fast_thresholds,
-            DEFAULT_SETTINGS if args.setting is None else args.setting,
-            args.flights,
-            args.steps,
-            args.out,
-            progress=not args.no_progress,
-        )
-    elif args.target == "isolation":
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.studies.perf.isolation_cost import DEFAULT_AGENT, run_isolation_benchmark
-
-        paths = run_isolation_benchmark(
-            args.agent or DEFAULT_AGENT, steps=args.steps, repeats=args.repeats, out_dir=args.out
-        )
-    elif args.target == "recipe":
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.policies.teachers import make_teacher
-        from agents.studies.perf.recipe_speed_report import run_recipe_benchmark
-
-        paths = run_recipe_benchmark(
-            args.recipe,
-            args.rollouts,
-            args.repeats,
-            args.out,
-            make_teacher=make_teacher,
-            ablation_dir=args.ablation_dir,
-            progress=not args.no_progress,
-        )
-    else:
-        # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-        from agents.studies.perf.env_speed_report import run_env_benchmark
-
-        paths = run_env_benchmark(
-            resolutions=args.resolutions,
-            steps=args.steps,
-            repeats=args.repeats,
-            seed=args.seed_start,
-            out_dir=args.out,
-            progress=not args.no_progress,
-        )
-    for path in paths:
+    for path in _BENCHMARKS[args.target](args):
         print(f"wrote {path}")
     return 0
+
+
+# Each benchmark imports its study on use: `flownav --help` imports every subcommand module and must stay quick.
+
+
+def _estimator(args: argparse.Namespace) -> list[Path]:
+    from agents.studies.perf.estimator_speed_report import run_estimator_benchmark
+
+    return run_estimator_benchmark(
+        frames=args.frames,
+        thresholds=args.thresholds,
+        repeats=args.repeats,
+        width=args.width,
+        height=args.height,
+        layout=args.layout,
+        seed=args.seed_start,
+        out_dir=args.out,
+        progress=not args.no_progress,
+    )
+
+
+def _env(args: argparse.Namespace) -> list[Path]:
+    from agents.studies.perf.env_speed_report import run_env_benchmark
+
+    return run_env_benchmark(
+        resolutions=args.resolutions,
+        steps=args.steps,
+        repeats=args.repeats,
+        seed=args.seed_start,
+        out_dir=args.out,
+        progress=not args.no_progress,
+    )
+
+
+def _recipe(args: argparse.Namespace) -> list[Path]:
+    from agents.policies.teachers import make_teacher
+    from agents.studies.perf.recipe_speed_report import run_recipe_benchmark
+
+    return run_recipe_benchmark(
+        args.recipe,
+        args.rollouts,
+        args.repeats,
+        args.out,
+        make_teacher=make_teacher,
+        ablation_dir=args.ablation_dir,
+        progress=not args.no_progress,
+    )
+
+
+def _yield(args: argparse.Namespace) -> list[Path]:
+    from agents.studies.perf.depth_yield import DEFAULT_SETTINGS, run_depth_yield
+
+    return run_depth_yield(
+        args.frames,
+        args.fast_thresholds,
+        DEFAULT_SETTINGS if args.setting is None else args.setting,
+        args.flights,
+        args.steps,
+        args.out,
+        progress=not args.no_progress,
+    )
+
+
+def _isolation(args: argparse.Namespace) -> list[Path]:
+    from agents.studies.perf.isolation_cost import DEFAULT_AGENT, run_isolation_benchmark
+
+    return run_isolation_benchmark(
+        args.agent or DEFAULT_AGENT, steps=args.steps, repeats=args.repeats, out_dir=args.out
+    )
+
+
+# The sub-subcommand each benchmark answers to, as registered in add_arguments.
+_BENCHMARKS: dict[str, Callable[[argparse.Namespace], list[Path]]] = {
+    "estimator": _estimator,
+    "env": _env,
+    "recipe": _recipe,
+    "yield": _yield,
+    "isolation": _isolation,
+}
 
 
 def _add_output_options(parser: argparse.ArgumentParser) -> None:

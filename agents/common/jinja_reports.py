@@ -119,8 +119,3 @@ def template_source(package: str, template: str) -> str:
 def unused_values(source: str, values: Mapping[str, object]) -> list[str]:
     """The names in ``values`` that the template text ``source`` never names, sorted."""
     return sorted(set(values) - names_in(source))
-
-
-def template_names(package: str, template: str) -> frozenset[str]:
-    """Every value ``package``'s ``templates/<template>`` names."""
-    return names_in(template_source(package, template))

@@ -167,10 +167,9 @@ class VFHAgent:
     """
 
     bin_edges: tuple[float, ...] = tuple(DEFAULT_BIN_EDGES)
-    # Tuned: the winner of ``flownav tune --agent vfh`` to 4 significant digits (results/tuning/vfh/tuning.md,
-    # re-tuned 2026-12-02 after the near-plane fix): failure 0.27 [0.21, 0.35] on 150 fresh training layouts,
-    # against 0.34 [0.27, 0.42] with the gains tuned before the fix (the intervals overlap: best measured,
-    # not clearly better).
+    # Tuned: the winner of ``flownav tune --agent vfh`` to 4 significant digits, re-tuned after the near-plane
+    # fix; results/tuning/vfh/tuning.md sets its failure on fresh training layouts beside the gains tuned before
+    # the fix (the best measured, not clearly better).
     obstacle_rows: int = 2
     safe_distance_m: float = 3.871
     threshold: float = 0.01402

@@ -54,9 +54,9 @@ CANDIDATES = (
 )
 SEARCH_RESOLUTIONS = (TODAY, *CANDIDATES)
 # The refinement, stated after the search and before it flew: the search picked nothing, and its nearest candidate
-# (bee_ttc at 3x15-9bins, -0.160 [-0.340, +0.020] on 25 layouts per tier) was short of power. It flies again on
-# twice the layouts, beside the student's bins at the rule's own columns, which tells the bins' share of a gain from
-# the columns' (3x15 with the default bins was +0.100).
+# (bee_ttc at 3x15-9bins; results/rule_resolution/rule_resolution.md) was short of power. It flies again on twice
+# the layouts, beside the student's bins at the rule's own columns, which tells the bins' share of a gain from the
+# columns' (the search flew 3x15 with the default bins too).
 REFINE_RULE = "bee_ttc"
 REFINE_CANDIDATES = (
     HistogramResolution((3, 15), FINE_BIN_EDGES),

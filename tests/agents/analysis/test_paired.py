@@ -16,7 +16,6 @@ from agents.analysis.paired import (
     probability_of_improvement,
     provisional_note,
     rank_tier,
-    refuse_privileged,
     runs_interval,
     seed_interval,
 )
@@ -121,8 +120,6 @@ def test_bad_input_is_one_line() -> None:
         probability_of_improvement(np.zeros(3), np.zeros((1, 3)))
     with pytest.raises(ValueError, match="no agent to rank: every agent is privileged or provisional"):
         rank_tier({"oracle": _failures(0.0)}, privileged=["oracle"])
-    with pytest.raises(ValueError, match=r"agent ppo_oracle is privileged .* cannot be ranked"):
-        refuse_privileged(["bee", "ppo_oracle"], privileged=["ppo_oracle"])
 
 
 def test_a_comparison_names_the_learned_agents_it_rests_on_too_few_seeds_of() -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import jinja2
 import pytest
 
-from agents.common.jinja_reports import environment, names_in, render, template_names, unused_values
+from agents.common.jinja_reports import environment, names_in, render, template_source, unused_values
 
 
 def _render(text: str, **values: object) -> str:
@@ -37,11 +37,11 @@ def test_names_and_unused_values() -> None:
     text = "{% if met %}{{ value }}{% else %}{{ low | interval(high) }}{% endif %}"
     assert names_in(text) == {"met", "value", "low", "high"}
     assert unused_values(text, {"met": True, "value": "1", "stale": "2"}) == ["stale"]
-    assert "board" in template_names("agents.studies", "benchmark.md.j2")
+    assert "board" in names_in(template_source("agents.studies", "benchmark.md.j2"))
 
 
 def test_every_value_used_names_the_template_and_the_value() -> None:
-    names = template_names("agents.studies.perf", "target_verdict.md.j2")
+    names = names_in(template_source("agents.studies.perf", "target_verdict.md.j2"))
     values = {name: "1" for name in names} | {"swept": True, "met": True, "stale": "x"}
     with pytest.raises(ValueError, match=r"template 'target_verdict\.md\.j2': value 'stale' is not used"):
         render("agents.studies.perf", "target_verdict.md.j2", values, every_value_used=True)

@@ -22,8 +22,9 @@ PRIVILEGED_SIGHTS: tuple[Sight, ...] = ("true_depth", "layout", "camera_view")
 SearchRange = tuple[float, float, bool]
 # How a search range's third item is written: "log" or "linear".
 SEARCH_SCALES = {"log": True, "linear": False}
-# The value types an env setting an agent asks for may have (the env's observe_* switches are booleans).
-EnvValue = bool | int | float | str
+# The value types an env setting an agent asks for may have (the env's observe_* switches are booleans; the
+# histogram's sectors and bin edges are tuples of numbers).
+EnvValue = bool | int | float | str | tuple[int | float, ...]
 # "package.module:ClassName": where an agent built from code is written.
 CLASS_PATH = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 TABLE_KEYS = ("kind", "sees", "suite_only", "per_tier", "retired", "not_flown_on")
@@ -137,15 +138,25 @@ def _with_code(source: str, entry: AgentEntry, values: Mapping[str, object]) -> 
 
 
 def _env(source: str, name: str, settings: object) -> tuple[tuple[str, EnvValue], ...]:
-    """An entry's ``env``: env setting → value, in order."""
+    """An entry's ``env``: env setting → value (a list of numbers, such as a histogram's sectors or bin edges, as a
+    tuple), in order."""
     if not isinstance(settings, dict) or not all(
-        isinstance(key, str) and isinstance(value, EnvValue) for key, value in settings.items()
+        isinstance(key, str) and _is_env_value(value) for key, value in settings.items()
     ):
         raise ValueError(
             f"{source}: agent {name!r} env must map env settings to values (such as observe_unresolved: true), "
             f"got {settings!r}"
         )
-    return tuple(settings.items())
+    return tuple((key, tuple(value) if isinstance(value, list) else value) for key, value in settings.items())
+
+
+def _is_env_value(value: object) -> bool:
+    """A scalar setting, or a non-empty list of numbers (booleans are not numbers here)."""
+    if isinstance(value, list):
+        return bool(value) and all(
+            isinstance(item, (int, float)) and not isinstance(item, bool) for item in value
+        )
+    return isinstance(value, (bool, int, float, str))
 
 
 def _search_space(source: str, name: str, space: object) -> tuple[tuple[str, SearchRange], ...]:

@@ -4,7 +4,9 @@ The chain's links, each knowing less than the one before (:data:`CHAIN`):
 
 1. the map: ``planner`` knows every capsule and its true state;
 2. the camera's view: ``planner_camera`` knows only the capsules that have been in view within its range;
-3. the observation's resolution: ``planner_camera_observed`` knows them only as the histogram resolves them;
+3. the observation's resolution: ``planner_camera_observed`` knows them only as the histogram resolves them, at
+   each resolution declared for it (the default 3 × 5, the camera student's 3 × 15, a finer 1 × 32): the best
+   flown is the link, its resolution named;
 4. true depths, learned: the best learned agent that reads true depths (a privileged twin);
 5. flow, learned: the best learned agent on the estimator's depths;
 6. flow, a rule: the best reactive rule.
@@ -16,6 +18,7 @@ tier is left out, and the next one is measured from the last that was.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -24,6 +27,9 @@ import numpy as np
 from agents.analysis.paired import Comparison, compare, provisional_note
 from agents.policies import REACTIVE_AGENTS, is_learned, is_privileged
 from agents.policies.base import PLANNERS
+from agents.policies.planner_camera import ObservedCameraPlannerAgent
+from agents.policies.registry import planner_class, requested_env_kwargs
+from flownav_env.settings import EnvSettings
 
 
 @dataclass(frozen=True)
@@ -65,21 +71,39 @@ def _learned_on_flow(name: str) -> bool:
     return _learned(name, privileged=False)
 
 
-# The camera-limited reference: what the camera's view allows, the bar a learned flow agent is held to.
-CAMERA_VIEW_REFERENCE = PLANNERS[1]
+# The map's reference and the camera-limited one (what the camera's view allows, the bar a learned flow agent is
+# held to).
+MAP_REFERENCE, CAMERA_VIEW_REFERENCE = PLANNERS[0], PLANNERS[1]
+# The observation-limited references: the camera-limited planner shown only what a histogram resolves, one per
+# resolution declared (configs/agents.yaml); the chain's link is the best of those flown, its resolution named.
+OBSERVED_REFERENCES = tuple(
+    name for name in PLANNERS if issubclass(planner_class(name), ObservedCameraPlannerAgent)
+)
+OBSERVATION_LINK = "the observation's resolution"
+
+
+def _only(name: str) -> Callable[[Mapping[str, np.ndarray]], str | None]:
+    return lambda failures: name if name in failures else None
+
 
 # Each link: what its agent knows, and how it is picked among the agents flown on the tier.
 CHAIN: Sequence[tuple[str, Callable[[Mapping[str, np.ndarray]], str | None]]] = (
-    *(
-        (knows, lambda f, name=name: name if name in f else None)
-        for knows, name in zip(
-            ("the map", "the camera's view", "the observation's resolution"), PLANNERS, strict=True
-        )
-    ),
+    ("the map", _only(MAP_REFERENCE)),
+    ("the camera's view", _only(CAMERA_VIEW_REFERENCE)),
+    (OBSERVATION_LINK, lambda f: _best(f, lambda name: name in OBSERVED_REFERENCES)),
     ("true depths, learned", lambda f: _best(f, _learned_on_true_depths)),
     ("flow, learned", lambda f: _best(f, _learned_on_flow)),
     ("flow, a rule", lambda f: _best(f, lambda name: name in REACTIVE_AGENTS)),
 )
+
+
+def resolution_text(agent: str) -> str:
+    """The histogram resolution an observation-limited reference plans on, in words: "3 × 15 sectors, bins 0.5 m
+    wide from 0" (its declared settings over the env's defaults)."""
+    settings = {**dataclasses.asdict(EnvSettings()), **requested_env_kwargs(agent)}
+    rows, cols = settings["histogram_sectors"]
+    edges = settings["depth_bin_edges"]
+    return f"{rows} × {cols} sectors, bins {edges[1] - edges[0]:g} m wide from {edges[0]:g}"
 
 
 def reference_chain(failures: Mapping[str, np.ndarray]) -> list[ChainLink]:
@@ -92,6 +116,7 @@ def reference_chain(failures: Mapping[str, np.ndarray]) -> list[ChainLink]:
         if agent is None:
             continue
         cost = None if previous is None else compare(agent, failures[agent], previous, failures[previous])
-        links.append(ChainLink(knows, agent, float(np.mean(failures[agent])), cost))
+        named = f"{knows} ({resolution_text(agent)})" if knows == OBSERVATION_LINK else knows
+        links.append(ChainLink(named, agent, float(np.mean(failures[agent])), cost))
         previous = agent
     return links

@@ -19,7 +19,13 @@ from agents.common.agent_table import (
 
 def test_kinds_come_from_the_table() -> None:
     assert agents_where(kind="rule") == ("straight", "bee", "bee_robust", "bee_ttc", "vfh")
-    assert agents_where(kind="planner") == ("planner", "planner_camera", "planner_camera_observed")
+    assert agents_where(kind="planner") == (
+        "planner",
+        "planner_camera",
+        "planner_camera_observed",
+        "planner_camera_observed_3x15",
+        "planner_camera_observed_1x32",
+    )
     assert set(agents_where(privileged=True)) == {
         name for name in AGENTS if AGENTS[name].sees in ("true_depth", "layout", "camera_view")
     }

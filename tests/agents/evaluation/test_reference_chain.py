@@ -36,3 +36,17 @@ def test_the_links_come_in_order_and_each_costs_over_the_last_flown_one() -> Non
 
 def test_a_tier_with_nothing_of_the_chain_flown_has_no_links() -> None:
     assert reference_chain({"someone_else": _failures(0, 1)}) == []
+
+
+def test_the_observations_link_is_the_best_resolution_flown_and_names_it() -> None:
+    failures = {
+        "planner_camera": _failures(0, 0, 0, 0),
+        "planner_camera_observed": _failures(1, 1, 1, 0),  # the default 3 × 5
+        "planner_camera_observed_3x15": _failures(1, 0, 0, 0),
+        "planner_camera_observed_1x32": _failures(1, 1, 0, 0),
+    }
+    _, observed = reference_chain(failures)
+    assert observed.agent == "planner_camera_observed_3x15"
+    assert observed.knows == "the observation's resolution (3 × 15 sectors, bins 0.5 m wide from 0)"
+    (default,) = reference_chain({"planner_camera_observed": _failures(1, 0)})
+    assert default.knows == "the observation's resolution (3 × 5 sectors, bins 1 m wide from 0)"

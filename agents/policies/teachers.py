@@ -96,11 +96,16 @@ def check_teacher(
     wanted = agent_env_kwargs(name)
     # A privileged teacher's own opt-in is given to the training envs by the teacher start, not by 'env'.
     for setting, value in wanted.items():
-        if setting not in privileged_requests(wanted) and env.get(setting) != value:
+        if setting not in privileged_requests(wanted) and _comparable(env.get(setting)) != _comparable(value):
             raise ValueError(
                 f"{source}: the teacher {name!r} reads what the env setting {setting}={value!r} gives; add it "
                 f"to the config's 'env' section (it has {setting}={env.get(setting)!r})"
             )
+
+
+def _comparable(value: object) -> object:
+    """A setting as compared with another: a YAML list and a declared tuple of the same numbers are equal."""
+    return tuple(value) if isinstance(value, list | tuple) else value
 
 
 def check_teacher_params(name: str, params: Mapping[str, float], source: str) -> None:

@@ -21,7 +21,11 @@ from agents.analysis.statistics import runs_and_layouts_interval
 from agents.common.agent_table import base_agent_name, kind_of
 
 CONFIDENCE = 0.95
-BOOTSTRAP_REPS = 2_000
+# Draws of every paired bootstrap: enough that a p-value near SIGNIFICANCE moves by about a thousandth from one
+# bootstrap seed to another, a Holm-corrected one by a few (p_value_error), so a top group does not hang on the seed.
+BOOTSTRAP_REPS = 100_000
+# Draws are made in blocks of about this many resampled layouts, so that a block's counts stay a few megabytes.
+DRAWN_CELLS = 1_000_000
 # A corrected p-value at or above this leaves two agents unseparated.
 SIGNIFICANCE = 0.05
 # A learned agent needs this many training seeds for its rank to describe its recipe rather than its runs.
@@ -70,32 +74,60 @@ def _check(matrix: np.ndarray, name: str) -> np.ndarray:
     return matrix
 
 
+def resample_counts(rng: np.random.Generator, items: int, reps: int) -> np.ndarray:
+    """How often each of ``items`` things is picked in each of ``reps`` draws of ``items`` with replacement: a
+    (reps, items) array of counts, each row a multinomial draw summing to ``items``."""
+    picked = rng.integers(items, size=(reps, items))
+    picked += np.arange(0, reps * items, items)[:, None]  # each draw's picks offset to its own row of counts
+    return np.bincount(picked.ravel(), minlength=reps * items).reshape(reps, items)
+
+
+def bootstrap_means(
+    matrices: Mapping[str, np.ndarray], reps: int = BOOTSTRAP_REPS, seed: int = 0
+) -> dict[str, np.ndarray]:
+    """``reps`` bootstrap draws of the mean of each named (runs, layouts) matrix: each draw resamples the layouts
+    once for all the matrices (the pairing) and each matrix's runs on its own.
+
+    Drawing L layouts and R runs with replacement and averaging the picked (run, layout) cells is the same as
+    weighting the matrix by how often each run (counts c) and each layout (counts w) was picked: the draw's mean
+    is c·A·w / (R·L). Counts and a matrix product stand in for the (reps, R, L) picked cells, so many draws cost
+    little. Sums of 0/1 cells stay whole numbers, so a draw of no difference between two agents is exactly 0.
+
+    Raises:
+        ValueError: no matrix, or not (runs, layouts) matrices on the same number of layouts.
+    """
+    checked = {name: _check(matrix, name) for name, matrix in matrices.items()}
+    if not checked:
+        raise ValueError("no (runs, layouts) matrix to draw from")
+    layouts = next(iter(checked.values())).shape[1]
+    for matrix in checked.values():
+        if matrix.shape[1] != layouts:
+            raise ValueError(f"paired agents must share their layouts: {layouts} against {matrix.shape[1]}")
+    rng = np.random.default_rng(seed)
+    means = {name: np.empty(reps) for name in checked}
+    block = max(1, DRAWN_CELLS // layouts)
+    for start in range(0, reps, block):
+        count = min(block, reps - start)
+        layout_counts = resample_counts(rng, layouts, count).astype(float)
+        for name, matrix in checked.items():
+            run_counts = resample_counts(rng, matrix.shape[0], count)
+            # einsum's own loops, not a threaded BLAS product: the flights keep every core busy.
+            per_run = np.einsum("dl,rl->dr", layout_counts, matrix)
+            means[name][start : start + count] = np.einsum("dr,dr->d", run_counts, per_run) / matrix.size
+    return means
+
+
 def paired_bootstrap(
     agent: np.ndarray, reference: np.ndarray, reps: int = BOOTSTRAP_REPS, seed: int = 0
 ) -> np.ndarray:
     """``reps`` bootstrap draws of mean failure(agent) − mean failure(reference): layouts drawn once for both,
-    each agent's runs drawn on their own.
+    each agent's runs drawn on their own (:func:`bootstrap_means`).
 
     Raises:
         ValueError: not (runs, layouts) matrices on the same number of layouts.
     """
-    agent, reference = _check(agent, "agent"), _check(reference, "reference")
-    if agent.shape[1] != reference.shape[1]:
-        raise ValueError(
-            f"paired agents must share their layouts: {agent.shape[1]} against {reference.shape[1]}"
-        )
-    rng = np.random.default_rng(seed)
-    layouts = agent.shape[1]
-    draws = np.empty(reps)
-    for start in range(0, reps, 250):  # blocks keep the index arrays small for 10 runs × 300 layouts
-        count = min(250, reps - start)
-        chosen = rng.integers(layouts, size=(count, 1, layouts))
-        own = rng.integers(agent.shape[0], size=(count, agent.shape[0], 1))
-        theirs = rng.integers(reference.shape[0], size=(count, reference.shape[0], 1))
-        draws[start : start + count] = agent[own, chosen].mean(axis=(1, 2)) - reference[theirs, chosen].mean(
-            axis=(1, 2)
-        )
-    return draws
+    means = bootstrap_means({"agent": agent, "reference": reference}, reps, seed)
+    return means["agent"] - means["reference"]
 
 
 def probability_of_improvement(agent: np.ndarray, reference: np.ndarray) -> float:
@@ -110,13 +142,22 @@ def probability_of_improvement(agent: np.ndarray, reference: np.ndarray) -> floa
 def compare(
     name: str, agent: np.ndarray, reference_name: str, reference: np.ndarray, seed: int = 0
 ) -> Comparison:
-    """``agent`` against ``reference`` (:class:`Comparison`, ``p_holm`` still the raw p-value)."""
+    """``agent`` against ``reference`` (:class:`Comparison`, ``p_holm`` still the raw p-value).
+
+    Raises:
+        ValueError: not (runs, layouts) matrices on the same number of layouts.
+    """
     draws = paired_bootstrap(agent, reference, seed=seed)
+    return _comparison(name, np.asarray(agent, float), reference_name, np.asarray(reference, float), draws)
+
+
+def _comparison(
+    name: str, agent: np.ndarray, reference_name: str, reference: np.ndarray, draws: np.ndarray
+) -> Comparison:
+    """:class:`Comparison` of ``agent`` with ``reference`` from bootstrap ``draws`` of their difference."""
     tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
     low, high = np.percentile(draws, [tail, 100.0 - tail])
-    # Two-sided: how often the resampled difference lands on either side of zero; never below 1 / reps.
-    p = min(1.0, 2.0 * min(float(np.mean(draws <= 0.0)), float(np.mean(draws >= 0.0))))
-    p = float(max(p, 1.0 / len(draws)))
+    p = float(max(two_sided_p_value(draws), 1.0 / len(draws)))  # never below what the draws can resolve
     difference = float(np.mean(agent) - np.mean(reference))
     return Comparison(
         name,
@@ -130,6 +171,29 @@ def compare(
         agent_runs=agent.shape[0],
         reference_runs=reference.shape[0],
     )
+
+
+def two_sided_p_value(draws: np.ndarray) -> float:
+    """Two-sided bootstrap p-value of a difference: twice the share of ``draws`` on the rarer side of zero
+    (draws at zero count on both sides), at most 1."""
+    return min(1.0, 2.0 * min(float(np.mean(draws <= 0.0)), float(np.mean(draws >= 0.0))))
+
+
+def p_value_error(p_value: float = SIGNIFICANCE, reps: int = BOOTSTRAP_REPS, multiplier: int = 1) -> float:
+    """Monte Carlo standard error of a bootstrap p-value near ``p_value`` from ``reps`` draws: the p-value is
+    twice a share of draws, q = p / 2, so its error is 2·√(q(1 − q) / reps). A Holm-corrected p-value that
+    multiplied its raw p-value by ``multiplier`` k reaches ``p_value`` from a raw one of p / k, and its error is
+    k times that one's: about √k times the uncorrected error.
+
+    Raises:
+        ValueError: a p-value outside (0, 1], fewer than 1 draw, or a multiplier below 1.
+    """
+    if not 0.0 < p_value <= 1.0:
+        raise ValueError(f"p_value must lie in (0, 1], got {p_value}")
+    if reps < 1 or multiplier < 1:
+        raise ValueError(f"reps and multiplier must be at least 1, got {reps} and {multiplier}")
+    share = p_value / multiplier / 2.0
+    return float(multiplier * 2.0 * np.sqrt(share * (1.0 - share) / reps))
 
 
 def verdict(comparison: Comparison, agent: str = "", reference: str = "") -> str:
@@ -227,9 +291,14 @@ def _left_out(
 
 
 def rank_tier(
-    failures: Mapping[str, np.ndarray], *, privileged: Sequence[str] = (), learned: Sequence[str] = ()
+    failures: Mapping[str, np.ndarray],
+    *,
+    privileged: Sequence[str] = (),
+    learned: Sequence[str] = (),
+    seed: int = 0,
 ) -> TierRanking:
-    """Rank the agents of one tier from their failure matrices (runs, layouts), on the same layouts.
+    """Rank the agents of one tier from their failure matrices (runs, layouts), on the same layouts, by the
+    paired bootstrap drawn from ``seed``.
 
     A privileged agent (it reads what the tier's sensor does not give) is a reference and never ranked; a
     learned agent with fewer than :data:`MIN_RANKED_SEEDS` runs is provisional and not ranked either.
@@ -244,7 +313,13 @@ def rank_tier(
             f"no agent to rank: every agent is privileged or provisional ({', '.join(failures)})"
         )
     best = min(rankable, key=lambda name: (float(np.mean(rankable[name])), name))
-    raw = [compare(name, matrix, best, rankable[best]) for name, matrix in rankable.items() if name != best]
+    # One draw of the layouts for the whole tier: each comparison's draws are paired_bootstrap's, made once.
+    means = bootstrap_means(rankable, seed=seed) if len(rankable) > 1 else {}
+    raw = [
+        _comparison(name, matrix, best, rankable[best], means[name] - means[best])
+        for name, matrix in rankable.items()
+        if name != best
+    ]
     corrected = holm([c.p_value for c in raw])
     comparisons = tuple(
         Comparison(**{**c.__dict__, "p_holm": p}) for c, p in zip(raw, corrected, strict=True)

@@ -17,7 +17,16 @@ import numpy as np
 from agents.analysis.decision_rows import AgentDecision
 from agents.analysis.family import FamilyCorrection, correct_family
 from agents.analysis.over_seeds import episode_outcomes
-from agents.analysis.paired import MIN_RANKED_SEEDS, SIGNIFICANCE, Comparison, TierRanking, compare, rank_tier
+from agents.analysis.paired import (
+    BOOTSTRAP_REPS,
+    MIN_RANKED_SEEDS,
+    SIGNIFICANCE,
+    Comparison,
+    TierRanking,
+    compare,
+    p_value_error,
+    rank_tier,
+)
 from agents.analysis.records import read_records
 from agents.analysis.reflights import ReflightSummary
 from agents.common.jinja_reports import render
@@ -128,16 +137,16 @@ def tier_failures(
 
 
 def rank_suite(
-    table: Sequence[SuiteRow], failures: Mapping[str, Mapping[str, np.ndarray]]
+    table: Sequence[SuiteRow], failures: Mapping[str, Mapping[str, np.ndarray]], seed: int = 0
 ) -> dict[str, TierRanking]:
-    """Each tier's :class:`~agents.analysis.paired.TierRanking` of the agents in its rows; a tier with no rankable
-    agent flown (privileged or provisional agents only) has none."""
+    """Each tier's :class:`~agents.analysis.paired.TierRanking` of the agents in its rows, its bootstrap drawn
+    from ``seed``; a tier with no rankable agent flown (privileged or provisional agents only) has none."""
     rankings = {}
     for name, matrices in failures.items():
         privileged = [row["agent"] for row in table if row["tier"] == name and row["privileged"]]
         learned = [agent for agent in matrices if _is_shipped_learned(agent)]
         try:
-            rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned)
+            rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned, seed=seed)
         except ValueError:
             continue  # nothing rankable flown on this tier (say a reference flown on its own): no ranking
     return rankings
@@ -278,6 +287,8 @@ def suite_values(
                 "bound": (bounds or {}).get(name),
             }
         )
+    # Holm multiplies a tier's smallest p-value by its number of comparisons: the widest error near the cut.
+    holm_factor = max([1, *(len(ranking.comparisons) for ranking in rankings.values())])
     return {
         "suite_version": version,
         "current_version": SUITE_VERSION,
@@ -296,6 +307,10 @@ def suite_values(
         "headroom_failure": HEADROOM_FAILURE,
         "min_seeds": MIN_RANKED_SEEDS,
         "significance": SIGNIFICANCE,
+        "bootstrap_draws": BOOTSTRAP_REPS,
+        "p_value_error": p_value_error(SIGNIFICANCE),
+        "holm_factor": holm_factor,
+        "holm_p_value_error": p_value_error(SIGNIFICANCE, multiplier=holm_factor),
         "missing": list(missing),
         "readings": list(readings),
         "suite_noise_m": translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),

@@ -9,15 +9,21 @@ import numpy as np
 import pytest
 
 from agents.analysis.paired import (
+    BOOTSTRAP_REPS,
     MIN_RANKED_SEEDS,
+    SIGNIFICANCE,
+    bootstrap_means,
     compare,
     holm,
+    p_value_error,
     paired_bootstrap,
     probability_of_improvement,
     provisional_note,
     rank_tier,
+    resample_counts,
     runs_interval,
     seed_interval,
+    two_sided_p_value,
 )
 from agents.analysis.statistics import runs_and_layouts_interval
 
@@ -139,3 +145,93 @@ def test_a_comparison_names_the_learned_agents_it_rests_on_too_few_seeds_of() ->
     assert (
         provisional_note(compare("my_agent.py:make", rule, "bee", rule)) == ""
     )  # rules and outside agents: one run
+
+
+def _index_bootstrap(agent: np.ndarray, reference: np.ndarray, reps: int, seed: int) -> np.ndarray:
+    """The paired bootstrap by picking cells: layouts picked once for both, each agent's runs on their own."""
+    rng = np.random.default_rng(seed)
+    layouts = rng.integers(agent.shape[1], size=(reps, 1, agent.shape[1]))
+    own = rng.integers(agent.shape[0], size=(reps, agent.shape[0], 1))
+    theirs = rng.integers(reference.shape[0], size=(reps, reference.shape[0], 1))
+    return agent[own, layouts].mean(axis=(1, 2)) - reference[theirs, layouts].mean(axis=(1, 2))
+
+
+@pytest.mark.parametrize("agent_runs", [1, 10])
+def test_counted_draws_follow_the_bootstrap_that_picks_cells(agent_runs: int) -> None:
+    rates = np.linspace(0.1, 0.5, agent_runs)[:, None]
+    agent = (np.random.default_rng(1).random((agent_runs, 300)) < rates).astype(float)
+    reference = _failures(0.25, runs=10, seed=2)
+    reference[:, :100] = np.maximum(
+        reference[:, :100], agent[:1, :100]
+    )  # shared hard layouts: pairing matters
+    reps = 20_000
+    counted = paired_bootstrap(agent, reference, reps=reps, seed=3)
+    picked = _index_bootstrap(agent, reference, reps, seed=4)
+    spread = picked.std()
+    assert counted.mean() == pytest.approx(picked.mean(), abs=5 * spread / np.sqrt(reps))
+    assert counted.std() == pytest.approx(spread, rel=0.03)
+    # the 95 % interval's ends, each within a few Monte Carlo errors of a percentile of 20,000 draws
+    assert np.percentile(counted, [2.5, 97.5]) == pytest.approx(
+        np.percentile(picked, [2.5, 97.5]), abs=0.1 * spread
+    )
+
+
+def test_resampled_counts_are_multinomial_draws_of_every_item() -> None:
+    counts = resample_counts(np.random.default_rng(0), 7, 5_000)
+    assert counts.shape == (5_000, 7) and np.all(counts.sum(axis=1) == 7)
+    assert counts.mean(axis=0) == pytest.approx(
+        np.ones(7), abs=0.05
+    )  # each item picked once per draw on average
+    assert counts.var(axis=0) == pytest.approx(np.full(7, 6 / 7), rel=0.1)  # binomial(7, 1/7)
+
+
+def test_a_p_value_near_the_cut_is_known_to_a_few_thousandths() -> None:
+    assert p_value_error(SIGNIFICANCE, BOOTSTRAP_REPS) < 0.0015
+    # Holm's multiplier for the most comparisons a suite tier holds (its agents but the best) stays well inside
+    assert p_value_error(SIGNIFICANCE, BOOTSTRAP_REPS, multiplier=10) < 0.0035
+    assert p_value_error(0.05, 100) == pytest.approx(2 * np.sqrt(0.025 * 0.975 / 100))
+    assert p_value_error(0.05, 100, multiplier=4) == pytest.approx(4 * 2 * np.sqrt(0.00625 * 0.99375 / 100))
+
+
+def test_a_p_value_moves_between_bootstrap_seeds_by_its_stated_error() -> None:
+    rng = np.random.default_rng(7)
+    reference = (rng.random((1, 300)) < 0.2).astype(float)
+    agent = reference.copy()
+    agent[0, np.flatnonzero(reference[0] == 0)[:8]] = 1.0  # 8 more failures: p near 0.01
+    reps = 20_000
+    p_values = [two_sided_p_value(paired_bootstrap(agent, reference, reps=reps, seed=s)) for s in range(12)]
+    error = p_value_error(float(np.mean(p_values)), reps)
+    assert np.std(p_values, ddof=1) == pytest.approx(error, rel=0.6)
+
+
+def test_the_top_group_is_the_same_under_other_bootstrap_seeds() -> None:
+    failures = {
+        "best": _failures(0.10, seed=1),
+        "close": _failures(0.11, seed=2),
+        "learned": _failures(0.13, runs=MIN_RANKED_SEEDS, seed=5),
+        "far": _failures(0.60, seed=3),
+    }
+    groups = {rank_tier(failures, learned=["learned"], seed=seed).top_group for seed in range(3)}
+    assert groups == {("best", "close", "learned")}
+
+
+def test_bootstrap_means_pair_every_matrix_on_the_same_layout_draws() -> None:
+    same = _failures(0.3)
+    means = bootstrap_means({"a": same, "b": same.copy(), "c": _failures(0.3, runs=3)}, reps=500)
+    assert np.array_equal(means["a"], means["b"])  # one run each, the same layouts drawn: exactly equal means
+    assert two_sided_p_value(means["a"] - means["b"]) == 1.0
+
+
+def test_bad_bootstrap_input_is_one_line() -> None:
+    with pytest.raises(ValueError, match=re.escape("no (runs, layouts) matrix to draw from")):
+        bootstrap_means({})
+    with pytest.raises(ValueError, match=re.escape("paired agents must share their layouts: 300 against 50")):
+        bootstrap_means({"a": _failures(0.1), "b": _failures(0.1), "c": _failures(0.1, layouts=50)})
+    with pytest.raises(ValueError, match=re.escape("c must be a (runs, layouts) matrix")):
+        bootstrap_means({"c": np.zeros(3)})
+    with pytest.raises(ValueError, match=re.escape("p_value must lie in (0, 1], got 0.0")):
+        p_value_error(0.0)
+    with pytest.raises(ValueError, match=re.escape("reps and multiplier must be at least 1, got 0 and 1")):
+        p_value_error(0.05, 0)
+    with pytest.raises(ValueError, match=re.escape("reps and multiplier must be at least 1, got 10 and 0")):
+        p_value_error(0.05, 10, multiplier=0)

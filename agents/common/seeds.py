@@ -27,6 +27,8 @@ Sub-ranges with one use each:
 | rule resolutions (validation) | ``RULE_RESOLUTION_SEED_START ..`` (1,000) | the flow rules at finer depth histograms, per suite v2 hard tier, paired against their own resolution (``flownav rule-resolution``, ``results/rule_resolution/``) |
 | rule resolution refinement (validation) | ``RULE_RESOLUTION_REFINE_SEED_START ..`` (1,000) | the search's nearest rule at its nearest resolution and at the finer bins alone, on fresh layouts, paired against its own resolution |
 | rule resolution confirmation (validation) | ``RULE_RESOLUTION_CONFIRM_SEED_START ..`` (1,000) | a resolution picked by the search or the refinement flown again against the rule's own on fresh layouts |
+| observed-teacher recipes (validation) | ``OBSERVED_TEACHER_RECIPE_SEED_START ..`` (1,000) | the flow students that follow an observation-limited teacher, compared per recipe on the hard tier (``configs/decisions.yaml``, ``observed_teacher_recipes``) |
+| observed-teacher confirmation (validation) | ``OBSERVED_TEACHER_CONFIRM_SEED_START ..`` (1,000) | the recipe picked there flown again beside the best rule on fresh layouts, paired |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
 Per tier (``TIER_TRAINING_SEEDS``, ``TIER_VALIDATION_SEEDS``; ``trained_tiers.tier_seed_split``): a policy
@@ -96,6 +98,11 @@ RULE_RESOLUTION_CONFIRM_SEED_START = 975_000
 # Fresh validation layouts on which the rule resolution study's second stage (the refinement) flies: past the
 # confirmation's 1,000.
 RULE_RESOLUTION_REFINE_SEED_START = 976_000
+# Validation layouts on which the flow students that follow an observation-limited teacher are compared per recipe
+# (configs/decisions.yaml, observed_teacher_recipes): past the rule resolution refinement's 1,000.
+OBSERVED_TEACHER_RECIPE_SEED_START = 977_000
+# Fresh validation layouts on which the recipe picked there is confirmed against the best rule: past those 1,000.
+OBSERVED_TEACHER_CONFIRM_SEED_START = 978_000
 # How many layouts each of the three rule resolution ranges holds (the next use starts past them).
 RULE_RESOLUTION_LAYOUTS = 1_000
 # Per suite version, where ``flownav ablation --tiers`` starts its validation layouts: v1's student recipes, v2's

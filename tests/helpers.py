@@ -134,3 +134,36 @@ def processes_with(marker: str) -> list[int]:
         except OSError:
             continue
     return found
+
+
+def fly_hard_camera_layout(agent, steps: int) -> list[tuple[dict, object]]:
+    """``steps`` steps of ``agent`` (a camera-limited planner) on the hard tier's first camera-reference layout, at a
+    small camera: each observation it acted on, with its action."""
+    import gymnasium as gym
+
+    import flownav_env  # noqa: F401  (registers the env ids)
+    from agents.common.seeds import CAMERA_REFERENCE_SEED_START
+    from flownav_env.tiers import TIERS
+
+    hard = TIERS["hard"]
+    env = gym.make(
+        hard.env_id,
+        **hard.settings,
+        observe_layout=True,
+        camera_width=64,
+        camera_height=48,
+        depth_error_info=False,
+    )
+    flown = []
+    try:
+        observation, _ = env.reset(seed=CAMERA_REFERENCE_SEED_START)
+        start = [True]
+        for _ in range(steps):
+            action, _ = agent.predict(observation, episode_start=start)
+            start = [False]
+            flown.append((observation, action))
+            observation, _, terminated, truncated, _ = env.step(action)
+            assert not (terminated or truncated)
+    finally:
+        env.close()
+    return flown

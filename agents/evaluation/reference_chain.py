@@ -5,8 +5,9 @@ The chain's links, each knowing less than the one before (:data:`CHAIN`):
 1. the map: ``planner`` knows every capsule and its true state;
 2. the camera's view: ``planner_camera`` knows only the capsules that have been in view within its range;
 3. the observation's resolution: ``planner_camera_observed`` knows them only as the histogram resolves them, at
-   each resolution declared for it (the default 3 × 5, the camera student's 3 × 15, a finer 1 × 32): the best
-   flown is the link, its resolution named;
+   each resolution declared for it (the default 3 × 5, the camera student's 3 × 15, a finer 1 × 32), or with the
+   histogram integrated over frames (``planner_camera_filtered``): the best flown is the link, its resolution
+   named;
 4. true depths, learned: the best learned agent that reads true depths (a privileged twin);
 5. flow, learned: the best learned agent on the estimator's depths;
 6. flow, a rule: the best reactive rule.
@@ -28,6 +29,7 @@ from agents.analysis.paired import Comparison, compare, provisional_note
 from agents.policies import REACTIVE_AGENTS, is_learned, is_privileged
 from agents.policies.base import PLANNERS
 from agents.policies.planner_camera import ObservedCameraPlannerAgent
+from agents.policies.planner_camera_filtered import FilteredCameraPlannerAgent
 from agents.policies.registry import planner_class, requested_env_kwargs
 from flownav_env.settings import EnvSettings
 
@@ -103,7 +105,10 @@ def resolution_text(agent: str) -> str:
     settings = {**dataclasses.asdict(EnvSettings()), **requested_env_kwargs(agent)}
     rows, cols = settings["histogram_sectors"]
     edges = settings["depth_bin_edges"]
-    return f"{rows} × {cols} sectors, bins {edges[1] - edges[0]:g} m wide from {edges[0]:g}"
+    over_frames = issubclass(planner_class(agent), FilteredCameraPlannerAgent)
+    return f"{rows} × {cols} sectors, bins {edges[1] - edges[0]:g} m wide from {edges[0]:g}" + (
+        ", integrated over frames" if over_frames else ""
+    )
 
 
 def reference_chain(failures: Mapping[str, np.ndarray]) -> list[ChainLink]:

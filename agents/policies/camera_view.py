@@ -82,6 +82,86 @@ def seen_capsules(
     return seen
 
 
+def front_points(capsules: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """Each capsule's front point (N, 3): the point of its circle nearest ``position`` (the camera's, m), at the
+    camera's height.
+
+    Args:
+        capsules: (N, 3) x, y and radius (m).
+        position: (3,) the camera's world position (m).
+    """
+    capsules = np.asarray(capsules, np.float64).reshape(-1, 3)
+    position = np.asarray(position, np.float64)
+    towards = capsules[:, :2] - position[:2]
+    towards /= np.maximum(np.linalg.norm(towards, axis=1, keepdims=True), 1e-9)
+    return np.column_stack(
+        [capsules[:, :2] - capsules[:, 2:3] * towards, np.full(len(capsules), position[2])]
+    )
+
+
+def histogram_cells(
+    front: np.ndarray,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    fx: float,
+    cx: float,
+    width: int,
+    sector_columns: int,
+    bin_edges: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The histogram cell each front point (N, 3) falls in: its sector column and depth bin (clamped as the module
+    docstring says), and whether it lay inside the image. Arguments as :func:`resolved_capsules`'s.
+
+    Raises:
+        ValueError: ``sector_columns`` < 1 or fewer than two ``bin_edges``.
+    """
+    if not sector_columns >= 1:
+        raise ValueError(f"sector_columns must be >= 1, got {sector_columns!r}")
+    edges = np.asarray(bin_edges, np.float64).reshape(-1)
+    if len(edges) < 2:
+        raise ValueError(f"bin_edges must hold at least two edges, got {len(edges)}")
+    in_camera = (np.asarray(front, np.float64).reshape(-1, 3) - position) @ rotation  # rows: R^T (p - c)
+    depth = in_camera[:, 2]
+    ahead = depth > 1e-9
+    # A front point at or behind the image plane lies beyond the edge on its own side.
+    beyond = np.where(in_camera[:, 0] < 0.0, -1.0, float(width))
+    column = np.where(ahead, fx * in_camera[:, 0] / np.where(ahead, depth, 1.0) + cx, beyond)
+    inside = ahead & (column >= -0.5) & (column < width - 0.5)
+    sector = np.clip(np.floor((column + 0.5) / (width / sector_columns)), 0, sector_columns - 1).astype(int)
+    bins = np.clip(np.searchsorted(edges, depth, side="right") - 1, 0, len(edges) - 2)
+    return sector, bins, inside
+
+
+def centres_behind(front: np.ndarray, radii: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """The centres (N, 2) of capsules of ``radii`` whose front points seen from ``position`` are ``front``."""
+    away = np.asarray(front, np.float64)[:, :2] - np.asarray(position, np.float64)[:2]
+    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-9)
+    return np.asarray(front, np.float64)[:, :2] + np.asarray(radii, np.float64).reshape(-1, 1) * away
+
+
+def cell_points(
+    sector: np.ndarray,
+    bins: np.ndarray,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    fx: float,
+    cx: float,
+    width: int,
+    sector_columns: int,
+    bin_edges: np.ndarray,
+    across: np.ndarray,
+    deep: np.ndarray,
+) -> np.ndarray:
+    """World points (N, 3) in histogram cells: for each (sector, bin), the point at fraction ``across`` of the
+    sector's pixel columns and ``deep`` of the bin's depths (0.5 and 0.5: the cell's centre)."""
+    edges = np.asarray(bin_edges, np.float64).reshape(-1)
+    sector_width = width / sector_columns
+    column = (np.asarray(sector) + np.asarray(across)) * sector_width - 0.5
+    depth = edges[bins] + np.asarray(deep) * (edges[np.asarray(bins) + 1] - edges[bins])
+    ray = np.column_stack([(column - cx) / fx, np.zeros(len(column)), np.ones(len(column))])
+    return position + (ray * depth[:, None]) @ np.asarray(rotation, np.float64).T
+
+
 def resolved_capsules(
     capsules: np.ndarray,
     position: np.ndarray,
@@ -106,34 +186,12 @@ def resolved_capsules(
     Raises:
         ValueError: ``sector_columns`` < 1 or fewer than two ``bin_edges``.
     """
-    if not sector_columns >= 1:
-        raise ValueError(f"sector_columns must be >= 1, got {sector_columns!r}")
-    edges = np.asarray(bin_edges, np.float64).reshape(-1)
-    if len(edges) < 2:
-        raise ValueError(f"bin_edges must hold at least two edges, got {len(edges)}")
     capsules = np.asarray(capsules, np.float64).reshape(-1, 3)
     position = np.asarray(position, np.float64)
     rotation = np.asarray(rotation, np.float64)
-    towards = capsules[:, :2] - position[:2]
-    towards /= np.maximum(np.linalg.norm(towards, axis=1, keepdims=True), 1e-9)
-    front = np.column_stack(
-        [capsules[:, :2] - capsules[:, 2:3] * towards, np.full(len(capsules), position[2])]
-    )
-    in_camera = (front - position) @ rotation  # rows: R^T (p - c), OpenCV axes
-    depth = in_camera[:, 2]
-    ahead = depth > 1e-9
-    # A front point at or behind the image plane lies beyond the edge on its own side.
-    beyond = np.where(in_camera[:, 0] < 0.0, -1.0, float(width))
-    column = np.where(ahead, fx * in_camera[:, 0] / np.where(ahead, depth, 1.0) + cx, beyond)
-    inside = ahead & (column >= -0.5) & (column < width - 0.5)
-    sector_width = width / sector_columns
-    sector = np.clip(np.floor((column + 0.5) / sector_width), 0, sector_columns - 1)
-    column_centre = (sector + 0.5) * sector_width - 0.5
-    bins = np.clip(np.searchsorted(edges, depth, side="right") - 1, 0, len(edges) - 2)
-    depth_centre = (edges[bins] + edges[bins + 1]) / 2.0
-    ray = np.column_stack([(column_centre - cx) / fx, np.zeros(len(capsules)), np.ones(len(capsules))])
-    resolved_front = position + (ray * depth_centre[:, None]) @ rotation.T
-    away = resolved_front[:, :2] - position[:2]
-    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-9)
-    centres = resolved_front[:, :2] + capsules[:, 2:3] * away
+    camera = (position, rotation, fx, cx, width, sector_columns, bin_edges)
+    sector, bins, inside = histogram_cells(front_points(capsules, position), *camera)
+    half = np.full(len(capsules), 0.5)
+    resolved_front = cell_points(sector, bins, *camera, half, half)
+    centres = centres_behind(resolved_front, capsules[:, 2], position)
     return np.column_stack([centres, capsules[:, 2]]), inside

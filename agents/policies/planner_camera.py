@@ -123,7 +123,7 @@ class CameraPlannerAgent(PlannerAgent):
         )
         rays = column_rays(rotation, camera[_FX], camera[_CX], round(float(camera[_WIDTH])))
         rows = near[seen_capsules(position[:2], rays, capsules[near], self.view_range)]
-        estimates, whole = self._estimates(capsules[rows], camera, edges, columns)
+        estimates, whole = self._estimates(rows, capsules[rows], camera, edges, columns)
         if not self.memory:
             self._known, self._whole = {}, {}
         for row, estimate, is_whole in zip(rows.tolist(), estimates, whole.tolist(), strict=True):
@@ -132,9 +132,10 @@ class CameraPlannerAgent(PlannerAgent):
                 self._known[row], self._whole[row] = estimate, is_whole
 
     def _estimates(
-        self, capsules: np.ndarray, camera: np.ndarray, edges: np.ndarray, columns: int
+        self, rows: np.ndarray, capsules: np.ndarray, camera: np.ndarray, edges: np.ndarray, columns: int
     ) -> tuple[np.ndarray, np.ndarray]:
-        """What is known of the ``capsules`` in view: their exact rows, each seen whole."""
+        """What is known of the ``capsules`` in view (their ``rows`` in the layout name them from frame to frame):
+        their exact rows, each seen whole."""
         return capsules, np.ones(len(capsules), bool)
 
     def _replan(self, x: float, course: np.ndarray) -> None:
@@ -173,7 +174,7 @@ class ObservedCameraPlannerAgent(CameraPlannerAgent):
         return (*CAMERA_PLANNER_KEYS, "depth_histogram")
 
     def _estimates(
-        self, capsules: np.ndarray, camera: np.ndarray, edges: np.ndarray, columns: int
+        self, rows: np.ndarray, capsules: np.ndarray, camera: np.ndarray, edges: np.ndarray, columns: int
     ) -> tuple[np.ndarray, np.ndarray]:
         """The ``capsules`` in view as the histogram resolves them, and which were seen whole."""
         return resolved_capsules(

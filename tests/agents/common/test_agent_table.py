@@ -25,6 +25,8 @@ def test_kinds_come_from_the_table() -> None:
         "planner_camera_observed",
         "planner_camera_observed_3x15",
         "planner_camera_observed_1x32",
+        "planner_camera_filtered",
+        "planner_camera_filtered_3x15",
     )
     assert set(agents_where(privileged=True)) == {
         name for name in AGENTS if AGENTS[name].sees in ("true_depth", "layout", "camera_view")

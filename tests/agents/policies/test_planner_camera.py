@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import re
 
-import gymnasium as gym
 import numpy as np
 import pytest
+from helpers import fly_hard_camera_layout
 
 import flownav_env  # noqa: F401  (registers the env ids)
-from agents.common.seeds import CAMERA_REFERENCE_SEED_START
 from agents.policies import AGENT_NAMES, PRIVILEGED_AGENTS, agent_env_kwargs, is_privileged, load_agent
 from agents.policies.base import PLANNERS
 from agents.policies.planner import build_cost_to_go
@@ -18,7 +17,6 @@ from agents.policies.planner_camera import CameraPlannerAgent, ObservedCameraPla
 from agents.policies.teachers import PlannerTeacher, check_teacher_params, make_teacher
 from flownav_env.tiers import TIERS, check_agent_settings
 
-SMALL = {"camera_width": 64, "camera_height": 48, "depth_error_info": False}
 # The hard tier: a closed field (capsules across the whole lateral bound), so capsules come into view early.
 HARD = TIERS["hard"]
 
@@ -62,25 +60,6 @@ def test_an_env_without_the_privileged_keys_is_refused_in_one_line() -> None:
         ObservedCameraPlannerAgent().predict({"state": np.zeros(7)}, episode_start=np.ones(1, bool))
 
 
-def _fly(agent: CameraPlannerAgent, steps: int) -> list[tuple[dict[str, np.ndarray], np.ndarray]]:
-    """``steps`` steps of the hard tier's first camera-reference layout: each observation the agent
-    acted on, with its action."""
-    env = gym.make(HARD.env_id, **HARD.settings, observe_layout=True, **SMALL)
-    flown = []
-    try:
-        observation, _ = env.reset(seed=CAMERA_REFERENCE_SEED_START)
-        start = np.ones(1, bool)
-        for _ in range(steps):
-            action, _ = agent.predict(observation, episode_start=start)
-            start = np.zeros(1, bool)
-            flown.append((observation, action))
-            observation, _, terminated, truncated, _ = env.step(action)
-            assert not (terminated or truncated)
-    finally:
-        env.close()
-    return flown
-
-
 def _in_reach(observation: dict[str, np.ndarray], view_range: float) -> set[int]:
     """The capsules whose surface lies within ``view_range`` of the camera."""
     capsules = observation["layout"][observation["layout_mask"] > 0.5]
@@ -91,7 +70,7 @@ def _in_reach(observation: dict[str, np.ndarray], view_range: float) -> set[int]
 
 def test_it_knows_only_capsules_it_has_seen_and_replans_as_they_come() -> None:
     agent = CameraPlannerAgent()
-    flown = _fly(agent, 20)
+    flown = fly_hard_camera_layout(agent, 20)
     reached = set().union(*(_in_reach(observation, agent.view_range) for observation, _ in flown))
     assert agent.known_capsules and set(agent.known_capsules) <= reached
     layout = flown[-1][0]["layout"]
@@ -105,13 +84,13 @@ def test_it_knows_only_capsules_it_has_seen_and_replans_as_they_come() -> None:
 
 def test_without_memory_it_knows_only_what_is_in_view_now() -> None:
     agent = CameraPlannerAgent(memory=False)
-    flown = _fly(agent, 20)
+    flown = fly_hard_camera_layout(agent, 20)
     assert set(agent.known_capsules) <= _in_reach(flown[-1][0], agent.view_range)
 
 
 def test_the_observed_planner_knows_capsules_where_the_histogram_puts_them() -> None:
     agent = ObservedCameraPlannerAgent()
-    flown = _fly(agent, 20)
+    flown = fly_hard_camera_layout(agent, 20)
     layout = flown[-1][0]["layout"]
     whole = [row for row, seen_whole in agent.seen_whole.items() if seen_whole]
     assert whole and set(agent.seen_whole) == set(agent.known_capsules)
@@ -137,7 +116,7 @@ def test_a_camera_planner_teaches_over_a_batch_with_its_own_parameters() -> None
 @pytest.mark.parametrize("kind", [CameraPlannerAgent, ObservedCameraPlannerAgent])
 def test_the_refilled_table_equals_one_built_afresh_for_what_it_knows(kind: type[CameraPlannerAgent]) -> None:
     agent = kind(memory=False)
-    flown = _fly(agent, 30)
+    flown = fly_hard_camera_layout(agent, 30)
     assert agent.replans >= 2  # refilled over some stages more than once
     true, course = flown[-1][0]["true_state"], flown[-1][0]["course"]
     known = np.array([agent.known_capsules[row] for row in sorted(agent.known_capsules)]).reshape(-1, 3)

@@ -66,6 +66,12 @@ def test_the_declarations_give_the_env_settings_and_search_spaces_they_gave_befo
             "histogram_sectors": (1, 32),
             "depth_bin_edges": (0.0, *(0.25 * k for k in range(1, 13)), 5.0, 8.0, 13.0),
         },
+        "planner_camera_filtered": {"observe_layout": True},
+        "planner_camera_filtered_3x15": {
+            "observe_layout": True,
+            "histogram_sectors": (3, 15),
+            "depth_bin_edges": (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 5.0, 8.0, 13.0),
+        },
     }
     bee = {
         "centring_gain": (0.1, 4.0, True),
@@ -134,8 +140,8 @@ def test_only_a_registered_agent_can_be_unregistered(toy_rule: str) -> None:
         (
             lambda: agent_class("ppo_flow"),
             r"^agent must be one of straight, bee, bee_robust, bee_ttc, vfh, planner, planner_camera, "
-            r"planner_camera_observed, planner_camera_observed_3x15, planner_camera_observed_1x32 \(built from a "
-            r"class\), got 'ppo_flow'$",
+            r"planner_camera_observed, planner_camera_observed_3x15, planner_camera_observed_1x32, "
+            r"planner_camera_filtered, planner_camera_filtered_3x15 \(built from a class\), got 'ppo_flow'$",
         ),
         (
             lambda: search_space("straight"),
@@ -144,7 +150,8 @@ def test_only_a_registered_agent_can_be_unregistered(toy_rule: str) -> None:
         (
             lambda: planner_class("bee"),
             r"^a planner must be one of planner, planner_camera, planner_camera_observed, "
-            r"planner_camera_observed_3x15, planner_camera_observed_1x32, got 'bee'$",
+            r"planner_camera_observed_3x15, planner_camera_observed_1x32, planner_camera_filtered, "
+            r"planner_camera_filtered_3x15, got 'bee'$",
         ),
         (lambda: check_agent("bee_ttc"), r"^--agent must be one of bee, bee_robust, vfh, got 'bee_ttc'$"),
     ],

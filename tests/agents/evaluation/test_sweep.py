@@ -142,6 +142,27 @@ def test_sweep_runs_on_a_local_ray_instance(tmp_path: Path) -> None:
     ]
 
 
+def test_a_v2_sweep_cut_short_on_ray_resumes_there_without_duplicates(tmp_path: Path) -> None:
+    pytest.importorskip("ray")
+    config = load_config(
+        write_sweep_config(
+            tmp_path,
+            agents=["straight"],
+            env_id="FlowNav-v1",
+            episodes=2,
+            factors={"velocity_correlation_s": [1.0]},
+        ),
+        SweepConfig,
+    )
+    tasks = build_tasks(config, ["straight"])
+    episodes_csv = tmp_path / "sweep_episodes.csv"
+    assert execute(tasks[:2], episodes_csv, backend="ray", workers=1) == 2  # a run cut short
+    assert execute(tasks, episodes_csv, backend="ray", workers=1) == len(tasks) - 2  # resumed: the rest only
+    keys = [(r["factor"], r["level"], r["seed"]) for r in read_records(episodes_csv)]
+    assert len(keys) == len(set(keys)) == len(tasks) == 4
+    assert {r["env_id"] for r in read_records(episodes_csv)} == {"FlowNav-v1"}
+
+
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [

@@ -8,7 +8,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.studies.tier_calibration import CALIBRATION_LAYOUTS, write_calibration
+from agents.studies.tier_calibration import STUDY, write_calibration
 
 HELP = "choose the suite's hard course on validation layouts and check every tier -> calibration.md"
 
@@ -17,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--layouts",
         type=int,
-        default=CALIBRATION_LAYOUTS,
+        default=STUDY.layouts,
         help="validation layouts per candidate and tier (default: %(default)s)",
     )
     parser.add_argument(

@@ -11,7 +11,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from agents.studies.rule_resolution import CONFIRM_LAYOUTS, REFINE_LAYOUTS, SEARCH_LAYOUTS
+from agents.studies.rule_resolution import STUDY
 
 HELP = "the flow rules at finer depth histograms, chosen on validation layouts -> rule_resolution.md"
 
@@ -20,20 +20,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--search-layouts",
         type=int,
-        default=SEARCH_LAYOUTS,
+        default=STUDY.layouts.search,
         help="validation layouts per tier the search flies every rule at every resolution on (default: %(default)s)",
     )
     parser.add_argument(
         "--refine-layouts",
         type=int,
-        default=REFINE_LAYOUTS,
+        default=STUDY.layouts.refinement,
         help="fresh validation layouts per tier the refinement flies its rule on at its resolutions "
         "(default: %(default)s)",
     )
     parser.add_argument(
         "--confirm-layouts",
         type=int,
-        default=CONFIRM_LAYOUTS,
+        default=STUDY.layouts.confirmation,
         help="fresh validation layouts per tier a pick flies again on, with the rule's own resolution "
         "(default: %(default)s)",
     )

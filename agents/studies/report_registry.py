@@ -7,8 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
 
@@ -19,7 +18,7 @@ from agents.evaluation.suite import run_suite, suite_agents
 from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
 from agents.studies import confirmation, tier_calibration
-from agents.studies.ablation import compare_configs
+from agents.studies.ablation_entry import AblationSpec
 from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
@@ -46,38 +45,6 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
     with _repository_as_cwd():
         run_sweep(
             Path(config), folder, report_only=True, command=report.command.replace(" --report-only", "")
-        )
-
-
-def _ablation(
-    report: Report,
-    folder: Path,
-    *,
-    configs: Sequence[str],
-    episodes: int,
-    env: Mapping[str, object],
-    seeds: Sequence[int],
-    reference: Sequence[str],
-    tier: str | None,
-    suite_version: str,
-    confirm: bool,
-) -> None:
-    # Run folders (runs/) are not committed: an empty one makes every seed its shipped policy, as on a fresh
-    # checkout, so the report does not depend on what this machine trained.
-    with tempfile.TemporaryDirectory(prefix="flownav-no-runs-") as no_runs:
-        compare_configs(
-            [REPO_ROOT / config for config in configs],
-            seeds,
-            folder,
-            runs_dir=Path(no_runs),
-            episodes=episodes,
-            report_only=True,
-            command=report.command,
-            reference_agents=reference,
-            env=env,
-            tier=tier,
-            suite_version=suite_version,
-            confirm=confirm,
         )
 
 
@@ -130,41 +97,36 @@ STUDENT_RECIPES = tuple(
 CAMERA_STUDENT_PICK = "configs/experiments/ppo_flow_camera_student_fine_rounds6.yaml"
 
 
-def _ablation_report(
-    folder: str,
-    configs: Sequence[str],
-    episodes: int,
-    env: Mapping[str, object],
-    seeds: Sequence[int] = range(5),
-    reference: Sequence[str] = ("bee_robust", "bee_ttc"),
-    tier: str | None = None,
-    suite_version: str = "1",
-    confirm: bool = False,
-) -> Report:
-    """An ``ablation.md``, its command written from the same settings the writer is called with (a tier's of
-    ``suite_version``: the student's recipes were compared on suite v1's tiers; with ``confirm``, on the tier's
-    confirmation layouts)."""
-    options = f" --layouts {episodes}" + "".join(f" --env {key}={value}" for key, value in env.items())
-    options += f" --tiers {tier} --suite-version {suite_version}" if tier else ""
-    options += " --confirm" if confirm else ""
-    return Report(
-        f"{folder}/ablation.md",
-        name=folder.replace("/", "-").replace("_", "-"),
-        command=f"flownav ablation --configs {' '.join(configs)} --seeds {','.join(map(str, seeds))} "
-        f"--reference {','.join(reference)}{options} --out results/{folder} --report-only",
-        inputs=(f"{folder}/*/seed_*.csv", f"{folder}/reference/*.csv"),
-        write=partial(
-            _ablation,
-            configs=configs,
-            episodes=episodes,
-            env=env,
-            seeds=seeds,
-            reference=reference,
-            tier=tier,
-            suite_version=suite_version,
-            confirm=confirm,
-        ),
-    )
+# The ablations rebuilt from their committed episodes: the flow-gap levers, clean and in the two robustness
+# conditions, and the planner's student's recipes per tier (compared on suite v1's tiers).
+ABLATIONS = (
+    AblationSpec("ablation", _CLEAN_ABLATION, layouts=100),
+    AblationSpec("ablation/density_0.18", _CONDITION_ABLATION, layouts=50, env=(("obstacle_density", 0.18),)),
+    AblationSpec("ablation/speed_1.5", _CONDITION_ABLATION, layouts=50, env=(("forward_speed", 1.5),)),
+    *(
+        AblationSpec(
+            f"student_recipes/{name}",
+            STUDENT_RECIPES,
+            layouts=50,
+            seeds=(0, 1),
+            reference=("bee_ttc",),
+            tier=name,
+            suite_version="1",
+        )
+        for name in TIER_NAMES
+    ),
+)
+# The camera student's pick flown again on suite v2's hard tier's fresh confirmation layouts.
+CAMERA_STUDENT_CONFIRMATION = AblationSpec(
+    "student_recipes_v2/hard_confirmation",
+    (CAMERA_STUDENT_PICK,),
+    layouts=50,
+    seeds=(0, 1),
+    reference=("bee_ttc",),
+    tier="hard",
+    suite_version="2",
+    confirm=True,
+)
 
 
 REPORTS: tuple[Report, ...] = (
@@ -229,13 +191,7 @@ REPORTS: tuple[Report, ...] = (
         ),
         staged=False,
     ),
-    _ablation_report("ablation", _CLEAN_ABLATION, 100, {}),
-    _ablation_report("ablation/density_0.18", _CONDITION_ABLATION, 50, {"obstacle_density": 0.18}),
-    _ablation_report("ablation/speed_1.5", _CONDITION_ABLATION, 50, {"forward_speed": 1.5}),
-    *(
-        _ablation_report(f"student_recipes/{name}", STUDENT_RECIPES, 50, {}, (0, 1), ("bee_ttc",), name)
-        for name in TIER_NAMES
-    ),
+    *(spec.report() for spec in ABLATIONS),
     Report(
         "suite_v1/suite_calibration/calibration.md",
         name="calibrate-tiers",
@@ -313,17 +269,7 @@ REPORTS: tuple[Report, ...] = (
         inputs=(*BENCHMARK_INPUTS, "confirmation/*.csv"),
         write=lambda report, folder: write_flow_gap(folder, folder, report.command),
     ),
-    _ablation_report(
-        "student_recipes_v2/hard_confirmation",
-        (CAMERA_STUDENT_PICK,),
-        50,
-        {},
-        (0, 1),
-        ("bee_ttc",),
-        "hard",
-        suite_version="2",
-        confirm=True,
-    ),
+    CAMERA_STUDENT_CONFIRMATION.report(),
     Report(
         "rule_resolution/rule_resolution.md",
         name="rule-resolution",

@@ -14,7 +14,8 @@ flies :data:`REFINE_RULE` at its own resolution and each of :data:`REFINE_CANDID
 a pick (the search's, or for :data:`REFINE_RULE` the refinement's) is the best of several, so it flies again, with
 the rule's own resolution, on fresh layouts from :data:`~agents.common.seeds.RULE_RESOLUTION_CONFIRM_SEED_START`:
 confirmed only where that interval lies wholly below 0 too. Every episode goes to ``<out>/episodes.csv``
-(resumable: a run flies only what it lacks).
+(resumable: a run flies only what it lacks). The rules, tiers, candidates and layouts per stage are
+``configs/studies/rule_resolution.yaml`` (:data:`STUDY`).
 """
 
 from __future__ import annotations
@@ -38,36 +39,20 @@ from agents.common.seeds import (
 )
 from agents.evaluation.episode_tasks import EpisodeTask, rows_of
 from agents.evaluation.runner import execute
-from agents.policies.histogram_resolution import FINE_BIN_EDGES, HistogramResolution
+from agents.policies.histogram_resolution import HistogramResolution
+from agents.studies.study_configs import rule_resolution_config
 from flownav_env.tiers import check_agent_settings, tier
 
-RULES = ("bee_robust", "bee_ttc", "vfh")
-# Suite v2's tiers where the flow student's finer histogram beat the best rule; the clean ones are left to it.
-SUITE_VERSION = "2"
-TIERS = ("hard", "hard_noisy")
+# The study's choices (configs/studies/rule_resolution.yaml says why each); the names below are read from it.
+STUDY = rule_resolution_config()
+RULES = tuple(STUDY.rules)
+TIERS = tuple(STUDY.tiers)
 TODAY = HistogramResolution()
-# Columns that split the bee's fifths of the view on column edges (10, 15; 9 would cut them), then the student's.
-CANDIDATES = (
-    HistogramResolution((3, 10)),
-    HistogramResolution((3, 15)),
-    HistogramResolution((3, 15), FINE_BIN_EDGES),
-)
+CANDIDATES = STUDY.candidate_resolutions
 SEARCH_RESOLUTIONS = (TODAY, *CANDIDATES)
-# The refinement, stated after the search and before it flew: the search picked nothing, and its nearest candidate
-# (bee_ttc at 3x15-9bins; results/rule_resolution/rule_resolution.md) was short of power. It flies again on twice
-# the layouts, beside the student's bins at the rule's own columns, which tells the bins' share of a gain from the
-# columns' (the search flew 3x15 with the default bins too).
-REFINE_RULE = "bee_ttc"
-REFINE_CANDIDATES = (
-    HistogramResolution((3, 15), FINE_BIN_EDGES),
-    HistogramResolution((3, 5), FINE_BIN_EDGES),
-)
+REFINE_RULE = STUDY.refine_rule
+REFINE_CANDIDATES = STUDY.refine_resolutions
 RESOLUTIONS = (*SEARCH_RESOLUTIONS, *(r for r in REFINE_CANDIDATES if r not in SEARCH_RESOLUTIONS))
-# Episodes: 3 rules x 4 resolutions x 2 tiers x 25 = 600 searched; 3 resolutions x 2 tiers x 50 = 300 refining;
-# 2 resolutions x 2 tiers x 50 = 200 confirming per pick.
-SEARCH_LAYOUTS = 25
-REFINE_LAYOUTS = 50
-CONFIRM_LAYOUTS = 50
 EPISODES_FILE = "episodes.csv"
 STAGES = {
     "search": RULE_RESOLUTION_SEED_START,
@@ -120,14 +105,14 @@ def resolution_tasks(rule: str, resolution: HistogramResolution, seeds: range) -
     settings = resolution.env_kwargs()
     tasks = []
     for name in TIERS:
-        check_agent_settings(rule, settings, name, version=SUITE_VERSION)
+        check_agent_settings(rule, settings, name, version=STUDY.suite_version)
         tasks += [
             EpisodeTask(
                 rule,
                 f"{name}/{resolution.name}",
                 0.0,
                 seed,
-                env_id=tier(name, SUITE_VERSION).env_id,
+                env_id=tier(name, STUDY.suite_version).env_id,
                 env_kwargs=tuple(sorted(settings.items())),
                 bee_params=tuple(sorted(resolution.rule_parameters().items())),
             )
@@ -267,9 +252,9 @@ def _confirmed(
 def run_rule_resolution(
     out: Path,
     *,
-    search_layouts: int = SEARCH_LAYOUTS,
-    refine_layouts: int = REFINE_LAYOUTS,
-    confirm_layouts: int = CONFIRM_LAYOUTS,
+    search_layouts: int = STUDY.layouts.search,
+    refine_layouts: int = STUDY.layouts.refinement,
+    confirm_layouts: int = STUDY.layouts.confirmation,
     report_only: bool = False,
 ) -> RuleResolutionResult:
     """Fly (unless ``report_only``) the search, the refinement, then the confirmation of each pick, into

@@ -1,11 +1,12 @@
 """How suite v1's tiers were chosen, on validation layouts only (``flownav calibrate-tiers``). Suite v2 chose
 none of its tiers this way: they are fixed from physics (:mod:`flownav_env.tiers`), so this study is v1's
-history and reads v1's tiers (:data:`CALIBRATED_VERSION`).
+history and reads v1's tiers (the config's ``calibrated_version``). Its choices are
+``configs/studies/tier_calibration.yaml`` (:data:`STUDY`).
 
-1. **Hard course.** Every candidate of :data:`CANDIDATE_COURSES` (forward speed × obstacle density) is flown
-   by the :data:`COURSE_AGENTS` on :data:`CALIBRATION_LAYOUTS` validation layouts from
-   ``TIER_CALIBRATION_SEED_START``. The pick is the candidate whose best agent's failure rate lies in
-   :data:`TARGET_FAILURE` and nearest its middle (ties: the slower, then the sparser course).
+1. **Hard course.** Every candidate course of the config (forward speed × obstacle density) is flown by the
+   :data:`COURSE_AGENTS` on the config's ``layouts`` validation layouts from ``TIER_CALIBRATION_SEED_START``.
+   The pick is the candidate whose best agent's failure rate lies in the config's ``target_failure`` and
+   nearest its middle (ties: the slower, then the sparser course).
 2. **Every tier but clean as registered** (``flownav_env.tiers``, with the frozen hard course) is flown by every
    agent on the same layouts, to show the best agent of each and how many pairs of agents a paired test tells apart.
 
@@ -35,45 +36,25 @@ from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
+from agents.studies.study_configs import tier_calibration_config
 from agents.studies.wording import render_report
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, Tier
 from flownav_env.tiers import tier as tier_of_version
 
-# The suite version whose tiers this study calibrated.
-CALIBRATED_VERSION = "1"
+# The study's choices (configs/studies/tier_calibration.yaml says why each); the agents' names are read from it.
+STUDY = tier_calibration_config()
+COURSE_AGENTS = tuple(STUDY.course_agents)
+TIER_AGENTS = tuple(STUDY.tier_agents)
+STAGES = ("course", "tiers")
 
 
 def tier(name: str) -> Tier:
     """The tier ``name`` of the calibrated version."""
-    return tier_of_version(name, CALIBRATED_VERSION)
+    return tier_of_version(name, STUDY.calibrated_version)
 
 
-CANDIDATE_COURSES = tuple(
-    {"forward_speed": speed, "obstacle_density": density}
-    for speed in (1.5, 2.0, 2.5)
-    for density in (0.12, 0.18, 0.24)
-)
-# The agents that lead on clean layouts or in the sweep's speed and density cells (vfh, bee and the other PPO
-# agents trail them everywhere there, results/sweep.md); every agent flies stage 2.
-COURSE_AGENTS = ("bee_robust", "bee_ttc", "ppo_flow_course_approach_curriculum_slow")
-STAGES = ("course", "tiers")
-# The agents the tiers were calibrated with when suite version 1 was frozen; an agent added later (the winner's
-# recipe on true depths) is scored on the frozen tiers by `flownav suite`, not flown into the calibration.
-TIER_AGENTS = (
-    "bee",
-    "bee_robust",
-    "bee_ttc",
-    "vfh",
-    "ppo_flow",
-    "ppo_robust",
-    "ppo_oracle",
-    "ppo_flow_course_approach_curriculum_slow",
-)
-CALIBRATION_LAYOUTS = 100
-CALIBRATION_RUNS = 5  # a learned agent's seeds shipped when the tiers were frozen (ppo_flow's 5-9 came later)
 # The clean tier is today's defaults, flown on validation layouts many times already (results/ablation/).
 CALIBRATED_TIERS = tuple(name for name in TIER_NAMES if name != "clean")
-TARGET_FAILURE = (0.20, 0.50)
 EPISODES_CSV = "calibration_episodes.csv"
 # Versions of the realistic sensor tried before it was frozen, flown by hand (the note in calibration.md).
 PILOT_CSV = "sensor_pilot_episodes.csv"
@@ -90,13 +71,11 @@ def tier_label(name: str) -> str:
     return f"tier:{name}[{course_label(tier(name).settings)}]"
 
 
-def calibration_tasks(
-    layouts: int = CALIBRATION_LAYOUTS, stages: Sequence[str] = STAGES
-) -> list[EpisodeTask]:
+def calibration_tasks(layouts: int = STUDY.layouts, stages: Sequence[str] = STAGES) -> list[EpisodeTask]:
     """Stage 1, ``course`` (every candidate course × course agent), then stage 2, ``tiers`` (every tier × tier
     agent), layout by layout within each. Stage 2 flies the tiers as frozen, so it runs after the pick."""
     seeds = range(TIER_CALIBRATION_SEED_START, TIER_CALIBRATION_SEED_START + layouts)
-    runs = {agent: runs_to_fly(agent)[0][:CALIBRATION_RUNS] for agent in TIER_AGENTS}
+    runs = {agent: runs_to_fly(agent)[0][: STUDY.runs] for agent in TIER_AGENTS}
 
     def run_on(agent: str, index: int) -> str:
         return runs[agent][index % len(runs[agent])]  # a learned agent: its training seeds in turn
@@ -105,7 +84,7 @@ def calibration_tasks(
         EpisodeTask(
             run_on(agent, i), course_label(course), 0.0, seed, env_kwargs=tuple(sorted(course.items()))
         )
-        for course in (CANDIDATE_COURSES if "course" in stages else ())
+        for course in (STUDY.courses if "course" in stages else ())
         for i, seed in enumerate(seeds)
         for agent in COURSE_AGENTS
     ]
@@ -135,7 +114,7 @@ def failure_table(rows: Sequence[EpisodeRow]) -> list[CalibrationCell]:
 
 
 def pick_course(table: list[CalibrationCell]) -> tuple[dict[str, float] | None, dict[str, CalibrationCell]]:
-    """The chosen candidate (None if no candidate's best agent lands in :data:`TARGET_FAILURE`) and, per
+    """The chosen candidate (None if no candidate's best agent lands in the config's ``target_failure``) and, per
     candidate label, its best agent's row."""
     best: dict[str, CalibrationCell] = {}
     for row in table:
@@ -143,11 +122,11 @@ def pick_course(table: list[CalibrationCell]) -> tuple[dict[str, float] | None, 
             continue
         if row.factor not in best or row.failure_rate < best[row.factor].failure_rate:
             best[row.factor] = row
-    low, high = TARGET_FAILURE
+    low, high = STUDY.target_failure
     middle = (low + high) / 2.0
     inside = [
         course
-        for course in CANDIDATE_COURSES
+        for course in STUDY.courses
         if course_label(course) in best and low <= best[course_label(course)].failure_rate <= high
     ]
     if not inside:
@@ -183,7 +162,7 @@ def separated_pairs(episodes: Sequence[EpisodeRow]) -> tuple[int, int]:
 def run_calibration(
     out: Path,
     *,
-    layouts: int = CALIBRATION_LAYOUTS,
+    layouts: int = STUDY.layouts,
     workers: int = 2,
     report_only: bool = False,
     stages: Sequence[str] = STAGES,
@@ -235,9 +214,9 @@ def report_lines(result: CalibrationResult, command: str) -> list[str]:
         "command": command,
         "episodes_csv": EPISODES_CSV,
         "first": TIER_CALIBRATION_SEED_START,
-        "courses": [(course_label(course), course) for course in CANDIDATE_COURSES],
+        "courses": [(course_label(course), course) for course in STUDY.courses],
         "course_agents": COURSE_AGENTS,
-        "target": TARGET_FAILURE,
+        "target": tuple(STUDY.target_failure),
         "cells": cells,
         "chosen_label": "" if chosen is None else course_label(chosen),
         "hard_course": course_label(HARD_COURSE),

@@ -8,14 +8,17 @@ import argparse
 import importlib
 import shlex
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
 
 from agents.cli import COMMANDS, main
 from agents.cli.arguments import tier_name_of
-from agents.common.locations import RESULTS_DIR
-from agents.studies import reports
+from agents.common.locations import REPO_ROOT, RESULTS_DIR
+from agents.studies import ablation, ablation_entry, reports
+from agents.studies.ablation_entry import AblationSpec
+from agents.studies.report_registry import ABLATIONS, CAMERA_STUDENT_CONFIRMATION
 from agents.studies.reports import (
     REPORTS,
     comparable_text,
@@ -163,6 +166,9 @@ def test_every_report_is_regenerated_or_says_why_not() -> None:
     assert len(report_names()) == len(set(report_names()))
 
 
+ABLATION_SPECS = {spec.name: spec for spec in (*ABLATIONS, CAMERA_STUDENT_CONFIRMATION)}
+
+
 def _parsed(command: str) -> argparse.Namespace:
     words = shlex.split(command)
     assert words[0] == "flownav", command
@@ -180,12 +186,45 @@ def test_each_command_is_a_valid_report_only_call_that_writes_where_the_report_l
     assert Path(args.out) == Path("results") / Path(report.path).parent
     if hasattr(args, "report_only"):
         assert args.report_only, report.command
-    if report.name.startswith(("ablation", "student-recipes")):
-        write = report.write
-        assert [str(path) for path in args.configs] == list(write.keywords["configs"])
-        assert args.layouts == write.keywords["episodes"] and dict(args.env) == write.keywords["env"]
-        assert parse_seeds(args.seeds) == list(write.keywords["seeds"])
-        assert args.reference == ",".join(write.keywords["reference"])
-        assert (args.tiers and tier_name_of(args.tiers)) == write.keywords["tier"]
-        assert args.suite_version == write.keywords["suite_version"] or not args.tiers
-        assert args.confirm == write.keywords["confirm"]
+    spec = ABLATION_SPECS.get(report.name)
+    if spec is not None:  # the named options of the spec the command and the writer are both derived from
+        assert report.write == spec.write and report.command == spec.command
+        assert [str(path) for path in args.configs] == list(spec.configs)
+        assert args.layouts == spec.layouts and tuple(args.env) == spec.env
+        assert tuple(parse_seeds(args.seeds)) == spec.seeds
+        assert args.reference == ",".join(spec.reference)
+        assert (args.tiers and tier_name_of(args.tiers)) == spec.tier
+        assert args.suite_version == spec.suite_version or not args.tiers
+        assert args.confirm == spec.confirm
+
+
+@pytest.mark.parametrize("spec", ABLATION_SPECS.values(), ids=lambda spec: spec.name)
+def test_an_ablation_report_is_written_with_the_values_its_command_gives_flownav_ablation(
+    spec: AblationSpec, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[tuple[tuple[object, ...], dict[str, object]]] = []
+
+    def compare_configs(*args: object, **options: object) -> list[str]:
+        calls.append((args, options))
+        return []
+
+    monkeypatch.setattr(ablation, "compare_configs", compare_configs)  # what the command line imports on use
+    monkeypatch.setattr(ablation_entry, "compare_configs", compare_configs)
+    monkeypatch.setattr(sys, "argv", shlex.split(spec.command))
+    (report,) = select_reports([spec.name])
+    assert main(shlex.split(spec.command)[1:]) == 0
+    report.write(report, tmp_path)
+    (cli_args, cli), (registry_args, registry) = calls
+    assert registry_args[0] == [REPO_ROOT / path for path in cli_args[0]]  # configs: the same files
+    assert registry_args[1] == cli_args[1] and registry_args[2] == tmp_path  # seeds; the folder written
+    same = (
+        "episodes",
+        "report_only",
+        "command",
+        "reference_agents",
+        "env",
+        "tier",
+        "suite_version",
+        "confirm",
+    )
+    assert {key: registry[key] for key in same} == {key: cli[key] for key in same}

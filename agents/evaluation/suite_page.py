@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 
 from agents.analysis.decision_rows import AgentDecision
-from agents.analysis.family import FamilyCorrection, correct_family
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import (
     BOOTSTRAP_REPS,
@@ -38,6 +37,7 @@ from agents.evaluation.lane import LANE_DIR, NEAR_EDGE_M, LaneRow, SidewaysRow, 
 from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_checks import VelocityReading
+from agents.evaluation.suite_findings import findings
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
 from agents.policies import (
@@ -298,7 +298,6 @@ def suite_values(
         "machine": machine,
         "reflights": list(reflights),
         "velocity_reading": velocity_reading,
-        "decisions": {agent: list(rows) for agent, rows in (decisions or {}).items()},
         "first_layout": layouts.start,
         "last_layout": layouts.stop - 1,
         "layouts": len(layouts),
@@ -316,8 +315,6 @@ def suite_values(
         "suite_noise_m": translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),
         "suite_reading": VELOCITY_READINGS[SUITE_READING][0],
         "reading_dir": SENSOR_READING_DIR,
-        "gains": list(gains),
-        "trained_on": {gain.learned: _trained_on(gain.learned, version) for gain in gains},
         "recipe_reports": dict(recipe_reports or {}),
         "camera_recipe_reports": dict(camera_recipe_reports or {}),
         "camera_reference": CAMERA_VIEW_REFERENCE,
@@ -329,32 +326,12 @@ def suite_values(
         "lane_seed": LANE_SEED_START,
         "retired": list(retired),
         "not_flown": dict(NOT_FLOWN_ON.get(version, {})),
-        "chains": {name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
-        "secondary": secondary_family(bounds or {}, chains or {}, gains),
+        "trained_on": {gain.learned: _trained_on(gain.learned, version) for gain in gains},
+        **findings(bounds or {}, chains or {}, gains, decisions or {}),
         "included_files": list(included_files),
         "not_counted": list(not_counted),
         "figure": figure,
     }
-
-
-def secondary_family(
-    bounds: Mapping[str, TierBound], chains: Mapping[str, Sequence[ChainLink]], gains: Sequence[LearningGain]
-) -> FamilyCorrection:
-    """The page's secondary comparisons (what each tier allows, the chain's steps, learning against the rules and
-    against the camera-limited reference) corrected as one family; the ranking has its own correction."""
-    family = [(f"`{name}`: best − planner", bound["gap"]) for name, bound in bounds.items()]
-    family += [
-        (f"`{name}`: {link.knows}", link.cost)
-        for name, links in chains.items()
-        if len(links) > 1
-        for link in links
-        if link.cost is not None
-    ]
-    for gain in gains:
-        family.append((f"`{gain.tier}`: learned − rule", gain.comparison))
-        if gain.camera is not None:
-            family.append((f"`{gain.tier}`: learned − camera-limited reference", gain.camera))
-    return correct_family(family)
 
 
 def beside_suite(

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.family import correct_family
 from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import Comparison, compare, provisional_note, runs_interval, verdict
 from agents.analysis.records import read_records
@@ -301,7 +302,12 @@ def flow_gap_values(
     if result is None:
         result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     confirmation = confirmation_rows(result, results, policies_dir)
+    pick_suite = _suite_rows(results, PICK, TRUE_DEPTH_RECIPE, policies_dir)
+    family = [(f"{where}, fresh validation", gap(flow, truth)) for where, flow, truth in confirmation]
+    family += [(f"`{tier_name}`, suite", gap(flow, truth)) for tier_name, flow, truth in pick_suite]
     return {
+        # The page's flow − truth comparisons as one family (Holm): each table reads them one by one.
+        "gap_family": correct_family(family),
         **report_values(data),
         **_plain_values(data, results, policies_dir),
         **selection_values(result, search_record(results / "ablation")),
@@ -313,9 +319,7 @@ def flow_gap_values(
         "true_depth_stages": choices().truth_stages,
         "truth_confirmation_table": gap_table(PICK, TRUE_DEPTH_RECIPE, confirmation, "condition"),
         "truth_confirmation": [(where, gap(flow, truth)) for where, flow, truth in confirmation],
-        "truth_suite_table": gap_table(
-            PICK, TRUE_DEPTH_RECIPE, _suite_rows(results, PICK, TRUE_DEPTH_RECIPE, policies_dir), "tier"
-        ),
+        "truth_suite_table": gap_table(PICK, TRUE_DEPTH_RECIPE, pick_suite, "tier"),
         "suite_version": READ_SUITE_VERSION,
         "confirmation_layouts_wanted": CONFIRMATION_LAYOUTS,
     }

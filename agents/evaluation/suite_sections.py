@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TypedDict
 
 import numpy as np
 
@@ -15,19 +14,20 @@ from agents.analysis.decision_rows import DECISION_CSV, AgentDecision, read_deci
 from agents.analysis.paired import TierRanking
 from agents.analysis.reflights import REFLIGHT_CSV, ReflightSummary, read_reflights, summarise_reflights
 from agents.evaluation.episode_tasks import TieredRow
-from agents.evaluation.lane import LaneRow, SidewaysRow, sideways_extent
+from agents.evaluation.lane import SidewaysRow, sideways_extent
 from agents.evaluation.learning_gain import LearningGain, learning_gains
 from agents.evaluation.reference_chain import ChainLink, reference_chain
 from agents.evaluation.suite_checks import VelocityReading, velocity_reading_values
-from agents.evaluation.suite_page import RetiredAgent, SensorReading, beside_suite
+from agents.evaluation.suite_page import BesideSuite, beside_suite
 from agents.evaluation.tier_bound import TierBound, suite_bounds
 
 # The file a suite's episodes are kept in, in its folder.
 EPISODES_CSV = "suite_episodes.csv"
 
 
-class PageSections(TypedDict):
-    """What :func:`page_sections` gives, as :func:`~agents.evaluation.suite_page.suite_values` takes it."""
+class PageSections(BesideSuite):
+    """What :func:`page_sections` gives, as :func:`~agents.evaluation.suite_page.suite_values` takes it: what is
+    kept beside the suite, and what its failure matrices and episodes give."""
 
     bounds: dict[str, TierBound]
     gains: list[LearningGain]
@@ -36,11 +36,6 @@ class PageSections(TypedDict):
     reflights: list[ReflightSummary]
     velocity_reading: VelocityReading | None
     decisions: dict[str, list[AgentDecision]]
-    readings: list[SensorReading]
-    recipe_reports: dict[str, str]
-    camera_recipe_reports: dict[str, str]
-    lanes: list[LaneRow]
-    retired: list[RetiredAgent]
 
 
 def page_sections(

@@ -33,6 +33,22 @@ from agents.policies.planner import NEAR_X_M, PLANNER_KEYS, PlannerAgent, unbatc
 CAMERA_PLANNER_KEYS = (*PLANNER_KEYS, "camera", "depth_bin_edges")
 # Indices into the env's ``camera`` key (flownav_env.privileged.CAMERA_FIELDS).
 _POSITION, _ROTATION, _FX, _CX, _WIDTH = slice(0, 3), slice(3, 12), 12, 13, 14
+# A frame's view as the histogram functions of agents.policies.camera_view take it, after the capsules: camera
+# position, rotation, fx, cx, width (px), sector columns and depth bin edges.
+View = tuple[np.ndarray, np.ndarray, float, float, int, int, np.ndarray]
+
+
+def histogram_view(camera: np.ndarray, columns: int, edges: np.ndarray) -> View:
+    """The env's ``camera`` key and the histogram's sector ``columns`` and bin ``edges`` as a :data:`View`."""
+    return (
+        camera[_POSITION],
+        camera[_ROTATION].reshape(3, 3),
+        float(camera[_FX]),
+        float(camera[_CX]),
+        round(float(camera[_WIDTH])),
+        columns,
+        edges,
+    )
 
 
 @dataclass
@@ -177,13 +193,4 @@ class ObservedCameraPlannerAgent(CameraPlannerAgent):
         self, rows: np.ndarray, capsules: np.ndarray, camera: np.ndarray, edges: np.ndarray, columns: int
     ) -> tuple[np.ndarray, np.ndarray]:
         """The ``capsules`` in view as the histogram resolves them, and which were seen whole."""
-        return resolved_capsules(
-            capsules,
-            camera[_POSITION],
-            camera[_ROTATION].reshape(3, 3),
-            float(camera[_FX]),
-            float(camera[_CX]),
-            round(float(camera[_WIDTH])),
-            columns,
-            edges,
-        )
+        return resolved_capsules(capsules, *histogram_view(camera, columns, edges))

@@ -24,13 +24,7 @@ from agents.policies.camera_view import (
     front_points,
     histogram_cells,
 )
-from agents.policies.planner_camera import ObservedCameraPlannerAgent
-
-# Indices into the env's ``camera`` key (flownav_env.privileged.CAMERA_FIELDS), as planner_camera reads them.
-_POSITION, _ROTATION, _FX, _CX, _WIDTH = slice(0, 3), slice(3, 12), 12, 13, 14
-# A frame's view as the histogram functions take it: camera position, rotation, fx, cx, width (px), sector columns
-# and depth bin edges.
-View = tuple[np.ndarray, np.ndarray, float, float, int, int, np.ndarray]
+from agents.policies.planner_camera import ObservedCameraPlannerAgent, View, histogram_view
 
 
 @dataclass
@@ -60,15 +54,7 @@ class FilteredCameraPlannerAgent(ObservedCameraPlannerAgent):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Each capsule in view at the mean of the centres that every frame's cell allows, and whether its front
         point lay inside the image now (a frame that clamps it to the edge sector narrows nothing)."""
-        view: View = (
-            camera[_POSITION],
-            camera[_ROTATION].reshape(3, 3),
-            float(camera[_FX]),
-            float(camera[_CX]),
-            round(float(camera[_WIDTH])),
-            columns,
-            edges,
-        )
+        view = histogram_view(camera, columns, edges)
         capsules = np.asarray(capsules, np.float64).reshape(-1, 3)
         sector, bins, inside = histogram_cells(front_points(capsules, view[0]), *view)
         estimates = np.empty_like(capsules)

@@ -19,7 +19,7 @@ from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
 from agents.studies import confirmation, tier_calibration
 from agents.studies.ablation_entry import AblationSpec
-from agents.studies.benchmark_report import write_benchmark, write_thesis_closed_loop
+from agents.studies.benchmark_report import write_benchmark, write_readme_results, write_thesis_closed_loop
 from agents.studies.error_analysis_report import write_error_analysis_from
 from agents.studies.flow_gap_report import write_flow_gap
 from agents.studies.report_entry import Report
@@ -46,6 +46,15 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
         run_sweep(
             Path(config), folder, report_only=True, command=report.command.replace(" --report-only", "")
         )
+
+
+def _benchmark_and_readme_block(report: Report, folder: Path) -> None:
+    """``benchmark.md``, and where it is published (``--out results``) the README's results block beside it, which
+    words the same values (``write_readme_results``); a check elsewhere leaves the README alone (the block is
+    compared with the committed one by ``tests/agents/studies/test_benchmark_report.py``)."""
+    write_benchmark(folder, folder, report.command)
+    if Path(folder).resolve() == RESULTS_DIR.resolve():
+        write_readme_results(folder, REPO_ROOT / "README.md")
 
 
 def _thesis_block(report: Report, folder: Path) -> None:
@@ -209,7 +218,7 @@ REPORTS: tuple[Report, ...] = (
         name="benchmark",
         command="flownav reports --out results --only benchmark",
         inputs=BENCHMARK_INPUTS,
-        write=lambda report, folder: write_benchmark(folder, folder, report.command),
+        write=_benchmark_and_readme_block,
     ),
     *(
         Report(

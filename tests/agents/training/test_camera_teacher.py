@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from helpers import teacher_started_record, tiny_train_config
 
+from agents.policies import agent_env_kwargs
 from agents.policies.base import PLANNERS
 from agents.policies.planner_camera import CAMERA_PLANNER_KEYS
 from agents.policies.teachers import PlannerTeacher, check_teacher, make_teacher
@@ -38,7 +39,14 @@ def test_every_planner_teaches_with_its_own_privileged_settings(name: str) -> No
     teacher = make_teacher(name)
     assert isinstance(teacher, PlannerTeacher) and teacher.name == name
     assert privileged_settings(teacher) == {"observe_layout": True}
-    check_teacher(name, {}, "run.yaml")
+    # A run's env holds the settings the teacher reads that any agent may ask for (a finer histogram), as YAML
+    # writes them: lists.
+    asked = {
+        key: list(value) if isinstance(value, tuple) else value
+        for key, value in agent_env_kwargs(name).items()
+        if key != "observe_layout"
+    }
+    check_teacher(name, asked, "run.yaml")
 
 
 def test_the_camera_planner_teaches_with_its_own_parameters() -> None:
@@ -92,7 +100,7 @@ def test_a_teacher_name_that_is_no_agent_is_refused_naming_it() -> None:
 def test_a_planner_teacher_of_a_rule_is_refused_naming_it() -> None:
     with pytest.raises(
         ValueError,
-        match=r"^a planner teacher must be one of planner, planner_camera, planner_camera_observed, got 'bee_ttc'$",
+        match=rf"^a planner teacher must be one of {', '.join(PLANNERS)}, got 'bee_ttc'$",
     ):
         PlannerTeacher(name="bee_ttc")
 

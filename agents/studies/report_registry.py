@@ -250,6 +250,8 @@ REPORTS: tuple[Report, ...] = (
             "suite_v2_calibration/*.csv",
             "suite_v2_calibration/sensitivity/*.csv",
             "suite_reflight.csv",
+            # The logged choices per agent (flownav decision-log writes it beside its page).
+            "decision_log.csv",
         ),
         write=lambda report, folder: run_suite(
             suite_agents("2"), folder, report_only=True, command=report.command, version="2"

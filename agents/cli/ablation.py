@@ -65,6 +65,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         + ", ".join(f"suite v{version} from {start:,}" for version, start in TIER_CONFIRM_SEED_STARTS.items())
         + "), on which nothing was chosen, instead of its recipe layouts: a recipe picked there flown again",
     )
+    parser.add_argument(
+        "--layout-start",
+        type=int,
+        default=None,
+        help="fly the validation layouts from this seed instead (a search's own range, declared in "
+        "configs/decisions.yaml before its flights; default: the tier's or the ablation's)",
+    )
     parser.add_argument("--out", default="runs/ablation", help="output folder (default: %(default)s)")
     parser.add_argument("--report-only", action="store_true", help="fly nothing: report what is in --out")
 
@@ -92,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         tier=args.tiers and tier_name_of(args.tiers),
         suite_version=args.suite_version,
         confirm=args.confirm,
+        layout_start=args.layout_start,
     )
     print("\n".join(lines))
     return 0

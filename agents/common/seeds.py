@@ -27,7 +27,7 @@ Sub-ranges with one use each:
 | rule resolutions (validation) | ``RULE_RESOLUTION_SEED_START ..`` (1,000) | the flow rules at finer depth histograms, per suite v2 hard tier, paired against their own resolution (``flownav rule-resolution``, ``results/rule_resolution/``) |
 | rule resolution refinement (validation) | ``RULE_RESOLUTION_REFINE_SEED_START ..`` (1,000) | the search's nearest rule at its nearest resolution and at the finer bins alone, on fresh layouts, paired against its own resolution |
 | rule resolution confirmation (validation) | ``RULE_RESOLUTION_CONFIRM_SEED_START ..`` (1,000) | a resolution picked by the search or the refinement flown again against the rule's own on fresh layouts |
-| observed-teacher recipes (validation) | ``OBSERVED_TEACHER_RECIPE_SEED_START ..`` (1,000) | the flow students that follow an observation-limited teacher, compared per recipe on the hard tier (``configs/decisions.yaml``, ``observed_teacher_recipes``) |
+| observed-teacher recipes (validation) | ``OBSERVED_TEACHER_RECIPE_SEED_START ..`` (1,000) | the flow students that follow an observation-limited teacher, compared per recipe on the hard tier (``configs/decisions.yaml``, ``observed_teacher_recipes``; ``flownav ablation --tiers hard --layout-start 977000``) |
 | observed-teacher confirmation (validation) | ``OBSERVED_TEACHER_CONFIRM_SEED_START ..`` (1,000) | the recipe picked there flown again beside the best rule on fresh layouts, paired |
 | suite (test, frozen) | ``SUITE_SEED_STARTS[version] .. + SUITE_LAYOUTS`` | each suite version's table and ``flownav score``; nothing is chosen by looking at it (v1 from 2,000,000, v2 from 3,000,000) |
 
@@ -148,3 +148,22 @@ def training_env_seed(run_seed: int) -> int:
 def checkpoint_selection_seed(run_seed: int) -> int:
     """The first layout seed of training run ``run_seed``'s held-out evaluation env (a validation seed)."""
     return VALIDATION_SEED_START + run_seed * RUN_SEED_STRIDE
+
+
+def validation_layouts_from(start: int) -> range:
+    """The validation layouts from ``start`` on, short of the test layouts: a search's own range, declared in
+    ``configs/decisions.yaml`` before its flights.
+
+    Raises:
+        ValueError: ``start`` outside the validation layouts.
+    """
+    if (
+        isinstance(start, bool)
+        or not isinstance(start, int)
+        or not VALIDATION_SEED_START <= start < TEST_SEED_START
+    ):
+        raise ValueError(
+            f"--layout-start must be a validation layout in [{VALIDATION_SEED_START:,}, {TEST_SEED_START - 1:,}], "
+            f"got {start!r}"
+        )
+    return range(start, TEST_SEED_START)

@@ -35,6 +35,7 @@ from agents.common.seeds import (
     TEST_SEED_START,
     TIER_CONFIRM_SEED_STARTS,
     TIER_RECIPE_SEED_STARTS,
+    validation_layouts_from,
 )
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import (
@@ -129,6 +130,7 @@ def compare_configs(
     tier: str | None = None,
     suite_version: str = SUITE_VERSION,
     confirm: bool = False,
+    layout_start: int | None = None,
 ) -> list[str]:
     """Fly every (config, seed) run that exists on the validation layouts and write ``ablation.md`` and
     ``ablation_curves.png`` into ``out``; returns the report's lines. A seed is its run in ``runs_dir``, else its
@@ -139,7 +141,8 @@ def compare_configs(
     suite tier's env (its course and sensor, of ``suite_version``) on its validation layouts from
     ``TIER_RECIPE_SEED_STARTS[suite_version]``; a recipe for every tier (``per_tier: true``) is then read as
     that tier's runs (``<name>_<tier>``, :func:`~agents.training.train_config.for_tier`). ``confirm``: fly the
-    tier's confirmation layouts instead (:func:`tier_layouts`), and say so on the page.
+    tier's confirmation layouts instead (:func:`tier_layouts`), and say so on the page. ``layout_start``: fly the
+    validation layouts from there instead (a search whose range was declared before its flights).
 
     Raises:
         ValueError: a bad config, episode count, worker count or env setting, a reference agent that is not
@@ -150,6 +153,8 @@ def compare_configs(
     if tier is not None:
         env_id = tier_of(tier, suite_version).env_id
         layouts = tier_layouts(suite_version, confirm)
+    if layout_start is not None:
+        layouts = validation_layouts_from(layout_start)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,7 @@ from agents.common.seeds import (
     TEST_SEED_START,
     VALIDATION_SEED_START,
     suite_seeds,
+    validation_layouts_from,
 )
 from agents.policies.trained_tiers import tier_seed_split
 from flownav_env.tiers import TIER_NAMES
@@ -117,3 +118,12 @@ def test_the_observed_teacher_ranges_follow_the_rule_resolution_ones_apart() -> 
     assert OBSERVED_TEACHER_CONFIRM_SEED_START == OBSERVED_TEACHER_RECIPE_SEED_START + 1_000
     last = OBSERVED_TEACHER_CONFIRM_SEED_START + 1_000 - 1
     assert last in TIER_VALIDATION_SEEDS and last < TEST_SEED_START
+
+
+def test_a_search_flies_its_own_declared_validation_layouts() -> None:
+    assert validation_layouts_from(977_000) == range(977_000, TEST_SEED_START)
+    for bad in (TEST_SEED_START, 499_999, True):
+        with pytest.raises(
+            ValueError, match=r"^--layout-start must be a validation layout in \[500,000, 999,999\], got "
+        ):
+            validation_layouts_from(bad)

@@ -356,3 +356,12 @@ def test_the_command_refuses_confirm_in_one_line(tmp_path: Path, capsys, options
     assert main(command) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"flownav ablation: error: {message}") and err.count("\n") == 1
+
+
+def test_the_command_refuses_a_layout_start_outside_validation_in_one_line(tmp_path: Path, capsys) -> None:
+    command = ["ablation", "--configs", "c.yaml", "--tiers", "hard", "--layout-start", "1000000"]
+    assert main([*command, "--out", str(tmp_path / "out"), "--report-only"]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        "flownav ablation: error: --layout-start must be a validation layout in [500,000, 999,999], got 1000000\n"
+    )

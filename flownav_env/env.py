@@ -267,7 +267,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
     # --- Gymnasium API ----------------------------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, object] | None = None
-    ) -> tuple[Observation, dict[str, Any]]:
+    ) -> tuple[Observation, dict[str, object]]:
         """Starts an episode on the layout drawn from ``seed``; ``info`` holds the keys the Info table marks
         "reset". ``options`` is accepted for Gymnasium's API and unused."""
         self._require_open("reset")
@@ -284,9 +284,9 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
             points = self._depth_points = self.estimator.update(self._frame, *motion.told_motion)
         observation = self.task.observe(physics, settings, points, np.zeros(0))
         self._episode_running = True
-        return observation, self.task.start_info(physics) | estimator_info(points, np.zeros(0))
+        return observation, {**self.task.start_info(physics), **estimator_info(points, np.zeros(0))}
 
-    def step(self, action: np.ndarray) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+    def step(self, action: np.ndarray) -> tuple[Observation, float, bool, bool, dict[str, object]]:
         """One camera frame: fly the action, see, estimate, observe (see the class docstring: the spaces,
         Rewards, Episode End, and Info for the keys of ``info``). Never truncates: the time limit is the
         ``TimeLimit`` wrapper's."""
@@ -322,7 +322,7 @@ class FlowNavEnv(gym.Env[dict[str, Any], np.ndarray]):
         outcome = task.outcome(physics, settings, x_before, collision)
         terms = task.reward(settings, outcome, action)
         self._episode_running = not outcome.terminated
-        info = {
+        info: dict[str, object] = {
             **outcome.info(),
             "true_rotation": motion.true_motion[0],
             "true_translation": motion.true_motion[1],

@@ -5,7 +5,7 @@ and the estimator statistics the env reports in ``info``. No simulation happens 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 
 import numpy as np
 from gymnasium import spaces
@@ -152,13 +152,23 @@ def drone_state(physics: FlowNavPhysics) -> np.ndarray:
     return np.clip(state, STATE_LOW, STATE_HIGH)
 
 
-def estimator_info(points: DepthPoints, true_depth: np.ndarray) -> dict[str, Any]:
+class EstimatorInfo(TypedDict):
+    """The estimator's entries of a step's ``info``: keypoints tracked and with a valid depth, and, where some
+    valid point had a finite true depth, the median relative depth error and the share of outliers."""
+
+    points_tracked: int
+    points_valid: int
+    depth_error_median: NotRequired[float]
+    depth_outlier_share: NotRequired[float]
+
+
+def estimator_info(points: DepthPoints, true_depth: np.ndarray) -> EstimatorInfo:
     """Estimator statistics; ``depth_error_median`` and ``depth_outlier_share`` (share of those points off by
     more than ``OUTLIER_RELATIVE_ERROR`` of their true depth) only when some valid point has a finite ground
     truth (a reset frame has no truth yet, so it passes an empty ``true_depth``)."""
     valid = np.asarray(points.valid, bool)
     comparable = valid & np.isfinite(true_depth) if len(true_depth) == len(valid) else np.zeros_like(valid)
-    info: dict[str, Any] = {"points_tracked": len(valid), "points_valid": int(valid.sum())}
+    info: EstimatorInfo = {"points_tracked": len(valid), "points_valid": int(valid.sum())}
     if comparable.any():
         relative = relative_depth_error(points.depth[comparable], true_depth[comparable])
         info["depth_error_median"] = float(np.median(relative))

@@ -220,7 +220,7 @@ class EstimatorArguments:
     def describe(self) -> str:
         return "None or a mapping of ``estimator.FlowDepthEstimator`` keyword arguments"
 
-    def check(self, name: str, value: object) -> Mapping[str, Any]:
+    def check(self, name: str, value: object) -> Mapping[str, object]:
         if value is None:
             return FrozenMapping({})
         if not isinstance(value, Mapping):
@@ -233,6 +233,8 @@ class EstimatorArguments:
         return FrozenMapping(value)
 
 
+# Returned as Any, as dataclasses.field's own result is: the field stands in for a value of the field's type (a
+# default of None stands for an empty mapping of estimator arguments, so the default's type is not the field's).
 def setting_field(default: object, rule: Rule, meaning: str) -> Any:
     """A settings dataclass field: its default, the rule that checks it and what it means (one line of
     FlowNavEnv's Arguments table), declared together once."""

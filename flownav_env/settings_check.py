@@ -52,7 +52,7 @@ def setting_range(name: str, **others: float) -> Range:
     return rule
 
 
-def check_setting(name: str, value: object, **others: float) -> Any:
+def check_setting(name: str, value: object, **others: float) -> object:
     """``value`` checked against setting ``name``'s rule and normalised (float, int, tuple, ...).
 
     For sweeps, training randomisation, playback and experiment configs that take one setting on its own;
@@ -67,7 +67,7 @@ def check_setting(name: str, value: object, **others: float) -> Any:
     return rule.check(name, value)
 
 
-def setting_check(setting: str) -> Callable[[str, object], Any]:
+def setting_check(setting: str) -> Callable[[str, object], object]:
     """A check of a config value that holds setting ``setting``: ``check(key, value)`` returns ``value``
     normalised by :func:`check_setting`, or a list of such values when ``value`` is a list or tuple of them (a
     list of levels or a ``[low, high]`` interval; a (rows, cols) or bin-edge setting's own value is a
@@ -79,7 +79,7 @@ def setting_check(setting: str) -> Callable[[str, object], Any]:
     """
     whole = isinstance(_rule(setting), (Sectors, BinEdges))
 
-    def check(_key: str, value: object) -> Any:
+    def check(_key: str, value: object) -> object:
         if isinstance(value, (list, tuple)) and not whole:
             return [check_setting(setting, item) for item in value]
         return check_setting(setting, value)
@@ -122,7 +122,7 @@ def settings_with(settings: EnvSettings | None, overrides: Mapping[str, object])
     return EnvSettings(**checked_on_build) if settings is None else replace(settings, **checked_on_build)
 
 
-def check_env_kwargs(env_kwargs: Mapping[str, object], source: str, key: str = "env") -> dict[str, Any]:
+def check_env_kwargs(env_kwargs: Mapping[str, object], source: str, key: str = "env") -> dict[str, object]:
     """Check a config's ``env:`` mapping (FlowNavEnv keywords) by name and value, as the env would, without
     building one.
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -43,6 +43,19 @@ def episode_outcome(collision: bool, out_of_bounds: bool, success: bool) -> str:
     return "success" if success else "timeout"
 
 
+class OutcomeInfo(TypedDict):
+    """The outcome's entries of a step's (or ``reset``'s) ``info``, as :class:`StepOutcome` names them but
+    ``progress``: the drone's x (m)."""
+
+    collision: bool
+    success: bool
+    out_of_bounds: bool
+    progress: float
+    clearance: float
+    min_clearance: float
+    position: np.ndarray
+
+
 @dataclass(frozen=True)
 class StepOutcome:
     """Where a step left the drone and what that means for the episode.
@@ -71,7 +84,7 @@ class StepOutcome:
         """Whether the episode ends here (a collision, the goal, or out of bounds)."""
         return self.collision or self.success or self.out_of_bounds
 
-    def info(self) -> dict[str, Any]:
+    def info(self) -> OutcomeInfo:
         """The step's ``info`` entries of the outcome (``progress`` is the drone's x, m)."""
         return {
             "collision": self.collision,
@@ -151,11 +164,18 @@ class FlowNavTask:
         self.min_clearance = physics.obstacle_clearance()
         self._observed = None
 
-    def start_info(self, physics: FlowNavPhysics) -> dict[str, Any]:
+    def start_info(self, physics: FlowNavPhysics) -> OutcomeInfo:
         """The outcome entries of ``reset``'s ``info``: nothing has happened yet; the drone is at its start."""
         clearance = self.min_clearance
-        info = {"collision": False, "success": False, "out_of_bounds": False, "progress": 0.0}
-        return info | {"clearance": clearance, "min_clearance": clearance, "position": physics.position()}
+        return {
+            "collision": False,
+            "success": False,
+            "out_of_bounds": False,
+            "progress": 0.0,
+            "clearance": clearance,
+            "min_clearance": clearance,
+            "position": physics.position(),
+        }
 
     @staticmethod
     def command(

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -16,9 +16,17 @@ from agents.analysis.episode_record import EpisodeRow
 MIN_PROGRESS_FOR_WEAVING_M = 2.0
 
 
+class AgentWeaving(TypedDict):
+    """How much an agent weaves on the clean course, and its median depth error per level of the factor."""
+
+    agent: str
+    weaving: float
+    depth_error: dict[float, float]
+
+
 def turning_and_rotation_error(
     rows: Sequence[EpisodeRow], factor: str = "rotation_error"
-) -> list[dict[str, Any]]:
+) -> list[AgentWeaving]:
     """Per agent: how much it weaves on the clean course, and its median depth error at each level of a
     relative rotation error.
 
@@ -29,7 +37,7 @@ def turning_and_rotation_error(
     """
     if not rows or any(r.get("path_length_m") is None or r.get("progress_m") is None for r in rows):
         return []
-    table = []
+    table: list[AgentWeaving] = []
     for agent in sorted({r["agent"] for r in rows}):
         clean = _clean_weaving(rows, agent)
         swept = [r for r in rows if r["agent"] == agent and r["factor"] in ("clean", factor)]

@@ -11,7 +11,8 @@ import numpy as np
 class Agent(Protocol):
     """What the evaluation needs of an agent: stable-baselines3's ``predict``. ``state`` is whatever the agent
     keeps between calls (an LSTM's state, a frame stack; None for a memoryless agent): opaque to its caller,
-    who passes back what the last call returned."""
+    who passes back what the last call returned, an ``object`` it does not look into. Taken as Any: each
+    agent's ``predict`` takes its own state's type (stable-baselines3's takes its LSTM's arrays)."""
 
     def predict(
         self,
@@ -19,4 +20,4 @@ class Agent(Protocol):
         state: Any = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]: ...
+    ) -> tuple[np.ndarray, object]: ...

@@ -23,7 +23,7 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
-from typing import Any, NoReturn, TypeVar
+from typing import Any, NoReturn, TypeVar, cast
 
 Item = TypeVar("Item")
 Result = TypeVar("Result")
@@ -57,7 +57,7 @@ def _serve(
         except (EOFError, OSError):
             return
         try:
-            reply: tuple[bool, Any] = (True, function(item))
+            reply: tuple[bool, object] = (True, function(item))
         except Exception as error:  # sent to the parent, which raises it there
             reply = (False, error)
         try:
@@ -115,14 +115,14 @@ def run_in_workers(
                 process, item = held.pop(connection)
                 ok, value = _reply(connection, process, item, describe)
                 if not ok:
-                    raise value
+                    raise cast(BaseException, value)  # what _serve sends when function raised
                 following = next(todo, _NONE_LEFT)
                 if following is _NONE_LEFT:
                     connection.close()  # done: the worker reads the end of its pipe and returns
                 else:
                     _hand(connection, process, following, describe)
                     held[connection] = (process, following)
-                yield value
+                yield cast(Result, value)  # what _serve sends when function returned
     finally:
         for connection in connections:
             connection.close()
@@ -139,8 +139,9 @@ def _hand(connection: Connection, process: BaseProcess, item: Item, describe: Ca
 
 def _reply(
     connection: Connection, process: BaseProcess, item: Item, describe: Callable[[Item], str]
-) -> tuple[bool, Any]:
-    """The worker's reply about ``item``, or :class:`WorkerProcessDied` when it ended without one."""
+) -> tuple[bool, object]:
+    """The worker's reply about ``item``, or :class:`WorkerProcessDied` when it ended without one: whether
+    ``function`` returned, and what it returned or raised (unpickled, so typed by the caller)."""
     try:
         if connection.poll():
             return connection.recv()

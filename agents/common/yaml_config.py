@@ -137,7 +137,9 @@ def checked_field(
     return _field({"check": check}, default, default_factory)
 
 
-def _field(metadata: dict[str, object], default: object, default_factory: Callable[[], object] | None) -> Any:
+def _field(
+    metadata: dict[str, object], default: object, default_factory: Callable[[], object] | None
+) -> object:
     if default_factory is not None:
         return dataclasses.field(default_factory=default_factory, metadata=metadata)
     return dataclasses.field(default=default, metadata=metadata)

@@ -26,7 +26,7 @@ import tempfile
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn, TypedDict
 
 import numpy as np
 
@@ -69,13 +69,23 @@ class AgentDeclarations:
     """What an outside agent declares, as its process reported it in JSON: the env settings it asks for
     (plain values only), whether it is privileged, the file that defines it and where its ``predict`` is."""
 
-    env_settings: dict[str, Any]
+    env_settings: dict[str, object]
     privileged: bool
     source: str
     predict_at: str
 
 
-def check_plain_settings(agent: str, settings: object) -> dict[str, Any]:
+class DeclarationsMessage(TypedDict):
+    """An outside agent's declarations as its process sends them, in JSON (read into
+    :class:`AgentDeclarations`)."""
+
+    env_settings: dict[str, object]
+    privileged: bool
+    source: str
+    predict_at: str
+
+
+def check_plain_settings(agent: str, settings: object) -> dict[str, object]:
     """``settings`` if it maps setting names to plain values: exactly ``bool``, ``int``, ``float`` or ``str`` (a
     subclass could compare equal to anything), or a list or tuple of ``int`` and ``float`` (the histogram's
     ``histogram_sectors`` and ``depth_bin_edges``), which is returned as a tuple, the type the env's settings use.
@@ -87,7 +97,7 @@ def check_plain_settings(agent: str, settings: object) -> dict[str, Any]:
         raise ValueError(
             f"agent {agent}: env_settings must map env setting names to values, got {settings!r}"
         )
-    checked: dict[str, Any] = {}
+    checked: dict[str, object] = {}
     for key, value in settings.items():
         if type(value) in (list, tuple) and all(type(item) in (int, float) for item in value):
             checked[key] = tuple(value)
@@ -139,7 +149,7 @@ class IsolatedAgent:
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         """The agent's action for ``observation``, computed in its process.
 
         Raises:

@@ -23,7 +23,14 @@ from typing import Any
 import numpy as np
 
 from agents.policies.agent_limits import AGENT_MEMORY_OPTION
-from agents.policies.agent_process import ACTION, DECLARED, ERROR, MAX_ACTION_DIMS, check_plain_settings
+from agents.policies.agent_process import (
+    ACTION,
+    DECLARED,
+    ERROR,
+    MAX_ACTION_DIMS,
+    DeclarationsMessage,
+    check_plain_settings,
+)
 from agents.policies.base import Agent
 from agents.policies.external import describe_error, is_external_name, load_external_agent, resolve_external
 from agents.policies.sb3_models import is_sb3_model_name, load_sb3_model
@@ -56,7 +63,7 @@ def _end_group(signum: int, frame: object) -> None:
     os.killpg(0, signal.SIGKILL)
 
 
-def load(spec: str, trust_pickle: bool) -> tuple[Agent, dict[str, Any]]:
+def load(spec: str, trust_pickle: bool) -> tuple[Agent, DeclarationsMessage]:
     """The agent ``spec`` loaded here, and its declarations (JSON-ready)."""
     if is_sb3_model_name(spec):
         return load_sb3_model(spec, trust_pickle=trust_pickle), {

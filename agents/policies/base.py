@@ -5,7 +5,7 @@ kind (read from ``configs/agents.yaml`` by :mod:`agents.common.agent_table`)."""
 from __future__ import annotations
 
 import inspect
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 
@@ -122,7 +122,7 @@ class AgentWrapper:
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         """``agent``'s ``predict`` on :meth:`observe`'s view of ``observation``."""
         return self.agent.predict(
             self.observe(observation), state=state, episode_start=episode_start, deterministic=deterministic

@@ -25,7 +25,7 @@ import sys
 import traceback
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NoReturn
+from typing import NoReturn
 
 import numpy as np
 
@@ -146,7 +146,7 @@ def resolve_external(spec: str) -> tuple[Agent, str]:
     return made, str(getattr(_module(str(spec).rpartition(":")[0]), "__file__", None) or "")
 
 
-def external_env_settings(spec: str) -> dict[str, Any]:
+def external_env_settings(spec: str) -> dict[str, object]:
     """The env settings the agent ``spec`` declares it needs (its ``env_settings``; {} when it has none), as its
     own process reports them: plain ``bool``, ``int``, ``float`` or ``str`` values only.
 
@@ -201,7 +201,7 @@ def check_display_name(name: str, agent: str) -> str:
     return str(name).strip()
 
 
-def external_parameters(spec: str) -> dict[str, Any]:
+def external_parameters(spec: str) -> dict[str, str]:
     """What identifies the agent ``spec`` in episode records: the hash of the file that defines it."""
     target = str(spec).rpartition(":")[0]
     # A file is hashed as it is; a module where its own process found it (this process never imports it).
@@ -247,7 +247,7 @@ class ExternalAgent(AgentWrapper):
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         """The outside agent's ``predict`` on the checked observation.
 
         Raises:

@@ -41,7 +41,7 @@ class HistogramResolution:
         default_bins = self.bin_edges == EnvSettings().depth_bin_edges
         return f"{rows}x{cols}" + ("" if default_bins else f"-{len(self.bin_edges) - 1}bins")
 
-    def env_kwargs(self) -> dict[str, Any]:
+    def env_kwargs(self) -> dict[str, object]:
         """The env settings that ask for this resolution: those that differ from the env's defaults."""
         wanted = {"histogram_sectors": self.sectors, "depth_bin_edges": self.bin_edges}
         defaults = EnvSettings()

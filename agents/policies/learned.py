@@ -297,7 +297,7 @@ def _shipped_agent(agent: str, trust_pickle: bool) -> Agent:
     )
 
 
-def agent_parameters(name: str, **overrides: float) -> dict[str, Any]:
+def agent_parameters(name: str, **overrides: float) -> dict[str, object]:
     """Every parameter the agent ``name`` flies with: a reactive agent's dataclass fields, its defaults with
     ``overrides`` on top; for a learned agent just ``overrides`` (its parameters are its policy file, which
     episode records identify by hash). Episode records keep these, so episodes flown before a reactive

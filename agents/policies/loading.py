@@ -45,7 +45,7 @@ def training_config_beside(path: Path) -> TrainConfig | None:
     return load_config(config_path, TrainConfig) if config_path.is_file() else None
 
 
-def env_spaces(env_id: str, env_kwargs: Mapping[str, object]) -> tuple[spaces.Dict, spaces.Space[Any]]:
+def env_spaces(env_id: str, env_kwargs: Mapping[str, object]) -> tuple[spaces.Dict, spaces.Box]:
     """The observation and action spaces of the env ``env_id`` made with ``env_kwargs`` (then closed)."""
     # Any value may come in: the env checks each setting it is made with.
     env = gym.make(env_id, **cast("dict[str, Any]", env_kwargs))
@@ -55,6 +55,10 @@ def env_spaces(env_id: str, env_kwargs: Mapping[str, object]) -> tuple[spaces.Di
         env.close()
     if not isinstance(observation_space, spaces.Dict):
         raise ValueError(f"{env_id} observes a {type(observation_space).__name__}, not named arrays (a Dict)")
+    if not isinstance(action_space, spaces.Box):
+        raise ValueError(
+            f"{env_id} acts with a {type(action_space).__name__}, not an array of numbers (a Box)"
+        )
     return observation_space, action_space
 
 

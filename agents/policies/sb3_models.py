@@ -20,7 +20,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from agents.common.saved_models import SavedModel, load_unpickled, read_saved_model
 from agents.policies.base import Agent
@@ -82,7 +82,7 @@ def _saved(path: Path) -> SavedModel:
     return read_saved_model(path)
 
 
-def sb3_model_env_settings(name: str) -> dict[str, Any]:
+def sb3_model_env_settings(name: str) -> dict[str, bool]:
     """The env settings that give every observation key the model was trained on (``observe_approach`` for
     an ``approach`` input, ...), read from the text form of its observation space that SB3 saves beside the
     pickled one: what the model must fly with."""
@@ -92,7 +92,7 @@ def sb3_model_env_settings(name: str) -> dict[str, Any]:
     return {OBSERVATION_KEY_SETTINGS[key]: True for key in sorted(keys) if key in OBSERVATION_KEY_SETTINGS}
 
 
-def sb3_model_parameters(name: str) -> dict[str, Any]:
+def sb3_model_parameters(name: str) -> dict[str, str]:
     """What identifies the model in episode records: its algorithm and the hash of its file."""
     algo, path = _split(name)
     return {"algo": algo, "model_sha256": hashlib.sha256(path.read_bytes()).hexdigest()}

@@ -9,7 +9,7 @@ evaluation exactly the stacks it saw in training.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 from gymnasium import spaces
@@ -20,12 +20,14 @@ if TYPE_CHECKING:
     from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
 
-def stacked_space(space: spaces.Dict, frame_stack: int) -> spaces.Space[Any]:
+def stacked_space(space: spaces.Dict, frame_stack: int) -> spaces.Dict:
     """The observation space a ``VecFrameStack`` of ``frame_stack`` frames gives for ``space``."""
     # stable-baselines3 (and torch with it) is heavy: imported only when a stacked policy loads.
     from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
-    return StackedObservations(1, frame_stack, space).stacked_observation_space
+    stacked = StackedObservations(1, frame_stack, space).stacked_observation_space
+    assert isinstance(stacked, spaces.Dict)  # a stack of named arrays is named arrays
+    return stacked
 
 
 class FrameStackedAgent(AgentWrapper):
@@ -56,7 +58,7 @@ class FrameStackedAgent(AgentWrapper):
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         """The policy's action for the stack ending with ``observation``; the stack is the returned state."""
         # stable-baselines3 (and torch with it) is heavy: imported only when a stacked policy flies.
         from stable_baselines3.common.vec_env.stacked_observations import StackedObservations

@@ -52,7 +52,7 @@ class PlannerTeacher:
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         count = len(next(iter(observation.values())))
         while len(self.planners) < count:
             self.planners.append(self._planner())

@@ -11,7 +11,6 @@ Its first episode flies the first seed, so episodes flown one after another from
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -54,7 +53,7 @@ class TrainingSeedsAgent(AgentWrapper):
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
+    ) -> tuple[np.ndarray, object]:
         """The current seed's action; at an episode start (or the first call) the next seed takes over.
 
         Raises:

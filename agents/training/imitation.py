@@ -24,7 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 import torch
@@ -141,6 +141,17 @@ def fit(
     return losses
 
 
+class ImitationSummary(TypedDict):
+    """A teacher start, for the run's record: the teacher and the env settings only it read, the env steps and
+    wall minutes it took, and per round the states recorded and the fit's losses."""
+
+    teacher: str
+    teacher_env: dict[str, object]
+    env_steps: int
+    wall_minutes: float
+    rounds: list[dict[str, float]]
+
+
 def imitate(
     model: OnPolicyAlgorithm,
     envs: VecEnv,
@@ -148,14 +159,14 @@ def imitate(
     params: ImitationParams,
     gamma: float,
     seed: int,
-) -> dict[str, Any]:
+) -> ImitationSummary:
     """DAgger: ``params.rounds`` rounds of ``params.steps_per_round`` steps per env on ``envs``, fitting
     ``model``'s policy after each (:func:`fly`, :func:`fit`). Returns a summary for the run's record: the
     env steps used, the wall minutes, and per round the student's agreement with the teacher before its fit."""
     rng = np.random.default_rng(seed)
     started = time.perf_counter()
     recorded: Flights | None = None
-    rounds = []
+    rounds: list[dict[str, float]] = []
     for round_index in range(params.rounds):
         student = None if round_index == 0 else model
         flights = fly(envs, teacher, params.steps_per_round, gamma, student=student)

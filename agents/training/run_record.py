@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Mapping
 from datetime import datetime, timezone
-from typing import Any
+from typing import NotRequired, TypedDict, cast
 
 from agents.common.folders import write_text_atomically
 from agents.common.machine import available_cores, code_version, cpu_model
@@ -28,11 +29,64 @@ from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS
 RUNNING, FINISHED, INTERRUPTED, FAILED, KILLED = "running", "finished", "interrupted", "failed", "killed"
 
 
+class SessionFacts(TypedDict):
+    """What a session runs with (:func:`session_facts`)."""
+
+    total_timesteps_asked: int
+    max_minutes: float
+    cpu: str
+    cores: int
+    n_envs: int
+    env_workers: str
+    code: str
+    env_estimator_defaults: dict[str, object]
+    gl_renderer: str
+
+
+class InitSummary(TypedDict):
+    """The earlier stage a run started from (:func:`init_summary`); its steps and minutes are None when it has
+    no record."""
+
+    path: str
+    timesteps: int | None
+    wall_minutes: float | None
+
+
+class Session(SessionFacts):
+    """A session's entry in the record: its facts, when and how it ran and how it ended (``error``: why a failed
+    one failed; ``imitation``: the teacher start's summary). Records written by earlier code may lack some facts."""
+
+    started: str
+    ended: str | None
+    status: str
+    command: str
+    steps_at_start: int
+    steps_this_session: int
+    wall_minutes: float
+    steps_per_second: float
+    interrupted: bool | None
+    error: NotRequired[str]
+    imitation: NotRequired[Mapping[str, object]]
+
+
+class TrainingRecord(TypedDict):
+    """The run's record: its sessions, the last command, the totals and, once a session wrote the run's policy,
+    its steps and how it was selected."""
+
+    sessions: list[Session]
+    command: NotRequired[str]
+    total_timesteps: NotRequired[int]
+    selected: NotRequired[str]
+    total_wall_minutes: NotRequired[float]
+    init_from: NotRequired[InitSummary]
+    total_wall_minutes_with_init: NotRequired[float]
+
+
 def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
-def session_facts(config: TrainConfig, in_process_envs: bool) -> dict[str, Any]:
+def session_facts(config: TrainConfig, in_process_envs: bool) -> SessionFacts:
     """What a session runs with, for its entry in the record: the budget, the machine and the code."""
     return {
         "total_timesteps_asked": config.total_timesteps,
@@ -48,7 +102,7 @@ def session_facts(config: TrainConfig, in_process_envs: bool) -> dict[str, Any]:
     }
 
 
-def init_summary(config: TrainConfig) -> dict[str, Any] | None:
+def init_summary(config: TrainConfig) -> InitSummary | None:
     """For the record: the earlier stage a run started from (``init_from``), its steps and training minutes
     (from the record beside it, when there is one), so a curriculum's cost per seed adds up."""
     source = init_source(config)
@@ -63,7 +117,7 @@ def init_summary(config: TrainConfig) -> dict[str, Any] | None:
     }
 
 
-def read_record(files: RunFiles) -> dict[str, Any] | None:
+def read_record(files: RunFiles) -> TrainingRecord | None:
     """The run's record, or None when there is none or it does not read as a record (a warning says so)."""
     if not files.record.is_file():
         return None
@@ -75,20 +129,20 @@ def read_record(files: RunFiles) -> dict[str, Any] | None:
     if not isinstance(record, dict) or not isinstance(record.get("sessions"), list):
         print(f"warning: {files.record} holds no list of sessions, starting a new record")
         return None
-    return record
+    return cast(TrainingRecord, record)  # written by SessionRecord; its sessions are not checked one by one
 
 
-def last_session(files: RunFiles) -> dict[str, Any]:
-    """The newest session in the run's record; empty when there is none."""
+def last_session(files: RunFiles) -> Session | None:
+    """The newest session in the run's record; None when there is none."""
     record = read_record(files)
-    return record["sessions"][-1] if record and record["sessions"] else {}
+    return record["sessions"][-1] if record and record["sessions"] else None
 
 
 def interrupted_at(files: RunFiles) -> int | None:
     """The step count at which Ctrl-C or SIGTERM stopped the run's last session (and its checkpoint was saved),
     or None when that session was not interrupted."""
     session = last_session(files)
-    if session.get("status") != INTERRUPTED:
+    if session is None or session.get("status") != INTERRUPTED:
         return None
     return int(session["steps_at_start"]) + int(session["steps_this_session"])
 
@@ -111,22 +165,22 @@ class SessionRecord:
     def __init__(
         self,
         files: RunFiles,
-        facts: dict[str, Any],
+        facts: SessionFacts,
         *,
         command: str,
         keep_earlier: bool,
         steps_at_start: int,
-        init: dict[str, Any] | None = None,
+        init: InitSummary | None = None,
     ) -> None:
         self.files = files
         self.init = init
         self.steps_at_start = int(steps_at_start)
         self.started = time.perf_counter()
-        self.record = (read_record(files) if keep_earlier else None) or {"sessions": []}
+        self.record: TrainingRecord = (read_record(files) if keep_earlier else None) or {"sessions": []}
         for earlier in self.record["sessions"]:
             if earlier.get("status") == RUNNING:  # it never wrote its end: killed outright
-                earlier.update(status=KILLED, interrupted=True)
-        self.session: dict[str, Any] = {
+                earlier.update({"status": KILLED, "interrupted": True})
+        self.session: Session = {
             "started": _now(),
             "ended": None,
             "status": RUNNING,
@@ -160,9 +214,11 @@ class SessionRecord:
         minutes = self.wall_minutes
         done = int(steps) - self.steps_at_start
         self.session.update(
-            steps_this_session=done,
-            wall_minutes=round(minutes, 1),
-            steps_per_second=round(done / max(minutes * 60, 1e-9), 1),
+            {
+                "steps_this_session": done,
+                "wall_minutes": round(minutes, 1),
+                "steps_per_second": round(done / max(minutes * 60, 1e-9), 1),
+            }
         )
         self.write()
 
@@ -173,7 +229,7 @@ class SessionRecord:
         Raises:
             OSError: the record could not be written; it names the file.
         """
-        self.session.update(ended=_now(), status=status, interrupted=status != FINISHED)
+        self.session.update({"ended": _now(), "status": status, "interrupted": status != FINISHED})
         if error is not None:
             self.session["error"] = error
         if selected is not None:

@@ -13,7 +13,6 @@ the stack).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -93,7 +92,7 @@ def teacher_view(envs: VecEnv, observation: dict[str, np.ndarray]) -> dict[str, 
     return observation
 
 
-def privileged_settings(teacher: object) -> dict[str, Any]:
+def privileged_settings(teacher: object) -> dict[str, object]:
     """The env settings a teacher reads that its student must not see (``{"observe_layout": True}`` for the
     planner), as the teacher declares them in ``privileged_settings``; empty for a teacher that reads only the
     student's observation.
@@ -102,7 +101,7 @@ def privileged_settings(teacher: object) -> dict[str, Any]:
         ValueError: a declared setting other than ``observe_layout``: only its keys can be hidden from the
             student (true depths replace the student's own histogram).
     """
-    settings: Mapping[str, Any] = getattr(teacher, "privileged_settings", {}) or {}
+    settings: Mapping[str, object] = getattr(teacher, "privileged_settings", {}) or {}
     other = sorted(set(settings) - {"observe_layout"})
     if other:
         raise ValueError(

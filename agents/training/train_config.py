@@ -15,12 +15,6 @@ from flownav_env.settings_check import setting_check
 from flownav_env.tiers import TIERS_BY_VERSION, tier, tier_of_env_id
 
 
-def env_setting_field(setting: str, **kwargs: Any) -> Any:
-    """A config field holding a value of FlowNavEnv's setting ``setting`` (or a list of them), checked against
-    the rule the env owns for it, so no config writes that range again."""
-    return checked_field(setting_check(setting), **kwargs)
-
-
 @dataclass
 class PPOParams:
     """stable-baselines3 PPO hyperparameters (see its docs); ``net_arch`` sizes both actor and critic."""
@@ -84,7 +78,8 @@ class RandomizationRanges:
 def _randomization_class() -> type[RandomizationRanges]:
     """The dataclass of :class:`RandomizationRanges` with a field for each name of :data:`RANDOMIZED_FIELDS`."""
     fields_ = [
-        (name, list[float], env_setting_field(name, default_factory=list)) for name in RANDOMIZED_FIELDS
+        (name, list[float], checked_field(setting_check(name), default_factory=list))
+        for name in RANDOMIZED_FIELDS
     ]
     made = make_dataclass("Randomization", fields_, bases=(RandomizationRanges,))
     made.__module__ = __name__

@@ -11,7 +11,7 @@ from flownav_env.playback.path import CameraPath
 from flownav_env.quadrotor import ControllerGains, QuadrotorParams
 from flownav_env.rendering import CameraRenderer
 from flownav_env.scene import LayoutParams, material_names
-from flownav_env.settings_check import check_setting, setting_range
+from flownav_env.settings_check import setting_range
 
 
 class PlaybackWorld:
@@ -83,7 +83,7 @@ class PlaybackWorld:
 
     def set_brightness(self, brightness: float) -> None:
         """Scene light level (1 = daylight)."""
-        self.physics.set_brightness(check_setting("brightness", brightness))
+        self.physics.set_brightness(setting_range("brightness").check_float("brightness", brightness))
 
     def render(self) -> np.ndarray:
         """RGB frame (H, W, 3) uint8 from the current camera pose."""

@@ -14,7 +14,7 @@ import shlex
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from tqdm import tqdm
@@ -111,14 +111,14 @@ def scene_rows(
 
 def variant_settings(
     baseline_frames: Sequence[int], fast_thresholds: Sequence[int], settings: Sequence[str]
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, dict[str, object]]:
     """Named estimator variants: the default, one per ``baseline_frames`` and FAST threshold, and one per
     ``KEY=VALUE[;KEY=VALUE...]`` setting (integers as ints, other numbers as floats, ``a,b`` as a pair)."""
-    variants: dict[str, dict[str, Any]] = {"default": {}}
+    variants: dict[str, dict[str, object]] = {"default": {}}
     variants |= {f"baseline_frames={k}": {"baseline_frames": k} for k in baseline_frames if k != 1}
     variants |= {f"fast_threshold={value}": {"fast_threshold": value} for value in fast_thresholds}
     for setting in settings:
-        variant: dict[str, Any] = {}
+        variant: dict[str, object] = {}
         for part in setting.split(";"):
             key, sep, text = part.partition("=")
             if not sep or not key.strip() or not text.strip():
@@ -150,7 +150,8 @@ def run_depth_yield(
     variants = variant_settings(baseline_frames, fast_thresholds, settings)
     for name, kwargs in variants.items():  # refuse a bad setting before flying anything
         try:
-            FlowDepthEstimator(CameraIntrinsics.from_fov(64, 48, 60.0), **kwargs)
+            # Any value may come in: the estimator refuses what it does not take.
+            FlowDepthEstimator(CameraIntrinsics.from_fov(64, 48, 60.0), **cast("dict[str, Any]", kwargs))
         except TypeError as error:
             raise ValueError(f"variant {name!r}: {error}") from None
     started = time.perf_counter()
@@ -167,7 +168,7 @@ def run_depth_yield(
     return [write_report(out_dir / "depth_yield.md", "depth_yield.md.j2", values), figure]
 
 
-def _setting_value(text: str) -> Any:
+def _setting_value(text: str) -> tuple[int, ...] | int | float:
     """``a,b`` → a pair of integers; an integer literal → int (the estimator refuses 5.0 for a count); else float."""
     if "," in text:
         return tuple(int(part) for part in text.split(","))

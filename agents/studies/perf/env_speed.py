@@ -164,7 +164,7 @@ def measure_env(
     repeats: int = 5,
     seed: int = 0,
     progress: bool = True,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, float | str]]:
     """Time FlowNav-v0 (default config, each resolution) against the bare MuJoCo loop.
 
     Args:
@@ -220,11 +220,11 @@ def measure_env(
             subject.env.close()
 
 
-def _summarise(subject: _Subject) -> dict[str, Any]:
+def _summarise(subject: _Subject) -> dict[str, float | str]:
     inner = subject.inner
     env_step, bare_step = median(subject.env_blocks), median(subject.bare_blocks)
     sides = {"env": subject.env_blocks, "bare": subject.bare_blocks, "floor": subject.floor_blocks}
-    row: dict[str, Any] = {
+    row: dict[str, float | str] = {
         "config": subject.label,
         "fast_threshold": inner.estimator.fast_threshold,
         "width": inner.intrinsics.width,

@@ -93,7 +93,7 @@ def plot_env_performance(rows: list[Row], path: Path) -> None:
         points_axis.legend(handles + more_handles, names + more_names, fontsize=8, loc="center right")
 
 
-def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) -> dict[str, Any]:
+def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) -> dict[str, object]:
     """Every figure, table and verdict of ``templates/env_performance.md.j2``, from :func:`measure_env`'s rows
     (the default config first), its steps and repeats, and the run's facts."""
     default = rows[0]

@@ -111,7 +111,7 @@ def run_estimator_table(
     thresholds: Sequence[int],
     repeats: int,
     progress: bool = True,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, float | str]]:
     """Time the streaming estimator and bare FAST + LK on a flight.
 
     Args:
@@ -156,11 +156,11 @@ def run_estimator_table(
 
 def _stream_row(
     threshold: int, runs: list[dict[str, _Pass]], flight: Flight, kept: list[DepthPoints]
-) -> dict[str, Any]:
+) -> dict[str, float | str]:
     """One threshold's Table 3 row from its timed passes: point counts, per-stage and total times, and each
     estimator configuration's time against the bare FAST + LK."""
     first = runs[0]
-    row: dict[str, Any] = {
+    row: dict[str, float | str] = {
         "fast_threshold": threshold,
         "points_found": median(first["bare"].corners),
         "points_used": median(first["fb_on"].valid),
@@ -169,8 +169,8 @@ def _stream_row(
     }
     for stage in ("prepare", "fast", "flow", "depth"):
         row[f"ms_{stage}"] = 1e3 * median([median(run["fb_on"].stages[stage]) for run in runs])
-    row["ms_total"] = 1e3 * median([median(run["fb_on"].seconds) for run in runs])
-    row["fps"] = 1e3 / row["ms_total"] if row["ms_total"] > 0 else math.nan
+    total_ms = row["ms_total"] = 1e3 * median([median(run["fb_on"].seconds) for run in runs])
+    row["fps"] = 1e3 / total_ms if total_ms > 0 else math.nan
     row["ms_bare_fast_lk"] = 1e3 * median([median(run["bare"].seconds) for run in runs])
     for name in ESTIMATOR_CONFIGS:
         # Ratio frame by frame (each estimator call against the bare call next to it in time), median over

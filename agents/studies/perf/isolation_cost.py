@@ -63,7 +63,7 @@ SIDES = ("in_process", "own_process", "sandbox")
 
 def measure_isolation_cost(
     agent: str = DEFAULT_AGENT, *, tier_name: str = "clean", steps: int = 100, repeats: int = 5, seed: int = 0
-) -> list[dict[str, Any]]:
+) -> list[dict[str, float]]:
     """Per repeat: ms per step with ``agent`` loaded here, in a plain process of its own and in its sandbox, and
     each one's ratio to in process; and ms per ``predict`` alone on each side; the sides rotate which goes first.
 

@@ -109,7 +109,7 @@ def run_recipe_benchmark(
 
 def _recipe_row(
     recipe: Recipe, entries: Sequence[RecipeBlock], ratios: list[float], ablation_dir: Path
-) -> dict[str, Any]:
+) -> dict[str, float | str]:
     """One recipe's CSV row: its work per seed, measured minutes, ratio to the reference and validation
     quality."""
     medians = median_minutes(entries)
@@ -130,8 +130,8 @@ def _recipe_row(
     }
 
 
-def _quality_columns(judged: RecipeQuality) -> dict[str, object]:
-    columns: dict[str, object] = {}
+def _quality_columns(judged: RecipeQuality) -> dict[str, float | str]:
+    columns: dict[str, float | str] = {}
     for label, rate in judged["rates"].items():
         key = label.replace(" ", "_").replace(".", "")
         columns[f"failure_{key}"] = "" if rate is None else round(rate[0], 3)
@@ -156,7 +156,7 @@ def _plot(rows: Sequence[Mapping[str, object]], path: Path) -> None:
 
 # A row is a CSV row whose columns are named from KINDS and CONDITIONS (``minutes_ppo``, ``failure_clean``): no
 # TypedDict spells computed keys, and its numbers are compared and formatted here.
-def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: RunFacts) -> dict[str, Any]:
+def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: RunFacts) -> dict[str, object]:
     """Every figure, table and verdict of ``templates/training_performance.md.j2``, from the recipes' rows (the
     reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the number of blocks and the
     run's facts."""

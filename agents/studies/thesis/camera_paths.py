@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -25,9 +25,18 @@ from flownav_env.playback import CameraPath, path_from_poses, record_env_flight
 from flownav_env.rotations import camera_rotation, rotation_from_vector
 
 
+class SceneArguments(TypedDict):
+    """The scene of a camera path (:func:`flownav_env.playback.path_from_poses`' keywords): the capsules' (x, y)
+    and materials, and the seed of their textures."""
+
+    obstacles: np.ndarray
+    materials: np.ndarray
+    texture_seed: int
+
+
 def scene_kwargs(
     config: ExperimentConfig, obstacles: Iterable[ObstacleConfig] | None = None
-) -> dict[str, Any]:
+) -> SceneArguments:
     obstacles = list(config.obstacles if obstacles is None else obstacles)
     return {
         "obstacles": np.array([[o.x, o.y] for o in obstacles], np.float64).reshape(-1, 2),

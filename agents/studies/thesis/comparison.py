@@ -5,12 +5,33 @@ thesis's numbers come from :mod:`agents.studies.thesis.reference`) and the figur
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, TypedDict
 
+from agents.studies.thesis.metrics import MetricRow
 from agents.studies.thesis.reference import TABLE3, THESIS_FOCAL_PX, VARIABLE_TESTS
+from agents.studies.thesis.results import SweepRow, TimingRow
 from agents.studies.wording import span
 
 Row = dict[str, Any]
+
+
+class Table3Comparison(TypedDict):
+    """The thesis's Table 3 rows (at our FAST threshold, and at our point count) and ours per method: median
+    stage times (ms), total, frames per second, points tracked and valid per frame (None: not measured)."""
+
+    thesis: Sequence[tuple[float, ...]]
+    ours: list[dict[str, float | str | None]]
+    threshold: int
+
+
+class VerdictRows(TypedDict):
+    """A variable test of the thesis (its name, levels and verdict) beside FlowNav's rows in its range."""
+
+    name: str
+    levels: str
+    verdict: str
+    rows: list[SweepRow]
 
 
 def _span(values: list[float]) -> str:
@@ -59,31 +80,34 @@ def table2_reading(rows: list[Row]) -> dict[str, str] | None:
     }
 
 
-def table3_comparison(timings: list[Row], rows: list[Row], threshold: int) -> dict[str, Any]:
+def table3_comparison(timings: list[TimingRow], rows: list[MetricRow], threshold: int) -> Table3Comparison:
     """The thesis's Table 3 rows at our FAST threshold and at our point count, and ours per method: median stage
     times, points and frames per second (``templates/thesis_tables.j2`` sets them side by side)."""
     ours = {(t["method"], t["stage"]): t["median_ms"] for t in timings}
     by_method = {r["method"]: r for r in rows}
-    used = by_method.get("thesis", {}).get("valid_per_frame", math.nan)
+    used = by_method["thesis"]["valid_per_frame"] if "thesis" in by_method else math.nan
     same_threshold = [row for row in TABLE3 if row[1] == threshold]
     nearest = min(TABLE3, key=lambda row: abs(row[8] - used)) if not math.isnan(used) else None
-    ours_rows = []
+    ours_rows: list[dict[str, float | str | None]] = []
     for method in ("thesis", "triangulation"):
         found = {stage: ours.get((method, stage)) for stage in ("fast", "flow", "depth")}
         total = ours.get((method, "total"), math.nan)
-        row = by_method.get(method, {})
+        row = by_method.get(method)
         ours_rows.append(
             {"method": method, **found, "total": total, "fps": 1e3 / total if total else math.nan}
-            | {"tracked": row.get("tracked_per_frame"), "valid": row.get("valid_per_frame")}
+            | {
+                "tracked": row["tracked_per_frame"] if row else None,
+                "valid": row["valid_per_frame"] if row else None,
+            }
         )
     picked = same_threshold + ([nearest] if nearest and nearest not in same_threshold else [])
     return {"thesis": picked, "ours": ours_rows, "threshold": threshold}
 
 
-def verdict_rows(sweeps: list[Row], method: str = "thesis") -> list[dict[str, Any]]:
+def verdict_rows(sweeps: Sequence[SweepRow], method: str = "thesis") -> list[VerdictRows]:
     """Per variable test FlowNav flew, the thesis's name, levels and verdict beside FlowNav's rows (one method)
     in the thesis's range (``templates/thesis_tables.j2`` words them)."""
-    found: list[dict[str, Any]] = []
+    found: list[VerdictRows] = []
     for name, variable, (low, high), levels, verdict in VARIABLE_TESTS:
         rows = [
             r

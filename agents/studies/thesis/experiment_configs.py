@@ -7,9 +7,9 @@ from typing import Any
 
 from agents.common.yaml_config import checked_field, field_range
 from agents.studies.thesis.attitude import unity_to_camera_deg
-from agents.training.train_config import env_setting_field
 from estimator import CameraIntrinsics, FlowDepthEstimator
 from flownav_env.playback import DISTANCE_PER_FRAME
+from flownav_env.settings_check import setting_check
 
 
 @dataclass
@@ -25,9 +25,9 @@ class ObstacleConfig:
 class CameraConfig:
     """Camera resolution and vertical field of view."""
 
-    width: int = env_setting_field("camera_width", default=640)
-    height: int = env_setting_field("camera_height", default=480)
-    fov_deg: float = env_setting_field("camera_fov_deg", default=60.0)
+    width: int = checked_field(setting_check("camera_width"), default=640)
+    height: int = checked_field(setting_check("camera_height"), default=480)
+    fov_deg: float = checked_field(setting_check("camera_fov_deg"), default=60.0)
 
 
 def _one_capsule() -> list[ObstacleConfig]:
@@ -173,8 +173,8 @@ class RecordConfig:
 
     env_seed: int = field_range(0, None, default=0)
     steps: int = field_range(2, 10000, default=40)
-    forward_speed: float = env_setting_field("forward_speed", default=1.0)
-    frame_rate: float = env_setting_field("frame_rate", default=10.0)
+    forward_speed: float = checked_field(setting_check("forward_speed"), default=1.0)
+    frame_rate: float = checked_field(setting_check("frame_rate"), default=10.0)
     lateral_action: float = field_range(0.0, 1.0, default=0.3)
     vertical_action: float = field_range(0.0, 1.0, default=0.2)
     yaw_action: float = field_range(0.0, 1.0, default=0.3)
@@ -186,10 +186,10 @@ class BaseSettingsConfig:
     """The base run's test variables; each sweep changes one of them."""
 
     distance_per_frame: float = checked_field(DISTANCE_PER_FRAME.check, default=0.05)
-    brightness: float = env_setting_field("brightness", default=1.0)
-    attitude_jitter_deg: float = env_setting_field("attitude_jitter_deg", default=0.0)
-    rotation_error: float = env_setting_field("rotation_error", default=0.0)
-    translation_error: float = env_setting_field("translation_error", default=0.0)
+    brightness: float = checked_field(setting_check("brightness"), default=1.0)
+    attitude_jitter_deg: float = checked_field(setting_check("attitude_jitter_deg"), default=0.0)
+    rotation_error: float = checked_field(setting_check("rotation_error"), default=0.0)
+    translation_error: float = checked_field(setting_check("translation_error"), default=0.0)
     max_frames: int = field_range(2, 10000, default=40)
 
 
@@ -197,20 +197,24 @@ class BaseSettingsConfig:
 class SweepConfig:
     """Values of each test variable (Appendices C–H); the others stay at the base run's values."""
 
-    attitude_jitter_deg: list[float] = env_setting_field(
-        "attitude_jitter_deg", default_factory=lambda: [0.0, 1.0, 2.5]
+    attitude_jitter_deg: list[float] = checked_field(
+        setting_check("attitude_jitter_deg"), default_factory=lambda: [0.0, 1.0, 2.5]
     )
     distance_per_frame: list[float] = checked_field(
         DISTANCE_PER_FRAME.check, default_factory=lambda: [0.005, 0.05, 0.3]
     )
-    brightness: list[float] = env_setting_field("brightness", default_factory=lambda: [0.5, 1.0, 2.0])
-    rotation_error: list[float] = env_setting_field("rotation_error", default_factory=lambda: [0.0, 0.1])
-    translation_error: list[float] = env_setting_field(
-        "translation_error", default_factory=lambda: [0.0, 0.1]
+    brightness: list[float] = checked_field(
+        setting_check("brightness"), default_factory=lambda: [0.5, 1.0, 2.0]
+    )
+    rotation_error: list[float] = checked_field(
+        setting_check("rotation_error"), default_factory=lambda: [0.0, 0.1]
+    )
+    translation_error: list[float] = checked_field(
+        setting_check("translation_error"), default_factory=lambda: [0.0, 0.1]
     )
     # Not a playback setting: the rotation error applied to the absolute attitude (agents.studies.thesis.attitude).
-    attitude_rotation_error: list[float] = env_setting_field(
-        "rotation_error", default_factory=lambda: [0.0, 0.1]
+    attitude_rotation_error: list[float] = checked_field(
+        setting_check("rotation_error"), default_factory=lambda: [0.0, 0.1]
     )
 
 
@@ -223,4 +227,4 @@ class ThreeCapsuleConfig(ExperimentConfig):
     sweeps: SweepConfig = field(default_factory=SweepConfig)
     obstacles: list[ObstacleConfig] = field(default_factory=list)
     # The thesis ran its rotation-error tests on its 0.5 deg instability run, not on the plain base run.
-    rotation_error_jitter_deg: float = env_setting_field("attitude_jitter_deg", default=0.5)
+    rotation_error_jitter_deg: float = checked_field(setting_check("attitude_jitter_deg"), default=0.5)

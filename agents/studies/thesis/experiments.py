@@ -21,7 +21,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -35,8 +34,9 @@ from agents.studies.thesis.experiment_configs import (
     TranslationConfig,
 )
 from agents.studies.thesis.figures import save_depth_figure
-from agents.studies.thesis.metrics import METHODS, metric_rows
+from agents.studies.thesis.metrics import METHODS, FrameRow, MetricRow, metric_rows
 from agents.studies.thesis.playback_runs import RunResult, run_playback
+from agents.studies.thesis.results import ExperimentResult, TimingRow
 from agents.studies.thesis.rotation import run_rotation
 from agents.studies.thesis.three_capsule import SWEEP_VARIABLES, run_three_capsule
 from estimator import CameraIntrinsics, FlowDepthEstimator
@@ -66,7 +66,7 @@ def _play(
         world.close()
 
 
-def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Experiment 1 (Figs. 22–24): straight flight toward one capsule; four depth variants."""
     result = _play(straight_path(config), config, "straight", progress=progress, component_variants=True)
     titles = {
@@ -83,10 +83,10 @@ def run_straight(config: StraightConfig, out_dir: Path, progress: bool = True) -
     return {"rows": metric_rows("straight", result.methods, titles), "figures": [figure.name]}
 
 
-def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Experiment 3 (Figs. 33, 35): x then y translation past each scene's capsules."""
-    rows: list[dict[str, Any]] = []
-    panels: list[tuple[str, list[dict[str, Any]], np.ndarray]] = []
+    rows: list[MetricRow] = []
+    panels: list[tuple[str, list[FrameRow], np.ndarray]] = []
     marks: dict[int, float] = {}
     for scene in config.scenes:
         path, turn = translation_path(config, scene)
@@ -100,7 +100,7 @@ def run_translation(config: TranslationConfig, out_dir: Path, progress: bool = T
     return {"rows": rows, "figures": [figure.name]}
 
 
-def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Experiment 4 (Fig. 38, Table 3): random 6-DoF path; depth errors and per-stage timings."""
     result = _play(random_6dof_path(config), config, "random6dof", progress=progress)
     figure = save_depth_figure(
@@ -123,7 +123,7 @@ def run_random6dof(config: Random6DofConfig, out_dir: Path, progress: bool = Tru
     }
 
 
-def _timing_row(method: str, stage: str, seconds: list[float]) -> dict[str, Any]:
+def _timing_row(method: str, stage: str, seconds: list[float]) -> TimingRow:
     milliseconds = np.asarray(seconds) * 1e3
     mean, median = float(milliseconds.mean()), float(np.median(milliseconds))
     return {"method": method, "stage": stage, "mean_ms": mean, "median_ms": median}
@@ -137,7 +137,7 @@ class Experiment:
     name: str
     title: str
     schema: type[ExperimentConfig]
-    runner: Callable[..., dict[str, Any]]
+    runner: Callable[..., ExperimentResult]
 
 
 EXPERIMENTS: dict[str, Experiment] = {

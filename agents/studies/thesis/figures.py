@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from agents.studies.perf.report_kit import saved_figure
+from agents.studies.thesis.metrics import FrameRow
 
 if TYPE_CHECKING:  # matplotlib is slow to import: the figures import it when they draw
     from matplotlib.axes import Axes
@@ -20,9 +21,7 @@ PLOT_MAX_DEPTH = 10.0
 _OBSTACLE_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown")
 
 
-def plot_depth_panel(
-    ax: Axes, frames: list[dict[str, np.ndarray]], references: np.ndarray, title: str
-) -> None:
+def plot_depth_panel(ax: Axes, frames: list[FrameRow], references: np.ndarray, title: str) -> None:
     """The thesis's plot style: each valid point's depth per frame, against each obstacle's true depth line.
 
     Points on a capsule take the capsule's colour; ground points are grey. Lines are the ground truth.
@@ -57,7 +56,7 @@ def plot_depth_panel(
 
 
 def save_depth_figure(
-    panels: list[tuple[str, list[dict[str, np.ndarray]], np.ndarray]],
+    panels: list[tuple[str, list[FrameRow], np.ndarray]],
     file: Path,
     suptitle: str,
     marks: dict[int, float] | None = None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -60,7 +60,39 @@ def component_depth(
     return depth, parallax
 
 
-def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = False) -> dict[str, float]:
+class FrameRow(TypedDict):
+    """One estimated frame of a method in a playback: its points (N, 2), their depths, validity, true depths
+    and labels (the capsule each ray hits, -1 for none), all (N,), and the number of points tracked."""
+
+    points: np.ndarray
+    depth: np.ndarray
+    valid: np.ndarray
+    true_depth: np.ndarray
+    labels: np.ndarray
+    tracked: int
+
+
+class DepthMetrics(TypedDict):
+    """A method's error statistics over a run (:func:`depth_metrics`)."""
+
+    median_rel_error: float
+    within_10pct: float
+    valid_per_frame: float
+    tracked_per_frame: float
+    evaluated: int
+    frames: int
+
+
+class MetricRow(DepthMetrics):
+    """A run's row of a method's statistics (:func:`metric_rows`), with the capsule-only error and count."""
+
+    run: str
+    method: str
+    obstacle_median_rel_error: float
+    obstacle_valid_per_frame: float
+
+
+def depth_metrics(frames: list[FrameRow], obstacles_only: bool = False) -> DepthMetrics:
     """Error statistics of one method over a run.
 
     Args:
@@ -94,18 +126,20 @@ def depth_metrics(frames: list[dict[str, np.ndarray]], obstacles_only: bool = Fa
     }
 
 
-def metric_rows(
-    run: str, methods: Mapping[str, list[dict[str, np.ndarray]]], names: Iterable[str]
-) -> list[dict[str, Any]]:
+def metric_rows(run: str, methods: Mapping[str, list[FrameRow]], names: Iterable[str]) -> list[MetricRow]:
     """One row of :func:`depth_metrics` per method named in ``names``, from a playback's per-method frames
     (``RunResult.methods``), with the capsule-only error and count beside it."""
     rows = []
     for name in names:
         frames = methods[name]
-        row = {"run": run, "method": name, **depth_metrics(frames)}
         obstacle = depth_metrics(frames, obstacles_only=True)
-        row["obstacle_median_rel_error"] = obstacle["median_rel_error"]
-        row["obstacle_valid_per_frame"] = obstacle["valid_per_frame"]
+        row: MetricRow = {
+            "run": run,
+            "method": name,
+            **depth_metrics(frames),
+            "obstacle_median_rel_error": obstacle["median_rel_error"],
+            "obstacle_valid_per_frame": obstacle["valid_per_frame"],
+        }
         rows.append(row)
     return rows
 

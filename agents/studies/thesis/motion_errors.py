@@ -4,6 +4,7 @@ and FlowNav's rows differ, computed from the three-capsule run's measured motion
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 from agents.studies.thesis.comparison import Row
@@ -48,7 +49,7 @@ def angle_for_shift_deg(focal_px: float, error: float, shift_px: float) -> float
     return math.degrees(shift_px / (focal_px * error))
 
 
-def motion_values(result: dict[str, Any]) -> dict[str, Any] | None:
+def motion_values(result: Mapping[str, Any]) -> dict[str, object] | None:
     """The section's figures and its tables' rows (``templates/thesis_tables.j2`` words them) from the
     three-capsule result (its ``motion`` and ``sweeps``); None without a measured motion."""
     motion, sweeps = result.get("motion"), result.get("sweeps", [])

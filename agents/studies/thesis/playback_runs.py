@@ -10,7 +10,7 @@ import numpy as np
 from tqdm import tqdm
 
 from agents.studies.thesis.attitude import AttitudeRotationError
-from agents.studies.thesis.metrics import COMPONENT_VARIANTS, METHODS, component_depth
+from agents.studies.thesis.metrics import COMPONENT_VARIANTS, METHODS, FrameRow, component_depth
 from estimator import CameraIntrinsics, DepthPoints, FlowDepthEstimator
 from estimator.geometry import solve_depth, valid_depth_mask
 from flownav_env.playback import (
@@ -38,7 +38,7 @@ class RunResult:
             rotations and the camera's world-from-camera rotation (its attitude) when it was rendered.
     """
 
-    methods: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    methods: dict[str, list[FrameRow]] = field(default_factory=dict)
     references: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     timings: dict[str, dict[str, list[float]]] = field(default_factory=dict)
     render_s: list[float] = field(default_factory=list)
@@ -185,9 +185,7 @@ class _GroundTruth:
         return self.cache[key]
 
 
-def _frame_row(
-    points: DepthPoints, depth: np.ndarray, valid: np.ndarray, truth: _GroundTruth
-) -> dict[str, Any]:
+def _frame_row(points: DepthPoints, depth: np.ndarray, valid: np.ndarray, truth: _GroundTruth) -> FrameRow:
     """One frame of a method: its points, their depths and validity, and the truth at those points."""
     true_depth, labels = truth(points.points)
     return {

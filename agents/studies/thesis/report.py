@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -20,11 +19,12 @@ from agents.studies.thesis.comparison import table2_reading, table3_comparison, 
 from agents.studies.thesis.experiments import EXPERIMENTS
 from agents.studies.thesis.motion_errors import motion_values
 from agents.studies.thesis.reference import THESIS_FOCAL_PX
+from agents.studies.thesis.results import ExperimentResult
 
 DISCUSSION_FILE = "DISCUSSION.md"
 
 
-def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_experiment(name: str, config_path: Path, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Load one experiment's config, run it, and write ``<out_dir>/<name>.json``.
 
     Args:
@@ -69,7 +69,7 @@ def _display_path(path: Path) -> str:
         return str(path)
 
 
-def _json_default(value: object) -> Any:
+def _json_default(value: object) -> object:
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
@@ -77,7 +77,7 @@ def _json_default(value: object) -> Any:
     return str(value)
 
 
-def _experiment_values(result: dict[str, Any]) -> dict[str, Any]:
+def _experiment_values(result: ExperimentResult) -> dict[str, object]:
     """One experiment's section of the README: its JSON result with the comparisons with the thesis beside it;
     the parts an experiment lacks stay empty and the template leaves them out."""
     table2, table3, sweeps = result.get("table2"), result.get("table3"), result.get("sweeps")
@@ -93,8 +93,8 @@ def _experiment_values(result: dict[str, Any]) -> dict[str, Any]:
 
 
 def readme_values(
-    results: dict[str, dict[str, Any]], ran: list[str], wall_s: float, discussion: str
-) -> dict[str, Any]:
+    results: dict[str, ExperimentResult], ran: list[str], wall_s: float, discussion: str
+) -> dict[str, object]:
     """What ``agents/studies/templates/thesis_readme.md.j2`` states: every experiment's section from its JSON
     result, the rotation- and translation-error section from the three-capsule one, the hand-written
     ``discussion`` (may be empty) and the machine of the first result."""

@@ -15,6 +15,7 @@ from agents.studies.thesis.camera_paths import rotation_path
 from agents.studies.thesis.experiment_configs import RotationCase, RotationConfig
 from agents.studies.thesis.metrics import rotation_residuals
 from agents.studies.thesis.playback_runs import run_playback
+from agents.studies.thesis.results import ExperimentResult
 from estimator import CameraIntrinsics
 from estimator.geometry import derotate, euler_zyx_to_rotation
 from flownav_env.playback import PlaybackSettings, PlaybackWorld
@@ -35,8 +36,8 @@ def _case_row(
     residuals: list[dict[str, np.ndarray]],
     config: RotationConfig,
     intrinsics: CameraIntrinsics,
-) -> dict[str, Any]:
-    row: dict[str, Any] = {
+) -> dict[str, object]:
+    row: dict[str, object] = {
         "case": case.name,
         "frame_pairs": len(residuals),
         "flown_deg": [case.pitch_deg, case.yaw_deg, case.roll_deg],
@@ -103,7 +104,7 @@ def _save_figure(table: list[dict[str, Any]], outlier_px: float, file: Path) -> 
         ax.grid(alpha=0.3, axis="y")
 
 
-def run_rotation(config: RotationConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_rotation(config: RotationConfig, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Experiment 2 (Table 2): pure rotations; residual distance after rotation compensation."""
     intrinsics = CameraIntrinsics.from_fov(config.camera.width, config.camera.height, config.camera.fov_deg)
     table = []

@@ -14,8 +14,9 @@ from agents.studies.thesis.attitude import unity_angles
 from agents.studies.thesis.camera_paths import record_three_capsule_flight, scene_kwargs
 from agents.studies.thesis.experiment_configs import ThreeCapsuleConfig
 from agents.studies.thesis.figures import save_depth_figure
-from agents.studies.thesis.metrics import METHODS, metric_rows
+from agents.studies.thesis.metrics import METHODS, MetricRow, metric_rows
 from agents.studies.thesis.playback_runs import RunResult, run_playback
+from agents.studies.thesis.results import ExperimentResult, MotionMeasure, SweepRow
 from estimator import CameraIntrinsics
 from estimator.geometry import derotate
 from flownav_env.playback import PlaybackSettings, PlaybackWorld, save_path
@@ -34,8 +35,9 @@ SWEEP_VARIABLES = (
 ROTATION_ERROR_VARIABLES = ("rotation_error", "attitude_rotation_error")
 
 
-def measure_motion(result: RunResult, intrinsics: CameraIntrinsics) -> dict[str, Any]:
-    """What a relative rotation error is relative to, and the parallax it competes with, on one run.
+def measure_motion(result: RunResult, intrinsics: CameraIntrinsics, jitter_deg: float) -> MotionMeasure:
+    """What a relative rotation error is relative to, and the parallax it competes with, on one run flown with
+    ``jitter_deg`` of angular instability.
 
     Needs ``result`` from :func:`run_playback` with ``keep_residuals``. Returns medians over frame pairs of the
     per-frame rotation (angle and per axis) and of the absolute attitude (signed Euler angles as Unity would
@@ -65,10 +67,11 @@ def measure_motion(result: RunResult, intrinsics: CameraIntrinsics) -> dict[str,
         "capsule_parallax_px_median": float(np.median(flow)) if len(flow) else float("nan"),
         "capsule_parallax_px_p25": float(np.percentile(flow, 25)) if len(flow) else float("nan"),
         "capsule_points": len(flow),
+        "jitter_deg": jitter_deg,
     }
 
 
-def _sweep_figure(sweeps: list[dict[str, Any]], file: Path) -> None:
+def _sweep_figure(sweeps: list[SweepRow], file: Path) -> None:
     with saved_figure(file, (3.2 * len(SWEEP_VARIABLES), 5.6)) as fig:
         axes = fig.subplots(2, len(SWEEP_VARIABLES), squeeze=False)
         fig.suptitle(
@@ -96,7 +99,7 @@ def _sweep_figure(sweeps: list[dict[str, Any]], file: Path) -> None:
         axes[0, 0].legend(fontsize=8)
 
 
-def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool = True) -> dict[str, Any]:
+def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool = True) -> ExperimentResult:
     """Experiment 5 (Figs. 41–43, Appendices C–H): recorded flight, base run, one sweep per variable."""
     path = record_three_capsule_flight(config)
     if config.obstacles:
@@ -107,7 +110,8 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
     base = dataclasses.asdict(config.base)
     camera = config.camera
     world = PlaybackWorld(path, camera.width, camera.height, camera.fov_deg)
-    rows, sweeps = [], []
+    rows: list[MetricRow] = []
+    sweeps: list[SweepRow] = []
 
     def play(settings: dict[str, Any], label: str, residuals: bool = False, error: float = 0.0) -> RunResult:
         playback = PlaybackSettings(seed=config.seed, **settings)
@@ -129,8 +133,8 @@ def run_three_capsule(config: ThreeCapsuleConfig, out_dir: Path, progress: bool 
         motion = measure_motion(
             play(unsteady, "three motion", residuals=True),
             CameraIntrinsics.from_fov(camera.width, camera.height, camera.fov_deg),
+            config.rotation_error_jitter_deg,
         )
-        motion["jitter_deg"] = config.rotation_error_jitter_deg
         for variable, _label in SWEEP_VARIABLES:
             for value in getattr(config.sweeps, variable):
                 settings = {**(unsteady if variable in ROTATION_ERROR_VARIABLES else base)}

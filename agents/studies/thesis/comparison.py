@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from agents.pages.wording import span
 from agents.studies.thesis.reference import TABLE3, THESIS_FOCAL_PX, VARIABLE_TESTS
-from agents.studies.wording import span
 
 Row = dict[str, Any]
 

@@ -1,4 +1,4 @@
-"""One entry of the registry of ``results/``'s Markdown reports (:mod:`agents.studies.report_registry`): what a
+"""One entry of the registry of ``results/``'s Markdown reports (:mod:`agents.reports.report_registry`): what a
 report is built from and how it is rebuilt, or why it is not."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The registry of every Markdown report in ``results/``: for each machine-written one, the committed data it is
 built from and the writer call that rebuilds it in-process; for every other one, why it is not regenerated.
-:mod:`agents.studies.reports` regenerates and compares them.
+:mod:`agents.reports.regeneration` regenerates and compares them.
 """
 
 from __future__ import annotations
@@ -17,14 +17,14 @@ from agents.evaluation.leaderboard import run_leaderboard
 from agents.evaluation.suite import run_suite, suite_agents
 from agents.evaluation.sweep import run_sweep
 from agents.policies import HISTORY_AGENTS
+from agents.reports.ablation_entry import AblationSpec
+from agents.reports.benchmark_report import write_benchmark, write_readme_results, write_thesis_closed_loop
+from agents.reports.error_analysis_report import write_error_analysis_from
+from agents.reports.flow_gap_report import write_flow_gap
+from agents.reports.report_entry import Report
+from agents.reports.reports_not_regenerated import NOT_REGENERATED
+from agents.reports.rule_resolution_report import write_rule_resolution
 from agents.studies import confirmation, tier_calibration
-from agents.studies.ablation_entry import AblationSpec
-from agents.studies.benchmark_report import write_benchmark, write_readme_results, write_thesis_closed_loop
-from agents.studies.error_analysis_report import write_error_analysis_from
-from agents.studies.flow_gap_report import write_flow_gap
-from agents.studies.report_entry import Report
-from agents.studies.reports_not_regenerated import NOT_REGENERATED
-from agents.studies.rule_resolution_report import write_rule_resolution
 from flownav_env.tiers import TIER_NAMES
 
 
@@ -51,7 +51,7 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
 def _benchmark_and_readme_block(report: Report, folder: Path) -> None:
     """``benchmark.md``, and where it is published (``--out results``) the README's results block beside it, which
     words the same values (``write_readme_results``); a check elsewhere leaves the README alone (the block is
-    compared with the committed one by ``tests/agents/studies/test_benchmark_report.py``)."""
+    compared with the committed one by ``tests/agents/reports/test_benchmark_report.py``)."""
     write_benchmark(folder, folder, report.command)
     if Path(folder).resolve() == RESULTS_DIR.resolve():
         write_readme_results(folder, REPO_ROOT / "README.md")

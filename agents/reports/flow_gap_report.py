@@ -7,7 +7,7 @@ and on the true depths at the same tracked points. Two recipes answer it: the pl
 interval resamples training seeds (each agent's apart) and layouts (once for both). The sources are the
 confirmation flights on fresh validation layouts (``results/confirmation/``), the suite's frozen test layouts
 (``results/suite_episodes.csv``, the current suite version) and the leading clean table. The prose is ``templates/flow_gap.md.j2``, the
-benchmark's values (:mod:`agents.studies.benchmark_report`) beside this report's own; nothing is flown.
+benchmark's values (:mod:`agents.reports.benchmark_report`) beside this report's own; nothing is flown.
 """
 
 from __future__ import annotations
@@ -29,11 +29,13 @@ from agents.common.agent_table import AGENTS
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import suite_seeds
+from agents.common.study_choices import choices
 from agents.common.tables import markdown_table, today
 from agents.evaluation.suite import EPISODES_CSV, SUITE_RESULTS_FOLDERS
+from agents.pages.wording import render_report
 from agents.policies import is_learned, shipped_seed_runs
-from agents.studies.benchmark_data import BenchmarkData, Rate, choices, load_benchmark_data
-from agents.studies.benchmark_report import report_values
+from agents.reports.benchmark_report import report_values
+from agents.studies.benchmark_data import BenchmarkData, Rate, load_benchmark_data
 from agents.studies.confirmation import (
     COMPARED,
     CONFIRMATION_LAYOUTS,
@@ -45,7 +47,6 @@ from agents.studies.confirmation import (
     run_confirmation,
     search_record,
 )
-from agents.studies.wording import render_report
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 # The suite version whose frozen layouts this page reads: the current one; a pair of agents not yet flown whole on

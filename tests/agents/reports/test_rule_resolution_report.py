@@ -8,7 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.studies import rule_resolution_report
+from agents.pages.wording import render_report
+from agents.reports import rule_resolution_report
+from agents.reports.rule_resolution_report import (
+    FIGURE,
+    PAGE,
+    page_values,
+    plot_rule_resolution,
+    write_rule_resolution,
+)
 from agents.studies.rule_resolution import (
     CANDIDATES,
     REFINE_CANDIDATES,
@@ -16,14 +24,6 @@ from agents.studies.rule_resolution import (
     RuleResolutionResult,
     _row,
 )
-from agents.studies.rule_resolution_report import (
-    FIGURE,
-    PAGE,
-    page_values,
-    plot_rule_resolution,
-    write_rule_resolution,
-)
-from agents.studies.wording import render_report
 
 
 def _result(confirmed: bool | None) -> RuleResolutionResult:

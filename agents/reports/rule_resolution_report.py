@@ -13,6 +13,7 @@ from agents.common.seeds import (
     RULE_RESOLUTION_SEED_START,
 )
 from agents.common.tables import today
+from agents.pages.wording import render_report
 from agents.studies.rule_resolution import (
     CANDIDATES,
     REFINE_CANDIDATES,
@@ -26,7 +27,6 @@ from agents.studies.rule_resolution import (
     RuleResolutionResult,
     run_rule_resolution,
 )
-from agents.studies.wording import render_report
 
 PAGE = "rule_resolution.md"
 FIGURE = "rule_resolution.png"

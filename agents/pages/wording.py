@@ -9,10 +9,10 @@ from collections.abc import Iterable, Mapping
 from agents.analysis.dose_response import format_p
 from agents.analysis.paired import provisional_note
 from agents.common.jinja_reports import environment, render
+from agents.common.study_choices import choices
 from agents.policies.base import base_agent_name
-from agents.studies.benchmark_data import choices
 
-PACKAGE = "agents.studies"
+PACKAGE = "agents.pages"
 
 
 def display_name(agent: str) -> str:

@@ -16,10 +16,9 @@ import pytest
 from agents.cli import COMMANDS, main
 from agents.cli.arguments import tier_name_of
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.studies import ablation, ablation_entry, reports
-from agents.studies.ablation_entry import AblationSpec
-from agents.studies.report_registry import ABLATIONS, CAMERA_STUDENT_CONFIRMATION
-from agents.studies.reports import (
+from agents.reports import ablation_entry, regeneration
+from agents.reports.ablation_entry import AblationSpec
+from agents.reports.regeneration import (
     REPORTS,
     comparable_text,
     differences,
@@ -27,6 +26,8 @@ from agents.studies.reports import (
     report_names,
     select_reports,
 )
+from agents.reports.report_registry import ABLATIONS, CAMERA_STUDENT_CONFIRMATION
+from agents.studies import ablation
 from agents.training.multiseed import parse_seeds
 
 
@@ -56,7 +57,7 @@ def test_regenerating_elsewhere_leaves_the_committed_report_and_its_data_alone(t
 def test_a_report_whose_data_is_not_committed_is_skipped_and_says_so(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(reports, "RESULTS_DIR", tmp_path / "results")
+    monkeypatch.setattr(regeneration, "RESULTS_DIR", tmp_path / "results")
     (outcome,) = regenerate(tmp_path / "out", ["leaderboard"])
     assert outcome.written is None
     assert outcome.skipped == "no results/leaderboard_episodes.csv (its data is not committed)"
@@ -68,7 +69,7 @@ def test_check_prints_a_diff_and_exits_1_when_a_committed_report_differs(
 ) -> None:
     results = tmp_path / "results"
     shutil.copytree(RESULTS_DIR / "ablation" / "speed_1.5", results / "ablation" / "speed_1.5")
-    monkeypatch.setattr(reports, "RESULTS_DIR", results)
+    monkeypatch.setattr(regeneration, "RESULTS_DIR", results)
     assert main(["reports", "--check", "--only", "ablation-speed-1.5"]) == 0
     assert "ablation/speed_1.5/ablation.md: same" in capsys.readouterr().out
 
@@ -153,7 +154,7 @@ def test_list_names_every_markdown_file_of_results_exactly_once(capsys: pytest.C
     lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
     assert len(lines) == len(REPORTS), "a report is listed twice"
     committed = {path.relative_to(RESULTS_DIR).as_posix() for path in RESULTS_DIR.rglob("*.md")}
-    assert not committed - set(lines), "reports of results/ missing from agents/studies/reports.py"
+    assert not committed - set(lines), "reports of results/ missing from agents/reports/regeneration.py"
     for path, line in lines.items():
         assert " regenerated as " in line or " not regenerated: " in line, line
         if path not in committed:  # only a report whose data is not committed yet (the suite's, say)

@@ -10,9 +10,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from agents.analysis.tolerance_rows import ToleranceRow
+from agents.common.study_choices import choices
+from agents.pages.wording import display_name
 from agents.policies.base import base_agent_name
-from agents.studies.benchmark_data import BenchmarkData, choices
-from agents.studies.wording import display_name
+from agents.studies.benchmark_data import BenchmarkData
 
 FLOW = "ppo_flow@all"
 TOLD_ROTATION = ("rotation_error", "rotation_bias", "rotation_drift", "rotation_noise_deg")

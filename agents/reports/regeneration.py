@@ -3,7 +3,7 @@ data without flying anything (``flownav reports``).
 
 A report's numbers should be what the current code makes of the committed episodes: when a statistic changes
 (a bootstrap interval, a table's layout), a report written before the change silently disagrees with the code
-that claims to produce it. :data:`~agents.studies.report_registry.REPORTS` lists every ``results/**/*.md``: each machine-written report with a
+that claims to produce it. :data:`~agents.reports.report_registry.REPORTS` lists every ``results/**/*.md``: each machine-written report with a
 report-only path names its inputs and the writer call that rebuilds it, in-process; every other one (prose,
 measurements of a machine's speed, stale archives) says in one line why it is not regenerated.
 :func:`regenerate` writes the reports into any folder with the layout of ``results/``, and :func:`differences`
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from agents.common.locations import RESULTS_DIR
-from agents.studies.report_registry import REPORTS, Report
+from agents.reports.report_registry import REPORTS, Report
 
 # Lines of a report's preamble that record how it was made, not what it says: every writer but the sweep's puts
 # the date, command, commit and machine on one "Generated ..." line; the sweep's header

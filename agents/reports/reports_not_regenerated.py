@@ -1,10 +1,10 @@
 """The reports of ``results/`` that are not regenerated, each with why: hand-written prose, measurements by the
 code of their time, pilots whose policies were not shipped, and stale pages kept for comparison. Part of
-:data:`agents.studies.report_registry.REPORTS`."""
+:data:`agents.reports.report_registry.REPORTS`."""
 
 from __future__ import annotations
 
-from agents.studies.report_entry import Report, not_regenerated
+from agents.reports.report_entry import Report, not_regenerated
 
 PROSE = "hand-written prose"
 STALE = "stale, kept for comparison as the code of its time wrote it (results/README.md)"

@@ -29,6 +29,7 @@ from agents.common.folders import check_writable_folder
 from agents.common.locations import RESULTS_DIR
 from agents.common.tables import today
 from agents.evaluation.sweep import pool_every_seed
+from agents.pages.wording import render_report
 from agents.studies.error_analysis import (
     baseline_of_flown_runs,
     best_learned_flow_agent,
@@ -45,7 +46,6 @@ from agents.studies.error_analysis_tiers import (
     tier_baseline,
     tolerance_shifts,
 )
-from agents.studies.wording import render_report
 from flownav_env.settings_check import setting_range
 from flownav_env.tiers import SUITE_VERSION, tier_of_env_id
 

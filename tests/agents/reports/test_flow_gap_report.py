@@ -13,8 +13,7 @@ from agents.analysis.paired import compare
 from agents.analysis.validation_rows import ConfirmationResult, PairedDifference, Rise, SearchRecord
 from agents.common.seeds import CONFIRMATION_SEED_START, suite_seeds
 from agents.evaluation.suite import SUITE_RESULTS_FOLDERS
-from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
-from agents.studies.flow_gap_report import (
+from agents.reports.flow_gap_report import (
     READ_SUITE_VERSION,
     confirmation_rows,
     gap,
@@ -24,6 +23,7 @@ from agents.studies.flow_gap_report import (
     selection_values,
     suite_matrices,
 )
+from agents.studies.confirmation import COMPARED, PICK, TRUE_DEPTH_RECIPE, run_confirmation
 
 
 def _write_episodes(path: Path, episodes: list[tuple[str, str, float, int, bool]]) -> None:

@@ -2,8 +2,9 @@
 committed data alone (nothing is flown).
 
 :func:`report_values` computes one dictionary of numbers, tables, comparisons and lists of names from
-:func:`~agents.studies.benchmark_data.load_benchmark_data`; the templates in ``templates/`` (``benchmark.md.j2``,
-``readme_results.md.j2``, ``thesis_closed_loop.md.j2``, their phrases in ``wording.j2``) word it, each verdict
+:func:`~agents.studies.benchmark_data.load_benchmark_data`; the templates in ``agents/pages/templates/``
+(``benchmark.md.j2``, ``readme_results.md.j2``, ``thesis_closed_loop.md.j2``, their phrases in ``wording.j2``)
+word it, each verdict
 from a value (a paired comparison, a list of the agents a claim holds for). The README and the thesis discussion
 are hand-written files with one generated block each, between two marker lines; only that block is rewritten.
 """
@@ -24,11 +25,12 @@ from agents.common.seeds import (
     TEST_SEED_START,
     VALIDATION_SEED_START,
 )
+from agents.common.study_choices import choices
 from agents.common.tables import markdown_table, today
+from agents.pages.wording import display_name, join_words, render_report, span
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
-from agents.studies.benchmark_data import BenchmarkData, choices, commit_of, load_benchmark_data
-from agents.studies.benchmark_sweep import sweep_values
-from agents.studies.wording import display_name, join_words, render_report, span
+from agents.reports.benchmark_sweep import sweep_values
+from agents.studies.benchmark_data import BenchmarkData, commit_of, load_benchmark_data
 from flownav_env.settings import EnvSettings
 from flownav_env.tiers import TIER_NAMES, tier
 

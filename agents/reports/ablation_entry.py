@@ -1,4 +1,4 @@
-"""A committed ``ablation.md`` as the registry (:mod:`agents.studies.report_registry`) rebuilds it: the options of
+"""A committed ``ablation.md`` as the registry (:mod:`agents.reports.report_registry`) rebuilds it: the options of
 ``flownav ablation`` it was written with, as named fields, from which both the command the report names and the
 in-process writer call are derived, so the two cannot disagree."""
 
@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from agents.common.locations import REPO_ROOT
+from agents.reports.report_entry import Report
 from agents.studies.ablation import compare_configs
-from agents.studies.report_entry import Report
 from flownav_env.tiers import SUITE_VERSION
 
 

@@ -17,8 +17,9 @@ import pytest
 from agents.analysis.paired import MIN_RANKED_SEEDS, Comparison
 from agents.common.jinja_reports import environment
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, choices, load_benchmark_data
-from agents.studies.benchmark_report import (
+from agents.common.study_choices import choices
+from agents.pages.wording import FILTERS, PACKAGE, render_report
+from agents.reports.benchmark_report import (
     README_MARKERS,
     THESIS_MARKERS,
     replace_block,
@@ -27,9 +28,9 @@ from agents.studies.benchmark_report import (
     write_readme_results,
     write_thesis_closed_loop,
 )
-from agents.studies.benchmark_sweep import broken_agents
-from agents.studies.flow_gap_report import flow_gap_values
-from agents.studies.wording import FILTERS, PACKAGE, render_report
+from agents.reports.benchmark_sweep import broken_agents
+from agents.reports.flow_gap_report import flow_gap_values
+from agents.studies.benchmark_data import INPUTS, BenchmarkData, Rate, load_benchmark_data
 
 WINNER = choices().winner
 TEMPLATES = ("benchmark.md.j2", "readme_results.md.j2", "thesis_closed_loop.md.j2", "flow_gap.md.j2")

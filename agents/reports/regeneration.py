@@ -35,6 +35,9 @@ PROVENANCE_PREFIXES = (
 )
 # The preamble ends where the report's content starts: its first section, code block or table.
 CONTENT_STARTS = ("## ", "```", "|")
+# Where a page outside results/ (``../README.md``) is written in a folder that is not results/ itself: the
+# layout of results/ has no place above its top, and a scratch folder's parent is not the repository.
+OUTSIDE_RESULTS = "outside_results"
 
 
 @dataclass(frozen=True)
@@ -104,14 +107,26 @@ def regenerate(out: Path, names: Sequence[str] | None = None) -> list[Outcome]:
         if missing:
             outcomes.append(Outcome(report, None, skipped=missing))
             continue
-        folder = out / Path(report.path).parent
+        written = written_at(report, out)
         if report.staged:
             _stage_inputs(report, out)
         started = time.perf_counter()
         assert report.write is not None  # select_reports returns regenerated reports only
-        report.write(report, folder)
-        outcomes.append(Outcome(report, out / report.path, time.perf_counter() - started))
+        report.write(report, written.parent)
+        outcomes.append(Outcome(report, written, time.perf_counter() - started))
     return outcomes
+
+
+def written_at(report: Report, out: Path) -> Path:
+    """Where :func:`regenerate` writes ``report`` in ``out`` (laid out as ``results/``): at its path there; a page
+    outside ``results/`` (``../README.md``) in ``out``'s :data:`OUTSIDE_RESULTS` folder, or, when ``out`` is
+    ``results/`` itself, over the committed file."""
+    path = Path(report.path)
+    if path.parts[0] != "..":
+        return out / path
+    if out.resolve() == RESULTS_DIR.resolve():
+        return (out / path).resolve()
+    return out / OUTSIDE_RESULTS / path.relative_to("..")
 
 
 def comparable_text(text: str) -> str:

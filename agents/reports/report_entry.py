@@ -10,10 +10,11 @@ from pathlib import Path
 
 @dataclass(frozen=True)
 class Report:
-    """One Markdown file of ``results/``.
+    """One Markdown file of ``results/``, or one outside it with a generated block (the README).
 
     Attributes:
-        path: the report, relative to ``results/`` (``ablation/speed_1.5/ablation.md``).
+        path: the report, relative to ``results/`` (``ablation/speed_1.5/ablation.md``); a page of the repository
+            outside ``results/`` climbs out of it (``../README.md``, whose results block is generated).
         name: what ``flownav reports --only`` calls it; empty for a report that is not regenerated.
         command: the stand-alone command that rebuilds it from the committed data (what the report names).
         inputs: glob patterns, relative to ``results/``, of the committed data it is built from; each must

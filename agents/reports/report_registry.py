@@ -1,5 +1,6 @@
-"""The registry of every Markdown report in ``results/``: for each machine-written one, the committed data it is
-built from and the writer call that rebuilds it in-process; for every other one, why it is not regenerated.
+"""The registry of every Markdown report in ``results/``, and of the README, whose results block is generated:
+for each machine-written one, the committed data it is built from and the writer call that rebuilds it
+in-process; for every other one, why it is not regenerated.
 :mod:`agents.reports.regeneration` regenerates and compares them.
 """
 
@@ -7,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
@@ -48,13 +50,15 @@ def _sweep(report: Report, folder: Path, *, config: str) -> None:
         )
 
 
-def _benchmark_and_readme_block(report: Report, folder: Path) -> None:
-    """``benchmark.md``, and where it is published (``--out results``) the README's results block beside it, which
-    words the same values (``write_readme_results``); a check elsewhere leaves the README alone (the block is
-    compared with the committed one by ``tests/agents/reports/test_benchmark_report.py``)."""
-    write_benchmark(folder, folder, report.command)
-    if Path(folder).resolve() == RESULTS_DIR.resolve():
-        write_readme_results(folder, REPO_ROOT / "README.md")
+def _readme_block(report: Report, folder: Path) -> None:
+    """The README's results block written from the committed data into the README in ``folder``: the committed
+    README itself when publishing (``--out results``), else a copy of it, so that only the block can differ."""
+    readme = folder / Path(report.path).name
+    committed = RESULTS_DIR / report.path
+    if not (readme.is_file() and readme.samefile(committed)):
+        folder.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(committed, readme)
+    write_readme_results(RESULTS_DIR, readme)
 
 
 def _thesis_block(report: Report, folder: Path) -> None:
@@ -66,7 +70,8 @@ def _thesis_block(report: Report, folder: Path) -> None:
     write_thesis_closed_loop(root, root / report.path)
 
 
-# What benchmark.md and the thesis's closed-loop paragraph are written from (agents/studies/benchmark_data.py).
+# What benchmark.md, the README's results block and the thesis's closed-loop paragraph are written from
+# (agents/studies/benchmark_data.py).
 BENCHMARK_INPUTS = (
     "leaderboard_episodes.csv",
     "suite_episodes.csv",
@@ -218,7 +223,15 @@ REPORTS: tuple[Report, ...] = (
         name="benchmark",
         command="flownav reports --out results --only benchmark",
         inputs=BENCHMARK_INPUTS,
-        write=_benchmark_and_readme_block,
+        write=lambda report, folder: write_benchmark(folder, folder, report.command),
+    ),
+    Report(
+        "../README.md",
+        name="readme-results",
+        command="flownav reports --out results --only readme-results",
+        inputs=BENCHMARK_INPUTS,
+        write=_readme_block,
+        staged=False,
     ),
     *(
         Report(

@@ -18,13 +18,16 @@ from agents.cli.arguments import tier_name_of
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.reports import ablation_entry, regeneration
 from agents.reports.ablation_entry import AblationSpec
+from agents.reports.benchmark_report import README_MARKERS
 from agents.reports.regeneration import (
+    OUTSIDE_RESULTS,
     REPORTS,
     comparable_text,
     differences,
     regenerate,
     report_names,
     select_reports,
+    written_at,
 )
 from agents.reports.report_registry import ABLATIONS, CAMERA_STUDENT_CONFIRMATION
 from agents.studies import ablation
@@ -38,7 +41,7 @@ def test_every_committed_report_is_what_the_code_writes_from_the_committed_data(
     (outcome,) = regenerate(tmp_path, [name])
     if outcome.written is None:
         pytest.skip(f"{outcome.report.path}: {outcome.skipped}")
-    assert outcome.written == tmp_path / outcome.report.path
+    assert outcome.written == written_at(outcome.report, tmp_path)
     assert (RESULTS_DIR / outcome.report.path).is_file(), f"results/{outcome.report.path} is not committed"
     # On failure: `flownav reports --check --only NAME` shows the diff; `--out results --only NAME` rewrites it.
     assert differences(outcome.report, outcome.written) == ""
@@ -157,7 +160,9 @@ def test_list_names_every_markdown_file_of_results_exactly_once(capsys: pytest.C
     assert not committed - set(lines), "reports of results/ missing from agents/reports/regeneration.py"
     for path, line in lines.items():
         assert " regenerated as " in line or " not regenerated: " in line, line
-        if path not in committed:  # only a report whose data is not committed yet (the suite's, say)
+        if not (
+            RESULTS_DIR / path
+        ).is_file():  # only a report whose data is not committed yet (the suite's, say)
             assert " regenerated as " in line and line.endswith(" (its data is not committed)]"), line
 
 
@@ -229,3 +234,20 @@ def test_an_ablation_report_is_written_with_the_values_its_command_gives_flownav
         "confirm",
     )
     assert {key: registry[key] for key in same} == {key: cli[key] for key in same}
+
+
+def test_the_readmes_results_block_is_a_report_of_its_own(tmp_path: Path) -> None:
+    # Its regeneration is compared with the committed README by the test above, as every report's.
+    (report,) = select_reports(["readme-results"])
+    assert (
+        "readme-results" not in select_reports(["benchmark"])[0].command
+    )  # benchmark.md alone writes no README
+    # Published (--out results) over the committed README; anywhere else beside the pages, never above the folder.
+    assert written_at(report, RESULTS_DIR) == REPO_ROOT / "README.md"
+    assert written_at(report, tmp_path) == tmp_path / OUTSIDE_RESULTS / "README.md"
+    # The whole README is compared, so a stale block is a difference (and the text outside it is the committed one).
+    start = f"{README_MARKERS[0]}\n"
+    stale = tmp_path / "README.md"
+    stale.write_text((REPO_ROOT / "README.md").read_text().replace(start, f"{start}stale 0.47\n"))
+    changed = [line for line in differences(report, stale).splitlines() if line[:1] in "+-"]
+    assert changed[2:] == ["+stale 0.47"]

@@ -25,7 +25,7 @@ from agents.reports.report_registry import REPORTS, Report
 
 # Lines of a report's preamble that record how it was made, not what it says: every writer but the sweep's puts
 # the date, command, commit and machine on one "Generated ..." line; the sweep's header
-# (agents/evaluation/sweep_report.write_report) gives the commit, the machine and the wall time lines of their own.
+# (agents/pages/sweep_report.write_report) gives the commit, the machine and the wall time lines of their own.
 PROVENANCE_PREFIXES = (
     "Generated ",
     "Code when this report was written: ",

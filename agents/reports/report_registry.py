@@ -14,10 +14,14 @@ from functools import partial
 from pathlib import Path
 
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
-from agents.evaluation import suite_checks
 from agents.evaluation.leaderboard import run_leaderboard
 from agents.evaluation.suite import run_suite, suite_agents
+from agents.evaluation.suite_checks import frozen_physics
 from agents.evaluation.sweep import run_sweep
+from agents.pages.calibration_page import write_page
+from agents.pages.leaderboard_page import write_leaderboard_page
+from agents.pages.suite_writer import write_suite_page
+from agents.pages.sweep_report import write_sweep_page
 from agents.policies import HISTORY_AGENTS
 from agents.reports.ablation_entry import AblationSpec
 from agents.reports.benchmark_report import write_benchmark, write_readme_results, write_thesis_closed_loop
@@ -45,9 +49,8 @@ def _repository_as_cwd() -> Iterator[None]:
 def _sweep(report: Report, folder: Path, *, config: str) -> None:
     # `flownav sweep` leaves --report-only out of the command it prints; the report's "Rebuilt with" line says it.
     with _repository_as_cwd():
-        run_sweep(
-            Path(config), folder, report_only=True, command=report.command.replace(" --report-only", "")
-        )
+        flight = run_sweep(Path(config), folder, report_only=True)
+        write_sweep_page(flight, report.command.replace(" --report-only", ""))
 
 
 def _readme_block(report: Report, folder: Path) -> None:
@@ -149,8 +152,8 @@ REPORTS: tuple[Report, ...] = (
         name="leaderboard",
         command="flownav leaderboard --out results --report-only",
         inputs=("leaderboard_episodes.csv",),
-        write=lambda report, folder: run_leaderboard(
-            HISTORY_AGENTS, folder, report_only=True, command=report.command
+        write=lambda report, folder: write_leaderboard_page(
+            run_leaderboard(HISTORY_AGENTS, folder, report_only=True), report.command
         ),
     ),
     Report(
@@ -266,8 +269,8 @@ REPORTS: tuple[Report, ...] = (
             # The logged choices per agent (flownav decision-log writes it beside its page).
             "decision_log.csv",
         ),
-        write=lambda report, folder: run_suite(
-            suite_agents("2"), folder, report_only=True, command=report.command, version="2"
+        write=lambda report, folder: write_suite_page(
+            run_suite(suite_agents("2"), folder, report_only=True, version="2"), report.command
         ),
     ),
     Report(
@@ -275,15 +278,15 @@ REPORTS: tuple[Report, ...] = (
         name="suite-checks",
         command="flownav reports --out results --only suite-checks",
         inputs=("suite_v2_calibration/*.csv", "suite_v2_calibration/sensitivity/*.csv"),
-        write=lambda report, folder: suite_checks.write_checks(folder, report.command),
+        write=lambda report, folder: write_page(folder, report.command, frozen_physics()),
     ),
     Report(
         "suite_v1/suite.md",
         name="suite-v1",
         command="flownav suite --suite-version 1 --out results/suite_v1 --report-only",
         inputs=("suite_v1/suite_episodes.csv", "suite_v1/sensor_reading/*.csv", "suite_v1/lane/*.csv"),
-        write=lambda report, folder: run_suite(
-            suite_agents("1"), folder, report_only=True, command=report.command, version="1"
+        write=lambda report, folder: write_suite_page(
+            run_suite(suite_agents("1"), folder, report_only=True, version="1"), report.command
         ),
     ),
     Report(

@@ -1,11 +1,12 @@
-"""Suite v2's calibration page (``results/suite_v2_calibration/calibration.md``), worded from the committed
-check flights by ``templates/suite_checks.md.j2``.
+"""Suite v2's check flights (``results/suite_v2_calibration/``) read and summarised: each privileged reference's
+feasibility per tier, and the noisy tiers at other readings of the velocity specification paired by layout with
+the frozen one. Its calibration page words these values (:mod:`agents.pages.calibration_page`).
 
-This module reads episodes and words them, nothing else: it imports only the analysis, the bottom layer's
-template and seed helpers, and its template (an import-linter contract in ``pyproject.toml`` and
-``tests/agents/evaluation/test_calibration_page.py`` keep it so: no MuJoCo, Gymnasium or env). The physics the
-page states, the frozen tiers and the sensor's velocity readings, is code, not data: its caller reads it from the
-env package and hands it in as :class:`FrozenPhysics` (:func:`agents.evaluation.suite_checks.frozen_physics`).
+This module reads episodes, nothing else: it imports only the analysis and the bottom layer (an import-linter
+contract in ``pyproject.toml`` and ``tests/agents/pages/test_calibration_page.py`` keep it so: no MuJoCo,
+Gymnasium or env). The physics the page states, the frozen tiers and the sensor's velocity readings, is code, not
+data: its caller reads it from the env package and hands it in as :class:`FrozenPhysics`
+(:func:`agents.evaluation.suite_checks.frozen_physics`).
 
 Nothing here chooses a setting: a tier passes its check when each reference fails at most
 :data:`FEASIBLE_FAILURE` of the checked layouts.
@@ -25,9 +26,6 @@ from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.paired import compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import wilson_interval
-from agents.common.folders import write_text_atomically
-from agents.common.jinja_reports import render
-from agents.common.seeds import SUITE_V2_CHECK_SEED_START, SUITE_V2_SENSOR_READING_SEED_START
 
 # A tier is feasible when each privileged reference fails at most this share of the checked layouts.
 FEASIBLE_FAILURE = 0.02
@@ -38,7 +36,6 @@ SENSITIVITY_DIR = "sensitivity"
 SENSITIVITY_NAME = re.compile(
     r"^(?P<agent>.+)_(?P<env_id>FlowNav[A-Za-z]*-v\d+)_(?P<reading>[a-z0-9_]+)_tau(?P<tau>[0-9.]+)$"
 )
-PAGE = "calibration.md"
 
 
 @dataclass(frozen=True)
@@ -153,52 +150,6 @@ def sensitivity_rows(folder: Path, physics: FrozenPhysics) -> list[dict[str, Any
             }
         )
     return found
-
-
-def check_values(folder: Path, command: str, physics: FrozenPhysics) -> dict[str, Any]:
-    """Every value the calibration page words."""
-    checks = check_rows(folder, physics.tiers)
-    tiers = [
-        {"name": spec.name, "env_id": spec.env_id, "why": spec.why, "settings": dict(spec.settings)}
-        for spec in physics.tiers
-    ]
-    hard = physics.tier("hard").settings
-    readings = physics.velocity_readings
-    return {
-        "command": command,
-        "tiers": tiers,
-        "checks": checks,
-        "all_pass": passing(checks),
-        "all_flown": all(row["layouts"] for row in checks),
-        "sensitivity": sensitivity_rows(folder, physics),
-        "feasible_failure": FEASIBLE_FAILURE,
-        "check_seed": SUITE_V2_CHECK_SEED_START,
-        "sensitivity_seed": SUITE_V2_SENSOR_READING_SEED_START,
-        "capsule_radius": physics.capsule_radius_m,
-        "hull_radius": physics.hull_radius_m,
-        "free_path_s": physics.hard_free_path_s,
-        "hard_speed": hard["forward_speed"],
-        "hard_density": hard["obstacle_density"],
-        "free_path_m": 1.0
-        / (hard["obstacle_density"] * 2 * (physics.capsule_radius_m + physics.hull_radius_m)),
-        "field_width": hard["field_width"],
-        "lateral_bound": hard["lateral_bound"],
-        "reading": readings[physics.flight_stack_reading][0],
-        "velocity_sigma": readings[physics.flight_stack_reading][1],
-        "readings": [
-            {"name": key, "meaning": meaning, "sigma": sigma} for key, (meaning, sigma) in readings.items()
-        ],
-        "tau": physics.velocity_correlation_s,
-        "taus": list(physics.velocity_correlation_readings_s),
-        "accuracy": physics.velocity_accuracy_m_s,
-    }
-
-
-def write_page(folder: Path, command: str, physics: FrozenPhysics) -> Sequence[str]:
-    """Write ``<folder>/calibration.md`` from the checks flown into ``folder``; returns its lines."""
-    text = render("agents.evaluation", "suite_checks.md.j2", check_values(Path(folder), command, physics))
-    write_text_atomically(Path(folder) / PAGE, text)
-    return text.splitlines()
 
 
 def passing(checks: Sequence[Mapping[str, object]]) -> bool:

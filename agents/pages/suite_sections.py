@@ -17,16 +17,14 @@ from agents.evaluation.episode_tasks import TieredRow
 from agents.evaluation.lane import SidewaysRow, sideways_extent
 from agents.evaluation.learning_gain import LearningGain, learning_gains
 from agents.evaluation.reference_chain import ChainLink, reference_chain
-from agents.evaluation.suite_checks import VelocityReading, velocity_reading_values
-from agents.evaluation.suite_page import BesideSuite, beside_suite
+from agents.evaluation.suite import EPISODES_CSV
 from agents.evaluation.tier_bound import TierBound, suite_bounds
-
-# The file a suite's episodes are kept in, in its folder.
-EPISODES_CSV = "suite_episodes.csv"
+from agents.pages.suite_page import BesideSuite, beside_suite
+from agents.pages.velocity_reading import VelocityReading, velocity_reading_values
 
 
 class PageSections(BesideSuite):
-    """What :func:`page_sections` gives, as :func:`~agents.evaluation.suite_page.suite_values` takes it: what is
+    """What :func:`page_sections` gives, as :func:`~agents.pages.suite_page.suite_values` takes it: what is
     kept beside the suite, and what its failure matrices and episodes give."""
 
     bounds: dict[str, TierBound]

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any, TypedDict
 import numpy as np
 
 from agents.analysis.decision_rows import AgentDecision
-from agents.analysis.over_seeds import episode_outcomes
 from agents.analysis.paired import (
     BOOTSTRAP_REPS,
     MIN_RANKED_SEEDS,
@@ -24,7 +23,6 @@ from agents.analysis.paired import (
     TierRanking,
     compare,
     p_value_error,
-    rank_tier,
 )
 from agents.analysis.records import read_records
 from agents.analysis.reflights import ReflightSummary
@@ -32,18 +30,18 @@ from agents.common.jinja_reports import render
 from agents.common.locations import RESULTS_DIR
 from agents.common.seeds import LANE_SEED_START
 from agents.common.tables import markdown_cell
-from agents.evaluation.episode_tasks import TieredRow, with_tier
+from agents.evaluation.episode_tasks import with_tier
 from agents.evaluation.lane import LANE_DIR, NEAR_EDGE_M, LaneRow, SidewaysRow, lane_values
 from agents.evaluation.learning_gain import CAMERA_MARGIN, LearningGain
 from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
-from agents.evaluation.suite_checks import VelocityReading
-from agents.evaluation.suite_findings import findings
+from agents.evaluation.suite_ranking import tier_failures
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
+from agents.pages.suite_findings import findings
+from agents.pages.velocity_reading import VelocityReading
 from agents.policies import (
     NOT_FLOWN_ON,
     RETIRED_AGENTS,
-    is_learned,
     is_per_tier,
     split_agent_name,
     trained_on,
@@ -115,49 +113,6 @@ class BesideSuite(TypedDict):
     camera_recipe_reports: dict[str, str]
     lanes: list[LaneRow]
     retired: list[RetiredAgent]
-
-
-def tier_failures(
-    rows: Sequence[TieredRow],
-    runs: Mapping[str, Sequence[str]],
-    tier_name: str,
-    layouts: Sequence[int],
-) -> dict[str, np.ndarray]:
-    """Each agent's failures on ``tier_name`` as a (runs, layouts) matrix, for the agents that flew every
-    layout with every run; ``rows`` are suite episode rows with their ``tier``
-    (:func:`~agents.evaluation.episode_tasks.with_tier`)."""
-    mine = [row for row in rows if row["tier"] == tier_name]
-    failures = {}
-    for agent, names in runs.items():
-        try:
-            failures[agent] = episode_outcomes(mine, names, layouts, "failure")
-        except ValueError:
-            continue  # not flown in full: the report lists it as not yet flown
-    return failures
-
-
-def rank_suite(
-    table: Sequence[SuiteRow], failures: Mapping[str, Mapping[str, np.ndarray]], seed: int = 0
-) -> dict[str, TierRanking]:
-    """Each tier's :class:`~agents.analysis.paired.TierRanking` of the agents in its rows, its bootstrap drawn
-    from ``seed``; a tier with no rankable agent flown (privileged or provisional agents only) has none."""
-    rankings = {}
-    for name, matrices in failures.items():
-        privileged = [row["agent"] for row in table if row["tier"] == name and row["privileged"]]
-        learned = [agent for agent in matrices if _is_shipped_learned(agent)]
-        try:
-            rankings[name] = rank_tier(matrices, privileged=privileged, learned=learned, seed=seed)
-        except ValueError:
-            continue  # nothing rankable flown on this tier (say a reference flown on its own): no ranking
-    return rankings
-
-
-def _is_shipped_learned(agent: str) -> bool:
-    """Whether ``agent`` is one of FlowNav's learned agents; an included agent's shown name (``my rule``) is not."""
-    try:
-        return is_learned(agent)
-    except ValueError:
-        return False
 
 
 def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
@@ -386,4 +341,4 @@ def camera_student_recipe_reports() -> dict[str, str]:
 
 def suite_page(values: Mapping[str, object]) -> str:
     """``suite.md``'s text from :func:`suite_values`."""
-    return render("agents.evaluation", "suite.md.j2", values, filters={"cell": markdown_cell})
+    return render("agents.pages", "suite.md.j2", values, filters={"cell": markdown_cell})

@@ -1,54 +1,25 @@
-"""The sweep's outputs: the summary CSV, the collision-against-error figure and ``sweep.md``."""
+"""The sweep's page: the collision-against-error figure and ``sweep.md``, from what
+:func:`~agents.evaluation.sweep.run_sweep` flew and summarised (its summary CSV is
+:mod:`agents.evaluation.sweep_summary`'s)."""
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from agents.analysis.episode_record import EpisodeRow
+from agents.analysis.records import read_records
 from agents.analysis.statistics import CellSummary, format_summary, summarise
 from agents.common.machine import code_version
 from agents.evaluation.provenance import machine_summary
+from agents.evaluation.sweep import SweepFlight
 from flownav_env.settings import ENV_ESTIMATOR_DEFAULTS, EnvSettings
 
 if TYPE_CHECKING:  # matplotlib is heavy: imported only where a figure is drawn
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
-
-SUMMARY_FIELDS = [
-    "agent",
-    "factor",
-    "level",
-    "episodes",
-    "collisions",
-    "collision_rate",
-    "ci_low",
-    "ci_high",
-    "success_rate",
-    "success_ci_low",
-    "success_ci_high",
-    "median_progress_m",
-    "median_min_clearance_m",
-    # Added after the first sweeps: appended, so readers of the columns above keep working.
-    "out_of_bounds",
-    "failure_rate",
-    "failure_ci_low",
-    "failure_ci_high",
-]
-
-
-def write_summary(rows: Sequence[EpisodeRow], path: Path) -> list[CellSummary]:
-    table = summarise(rows)
-    with path.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=SUMMARY_FIELDS)
-        writer.writeheader()
-        for row in table:
-            writer.writerow({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()})
-    return table
-
 
 # Each factor's axis label in the figure: what the level measures, and in what unit.
 FACTOR_AXIS_LABELS = {
@@ -326,3 +297,23 @@ def write_report(
         ]
     parts += ["## All cells", "", format_summary(table), ""]
     path.write_text("\n".join(parts))
+
+
+def write_sweep_page(flight: SweepFlight, command: str) -> None:
+    """``collision_vs_error.png`` and ``sweep.md`` in the sweep's folder: the summary, the flight time (none for a
+    rebuilt report) and, with the flight's ``compare_with``, each cell beside the earlier sweep's."""
+    config = flight.config
+    plot_collision_vs_error(flight.table, list(config.factors), flight.folder / "collision_vs_error.png")
+    write_report(
+        flight.folder / "sweep.md",
+        flight.table,
+        flight.config_path,
+        command,
+        flight.minutes,
+        list(config.factors),
+        None
+        if flight.compare_with is None
+        else (flight.compare_with, comparison_markdown(flight.rows, read_records(flight.compare_with))),
+        episodes_per_cell=config.episodes,
+        expected_cells=len(flight.agents) * (1 + sum(len(levels) for levels in config.factors.values())),
+    )

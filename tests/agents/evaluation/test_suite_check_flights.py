@@ -10,15 +10,16 @@ import pytest
 from helpers import EPISODE
 
 from agents.analysis.records import append_record
-from agents.evaluation.calibration_page import (
+from agents.evaluation.suite_checks import frozen_physics
+from agents.pages.calibration_page import (
     FEASIBLE_FAILURE,
     SENSITIVITY_DIR,
     check_rows,
     passing,
     sensitivity_file,
     sensitivity_rows,
+    write_page,
 )
-from agents.evaluation.suite_checks import frozen_physics, write_checks
 
 SUCCESS = replace(EPISODE, agent="planner", collision=False, success=True, max_abs_lateral_m=4.2)
 
@@ -71,7 +72,7 @@ def test_the_sensitivity_table_pairs_other_readings_with_the_frozen_one_by_layou
 
 def test_the_page_states_the_physics_and_lists_what_is_not_flown(tmp_path: Path) -> None:
     _fly(tmp_path / "planner_FlowNav-v1.csv", range(970_000, 970_020), set(), env_id="FlowNav-v1")
-    text = "\n".join(write_checks(tmp_path, "cmd"))
+    text = "\n".join(write_page(tmp_path, "cmd", frozen_physics()))
     assert (tmp_path / "calibration.md").read_text().strip() == text.strip()
     assert "n = 0.18 capsules/m²" in text and "τ = 1 s" in text and "12 m wide" in text
     assert "| `clean` | `FlowNav-v1` | `planner` | 20 | 0.00" in text

@@ -11,15 +11,15 @@ import pytest
 
 from agents.analysis.paired import MIN_RANKED_SEEDS
 from agents.common.seeds import suite_seeds
-from agents.evaluation.suite_page import (
+from agents.evaluation.suite_ranking import rank_suite
+from agents.evaluation.suite_report import SUMMARY_COLUMNS
+from agents.pages.suite_page import (
     STUDENT_RECIPES_DIR,
     camera_student_recipe_reports,
-    rank_suite,
     student_recipe_reports,
     suite_page,
     suite_values,
 )
-from agents.evaluation.suite_report import SUMMARY_COLUMNS
 from flownav_env.tiers import SUITE_VERSION, TIERS
 
 
@@ -78,7 +78,7 @@ def test_the_page_renders_every_branch() -> None:
 
 def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
     from agents.common.locations import RESULTS_DIR
-    from agents.evaluation.suite_page import SENSOR_READING_DIR, reading_values
+    from agents.pages.suite_page import SENSOR_READING_DIR, reading_values
     from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
 
     readings = reading_values(RESULTS_DIR / "suite_v1" / SENSOR_READING_DIR)
@@ -187,7 +187,7 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
     from helpers import EPISODE
 
     from agents.analysis.records import append_record
-    from agents.evaluation.suite_page import retired_values
+    from agents.pages.suite_page import retired_values
     from agents.policies import RETIRED_AGENTS
 
     retired = next(iter(RETIRED_AGENTS))

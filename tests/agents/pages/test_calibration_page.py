@@ -10,12 +10,13 @@ from pathlib import Path
 import pytest
 from helpers import flight_modules_loaded_by
 
-from agents.evaluation.calibration_page import FrozenPhysics, TierFacts, check_values
+from agents.evaluation.suite_check_flights import FrozenPhysics, TierFacts
 from agents.evaluation.suite_checks import frozen_physics
+from agents.pages.calibration_page import check_values
 
 
 def test_importing_the_calibration_page_loads_no_simulator() -> None:
-    assert flight_modules_loaded_by("agents.evaluation.calibration_page") == []
+    assert flight_modules_loaded_by("agents.pages.calibration_page") == []
 
 
 def test_the_page_states_the_physics_it_is_handed(tmp_path: Path) -> None:

@@ -1,5 +1,5 @@
-"""Suite v2's calibration page: the feasibility checks per tier and reference, and the sensitivity table paired by
-layout, from episode files laid out as the flights write them."""
+"""Suite v2's check flights and their calibration page: the feasibility checks per tier and reference, and the
+sensitivity table paired by layout, from episode files laid out as the flights write them."""
 
 from __future__ import annotations
 
@@ -10,16 +10,16 @@ import pytest
 from helpers import EPISODE
 
 from agents.analysis.records import append_record
-from agents.evaluation.suite_checks import frozen_physics
-from agents.pages.calibration_page import (
+from agents.evaluation.suite_check_flights import (
     FEASIBLE_FAILURE,
     SENSITIVITY_DIR,
     check_rows,
     passing,
     sensitivity_file,
     sensitivity_rows,
-    write_page,
 )
+from agents.evaluation.suite_checks import frozen_physics
+from agents.pages.calibration_page import write_page
 
 SUCCESS = replace(EPISODE, agent="planner", collision=False, success=True, max_abs_lateral_m=4.2)
 

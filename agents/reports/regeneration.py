@@ -1,14 +1,14 @@
-"""Every Markdown report in ``results/``, and how to write the machine-written ones again from the committed
-data without flying anything (``flownav reports``).
+"""Every Markdown report in ``results/``, and the README's generated results block, and how to write the
+machine-written ones again from the committed data without flying anything (``flownav reports``).
 
 A report's numbers should be what the current code makes of the committed episodes: when a statistic changes
 (a bootstrap interval, a table's layout), a report written before the change silently disagrees with the code
-that claims to produce it. :data:`~agents.reports.report_registry.REPORTS` lists every ``results/**/*.md``: each machine-written report with a
-report-only path names its inputs and the writer call that rebuilds it, in-process; every other one (prose,
-measurements of a machine's speed, stale archives) says in one line why it is not regenerated.
-:func:`regenerate` writes the reports into any folder with the layout of ``results/``, and :func:`differences`
-compares one with the committed file, ignoring only the lines that record when, where and with which commit it
-was written (:func:`comparable_text`).
+that claims to produce it. :data:`~agents.reports.report_registry.REPORTS` lists every ``results/**/*.md`` and
+the README (``../README.md``): each machine-written report with a report-only path names its inputs and the
+writer call that rebuilds it, in-process; every other one (prose, measurements of a machine's speed, stale
+archives) says in one line why it is not regenerated. :func:`regenerate` writes the reports into any folder with
+the layout of ``results/`` (:func:`written_at`), and :func:`differences` compares one with the committed file,
+ignoring only the lines that record when, where and with which commit it was written (:func:`comparable_text`).
 """
 
 from __future__ import annotations

@@ -34,6 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import run_suite, suite_agents
+    from agents.pages.suite_writer import write_suite_page
 
     if not 2 <= args.layouts <= SUITE_LAYOUTS:
         raise ValueError(
@@ -41,14 +42,8 @@ def run(args: argparse.Namespace) -> int:
         )
     tier_name = tier_name_of(args.tiers)
     out = Path(args.out)
-    lines = run_suite(
-        suite_agents(),
-        out,
-        tiers=tier_name,
-        layouts=args.layouts,
-        workers=args.workers,
-        command=f"flownav demo --layouts {args.layouts} --tiers {tier_name} --out {out}",
-    )
+    flight = run_suite(suite_agents(), out, tiers=tier_name, layouts=args.layouts, workers=args.workers)
+    lines = write_suite_page(flight, f"flownav demo --layouts {args.layouts} --tiers {tier_name} --out {out}")
     print("\n".join(lines))
     print(demo_note(args.layouts, tier_name, out))
     return 0

@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.studies.error_analysis_report import default_baseline, write_error_analysis_from
+    from agents.reports.error_analysis_report import default_baseline, write_error_analysis_from
 
     command = "flownav error-analysis " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     episodes = episode_files(args)

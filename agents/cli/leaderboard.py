@@ -31,7 +31,6 @@ from agents.cli.suite import add_suite_version_argument
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.evaluation.leaderboard import MIN_EPISODES, run_leaderboard
-from agents.evaluation.suite_plot import plot_suite
 from agents.policies import HISTORY_AGENTS
 
 HELP = (
@@ -100,16 +99,19 @@ def run(args: argparse.Namespace) -> int:
             "--agents bee,vfh flies some agents, --include runs/score/score.csv sets your rows beside the "
             "leading table without flying",
         )
+    # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
+    from agents.pages.leaderboard_page import write_leaderboard_page
+
     command = "flownav leaderboard " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    lines = run_leaderboard(
+    board = run_leaderboard(
         agents,
         Path(args.out),
         episodes=args.layouts,
         workers=args.workers,
         policies_dir=Path(args.policies_dir),
         report_only=args.report_only,
-        command=command.strip(),
     )
+    lines = write_leaderboard_page(board, command.strip())
     print("\n".join(lines))
     return 0
 
@@ -135,6 +137,8 @@ def _include(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.included import included_suite
     from agents.evaluation.suite import published_suite_csv, write_summary_csv
+    from agents.pages.included_page import included_page
+    from agents.pages.suite_plot import plot_suite
 
     version = args.suite_version
     suite_path = Path(args.suite) if args.suite else published_suite_csv(version)
@@ -144,9 +148,8 @@ def _include(args: argparse.Namespace) -> int:
     verified_now = _verify_included(args.include) if args.verify else {}
     if verified_now is None:
         return 1
-    text, rows, rankings, _ = included_suite(
-        suite_path, args.include, command=command.strip(), version=version, verified_now=verified_now
-    )
+    included = included_suite(suite_path, args.include, version=version, verified_now=verified_now)
+    text, rows, rankings = included_page(included, command.strip()), included.table, included.rankings
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomically(out / "suite_with_included.md", text)
     write_summary_csv(

@@ -1,5 +1,5 @@
 """``flownav reports``: write every machine-written report of results/ again from the committed episodes,
-flying nothing (see :mod:`agents.studies.reports`).
+flying nothing (see :mod:`agents.reports.regeneration`).
 
 By default the reports go to a scratch folder with the layout of results/; ``--out results`` rewrites the
 committed ones. ``--check`` writes them to a temporary folder and compares each with the committed file, lines
@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.studies.reports import listing, select_reports
+    from agents.reports.regeneration import listing, select_reports
 
     if args.list:
         print("\n".join(listing()))
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
 def _write(out: Path, names: list[str] | None) -> None:
     """Regenerate the reports into ``out``, a line per report."""
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.studies.reports import regenerate
+    from agents.reports.regeneration import regenerate
 
     for outcome in regenerate(out, names):
         if outcome.written is None:
@@ -73,7 +73,7 @@ def _check(names: list[str] | None) -> int:
     """Regenerate the reports into a temporary folder and print per report "same" or its diff; 1 if any
     differs."""
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
-    from agents.studies.reports import differences, regenerate
+    from agents.reports.regeneration import differences, regenerate
 
     differ = 0
     with tempfile.TemporaryDirectory(prefix="flownav-reports-") as scratch:

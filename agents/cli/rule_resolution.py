@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agents.studies.rule_resolution_report import write_rule_resolution
+    from agents.reports.rule_resolution_report import write_rule_resolution
 
     command = "flownav rule-resolution " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     lines = write_rule_resolution(

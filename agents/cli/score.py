@@ -24,7 +24,7 @@ from pathlib import Path
 
 from agents.cli.arguments import announce_flight
 from agents.cli.suite import add_tier_arguments
-from agents.evaluation.suite_report import tier_tables
+from agents.pages.suite_tables import tier_tables
 from agents.policies import POLICY_OPTION_HELP, TRUST_PICKLE_HELP
 from agents.policies.agent_limits import (
     AGENT_CPU_OPTION,

@@ -70,6 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.suite import run_suite
+    from agents.pages.suite_writer import write_suite_page
 
     names = args.agents if args.agents is not None else ",".join(suite_agents_of(args.suite_version))
     agents = [name.strip() for name in names.split(",") if name.strip()]
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
             "--agents, --tiers and --layouts 30 ask for less",
         )
     command = "flownav suite " + " ".join(shlex.quote(a) for a in sys.argv[2:])
-    lines = run_suite(
+    flight = run_suite(
         agents,
         Path(args.out),
         tiers=args.tiers,
@@ -94,8 +95,8 @@ def run(args: argparse.Namespace) -> int:
         backend=args.backend,
         address=args.address,
         report_only=args.report_only,
-        command=command.strip(),
         version=args.suite_version,
     )
+    lines = write_suite_page(flight, command.strip())
     print("\n".join(lines))
     return 0

@@ -69,6 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     # Imported on use: `flownav --help` imports every subcommand module and must stay quick.
     from agents.evaluation.sweep import run_sweep
+    from agents.pages.sweep_report import write_sweep_page
 
     if isinstance(args.refly, str):  # the first spelling, --refly AGENTS
         print(
@@ -81,8 +82,11 @@ def run(args: argparse.Namespace) -> int:
         for k, v in vars(args).items()
         if v not in (None, False) and k not in ("handler", "command", "report_only")
     }
+    command = "flownav sweep " + " ".join(
+        f"--{k.replace('_', '-')}" + ("" if v is True else f" {v}") for k, v in options.items()
+    )
     # Ctrl-C raises EpisodesInterrupted, which flownav prints as one line (where the episodes are), exit 130.
-    run_sweep(
+    flight = run_sweep(
         Path(args.config),
         Path(args.out),
         overrides={
@@ -99,9 +103,8 @@ def run(args: argparse.Namespace) -> int:
         report_only=args.report_only,
         overwrite=args.overwrite,
         address=args.address,
-        command="flownav sweep "
-        + " ".join(f"--{k.replace('_', '-')}" + ("" if v is True else f" {v}") for k, v in options.items()),
     )
+    write_sweep_page(flight, command)
     return 0
 
 

@@ -1,5 +1,6 @@
 """``suite_with_included``: agents scored with ``flownav score`` set beside the published suite and ranked
-exactly as ``suite.md`` ranks (:func:`~agents.evaluation.suite_page.rank_suite`, worded by the same template):
+exactly as ``suite.md`` ranks (:func:`~agents.evaluation.suite_ranking.rank_suite`; worded by the same template,
+:mod:`agents.pages.included_page`):
 privileged references apart, each ranked agent's difference from the best, its Holm-corrected p-value, and
 whether it joins the tier's top group.
 
@@ -12,6 +13,7 @@ CSV) are counted again on them. Which episode rows are an agent's runs is read f
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,10 +21,9 @@ import numpy as np
 from agents.analysis.paired import TierRanking
 from agents.analysis.records import read_records
 from agents.common.seeds import suite_seeds
-from agents.common.tables import markdown_cell, today
 from agents.evaluation.episode_tasks import TieredRow, with_tier
 from agents.evaluation.suite import EPISODES_CSV, agent_runs, summarise_suite
-from agents.evaluation.suite_page import rank_suite, suite_page, suite_values, tier_failures
+from agents.evaluation.suite_ranking import rank_suite, tier_failures
 from agents.evaluation.suite_report import (
     SuiteRow,
     merge_rows,
@@ -30,7 +31,6 @@ from agents.evaluation.suite_report import (
     read_score_runs,
     read_suite_csv,
 )
-from agents.evaluation.suite_sections import page_sections
 from agents.evaluation.verification_record import verification_mark
 from agents.policies import split_agent_name
 from agents.policies.agent_limits import ISOLATION_PROCESS, NO_SANDBOX_OPTION
@@ -123,20 +123,43 @@ def agent_to_verify(score_csv: Path) -> str:
     return flown[0] if len(flown) == 1 else split_agent_name(flown[0])[0]
 
 
+@dataclass(frozen=True)
+class IncludedSuite:
+    """The published suite with included agents ranked among its agents (:func:`included_suite`), for its page
+    (:func:`agents.pages.included_page.included_page`).
+
+    Attributes:
+        table: the rows, an included one with its ``included`` mark.
+        failures: each tier's failure matrices, agent → (runs, layouts) on the first ``layouts`` layouts.
+        rankings: each tier's ranking.
+        files: the score files read; ``marks`` how each one's rows are marked (its verification).
+        not_counted: the (agent, tier) rows that could not be counted again (no episodes beside their CSV).
+        layouts: the layouts every row rests on, the fewest an included row flew.
+        version: the suite version.
+        folder: the published suite's folder; ``published_episodes`` its agents' episodes on those layouts.
+    """
+
+    table: list[SuiteRow]
+    failures: dict[str, dict[str, np.ndarray]]
+    rankings: dict[str, TierRanking]
+    files: list[Path]
+    marks: dict[Path, str]
+    not_counted: list[tuple[str, str]]
+    layouts: int
+    version: str
+    folder: Path
+    published_episodes: list[TieredRow]
+
+
 def included_suite(
     suite_csv: Path,
     score_csvs: Sequence[str | Path],
     *,
-    command: str,
     version: str = SUITE_VERSION,
     verified_now: Mapping[Path, str] | None = None,
-) -> tuple[str, list[SuiteRow], dict[str, TierRanking], list[Path]]:
+) -> IncludedSuite:
     """The published suite (of suite ``version``) with the agents of ``score_csvs`` ranked among its agents;
     ``verified_now`` marks the files re-flown in this command.
-
-    Returns:
-        The page's text, the table's rows (an included one with ``included`` true), each tier's ranking, and
-        the score files read.
 
     Raises:
         ValueError: an included row on fewer than 2 layouts, or a bad suite or score CSV (:func:`read_included`).
@@ -161,25 +184,18 @@ def included_suite(
         missing += not_whole
         for name, found in matrices.items():
             failures.setdefault(name, {}).update(found)
-    rankings = rank_suite(table, failures)
     folder = Path(suite_csv).parent
     seeds = list(suite_seeds(layouts, version))
     published_runs = _runs_of(folder, list(dict.fromkeys(str(row["agent"]) for row in published)))
-    values = suite_values(
-        table,
-        rankings,
-        command=command,
-        layouts=suite_seeds(layouts, version),
-        machine="",
-        missing=[],
-        not_counted=[(markdown_cell(agent), name) for agent, name in missing],
-        generated=today(),
-        included_files=[(markdown_cell(path), marks[path]) for path in files],
-        figure="suite_with_included.png",
-        # The published page's sections, with the included agents among the failures they are read from.
-        **page_sections(
-            folder, _episodes(folder, published_runs, seeds, version), failures, rankings, seeds, version
-        ),
+    return IncludedSuite(
+        table=table,
+        failures=failures,
+        rankings=rank_suite(table, failures),
+        files=list(files),
+        marks=marks,
+        not_counted=missing,
+        layouts=layouts,
         version=version,
+        folder=folder,
+        published_episodes=_episodes(folder, published_runs, seeds, version),
     )
-    return suite_page(values), table, rankings, files

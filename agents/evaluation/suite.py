@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
@@ -28,19 +29,10 @@ from agents.analysis.statistics import wilson_interval
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import SUITE_LAYOUTS, suite_seeds
-from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, TieredRow, rows_of, suite_task, with_tier
-from agents.evaluation.provenance import machine_summary
 from agents.evaluation.runner import execute
-from agents.evaluation.suite_page import (
-    rank_suite,
-    suite_page,
-    suite_values,
-    tier_failures,
-)
-from agents.evaluation.suite_plot import plot_suite
+from agents.evaluation.suite_ranking import rank_suite, tier_failures
 from agents.evaluation.suite_report import OUTCOMES, SUMMARY_COLUMNS, SuiteRow
-from agents.evaluation.suite_sections import EPISODES_CSV, page_sections
 from agents.policies import (
     agent_env_kwargs,
     check_flown_on,
@@ -60,6 +52,8 @@ from agents.policies.external import canonical_spec, is_external_name
 from agents.policies.sb3_models import is_sb3_model_name
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_agent_settings, tier
 
+# The file a suite's episodes are kept in, in its folder.
+EPISODES_CSV = "suite_episodes.csv"
 # Where each suite version's published files lie under results/: the current version at the top, earlier ones as
 # history in their own folder.
 SUITE_RESULTS_FOLDERS = {"1": "suite_v1", "2": "."}
@@ -307,6 +301,30 @@ def suite_top_groups(
     ]
 
 
+@dataclass(frozen=True)
+class SuiteFlight:
+    """What :func:`run_suite` flew (or found, report-only) in its folder, for its page
+    (:func:`agents.pages.suite_writer.write_suite_page`).
+
+    Attributes:
+        folder: where the episodes, ``suite.csv`` and the page lie.
+        rows: the suite's episodes, each with its tier.
+        runs: each agent's runs.
+        tiers: the tiers asked for, in suite order.
+        layouts: how many of each tier's frozen layouts.
+        version: the suite version.
+        table: one row per (agent, tier) flown in full (``suite.csv``).
+    """
+
+    folder: Path
+    rows: list[TieredRow]
+    runs: dict[str, list[str]]
+    tiers: list[str]
+    layouts: int
+    version: str
+    table: list[SuiteRow]
+
+
 def run_suite(
     agents: Sequence[str],
     out: str | Path,
@@ -317,12 +335,11 @@ def run_suite(
     backend: str = "local",
     address: str | None = None,
     report_only: bool = False,
-    command: str = "flownav suite",
     version: str = SUITE_VERSION,
-) -> list[str]:
+) -> SuiteFlight:
     """Fly (unless ``report_only``) every agent on the suite, agent by agent in the order given (an interrupted
-    flight leaves whole agents), and write ``suite_episodes.csv``, ``suite.csv``, ``suite.md`` and ``suite.png``
-    into ``out``; returns the report's lines.
+    flight leaves whole agents), and write ``suite_episodes.csv`` and ``suite.csv`` into ``out``; returns what
+    its page is written from.
 
     Raises:
         ValueError: a bad or retired agent, tier, layout count, worker count or folder.
@@ -346,38 +363,6 @@ def run_suite(
     if not report_only:
         execute(tasks, csv_path, backend=backend, workers=workers, address=address, description="suite")
     rows = suite_rows(tasks, csv_path) if csv_path.is_file() else []
-    text = suite_page(_report_values(rows, runs, tier_names, layouts, version, out, command))
-    write_text_atomically(out / "suite.md", text)
-    return text.splitlines()
-
-
-def _report_values(
-    rows: Sequence[TieredRow],
-    runs: Mapping[str, Sequence[str]],
-    tier_names: Sequence[str],
-    layouts: int,
-    version: str,
-    out: Path,
-    command: str,
-) -> dict[str, object]:
-    """Write ``suite.csv`` and ``suite.png`` from the flown ``rows`` and return what ``suite.md`` words."""
     table = summarise_suite(rows, runs, tier_names, layouts, version)
-    whole = {(row["agent"], row["tier"]) for row in table}
-    missing = [f"{agent} on {name}" for name in tier_names for agent in runs if (agent, name) not in whole]
     write_summary_csv(out / "suite.csv", table)
-    if table:
-        plot_suite(table, out / "suite.png")
-    seeds = list(suite_seeds(layouts, version))
-    failures = {name: tier_failures(rows, runs, name, seeds) for name in tier_names}
-    rankings = rank_suite(table, failures)
-    return suite_values(
-        table,
-        rankings,
-        command=command,
-        layouts=suite_seeds(layouts, version),
-        machine=machine_summary(),
-        missing=missing,
-        generated=today(),
-        **page_sections(out, rows, failures, rankings, seeds, version),
-        version=version,
-    )
+    return SuiteFlight(out, rows, runs, tier_names, layouts, version, table)

@@ -1,6 +1,6 @@
-"""The suite's rows: their CSV (``suite.csv``, ``score.csv``), checked when read; their tables per tier and
-figure; outside rows set beside the published ones. ``suite.md`` itself, with its ranking, is
-:mod:`agents.evaluation.suite_page`'s.
+"""The suite's rows: their CSV (``suite.csv``, ``score.csv``), checked when read; outside rows set beside the
+published ones. Their tables per tier and figure, and ``suite.md`` itself, are :mod:`agents.pages`'
+(:mod:`~agents.pages.suite_tables`, :mod:`~agents.pages.suite_plot`, :mod:`~agents.pages.suite_page`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, TypedDict, cast
 from agents.common.agent_table import published_name_like
 from agents.common.folders import write_text_atomically
 from agents.common.seeds import SUITE_LAYOUTS
-from agents.common.tables import markdown_cell, markdown_table
 from agents.evaluation.verification_record import verification_mark
 from agents.policies.base import PRIVILEGED_AGENTS
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES, check_flown_settings, tier
@@ -332,40 +331,3 @@ def merge_rows(published: Sequence[SuiteRow], included: Sequence[SuiteRow]) -> l
         merged[(row["tier"], row["agent"])] = {**row, "included": row.get("included") or True}
     order = {name: index for index, name in enumerate(TIER_NAMES)}
     return sorted(merged.values(), key=lambda r: (order[r["tier"]], r["failure_rate"], r["agent"]))
-
-
-def _interval(row: SuiteRow, outcome: str) -> str:
-    rate, low, high = outcome_interval(row, outcome)
-    return f"{rate:.2f} [{low:.2f}, {high:.2f}]"
-
-
-def tier_tables(rows: Sequence[SuiteRow]) -> list[str]:
-    """A markdown table per tier, best agent first; an included row is marked."""
-    lines: list[str] = []
-    for name in TIER_NAMES:
-        mine = sorted((r for r in rows if r["tier"] == name), key=lambda r: (r["failure_rate"], r["agent"]))
-        if not mine:
-            continue
-        spec = tier(name, str(mine[0].get("suite_version") or SUITE_VERSION))
-        lines += [f"### `{name}` (`{spec.env_id}`)", "", spec.why + ".", ""]
-        table_rows = [
-            [
-                f"`{markdown_cell(r['agent'])}`" + _included_mark(r),
-                r["runs"],
-                r["layouts"],
-                *(_interval(r, outcome) for outcome in OUTCOMES),
-            ]
-            for r in mine
-        ]
-        header = ["agent", "runs", "layouts", *(f"{o.replace('_', ' ')} [95 % CI]" for o in OUTCOMES)]
-        lines += [markdown_table(header, table_rows), ""]
-    return lines
-
-
-def _included_mark(row: Mapping[str, object]) -> str:
-    """`` (included, verified ...)`` or `` (included, self-reported)`` for an included row (its ``included``
-    says which, :func:`agents.evaluation.verification_record.verification_mark`); "" for a published one."""
-    mark = row.get("included")
-    if not mark:
-        return ""
-    return f" (included, {mark})" if isinstance(mark, str) else " (included)"

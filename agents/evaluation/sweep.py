@@ -2,13 +2,13 @@
 
 Each (agent, factor, level) cell flies the same seeds, so agents and levels are compared on identical
 obstacle layouts. Episodes are appended to ``<out>/sweep_episodes.csv`` as they end (re-running resumes);
-the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals) and the
-figure ``<out>/collision_vs_error.png`` (a panel per factor, a line per agent, CI bands).
+the summary goes to ``<out>/sweep.csv`` (collision and success rates with Wilson 95 % intervals); the page and
+figure written from what :func:`run_sweep` returns are :mod:`agents.pages.sweep_report`'s.
 
 After a policy is retrained, ``--agents AGENT[,AGENT] --refly`` deletes that agent's episodes so they are flown again;
 ``--overwrite`` moves the episodes CSV aside (``sweep_episodes.csv.bak-<time>``) and starts a new one, the way
 out when the CSV holds episodes flown with other settings (resuming refuses to mix them) or predates them;
-``--compare-with OLD/sweep_episodes.csv`` adds a table to ``sweep.md`` setting each cell beside an earlier sweep.
+``--compare-with OLD/sweep_episodes.csv`` sets each cell of the page beside an earlier sweep's.
 
 Backends: a local process pool (default) or Ray (``--backend ray [--address ADDR]``), the same tasks either way.
 """
@@ -26,7 +26,6 @@ from agents.analysis.records import (
     drop_agents,
     overwrite_hint,
     read_episodes,
-    read_records,
     start_new_file,
 )
 from agents.analysis.statistics import RUN_KEY, CellSummary, format_summary
@@ -37,12 +36,7 @@ from agents.common.yaml_config import field_range, load_config
 from agents.evaluation.episode_tasks import EpisodeTask, pending_tasks, rows_of
 from agents.evaluation.runner import execute
 from agents.evaluation.sweep_factors import SWEEP_FACTORS, factor_settings
-from agents.evaluation.sweep_report import (
-    comparison_markdown,
-    plot_collision_vs_error,
-    write_report,
-    write_summary,
-)
+from agents.evaluation.sweep_summary import write_summary
 from agents.policies import (
     LEARNED_AGENTS,
     is_learned,
@@ -195,6 +189,30 @@ def build_tasks(config: SweepConfig, agents: list[str]) -> list[EpisodeTask]:
     ]
 
 
+@dataclass(frozen=True)
+class SweepFlight:
+    """What :func:`run_sweep` flew (or found, report-only) and summarised in its folder, for its page.
+
+    Attributes:
+        folder: the sweep's folder (its episodes CSV and ``sweep.csv``).
+        config: the sweep's config with the command line's overrides; ``config_path`` the file it was read from.
+        table: the summary, one row per (agent, factor, level) cell (``sweep.csv``).
+        rows: the episodes summarised, each ``<learned>@all`` agent's seeds pooled.
+        agents: the config's agents that could fly.
+        minutes: the wall time of this invocation; None for a report-only one.
+        compare_with: an earlier sweep's episodes CSV to set each cell beside.
+    """
+
+    folder: Path
+    config: SweepConfig
+    config_path: Path
+    table: list[CellSummary]
+    rows: list[PooledRow]
+    agents: list[str]
+    minutes: float | None
+    compare_with: Path | None
+
+
 def run_sweep(
     config_path: Path,
     out: Path,
@@ -205,21 +223,19 @@ def run_sweep(
     report_only: bool = False,
     overwrite: bool = False,
     address: str | None = None,
-    command: str = "flownav sweep",
-) -> list[CellSummary]:
+) -> SweepFlight:
     """Fly every episode of the sweep in ``config_path`` not yet in ``<out>/sweep_episodes.csv``, then write
-    ``sweep.csv``, ``collision_vs_error.png`` and ``sweep.md``; returns the summary table.
+    ``sweep.csv``; returns what its page is written from (:func:`agents.pages.sweep_report.write_sweep_page`).
 
     Args:
         config_path: the sweep's YAML (:class:`SweepConfig`).
-        out: folder of the episodes CSV and the reports.
+        out: folder of the episodes CSV and the summary.
         overrides: config fields to replace (``episodes``, ``workers``, ``backend``).
         refly: agents whose episodes are deleted first, so they are flown again.
         compare_with: an earlier sweep's episodes CSV to set each cell beside.
-        report_only: fly nothing, rebuild the reports from the episodes flown so far.
+        report_only: fly nothing, summarise the episodes flown so far.
         overwrite: move the episodes CSV to ``sweep_episodes.csv.bak-<time>`` first and start a new one.
         address: Ray cluster address.
-        command: the command line, for the report.
 
     Raises:
         ValueError / FileNotFoundError: bad config, overrides, agents or files, or an episodes CSV that cannot
@@ -238,22 +254,12 @@ def run_sweep(
     flown = 0 if report_only else _fly(config, tasks, episodes_csv, address)
     rows = _summary_rows(tasks, agents, episodes_csv)
     table = write_summary(rows, out / "sweep.csv")
-    plot_collision_vs_error(table, list(config.factors), out / "collision_vs_error.png")
     minutes = (time.perf_counter() - started) / 60
-    _write_markdown(
-        out / "sweep.md",
-        config,
-        config_path,
-        table,
-        rows,
-        agents,
-        command=command,
-        minutes=None if report_only else minutes,
-        compare_with=compare_with,
-    )
     print(format_summary(table))
     print(f"{flown} episodes flown in {minutes:.1f} min; {len(rows)} in the summary")
-    return table
+    return SweepFlight(
+        Path(out), config, config_path, table, rows, agents, None if report_only else minutes, compare_with
+    )
 
 
 def _load_sweep_config(config_path: Path, overrides: Mapping[str, int | str] | None) -> SweepConfig:
@@ -352,32 +358,3 @@ def _summary_rows(tasks: list[EpisodeTask], agents: list[str], episodes_csv: Pat
     if episodes.skipped:
         print(f"skipped {episodes.skipped} torn or corrupt rows of {episodes_csv}")
     return rows
-
-
-def _write_markdown(
-    path: Path,
-    config: SweepConfig,
-    config_path: Path,
-    table: Sequence[CellSummary],
-    rows: Sequence[EpisodeRow],
-    agents: list[str],
-    *,
-    command: str,
-    minutes: float | None,
-    compare_with: Path | None,
-) -> None:
-    """``sweep.md``: the summary, the flight time (none for a rebuilt report) and, with ``compare_with``, each
-    cell beside the earlier sweep's."""
-    write_report(
-        path,
-        table,
-        config_path,
-        command,
-        minutes,
-        list(config.factors),
-        None
-        if compare_with is None
-        else (compare_with, comparison_markdown(rows, read_records(compare_with))),
-        episodes_per_cell=config.episodes,
-        expected_cells=len(agents) * (1 + sum(len(levels) for levels in config.factors.values())),
-    )

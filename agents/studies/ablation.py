@@ -28,7 +28,6 @@ from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
 from agents.analysis.validation_rows import AblationRow
 from agents.common.folders import check_writable_folder
-from agents.common.jinja_reports import render
 from agents.common.locations import POLICIES_DIR
 from agents.common.seeds import (
     ABLATION_SEED_START,
@@ -46,6 +45,7 @@ from agents.evaluation.episode_tasks import (
 )
 from agents.evaluation.runner import execute
 from agents.evaluation.trained_runs import evaluations_file, how_trained, recipe_on_tier, seed_files
+from agents.pages.wording import render_report
 from agents.policies.base import REACTIVE_AGENTS
 from agents.training.curves import plot_grouped_learning_curves
 from agents.training.outputs import RunFiles
@@ -182,8 +182,7 @@ def compare_configs(
         plot_grouped_learning_curves(
             curves, out / "ablation_curves.png", "held-out evaluation return during training, per config"
         )
-    text = render(
-        "agents.studies",
+    text = render_report(
         "ablation.md.j2",
         ablation_values(
             rows,

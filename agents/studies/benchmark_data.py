@@ -1,5 +1,5 @@
 """The committed data ``benchmark.md``, ``flow_gap.md`` and the generated blocks of the README and the thesis
-discussion are written from, read and summarised once, and what the study chose (``configs/studies.yaml``).
+discussion are written from, read and summarised once (what the study chose is :mod:`agents.common.study_choices`).
 
 Everything comes from files under ``results/``: the leaderboard's and the sweep's episodes, the training seeds'
 rates, the ablations on validation layouts, the diagnostic flights on true depths, the shipped policies' training
@@ -26,8 +26,6 @@ from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
 from agents.analysis.tolerance_rows import ToleranceRow
-from agents.common.locations import REPO_ROOT
-from agents.common.yaml_config import load_config
 from agents.evaluation.leaderboard import summarise_runs
 from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
@@ -41,7 +39,6 @@ from agents.policies.base import (
 from agents.studies.error_analysis import baseline_of_flown_runs, tolerance_table
 from flownav_env.tiers import SUITE_VERSION
 
-CHOICES_PATH = REPO_ROOT / "configs" / "studies.yaml"
 # Each input, relative to results/, and the command that writes it (for the error naming a missing one).
 INPUTS = {
     "leaderboard_episodes.csv": "flownav leaderboard --out results",
@@ -52,45 +49,6 @@ INPUTS = {
 }
 # The ablations on validation layouts (flownav ablation): the clean folder and the two robustness conditions.
 ABLATION_CONDITIONS = {"clean": "", "density": "density_0.18", "speed": "speed_1.5"}
-
-
-@dataclass(frozen=True)
-class BenchmarkChoices:
-    """What the benchmark study chose (``configs/studies.yaml`` says what each is)."""
-
-    winner: str
-    student: str
-    plain: list[str]
-    truth_stages: list[str]
-    gap_seeds: int
-    max_failure: float
-    oracle_factor: float
-    max_rise: float
-    robustness_speed: float
-    robustness_density: float
-    budget_minutes: float
-    material: float
-    thesis_max_relative: float
-    centring_rules: list[str]
-    speeds: list[float]
-    descriptions: dict[str, str]
-    factors: dict[str, list[str]]
-
-    @property
-    def truth_recipe(self) -> str:
-        """The winner's recipe, both stages and the same budget, on the true depths at the same tracked points."""
-        return f"{self.winner}_oracle"
-
-    @property
-    def student_truth(self) -> str:
-        """The planner's student's recipe on the true depths at the same tracked points (privileged)."""
-        return f"{self.student}_oracle"
-
-
-@functools.cache
-def choices(path: Path = CHOICES_PATH) -> BenchmarkChoices:
-    """The study's choices, read once."""
-    return load_config(path, BenchmarkChoices)
 
 
 @dataclass(frozen=True)

@@ -30,12 +30,13 @@ from agents.analysis.validation_rows import (
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
+from agents.common.study_choices import choices
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
 from agents.evaluation.runner import execute
+from agents.pages.wording import render_report
 from agents.policies import seeded_agent_name, trained_seeds
-from agents.studies.benchmark_data import choices, seed_failures
-from agents.studies.wording import render_report
+from agents.studies.benchmark_data import seed_failures
 
 PICK = choices().winner
 # Its own first stage (the pick is this run plus a gentler second stage) and the plain flow policy.

@@ -23,7 +23,7 @@ from agents.analysis.decision_rows import DECISION_CSV, AgentDecision, write_dec
 from agents.common.agent_table import base_agent_name
 from agents.common.locations import CONFIGS_DIR, REPO_ROOT, RESULTS_DIR
 from agents.common.tables import today
-from agents.studies.wording import render_report
+from agents.pages.wording import render_report
 
 DECISIONS_FILE = CONFIGS_DIR / "decisions.yaml"
 EPISODES = "results/suite_episodes.csv"

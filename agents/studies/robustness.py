@@ -37,11 +37,12 @@ from agents.common.yaml_config import load_config
 from agents.evaluation.episode_tasks import rows_of
 from agents.evaluation.runner import execute
 from agents.evaluation.sweep import ALL_SEEDS, SweepConfig, build_tasks, pool_every_seed
-from agents.evaluation.sweep_report import SUMMARY_FIELDS, plot_collision_vs_error
+from agents.evaluation.sweep_summary import SUMMARY_FIELDS
+from agents.pages.sweep_report import plot_collision_vs_error
+from agents.pages.wording import render_report
 from agents.policies.agent_limits import DEFAULT_STEP_TIMEOUT_S, AgentLimits
 from agents.policies.base import is_learned, split_agent_name
 from agents.studies.error_analysis import neutral_level, tolerance_table
-from agents.studies.wording import render_report
 
 SWEEP_CONFIG = REPO_ROOT / "configs" / "sweep.yaml"
 EPISODES_CSV = "robustness_episodes.csv"

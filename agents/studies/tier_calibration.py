@@ -34,10 +34,10 @@ from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, canonical_json, rows_of
 from agents.evaluation.runner import execute
 from agents.evaluation.suite_report import HEADROOM_FAILURE
+from agents.pages.wording import render_report
 from agents.policies import runs_to_fly
 from agents.policies.base import base_agent_name
 from agents.studies.study_configs import tier_calibration_config
-from agents.studies.wording import render_report
 from flownav_env.tiers import HARD_COURSE, TIER_NAMES, Tier
 from flownav_env.tiers import tier as tier_of_version
 

@@ -23,6 +23,7 @@ import numpy as np
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import start_new_file
 from agents.common.folders import check_writable_folder
+from agents.pages.wording import render_report
 from agents.policies.registry import search_space
 from agents.studies.perf.report_kit import saved_figure
 from agents.studies.tuning_study import (
@@ -35,7 +36,6 @@ from agents.studies.tuning_study import (
     run_final,
     run_search,
 )
-from agents.studies.wording import render_report
 
 
 @dataclass(frozen=True)

@@ -8,10 +8,10 @@ import math
 from collections.abc import Sequence
 from typing import Any, TypedDict
 
+from agents.pages.wording import span
 from agents.studies.thesis.metrics import MetricRow
 from agents.studies.thesis.reference import TABLE3, THESIS_FOCAL_PX, VARIABLE_TESTS
 from agents.studies.thesis.results import SweepRow, TimingRow
-from agents.studies.wording import span
 
 Row = dict[str, Any]
 

@@ -7,9 +7,9 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from agents.pages.wording import pct
 from agents.studies.thesis.comparison import Row
 from agents.studies.thesis.reference import THESIS_FOCAL_PX
-from agents.studies.wording import pct
 
 # The thesis's breaking point, and the derotation error (px) taken to break depths at this scene's parallax.
 BREAKING_ERROR = 0.08

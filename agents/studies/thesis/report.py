@@ -14,7 +14,7 @@ from agents.common.jinja_reports import render
 from agents.common.locations import REPO_ROOT
 from agents.common.yaml_config import load_config
 from agents.evaluation.provenance import machine_summary
-from agents.studies import wording
+from agents.pages import wording
 from agents.studies.thesis.comparison import table2_reading, table3_comparison, verdict_rows
 from agents.studies.thesis.experiments import EXPERIMENTS
 from agents.studies.thesis.motion_errors import motion_values
@@ -95,7 +95,7 @@ def _experiment_values(result: ExperimentResult) -> dict[str, object]:
 def readme_values(
     results: dict[str, ExperimentResult], ran: list[str], wall_s: float, discussion: str
 ) -> dict[str, object]:
-    """What ``agents/studies/templates/thesis_readme.md.j2`` states: every experiment's section from its JSON
+    """What ``agents/pages/templates/thesis_readme.md.j2`` states: every experiment's section from its JSON
     result, the rotation- and translation-error section from the three-capsule one, the hand-written
     ``discussion`` (may be empty) and the machine of the first result."""
     return {

@@ -10,6 +10,7 @@ import pytest
 from agents.cli import main
 from agents.cli.arguments import EPISODE_SECONDS, NOTICE_MINUTES, flight_notice
 from agents.evaluation import scoring, suite
+from agents.pages import suite_writer
 
 
 def test_a_long_flight_is_announced_with_how_to_ask_for_less() -> None:
@@ -24,7 +25,8 @@ def test_a_long_flight_is_announced_with_how_to_ask_for_less() -> None:
 def test_the_leaderboard_without_include_says_what_it_would_fly(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr("agents.cli.leaderboard.run_leaderboard", lambda *args, **kwargs: [])
+    monkeypatch.setattr("agents.cli.leaderboard.run_leaderboard", lambda *args, **kwargs: None)
+    monkeypatch.setattr("agents.pages.leaderboard_page.write_leaderboard_page", lambda *args, **kwargs: [])
     assert main(["leaderboard", "--out", str(tmp_path)]) == 0
     (line,) = [
         line for line in capsys.readouterr().out.splitlines() if line.startswith("flownav leaderboard: ")
@@ -38,7 +40,8 @@ def test_score_and_suite_say_what_they_would_fly(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setattr(scoring, "score", lambda *args, **kwargs: [])
-    monkeypatch.setattr(suite, "run_suite", lambda *args, **kwargs: [])
+    monkeypatch.setattr(suite, "run_suite", lambda *args, **kwargs: None)
+    monkeypatch.setattr(suite_writer, "write_suite_page", lambda *args, **kwargs: [])
     assert main(["score", "--agent", "bee", "--out", str(tmp_path)]) == 0
     assert "flownav score: up to 1,200 episodes" in capsys.readouterr().out
     assert main(["score", "--agent", "bee", "--layouts", "10", "--out", str(tmp_path)]) == 0

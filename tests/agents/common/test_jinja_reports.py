@@ -11,7 +11,7 @@ from agents.common.jinja_reports import environment, names_in, render, template_
 
 def _render(text: str, **values: object) -> str:
     # The studies' environment, on a template given as text: the same whitespace rules and filters.
-    return environment("agents.studies").from_string(text).render(**values)
+    return environment("agents.pages").from_string(text).render(**values)
 
 
 def test_a_block_tag_alone_on_its_line_takes_the_line() -> None:
@@ -37,7 +37,7 @@ def test_names_and_unused_values() -> None:
     text = "{% if met %}{{ value }}{% else %}{{ low | interval(high) }}{% endif %}"
     assert names_in(text) == {"met", "value", "low", "high"}
     assert unused_values(text, {"met": True, "value": "1", "stale": "2"}) == ["stale"]
-    assert "board" in names_in(template_source("agents.studies", "benchmark.md.j2"))
+    assert "board" in names_in(template_source("agents.pages", "benchmark.md.j2"))
 
 
 def test_every_value_used_names_the_template_and_the_value() -> None:

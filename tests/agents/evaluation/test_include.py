@@ -14,13 +14,13 @@ from agents.analysis.records import read_records
 from agents.cli import main
 from agents.evaluation.included import included_mark
 from agents.evaluation.progress import PROGRESS_PREFIX
-from agents.evaluation.suite_plot import plot_label, plot_suite
 from agents.evaluation.suite_report import (
     read_included,
     read_score_runs,
     read_suite_csv,
     write_score_runs,
 )
+from agents.pages.suite_plot import plot_label, plot_suite
 from flownav_env.tiers import SUITE_VERSION
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "open_gap_agent.py"
@@ -313,10 +313,14 @@ def test_an_included_agent_is_ranked_as_the_suite_ranks_and_the_figure_agrees(
     from matplotlib import pyplot
 
     from agents.evaluation.included import included_suite
-    from agents.evaluation.suite_plot import _plot_tier
+    from agents.pages.included_page import included_page
+    from agents.pages.suite_plot import _plot_tier
 
-    text, rows, rankings, _ = included_suite(
-        scored["published"], [scored["mine"] / "score.csv"], command="flownav leaderboard --include x"
+    included = included_suite(scored["published"], [scored["mine"] / "score.csv"])
+    text, rows, rankings = (
+        included_page(included, "flownav leaderboard --include x"),
+        included.table,
+        included.rankings,
     )
     ranking = rankings["clean"]
     # The planner is privileged: a reference apart, never ranked nor best.
@@ -431,7 +435,7 @@ def test_the_included_page_holds_the_published_pages_sections(
 
 
 def test_the_figure_lists_agents_as_the_tables_do() -> None:
-    from agents.evaluation.suite_plot import figure_order
+    from agents.pages.suite_plot import figure_order
 
     def row(agent: str, failure: float, runs: int = 1, privileged: bool = False) -> dict:
         return {"agent": agent, "failure_rate": failure, "runs": runs, "privileged": privileged}

@@ -13,7 +13,7 @@ from helpers import EPISODE
 
 from agents.analysis.records import append_record
 from agents.evaluation.lane import lane_edge, lane_values, sideways_extent
-from agents.evaluation.suite_page import beside_suite, suite_page, suite_values
+from agents.pages.suite_page import beside_suite, suite_page, suite_values
 from flownav_env.tiers import TIERS, tier_value
 
 RECORD = replace(

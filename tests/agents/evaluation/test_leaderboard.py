@@ -21,9 +21,9 @@ from agents.evaluation.leaderboard import (
     improvements,
     leaderboard_runs,
     leaderboard_tasks,
-    report_lines,
     summarise_runs,
 )
+from agents.pages.leaderboard_page import report_lines
 from agents.policies import (
     REACTIVE_AGENTS,
     is_learned,

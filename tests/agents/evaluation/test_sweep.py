@@ -315,7 +315,7 @@ def test_obstacle_density_is_swept_as_a_course_factor(tmp_path: Path) -> None:
 
 
 def test_the_partial_warning_counts_cells_not_flown_at_all() -> None:
-    from agents.evaluation.sweep_report import partial_lines
+    from agents.pages.sweep_report import partial_lines
 
     table = [{"episodes": 100}, {"episodes": 100}]
     assert partial_lines(table, 100, expected_cells=2) == []

@@ -15,7 +15,7 @@ from agents.evaluation.suite import (
     suite_tasks,
     summarise_suite,
 )
-from agents.evaluation.suite_page import rank_suite, tier_failures
+from agents.evaluation.suite_ranking import rank_suite, tier_failures
 from flownav_env.tiers import SUITE_VERSION, TIER_NAMES
 
 OTHER_SEEDS = range(1, 5)

@@ -16,9 +16,9 @@ from agents.evaluation.leaderboard import (
     against_best_reactive,
     improvements,
     leaderboard_runs,
-    report_lines,
     summarise_runs,
 )
+from agents.pages.leaderboard_page import report_lines
 from agents.studies.tuning import tune
 from agents.studies.tuning_study import Budget
 

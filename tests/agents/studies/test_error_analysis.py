@@ -15,9 +15,9 @@ from agents.analysis.dose_response import cell_quality, fit_dose_response, forma
 from agents.analysis.episode_record import is_flow_agent
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.cli import main
+from agents.pages.wording import render_report
+from agents.reports.error_analysis_report import report_values, write_error_analysis
 from agents.studies.error_analysis import best_learned_flow_agent, neutral_level, tolerance_table
-from agents.studies.error_analysis_report import report_values, write_error_analysis
-from agents.studies.wording import render_report
 
 
 def _cell(
@@ -348,7 +348,7 @@ def test_the_clean_baseline_holds_only_the_training_runs_the_sweep_flew(tmp_path
     import dataclasses
 
     from agents.analysis.records import append_record, read_records
-    from agents.studies.error_analysis_report import write_error_analysis_from
+    from agents.reports.error_analysis_report import write_error_analysis_from
 
     episodes = tmp_path / "sweep_episodes.csv"
     _write_sweep_episodes(episodes, separated=False)

@@ -12,7 +12,7 @@ from helpers import EPISODE
 
 from agents.analysis.records import append_record
 from agents.cli import main
-from agents.studies.error_analysis_report import default_baseline, write_error_analysis_from
+from agents.reports.error_analysis_report import default_baseline, write_error_analysis_from
 from agents.studies.error_analysis_tiers import (
     BEST_LEARNED,
     paired_cells,

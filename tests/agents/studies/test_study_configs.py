@@ -11,8 +11,8 @@ import pytest
 import yaml
 
 from agents.common.yaml_config import ConfigError, load_config
+from agents.reports.regeneration import differences, regenerate
 from agents.studies import rule_resolution, tier_calibration
-from agents.studies.reports import differences, regenerate
 from agents.studies.study_configs import (
     RULE_RESOLUTION_CONFIG,
     TIER_CALIBRATION_CONFIG,

@@ -11,7 +11,7 @@ from agents.cli.replicate import EXPERIMENT_NAMES
 from agents.common.jinja_reports import environment
 from agents.common.locations import CONFIGS_DIR
 from agents.common.yaml_config import ConfigError, load_config
-from agents.studies import wording
+from agents.pages import wording
 from agents.studies.thesis.attitude import (
     AttitudeRotationError,
     unity_angles,

@@ -39,6 +39,12 @@ NOT_REGENERATED: tuple[Report, ...] = (
         for tier_name in ("clean", "noisy")
     ),
     Report(
+        "observed_teacher_recipes/ablation.md",
+        reason="the observed-teacher search (configs/decisions.yaml, observed_teacher_recipes), whose policies were "
+        "not shipped: flownav ablation wrote it from the run folders its training left in runs/, which a checkout "
+        "does not keep (the commands are in the report; its episodes are committed beside it)",
+    ),
+    Report(
         "ablation/lever_lab_notes.md",
         reason="the lever search's lab notebook, hand-written lever by lever as each was judged and kept as it was: its "
         "figures are those of their day (the current ones are flow_gap.md's and ablation.md's)",

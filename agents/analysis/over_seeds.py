@@ -17,7 +17,7 @@ from __future__ import annotations
 import contextlib
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -67,13 +67,25 @@ def _rliable_estimates(
         )
 
 
-def run_rates(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
+class RunRates(TypedDict):
+    """One run's rates over its episodes (:func:`run_rates`): its training seed is "" for a reactive agent."""
+
+    agent: str
+    train_seed: int | str
+    episodes: int
+    success_rate: float
+    failure_rate: float
+    collision_rate: float
+    out_of_bounds_rate: float
+
+
+def run_rates(rows: Iterable[EpisodeRow]) -> list[RunRates]:
     """One row per run (agent name, with its training seed for a learned agent): episodes and the success,
     failure, collision and out-of-bounds rates over them; sorted by agent, then training seed."""
     groups: dict[str, list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault(row["agent"], []).append(row)
-    table = []
+    table: list[RunRates] = []
     for name, members in groups.items():
         agent, train_seed = split_agent_name(name)
         n = len(members)
@@ -89,7 +101,9 @@ def run_rates(rows: Iterable[EpisodeRow]) -> list[dict[str, Any]]:
                 "out_of_bounds_rate": sum(bool(m["out_of_bounds"]) for m in members) / n,
             }
         )
-    return sorted(table, key=lambda r: (r["agent"], -1 if r["train_seed"] == "" else r["train_seed"]))
+    return sorted(
+        table, key=lambda r: (r["agent"], -1 if isinstance(r["train_seed"], str) else r["train_seed"])
+    )
 
 
 def success_outcomes(rows: Iterable[EpisodeRow], runs: Sequence[str], layouts: Sequence[int]) -> np.ndarray:

@@ -1,6 +1,7 @@
-"""Reports as Jinja2 templates over values: one function computes a dictionary of numbers and tables from the
-committed data, one template (``<package>/templates/*.md.j2``) words it, and the small filters here turn a
-number into text. Markdown needs no escaping, and an undefined value is an error rather than an empty string.
+"""Reports as Jinja2 templates over values: one function computes a frozen dataclass of numbers and tables from
+the committed data (its fields typed, so mypy checks what a template is given), one template
+(``<package>/templates/*.md.j2``) words it, and the small filters here turn a number into text. Markdown needs no
+escaping, and an undefined value is an error rather than an empty string.
 
 Block tags alone on their line take the line with them (``trim_blocks``, ``lstrip_blocks``), so sections leave no
 blank lines behind; a block tag inside a line that ends it is written ``{% endif +%}`` to keep the newline.
@@ -8,13 +9,21 @@ blank lines behind; a block tag inside a line that ends it is written ``{% endif
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, TypeAlias
 
 import jinja2
 import jinja2.meta
 import jinja2.nodes
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+    # A template's values: a frozen dataclass of them, or a mapping (a few small templates, and tests).
+    TemplateValues: TypeAlias = DataclassInstance | Mapping[str, object]
 
 
 def rate(value: float) -> str:
@@ -60,7 +69,7 @@ def environment(package: str) -> jinja2.Environment:
 def render(
     package: str,
     template: str,
-    values: Mapping[str, object],
+    values: TemplateValues,
     *,
     every_value_used: bool = False,
     filters: Mapping[str, Callable[..., object]] | None = None,
@@ -70,7 +79,8 @@ def render(
     Args:
         package: the package whose ``templates/`` folder holds the template.
         template: its file name.
-        values: what it names.
+        values: what it names: a dataclass's fields (each as it is: a nested dataclass stays one, and Jinja reads
+            its attributes as it reads a mapping's keys), or a mapping's items.
         every_value_used: also fail on a value the template never names: for a writer that computes its
             values for this one template, a value left unused means the template drifted from its data.
         filters: the package's own filters beside :data:`FILTERS` (added to its environment once given).
@@ -80,15 +90,24 @@ def render(
         jinja2.UndefinedError: the template names a value ``values`` lacks (on the path it renders).
         ValueError: ``every_value_used`` and a value the template never names.
     """
+    named = template_fields(values)
     if every_value_used:
-        unused = unused_values(template_source(package, template), values)
+        unused = unused_values(template_source(package, template), named)
         if unused:
             raise ValueError(
                 f"template {template!r}: value {unused[0]!r} is not used by the template (drifted?)"
             )
     made = environment(package)
     made.filters.update(filters or {})
-    return made.get_template(template).render(**values)
+    return made.get_template(template).render(**named)
+
+
+def template_fields(values: TemplateValues) -> dict[str, object]:
+    """The names a template is given from ``values``: a dataclass's fields, shallowly (``dataclasses.asdict``
+    would copy every nested value and turn a nested dataclass into a dictionary), or a mapping's items."""
+    if isinstance(values, Mapping):
+        return dict(values)
+    return {field.name: getattr(values, field.name) for field in dataclasses.fields(values)}
 
 
 def names_in(source: str) -> frozenset[str]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -25,6 +25,7 @@ import flownav_env  # noqa: F401  (sets MUJOCO_GL before the machine summary que
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.over_seeds import (
     LAYOUT_BLOCK,
+    RunRates,
     block_scores,
     episode_outcomes,
     interval_estimates,
@@ -50,6 +51,37 @@ from agents.evaluation.runner import execute
 from agents.policies import is_learned, policy_file, shipped_seed_runs
 
 MIN_EPISODES = 300
+
+
+class LeaderboardRow(TypedDict):
+    """One agent's row of the history table (:func:`summarise_runs`): its rates with their 95 % intervals, and
+    the interquartile mean of its failure over runs × layout blocks with its bootstrap interval."""
+
+    agent: str
+    runs: int
+    episodes: int
+    success_rate: float
+    success_low: float
+    success_high: float
+    failure_rate: float
+    failure_low: float
+    failure_high: float
+    collision_rate: float
+    out_of_bounds_rate: float
+    iqm_failure: float
+    iqm_failure_low: float
+    iqm_failure_high: float
+    interval_over: str
+
+
+class Improvement(TypedDict):
+    """The probability that a learned agent's runs improve on a reactive agent, with its bootstrap interval."""
+
+    learned: str
+    reactive: str
+    probability: float
+    low: float
+    high: float
 
 
 def declared_as(agent: str, kind: Kind, *, privileged: bool | None = None) -> bool:
@@ -108,12 +140,12 @@ def leaderboard_tasks(
 
 def summarise_runs(
     rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
-) -> list[dict]:
+) -> list[LeaderboardRow]:
     """Per agent: runs, episodes, mean rates over runs with their 95 % intervals, and the IQM of the success
     rate over runs × layout blocks with its stratified-bootstrap interval."""
     outcomes = {agent: success_outcomes(rows, names, layouts) for agent, names in runs.items()}
     estimates = interval_estimates({agent: block_scores(o, block) for agent, o in outcomes.items()})
-    table = []
+    table: list[LeaderboardRow] = []
     layout_set = set(layouts)
     for agent, names in runs.items():
         mine = [row for row in rows if row["agent"] in names and int(row["seed"]) in layout_set]
@@ -149,7 +181,7 @@ def summarise_runs(
 
 def improvements(
     rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int], block: int = LAYOUT_BLOCK
-) -> list[dict[str, Any]]:
+) -> list[Improvement]:
     """P(learned run beats reactive agent) for every learned × reactive pair (straight left out), with its
     stratified-bootstrap interval."""
     learned = [agent for agent in runs if declared_as(agent, "learned")]
@@ -158,7 +190,7 @@ def improvements(
         agent: block_scores(success_outcomes(rows, runs[agent], layouts), block)
         for agent in learned + reactive
     }
-    result = []
+    result: list[Improvement] = []
     for x in learned:
         for y in reactive:
             point, low, high = probability_of_improvement(scores[x], scores[y])
@@ -167,7 +199,10 @@ def improvements(
 
 
 def against_best_reactive(
-    table: list[dict], rows: Sequence[EpisodeRow], runs: dict[str, list[str]], layouts: list[int]
+    table: Sequence[LeaderboardRow],
+    rows: Sequence[EpisodeRow],
+    runs: dict[str, list[str]],
+    layouts: list[int],
 ) -> list[Comparison]:
     """Each learned agent but the privileged ones against the reactive agent (``straight`` aside) with the
     lowest failure rate, paired by layout (:func:`agents.analysis.paired.compare`)."""
@@ -195,9 +230,9 @@ class Leaderboard:
     """
 
     folder: Path
-    table: list[dict[str, Any]]
-    seed_rows: list[dict[str, Any]]
-    gains: list[dict[str, Any]]
+    table: list[LeaderboardRow]
+    seed_rows: list[RunRates]
+    gains: list[Improvement]
     layouts: list[int]
     block: int
     against_best: list[Comparison]

@@ -17,7 +17,7 @@ import io
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, cast
+from typing import TypedDict, cast
 
 import numpy as np
 
@@ -265,9 +265,20 @@ def suite_agents(version: str = SUITE_VERSION) -> list[str]:
     return [agent for agent in suite_agents_of(version) if not is_learned(agent) or default_runs(agent)[0]]
 
 
+class TierTopGroup(TypedDict):
+    """A tier's best ranked agent with its failure, its top group, and whether every agent has flown it in full
+    (:func:`suite_top_groups`)."""
+
+    tier: str
+    best: str
+    best_failure: float
+    top_group: list[str]
+    complete: bool
+
+
 def suite_top_groups(
     folder: Path, layouts: int = SUITE_LAYOUTS, version: str = SUITE_VERSION
-) -> list[dict[str, Any]]:
+) -> list[TierTopGroup]:
     """Per tier with any agent flown in full, in suite order: its best ranked agent with its failure, its top
     group, and whether every agent of the suite has flown it in full (``complete``), from ``folder``'s suite
     episodes (the ranking of ``suite.md``).

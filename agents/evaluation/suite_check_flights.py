@@ -18,12 +18,12 @@ import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
 from agents.analysis.episode_record import EpisodeRow
-from agents.analysis.paired import compare
+from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import wilson_interval
 
@@ -81,14 +81,49 @@ def sensitivity_file(agent: str, env_id: str, reading: str, tau: float) -> str:
     return f"{agent}_{env_id}_{reading}_tau{tau:g}.csv"
 
 
+class _CheckedPair(TypedDict):
+    """A (tier, reference) pair the checks cover; ``layouts`` 0 until it is flown."""
+
+    tier: str
+    env_id: str
+    agent: str
+    layouts: int
+
+
+class CheckRow(_CheckedPair, total=False):
+    """A (tier, reference) check (:func:`check_rows`): a flown one has its first layout, its failure with a Wilson
+    interval, its widest sideways excursion and whether it passes."""
+
+    first_seed: int
+    failure: float
+    low: float
+    high: float
+    widest_m: float
+    passes: bool
+
+
+class SensitivityRow(TypedDict):
+    """A noisy tier flown at another reading of the velocity specification, paired by layout with the frozen
+    reading's flight of the same agent (:func:`sensitivity_rows`)."""
+
+    agent: str
+    env_id: str
+    reading: str
+    tau: float
+    layouts: int
+    frozen_failure: float
+    failure: float
+    comparison: Comparison
+
+
 def _episodes(path: Path) -> list[EpisodeRow]:
     return [row for row in read_records(path) if row.get("seed") is not None]
 
 
-def check_rows(folder: Path, tiers: Sequence[TierFacts]) -> list[dict[str, Any]]:
+def check_rows(folder: Path, tiers: Sequence[TierFacts]) -> list[CheckRow]:
     """Per (tier, reference) flown: layouts, failures with a Wilson interval, the widest sideways excursion, and
     whether it passes (:data:`FEASIBLE_FAILURE`)."""
-    found = []
+    found: list[CheckRow] = []
     for spec in tiers:
         for agent in CHECK_AGENTS:
             path = Path(folder) / f"{agent}_{spec.env_id}.csv"
@@ -115,10 +150,10 @@ def check_rows(folder: Path, tiers: Sequence[TierFacts]) -> list[dict[str, Any]]
     return found
 
 
-def sensitivity_rows(folder: Path, physics: FrozenPhysics) -> list[dict[str, Any]]:
+def sensitivity_rows(folder: Path, physics: FrozenPhysics) -> list[SensitivityRow]:
     """The noisy tiers at other readings of the velocity specification, each paired by layout with the frozen
     reading's flight of the same agent (``sensitivity/<agent>_<env id>_<reading>_<tau>.csv``)."""
-    found = []
+    found: list[SensitivityRow] = []
     frozen = (physics.flight_stack_reading, physics.velocity_correlation_s)
     for path in sorted((Path(folder) / SENSITIVITY_DIR).glob("*.csv")):
         match = SENSITIVITY_NAME.match(path.stem)
@@ -152,6 +187,6 @@ def sensitivity_rows(folder: Path, physics: FrozenPhysics) -> list[dict[str, Any
     return found
 
 
-def passing(checks: Sequence[Mapping[str, object]]) -> bool:
+def passing(checks: Sequence[CheckRow]) -> bool:
     """Whether every reference flown passes on every tier it flew."""
-    return all(row["passes"] for row in checks if row["layouts"])
+    return all(row.get("passes") for row in checks if row["layouts"])

@@ -4,15 +4,15 @@ probabilities of improvement and the gap the strongest reactive agent leaves to 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from agents.analysis.over_seeds import LAYOUT_BLOCK
+from agents.analysis.over_seeds import LAYOUT_BLOCK, RunRates
 from agents.analysis.paired import Comparison, provisional_note, verdict
 from agents.common.machine import code_version
 from agents.common.seeds import SUITE_SEED_START
 from agents.common.tables import markdown_table, today
-from agents.evaluation.leaderboard import Leaderboard, declared_as
+from agents.evaluation.leaderboard import Improvement, Leaderboard, LeaderboardRow, declared_as
 from agents.evaluation.provenance import machine_summary
 
 
@@ -24,7 +24,7 @@ def write_leaderboard_page(board: Leaderboard, command: str) -> list[str]:
     return lines
 
 
-def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> None:
+def plot_leaderboard(table: Sequence[LeaderboardRow], seed_rows: Sequence[RunRates], path: Path) -> None:
     """Failure rate per agent with its 95 % interval, and a dot per training seed of a learned agent."""
     import matplotlib  # heavy: only a command that draws the figure pays for it
 
@@ -58,15 +58,15 @@ def plot_leaderboard(table: list[dict], seed_rows: list[dict], path: Path) -> No
     plt.close(figure)
 
 
-def _rate(row: dict, name: str) -> str:
+def _rate(row: Mapping[str, object], name: str) -> str:
     return (
         f"{row[name]:.2f} [{row[name.replace('rate', 'low')]:.2f}, {row[name.replace('rate', 'high')]:.2f}]"
     )
 
 
 def report_lines(
-    table: list[dict],
-    gains: list[dict],
+    table: Sequence[LeaderboardRow],
+    gains: Sequence[Improvement],
     layouts: list[int],
     command: str,
     block: int = LAYOUT_BLOCK,

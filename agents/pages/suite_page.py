@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
@@ -222,7 +222,7 @@ def suite_values(
     reflights: Sequence[ReflightSummary] = (),
     velocity_reading: VelocityReading | None = None,
     decisions: Mapping[str, Sequence[AgentDecision]] | None = None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
     whose rows are marked ``included``, each with its verification) the page is ``suite_with_included.md``, and ``not_counted`` the (agent,

@@ -4,11 +4,10 @@ at suite v1's harsher reading beside it on suite v2's check layouts (the sensiti
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from agents.evaluation.suite_check_flights import sensitivity_rows
+from agents.evaluation.suite_check_flights import SensitivityRow, sensitivity_rows
 from agents.evaluation.suite_checks import frozen_physics
 
 
@@ -20,7 +19,7 @@ class VelocityReading:
 
     frozen: str
     harsher: str
-    rows: tuple[Mapping[str, object], ...]
+    rows: tuple[SensitivityRow, ...]
     page: str
 
 

@@ -4,13 +4,17 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from agents.analysis.dose_response import format_p
 from agents.analysis.paired import provisional_note
 from agents.common.jinja_reports import environment, render
 from agents.common.study_choices import choices
 from agents.policies.base import base_agent_name
+
+if TYPE_CHECKING:
+    from agents.common.jinja_reports import TemplateValues
 
 PACKAGE = "agents.pages"
 
@@ -74,7 +78,7 @@ FILTERS = {
 environment(PACKAGE).filters.update(FILTERS)
 
 
-def render_report(template: str, values: Mapping[str, object]) -> str:
+def render_report(template: str, values: TemplateValues) -> str:
     """This package's ``template`` rendered with ``values``, its filters those of :data:`FILTERS` and
     :mod:`agents.common.jinja_reports`'s."""
     return render(PACKAGE, template, values)

@@ -1,7 +1,7 @@
 """``benchmark.md``, the README's results block and the thesis discussion's closed-loop paragraph, written from the
 committed data alone (nothing is flown).
 
-:func:`report_values` computes one dictionary of numbers, tables, comparisons and lists of names from
+:func:`report_values` computes one frozen dataclass of numbers, tables, comparisons and lists of names from
 :func:`~agents.studies.benchmark_data.load_benchmark_data`; the templates in ``agents/pages/templates/``
 (``benchmark.md.j2``, ``readme_results.md.j2``, ``thesis_closed_loop.md.j2``, their phrases in ``wording.j2``)
 word it, each verdict
@@ -12,12 +12,11 @@ are hand-written files with one generated block each, between two marker lines; 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from agents.analysis.episode_record import is_flow_agent
+from agents.analysis.paired import Comparison
 from agents.common.folders import check_writable_folder
-from agents.common.jinja_reports import rate
 from agents.common.locations import CONFIGS_DIR, REPO_ROOT
 from agents.common.seeds import (
     ABLATION_SEED_START,
@@ -25,32 +24,43 @@ from agents.common.seeds import (
     TEST_SEED_START,
     VALIDATION_SEED_START,
 )
-from agents.common.study_choices import choices
-from agents.common.tables import markdown_table, today
-from agents.pages.wording import display_name, join_words, render_report, span
+from agents.common.study_choices import BenchmarkChoices, choices
+from agents.common.tables import today
+from agents.evaluation.leaderboard import LeaderboardRow
+from agents.evaluation.suite import TierTopGroup
+from agents.pages.wording import join_words, render_report, span
 from agents.policies.base import LEARNED_AGENTS, REACTIVE_AGENTS
-from agents.reports.benchmark_sweep import sweep_values
-from agents.studies.benchmark_data import BenchmarkData, commit_of, load_benchmark_data
+from agents.reports.benchmark_sweep import SweepValues, sweep_values
+from agents.reports.benchmark_targets import TargetValues, ValidationValues, target_values, validation_values
+from agents.studies.benchmark_data import BenchmarkData, Rate, SeedRow, commit_of, load_benchmark_data
 from flownav_env.settings import EnvSettings
 from flownav_env.tiers import TIER_NAMES, tier
 
 README_MARKERS = ("<!-- results:start -->", "<!-- results:end -->")
 THESIS_MARKERS = ("<!-- closed-loop:start -->", "<!-- closed-loop:end -->")
-Values = dict[str, Any]
 
 
-def _interval(point: float, low: float, high: float) -> str:
-    return f"{point:.2f} [{low:.2f}, {high:.2f}]"
+class BoardRow(LeaderboardRow):
+    """A row of the leading table as the reports word it: what the agent is, whether it is reactive, and bold
+    for the best reactive and learned agent."""
+
+    what: str
+    bold: bool
+    reactive: bool
 
 
-def _board(data: BenchmarkData) -> list[dict[str, Any]]:
+def _board(data: BenchmarkData) -> list[BoardRow]:
     """The leading table's rows (``templates/benchmark_tables.j2`` words them), each with what the agent is,
     whether it is reactive, and bold for the best reactive and learned agent."""
     bold = {row["agent"] for row in data.best_agents()}
     described = choices().descriptions
     return [
-        {**r, "what": described.get(r["agent"], r["agent"])}
-        | {"bold": r["agent"] in bold, "reactive": r["agent"] in REACTIVE_AGENTS}
+        BoardRow(
+            **r,
+            what=described.get(r["agent"], r["agent"]),
+            bold=r["agent"] in bold,
+            reactive=r["agent"] in REACTIVE_AGENTS,
+        )
         for r in data.leaderboard
     ]
 
@@ -63,7 +73,7 @@ def _code_groups(data: BenchmarkData) -> list[tuple[str, str]]:
     return [(join_words(commits), join_words(agents)) for commits, agents in groups.items()]
 
 
-def _seed_ranges(data: BenchmarkData) -> list[tuple[str, list[float], dict[str, Any]]]:
+def _seed_ranges(data: BenchmarkData) -> list[tuple[str, list[float], SeedRow]]:
     """Each learned agent's training seeds: their failure rates and the worst seed's row."""
     learned = [r["agent"] for r in data.leaderboard if r["agent"] in LEARNED_AGENTS]
     seeds = {agent: [r for r in data.seed_rows if r["agent"] == agent] for agent in learned}
@@ -72,9 +82,26 @@ def _seed_ranges(data: BenchmarkData) -> list[tuple[str, list[float], dict[str, 
     ]
 
 
-def _comparisons(data: BenchmarkData, best: tuple[str, str]) -> Values:
-    """The paired comparisons the reports word, by name: ``best`` (the best learned agent against the best
-    reactive one) and fixed pairs; a pair with an agent missing from the leaderboard is left out."""
+@dataclass(frozen=True)
+class Comparisons:
+    """The paired comparisons the reports word (:meth:`BenchmarkData.compare`), failure(first) − failure(second):
+    ``best`` the best learned agent against the best reactive one, the others fixed pairs; None where an agent of
+    the pair is missing from the leaderboard."""
+
+    best: Comparison | None
+    flow_vs_ttc: Comparison | None
+    winner_vs_ttc: Comparison | None
+    flow_vs_oracle: Comparison | None
+    flow_vs_bee: Comparison | None
+    flow_vs_vfh: Comparison | None
+    flow_vs_robust_rule: Comparison | None
+    robust_vs_flow: Comparison | None
+    winner_vs_truth: Comparison | None
+
+
+def _comparisons(data: BenchmarkData, best: tuple[str, str]) -> Comparisons:
+    """The paired comparisons the reports word: ``best`` (the best learned agent against the best reactive one)
+    and fixed pairs; None for a pair with an agent missing from the leaderboard."""
     c = choices()
     pairs = {
         "best": best,
@@ -88,172 +115,105 @@ def _comparisons(data: BenchmarkData, best: tuple[str, str]) -> Values:
         "winner_vs_truth": (c.winner, c.truth_recipe),
     }
     flown = {r["agent"] for r in data.leaderboard}
-    return {name: data.compare(a, b) for name, (a, b) in pairs.items() if {a, b} <= flown}
+    return Comparisons(
+        **{name: data.compare(a, b) if {a, b} <= flown else None for name, (a, b) in pairs.items()}
+    )
 
 
-def leaderboard_values(data: BenchmarkData) -> Values:
+@dataclass(frozen=True)
+class LeaderboardValues(Comparisons):
+    """The leading table, its provenance, the training seeds' spread, the paired comparisons, and the suite's
+    top groups (:func:`leaderboard_values`)."""
+
+    c: BenchmarkChoices
+    rows: dict[str, LeaderboardRow]
+    layouts: list[int]
+    leaderboard_episodes: int
+    leaderboard_complete: bool
+    leaderboard_code: list[tuple[str, str]]
+    board: list[BoardRow]
+    block: int
+    seed_ranges: list[tuple[str, list[float], SeedRow]]
+    best_learned: str
+    best_reactive: str
+    truth_recipe_flown: bool
+    winner_closes: float
+    oracle_reactive: dict[str, Rate]
+    suite_top: list[TierTopGroup]
+    suite_complete: bool
+
+
+def leaderboard_values(data: BenchmarkData) -> LeaderboardValues:
     """The leading table, its provenance, the training seeds' spread, and the comparisons of two agents (each a
     paired test, :meth:`BenchmarkData.compare`) the reports word."""
     c = choices()
     best_reactive, best_learned = data.best_agents()
     rows = {r["agent"]: r for r in data.leaderboard}
     flow, ttc, winner = (rows[a]["failure_rate"] for a in ("ppo_flow", "bee_ttc", c.winner))
-    return {
-        "c": c,
-        "rows": rows,
-        "layouts": data.layouts,
-        "leaderboard_episodes": data.leaderboard_episodes,
-        "leaderboard_complete": all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard),
-        "leaderboard_code": _code_groups(data),
-        "board": _board(data),
-        "block": data.block,
-        "seed_ranges": _seed_ranges(data),
-        "best_learned": best_learned["agent"],
-        "best_reactive": best_reactive["agent"],
-        "truth_recipe_flown": c.truth_recipe in rows,
-        **_comparisons(data, (best_learned["agent"], best_reactive["agent"])),
-        "winner_closes": (flow - winner) / (flow - ttc),
-        "oracle_reactive": data.oracle_reactive,
-        "suite_top": data.suite_top,
-        "suite_complete": _suite_complete(data.suite_top),
-    }
+    return LeaderboardValues(
+        c=c,
+        rows=rows,
+        layouts=data.layouts,
+        leaderboard_episodes=data.leaderboard_episodes,
+        leaderboard_complete=all(r["episodes"] == r["runs"] * len(data.layouts) for r in data.leaderboard),
+        leaderboard_code=_code_groups(data),
+        board=_board(data),
+        block=data.block,
+        seed_ranges=_seed_ranges(data),
+        best_learned=best_learned["agent"],
+        best_reactive=best_reactive["agent"],
+        truth_recipe_flown=c.truth_recipe in rows,
+        **vars(_comparisons(data, (best_learned["agent"], best_reactive["agent"]))),
+        winner_closes=(flow - winner) / (flow - ttc),
+        oracle_reactive=data.oracle_reactive,
+        suite_top=data.suite_top,
+        suite_complete=_suite_complete(data.suite_top),
+    )
 
 
-def _suite_complete(top_groups: list[dict[str, object]]) -> bool:
+def _suite_complete(top_groups: list[TierTopGroup]) -> bool:
     """Whether every agent of the suite has flown every tier in full."""
     return len(top_groups) == len(TIER_NAMES) and all(tier["complete"] for tier in top_groups)
 
 
-def _validation_order(data: BenchmarkData) -> list[str]:
-    """The agents flown clean and in both validation conditions, learned ones first, then the reactive ones."""
-    clean, density, speed = (data.validation[k] for k in ("clean", "density", "speed"))
-    names = [n for n in clean if n in density and n in speed]
-    return [n for n in names if n not in REACTIVE_AGENTS] + [n for n in names if n in REACTIVE_AGENTS]
+@dataclass(frozen=True)
+class SetupValues:
+    """The task's and training's settings (:func:`setup_values`); a training config as its YAML file reads."""
+
+    env: dict[str, object]
+    seed_starts: tuple[int, int, int]
+    suite_starts: dict[str, int]
+    env_id: str
+    ppo: dict[str, object]
+    ppo_minutes: str
+    ppo_cores: str
+    stage1: dict[str, object]
+    stage2: dict[str, object]
+    train_seeds: dict[str, list[int]]
+    train_configs: dict[str, str]
 
 
-def _validation_row(data: BenchmarkData, name: str, within: bool) -> list[str]:
-    """One agent's validation row: its clean failure, each condition's with its rise, whether both stay within."""
-    clean = data.validation["clean"][name]
-    reactive = name in REACTIVE_AGENTS
-    return [
-        f"`{name}` (reactive)" if reactive else f"`{name}`",
-        "–" if reactive else str(clean.runs),
-        _interval(clean.rate, clean.low, clean.high),
-        *(
-            f"{_interval(r.rate, r.low, r.high)} ({r.rate - clean.rate:+.2f})"
-            for r in (data.validation["density"][name], data.validation["speed"][name])
-        ),
-        "yes" if within else "no",
-    ]
-
-
-def _layouts_per_run(data: BenchmarkData) -> dict[str, set[int]]:
-    """Each validation condition's layouts per training run (one value where every agent flew alike)."""
-    return {k: {r.episodes // r.runs for r in data.validation[k].values()} for k in data.validation}
-
-
-def validation_values(data: BenchmarkData) -> Values:
-    """The flow-gap levers and the reactive references on validation layouts: clean, at the robustness density
-    and speed, each with its difference from clean and whether both rises stay within the limit."""
-    c = choices()
-    clean, density, speed = (data.validation[k] for k in ("clean", "density", "speed"))
-    names = _validation_order(data)
-    within = [n for n in names if max(density[n].rate, speed[n].rate) - clean[n].rate <= c.max_rise]
-    rows = [_validation_row(data, name, name in within) for name in names]
-    header = ["config or agent", "seeds", "clean failure [95 % CI]", f"density {c.robustness_density:g} (Δ)"]
-    header += [f"{c.robustness_speed:g} m/s (Δ)", f"within +{c.max_rise:.2f} at both"]
-    per_run = _layouts_per_run(data)
-    stage1, stage2 = data.training[c.winner].init_config or {}, data.training[c.winner].config
-    return {
-        "validation_table": markdown_table(header, rows),
-        "validation_within": [f"`{n}`" for n in within],
-        "validation_clean_layouts": sorted(per_run["clean"]),
-        "validation_condition_layouts": sorted(per_run["density"] | per_run["speed"]),
-        "validation_ok": {n: n in within for n in names},
-        "stage2_steps": stage2["total_timesteps"],
-        "stage2_lr": stage2["ppo"]["learning_rate"],
-        "stage1_lr": stage1.get("ppo", {}).get("learning_rate", float("nan")),
-    }
-
-
-def _test_rises(data: BenchmarkData) -> dict[str, list[float]]:
-    """Each agent's failure rise over its clean test failure (of the training runs the sweep flew) at the
-    robustness speed, then density; an agent the sweep did not fly at both is left out."""
-    c = choices()
-    rise = {}
-    for row in data.leaderboard:
-        try:
-            cells = [data.cell(row["agent"], "forward_speed", c.robustness_speed)]
-            cells.append(data.cell(row["agent"], "obstacle_density", c.robustness_density))
-            clean = data.sweep_clean[data.sweep_name(row["agent"])].rate
-        except KeyError:
-            continue
-        rise[row["agent"]] = [cell.rate - clean for cell in cells]
-    return rise
-
-
-def _first_target_met(data: BenchmarkData) -> list[dict[str, Any]]:
-    """The flow agents (neither ``straight`` nor the oracle) within the first target's failure limit."""
-    c = choices()
-    limit = min(c.max_failure, c.oracle_factor * data.row("ppo_oracle")["failure_rate"])
-    others = ("straight", "ppo_oracle")
-    return [
-        r
-        for r in data.leaderboard
-        if is_flow_agent(r) and r["agent"] not in others and r["failure_rate"] <= limit
-    ]
-
-
-def target_values(data: BenchmarkData) -> Values:
-    """The flow-gap targets on test layouts: who meets the first target's failure limit, each sweep agent's rise
-    at the robustness speed and density over its clean failure, and the winner's training time."""
-    c = choices()
-    rise = _test_rises(data)
-    first = _first_target_met(data)
-    test_ok = {a: max(rises) <= c.max_rise for a, rises in rise.items()}
-    robust = [a for a, ok in test_ok.items() if ok]
-    minutes = data.training[c.winner].minutes
-    in_time = max(minutes) <= c.budget_minutes
-    met = {
-        "the first target's failure limit": data.row(c.winner) in first,
-        "the robustness limit": c.winner in robust,
-        f"the time limit of {c.budget_minutes:g} min per seed, its slowest seed taking {max(minutes):.0f}": in_time,
-    }
-    return {
-        "first_target_met": [f"{display_name(r['agent'])} ({rate(r['failure_rate'])})" for r in first],
-        "rise": rise,
-        "rise_members": [display_name(a) for a in rise],
-        "robust_agents": [display_name(a) for a in robust],
-        "winner_minutes": span(minutes),
-        "winner_cores": "/".join(map(str, data.training[c.winner].cores)),
-        "winner_in_time": in_time,
-        "targets_met": all(met.values()),
-        "winner_missed": [target for target, ok in met.items() if not ok],
-        "test_ok": test_ok,
-    }
-
-
-def setup_values(data: BenchmarkData) -> Values:
+def setup_values(data: BenchmarkData) -> SetupValues:
     """The task's and training's settings: the env's defaults, the seed ranges, the shipped policies' configs."""
     c = choices()
     learned = [a for a in data.training if a != c.winner]
     seeds = {
         a: [int(r["train_seed"]) for r in data.seed_rows if r["agent"] == a] for a in [*learned, c.winner]
     }
-    return {
-        "env": {f.name: f.default for f in dataclasses.fields(EnvSettings)},
-        "seed_starts": (VALIDATION_SEED_START, TEST_SEED_START, ABLATION_SEED_START),
-        "suite_starts": SUITE_SEED_STARTS,
+    return SetupValues(
+        env={f.name: f.default for f in dataclasses.fields(EnvSettings)},
+        seed_starts=(VALIDATION_SEED_START, TEST_SEED_START, ABLATION_SEED_START),
+        suite_starts=SUITE_SEED_STARTS,
         # The history table's task: suite v1's clean tier.
-        "env_id": tier("clean", "1").env_id,
-        "ppo": data.training["ppo_flow"].config,
-        "ppo_minutes": span([m for a in learned for m in data.training[a].minutes]),
-        "ppo_cores": "/".join(map(str, sorted({n for a in learned for n in data.training[a].cores}))),
-        "stage1": data.training[c.winner].init_config or {},
-        "stage2": data.training[c.winner].config,
-        "train_seeds": seeds,
-        "train_configs": {agent: _training_config(agent) for agent in seeds},
-    }
+        env_id=tier("clean", "1").env_id,
+        ppo=data.training["ppo_flow"].config,
+        ppo_minutes=span([m for a in learned for m in data.training[a].minutes]),
+        ppo_cores="/".join(map(str, sorted({n for a in learned for n in data.training[a].cores}))),
+        stage1=data.training[c.winner].init_config or {},
+        stage2=data.training[c.winner].config,
+        train_seeds=seeds,
+        train_configs={agent: _training_config(agent) for agent in seeds},
+    )
 
 
 def _training_config(agent: str) -> str:
@@ -269,18 +229,36 @@ def _training_config(agent: str) -> str:
     raise FileNotFoundError(f"no training config for {agent!r} in configs/ or configs/experiments/")
 
 
-def report_values(data: BenchmarkData) -> Values:
+# The parts' fields gathered as one flat set of names, as the templates name them; each part is handed on
+# whole, by its fields (``vars``: shallow, as the template is given them).
+@dataclass(frozen=True)
+class BenchmarkValues(SweepValues, SetupValues, TargetValues, ValidationValues, LeaderboardValues):
+    """Every value of the three templates (:func:`report_values`; each template takes the ones it names), and
+    whether validation and test layouts agree on which agents stay within the robustness limit."""
+
+    validation_agrees: bool
+
+
+@dataclass(frozen=True)
+class BenchmarkPageValues(BenchmarkValues):
+    """``benchmark.md``'s values: the benchmark's, with the date and the command that wrote the page."""
+
+    generated: str
+    command: str
+
+
+def report_values(data: BenchmarkData) -> BenchmarkValues:
     """Every value of the three templates, computed from ``data`` (each template takes the ones it names)."""
-    values = {
-        **leaderboard_values(data),
-        **validation_values(data),
-        **target_values(data),
-        **setup_values(data),
-        **sweep_values(data),
-    }
-    shared = set(values["validation_ok"]) & set(values["test_ok"])
-    values["validation_agrees"] = all(values["validation_ok"][a] == values["test_ok"][a] for a in shared)
-    return values
+    validation, target = validation_values(data), target_values(data)
+    shared = set(validation.validation_ok) & set(target.test_ok)
+    return BenchmarkValues(
+        **vars(leaderboard_values(data)),
+        **vars(validation),
+        **vars(target),
+        **vars(setup_values(data)),
+        **vars(sweep_values(data)),
+        validation_agrees=all(validation.validation_ok[a] == target.test_ok[a] for a in shared),
+    )
 
 
 def write_benchmark(results_dir: Path, out: Path, command: str) -> list[str]:
@@ -292,7 +270,8 @@ def write_benchmark(results_dir: Path, out: Path, command: str) -> list[str]:
         ValueError: an unwritable ``out``, or data the report cannot be worded from.
     """
     data = load_benchmark_data(Path(results_dir))
-    text = render_report("benchmark.md.j2", {**report_values(data), "generated": today(), "command": command})
+    page = BenchmarkPageValues(**vars(report_values(data)), generated=today(), command=command)
+    text = render_report("benchmark.md.j2", page)
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)

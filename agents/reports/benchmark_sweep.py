@@ -6,20 +6,18 @@ themselves are ``error_analysis.md``'s."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TypedDict
 
 from agents.analysis.tolerance_rows import ToleranceRow
 from agents.common.study_choices import choices
 from agents.pages.wording import display_name
 from agents.policies.base import base_agent_name
-from agents.studies.benchmark_data import BenchmarkData
+from agents.studies.benchmark_data import BenchmarkData, Rate
 
 FLOW = "ppo_flow@all"
 TOLD_ROTATION = ("rotation_error", "rotation_bias", "rotation_drift", "rotation_noise_deg")
-
-
-Values = dict[str, Any]
 
 
 def sweep_agents(data: BenchmarkData) -> list[str]:
@@ -50,13 +48,28 @@ def broken_agents(data: BenchmarkData, factor: str, level: float) -> tuple[list[
     return split
 
 
-def broken_by(data: BenchmarkData, factor: str, level: float) -> dict[str, Any]:
+class NamedRate(TypedDict):
+    """An agent's display name and its failure in one sweep cell."""
+
+    name: str
+    rate: float
+
+
+class BrokenBy(TypedDict):
+    """A sweep level and the agents it has broken by then, and those it has not (:func:`broken_by`)."""
+
+    level: float
+    broken: list[NamedRate]
+    unbroken: list[NamedRate]
+
+
+def broken_by(data: BenchmarkData, factor: str, level: float) -> BrokenBy:
     """:func:`broken_agents` as the template words it: display names with their failure at ``level``."""
     named = [
-        [{"name": display_name(a), "rate": data.cells[(a, factor, float(level))].rate} for a in side]
+        [NamedRate(name=display_name(a), rate=data.cells[(a, factor, float(level))].rate) for a in side]
         for side in broken_agents(data, factor, level)
     ]
-    return {"level": level, "broken": named[0], "unbroken": named[1]}
+    return BrokenBy(level=level, broken=named[0], unbroken=named[1])
 
 
 def _levels(data: BenchmarkData, factor: str) -> list[float]:
@@ -89,7 +102,34 @@ def _rotation_only(data: BenchmarkData) -> bool:
     return bool(worse) and worse <= set(TOLD_ROTATION)
 
 
-def finding_values(data: BenchmarkData) -> Values:
+class ThesisRows(TypedDict):
+    """The tolerance rows the thesis's comparison reads: ``ppo_flow``'s and ``bee_ttc``'s to relative rotation
+    error, and ``ppo_flow``'s to rotation bias above and below (None where not flown)."""
+
+    flow_rotation: ToleranceRow | None
+    ttc_rotation: ToleranceRow | None
+    flow_bias: list[ToleranceRow | None]
+
+
+@dataclass(frozen=True)
+class FindingValues:
+    """Where the sweep's errors first break the agents (:func:`finding_values`): a level is None where none
+    breaks."""
+
+    rotation_first: float | None
+    relative_first: float | None
+    flow_relative: list[float | None]
+    floor_low: BrokenBy
+    floor_harsher: bool
+    tb_low: BrokenBy
+    scale_spares_rules: bool
+    dn: BrokenBy
+    rotation_only: bool
+    rb_level: float
+    thesis_rows: ThesisRows
+
+
+def finding_values(data: BenchmarkData) -> FindingValues:
     """Where relative per-frame error (the thesis's model) first breaks any agent and ``ppo_flow``; who the
     lowest noise floor, translation bias and the depth noise that breaks ``ppo_flow`` (the most flown where none
     does) break; whether the floor breaks most agents, whether a scale error spares the centring rules, the
@@ -107,32 +147,43 @@ def finding_values(data: BenchmarkData) -> Values:
     rotation_bias = data.tolerance_row(c.winner, "rotation_bias")
     if rotation_bias is None:
         raise ValueError("the sweep has no rotation bias above its neutral level for the winner")
-    return {
-        "rotation_first": _first_breaking([r for r in relative if r["factor"] == "rotation_error"]),
-        "relative_first": _first_breaking(relative),
-        "flow_relative": [_breaking(data, FLOW, f) for f in ("rotation_error", "translation_error")],
-        "floor_low": broken_by(data, "rotation_noise_deg", _levels(data, "rotation_noise_deg")[0]),
-        "floor_harsher": len(floor[0]) >= len(floor[1]),
-        "tb_low": broken_by(data, "translation_bias", bias),
-        "scale_spares_rules": FLOW in bias_breaks and not set(c.centring_rules) & set(bias_breaks),
-        "dn": broken_by(data, "depth_noise", noise),
-        "rotation_only": _rotation_only(data),
-        "rb_level": rotation_bias["breaking_level"] or max(rotation_bias["levels"]),
-        "thesis_rows": {
-            "flow_rotation": data.tolerance_row(FLOW, "rotation_error"),
-            "ttc_rotation": data.tolerance_row("bee_ttc", "rotation_error"),
-            "flow_bias": [data.tolerance_row(FLOW, "rotation_bias", side) for side in ("above", "below")],
-        },
-    }
+    return FindingValues(
+        rotation_first=_first_breaking([r for r in relative if r["factor"] == "rotation_error"]),
+        relative_first=_first_breaking(relative),
+        flow_relative=[_breaking(data, FLOW, f) for f in ("rotation_error", "translation_error")],
+        floor_low=broken_by(data, "rotation_noise_deg", _levels(data, "rotation_noise_deg")[0]),
+        floor_harsher=len(floor[0]) >= len(floor[1]),
+        tb_low=broken_by(data, "translation_bias", bias),
+        scale_spares_rules=FLOW in bias_breaks and not set(c.centring_rules) & set(bias_breaks),
+        dn=broken_by(data, "depth_noise", noise),
+        rotation_only=_rotation_only(data),
+        rb_level=rotation_bias["breaking_level"] or max(rotation_bias["levels"]),
+        thesis_rows=ThesisRows(
+            flow_rotation=data.tolerance_row(FLOW, "rotation_error"),
+            ttc_rotation=data.tolerance_row("bee_ttc", "rotation_error"),
+            flow_bias=[data.tolerance_row(FLOW, "rotation_bias", side) for side in ("above", "below")],
+        ),
+    )
 
 
-def sweep_values(data: BenchmarkData) -> Values:
+@dataclass(frozen=True)
+class SweepValues(FindingValues):
+    """The sweep's size, a lookup of any of its cells, and its findings (:func:`sweep_values`)."""
+
+    sweep_episodes: int
+    per_cell: list[int]
+    sweep_factor_count: int
+    sweep_agent_count: int
+    cell: Callable[[str, str, float], Rate]
+
+
+def sweep_values(data: BenchmarkData) -> SweepValues:
     """The sweep's size and its findings (:func:`finding_values`)."""
-    return {
-        "sweep_episodes": len(data.sweep_rows),
-        "per_cell": sorted({cell.episodes for cell in data.cells.values()}),
-        "sweep_factor_count": len({key[1] for key in data.cells} - {"clean"}),
-        "sweep_agent_count": len(sweep_agents(data)),
-        "cell": data.cell,
-        **finding_values(data),
-    }
+    return SweepValues(
+        sweep_episodes=len(data.sweep_rows),
+        per_cell=sorted({cell.episodes for cell in data.cells.values()}),
+        sweep_factor_count=len({key[1] for key in data.cells} - {"clean"}),
+        sweep_agent_count=len(sweep_agents(data)),
+        cell=data.cell,
+        **vars(finding_values(data)),
+    )

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from agents.analysis.dose_response import (
 from agents.analysis.episode_record import EpisodeRow
 from agents.analysis.records import read_records
 from agents.analysis.tolerance_rows import ToleranceRow
-from agents.analysis.weaving import turning_and_rotation_error
+from agents.analysis.weaving import AgentWeaving, turning_and_rotation_error
 from agents.common.folders import check_writable_folder
 from agents.common.locations import RESULTS_DIR
 from agents.common.tables import today
@@ -39,6 +40,9 @@ from agents.studies.error_analysis import (
 from agents.studies.error_analysis_tiers import (
     BEST_LEARNED,
     FULL_CELL_LAYOUTS,
+    PairedCell,
+    SidewaysCell,
+    ToleranceShift,
     cell_counts,
     paired_cells,
     rows_by_tier,
@@ -115,7 +119,66 @@ def plot_dose_response(
     plt.close(figure)
 
 
-def report_values(rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()) -> dict[str, Any]:
+class FactorSide(TypedDict):
+    """One factor on one side of its neutral level, with each agent's tolerance row there."""
+
+    factor: str
+    side: str
+    rows: dict[str, ToleranceRow]
+
+
+class UnbrokenRow(ToleranceRow):
+    """A factor no level flown breaks the best agent at: why (:func:`unbroken_kind`), and the range it was flown
+    to the end of ("" unless it was)."""
+
+    kind: str
+    range: str
+
+
+@dataclass(frozen=True)
+class SweepFindings:
+    """One sweep's sections of the error report (:func:`report_values`): its tolerance table, the factors that
+    never break the best learned flow agent, the weaving against rotation error and the dose-response fits."""
+
+    episodes: int
+    table: list[ToleranceRow]
+    agents: list[str]
+    first_rows: dict[str, ToleranceRow]
+    keys: list[FactorSide]
+    best: str | None
+    unbroken: list[UnbrokenRow]
+    turning: list[AgentWeaving]
+    turning_levels: list[float]
+    quality: dict[tuple[str, float], CellQuality]
+    short: list[str]
+    min_full_course: int
+    p_floor: float
+    task_factors: tuple[str, ...]
+    fits: dict[str, DoseFit]
+    errors: dict[str, str]
+
+
+@dataclass(frozen=True)
+class SweepSections(SweepFindings):
+    """:class:`SweepFindings` as ``templates/error_analysis_sections.md.j2`` words them: with the dose-response
+    figure's file name and what the breaking points' clean rate is."""
+
+    figure: str
+    clean_text: str
+
+
+@dataclass(frozen=True)
+class ErrorAnalysisValues:
+    """``templates/error_analysis.md.j2``'s values: one sweep's sections, its episodes, and the page's date and
+    command."""
+
+    values: SweepSections
+    episodes: int
+    generated: str
+    command: str
+
+
+def report_values(rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = ()) -> SweepFindings:
     """Every value of ``templates/error_analysis.md.j2`` from a sweep's episodes (``rows``) and the clean table's
     (``baseline``), the fits among them."""
     quality = cell_quality(rows)
@@ -127,25 +190,24 @@ def report_values(rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow] = (
     best = best_learned_flow_agent(table)
     unbroken = [r for r in table if r["agent"] == best and r["breaking_level"] is None]
     turning = turning_and_rotation_error(rows)
-    return {
-        "episodes": len(rows),
-        "table": table,
-        "agents": sorted({r["agent"] for r in table}),
-        "first_rows": {r["agent"]: r for r in reversed(table)},
-        "keys": [{"factor": f, "side": side, "rows": keys[(f, side)]} for f, side in sorted(keys)],
-        "best": best,
-        # Why no level flown breaks it (error_analysis.unbroken_kind), and the range it was flown to the end of.
-        "unbroken": [{**r, "kind": unbroken_kind(r), "range": _range_text(r)} for r in unbroken],
-        "turning": turning,
-        "turning_levels": sorted({level for row in turning for level in row["depth_error"]}),
-        "quality": quality,
-        "short": sorted(f"`{f}={level:g}`" for (f, level), q in quality.items() if not q["full_course"]),
-        "min_full_course": MIN_FULL_COURSE,
-        "p_floor": P_VALUE_FLOOR,
-        "task_factors": TASK_FACTORS,
-        "fits": fits,
-        "errors": errors,
-    }
+    return SweepFindings(
+        episodes=len(rows),
+        table=table,
+        agents=sorted({r["agent"] for r in table}),
+        first_rows={r["agent"]: r for r in reversed(table)},
+        keys=[FactorSide(factor=f, side=side, rows=keys[(f, side)]) for f, side in sorted(keys)],
+        best=best,
+        unbroken=[UnbrokenRow(**r, kind=unbroken_kind(r), range=_range_text(r)) for r in unbroken],
+        turning=turning,
+        turning_levels=sorted({level for row in turning for level in row["depth_error"]}),
+        quality=quality,
+        short=sorted(f"`{f}={level:g}`" for (f, level), q in quality.items() if not q["full_course"]),
+        min_full_course=MIN_FULL_COURSE,
+        p_floor=P_VALUE_FLOOR,
+        task_factors=TASK_FACTORS,
+        fits=fits,
+        errors=errors,
+    )
 
 
 def write_error_analysis(
@@ -156,17 +218,14 @@ def write_error_analysis(
     out = Path(out)
     check_writable_folder(out)
     out.mkdir(parents=True, exist_ok=True)
-    values = {
-        **report_values(rows, baseline),
-        "figure": "dose_response.png",
-        "clean_text": "the agent's 300-layout clean table (`leaderboard_episodes.csv`, pooled over training seeds)",
-    }
-    if values["fits"]:
-        plot_dose_response(rows, values["fits"], values["quality"], out / values["figure"])
-    text = render_report(
-        "error_analysis.md.j2",
-        {"values": values, "episodes": len(rows), "generated": today(), "command": command},
+    values = SweepSections(
+        **vars(report_values(rows, baseline)),
+        figure="dose_response.png",
+        clean_text="the agent's 300-layout clean table (`leaderboard_episodes.csv`, pooled over training seeds)",
     )
+    if values.fits:
+        plot_dose_response(rows, values.fits, values.quality, out / values.figure)
+    text = render_report("error_analysis.md.j2", ErrorAnalysisValues(values, len(rows), today(), command))
     (out / "error_analysis.md").write_text(text)
     return text.split("\n")[:-1]
 
@@ -232,27 +291,57 @@ def on_current_suite(rows: Sequence[EpisodeRow]) -> bool:
     )
 
 
+@dataclass(frozen=True)
+class TierSections:
+    """One tier's part of the tiered error report (:func:`tier_values`)."""
+
+    tier: str
+    env_id: str | None
+    counts: Mapping[str, int]
+    sections: SweepSections
+    agents: list[str]
+    paired: dict[tuple[str, float, str], PairedCell]
+    cells: list[tuple[str, float]]
+    sideways: list[SidewaysCell]
+
+
+@dataclass(frozen=True)
+class TieredErrorAnalysisValues:
+    """``templates/error_analysis_tiers.md.j2``'s values: each tier's sections, and the clean tier's breaking
+    points beside an earlier sweep's (``shifts``; ``moved`` those that moved)."""
+
+    tiers: list[TierSections]
+    episodes: int
+    full_cell: int
+    shifts: list[ToleranceShift]
+    moved: list[ToleranceShift]
+    best_label: str
+    earlier_episodes: int
+    generated: str
+    command: str
+
+
 def tier_values(
     tier: str, rows: Sequence[EpisodeRow], baseline: Sequence[EpisodeRow], figure: str
-) -> dict[str, Any]:
+) -> TierSections:
     """One tier's part of the tiered report: the single sweep's sections (:func:`report_values`) with the
     figure's file name, each cell paired by layout against clean, and its successes' sideways extent."""
     paired = paired_cells(rows)
-    return {
-        "tier": tier,
-        "env_id": rows[0]["env_id"],
-        "counts": cell_counts(rows),
-        "sections": {
-            **report_values(rows, baseline),
-            "figure": figure,
-            "clean_text": f"the agent's rate on the suite's {tier} tier (`suite_episodes.csv`: its 300 frozen "
+    return TierSections(
+        tier=tier,
+        env_id=rows[0]["env_id"],
+        counts=cell_counts(rows),
+        sections=SweepSections(
+            **vars(report_values(rows, baseline)),
+            figure=figure,
+            clean_text=f"the agent's rate on the suite's {tier} tier (`suite_episodes.csv`: its 300 frozen "
             "layouts, pooled over training seeds)",
-        },
-        "agents": sorted({cell.agent for cell in paired}),
-        "paired": {(cell.factor, cell.level, cell.agent): cell for cell in paired},
-        "cells": sorted({(cell.factor, cell.level) for cell in paired}),
-        "sideways": sideways_cells(rows, tier, SUITE_VERSION),
-    }
+        ),
+        agents=sorted({cell.agent for cell in paired}),
+        paired={(cell.factor, cell.level, cell.agent): cell for cell in paired},
+        cells=sorted({(cell.factor, cell.level) for cell in paired}),
+        sideways=sideways_cells(rows, tier, SUITE_VERSION),
+    )
 
 
 def write_tiered_error_analysis(
@@ -273,28 +362,26 @@ def write_tiered_error_analysis(
     for tier, members in rows_by_tier(rows).items():
         figure = "dose_response.png" if tier == "clean" else f"dose_response_{tier}.png"
         values = tier_values(tier, members, tier_baseline(suite_rows, members[0]["env_id"]), figure)
-        if values["sections"]["fits"]:
-            plot_dose_response(
-                members, values["sections"]["fits"], values["sections"]["quality"], out / figure
-            )
+        if values.sections.fits:
+            plot_dose_response(members, values.sections.fits, values.sections.quality, out / figure)
         tiers.append(values)
-    shifts = []
+    shifts: list[ToleranceShift] = []
     if earlier is not None and tiers:
         before = tolerance_table(*earlier)
-        shifts = tolerance_shifts(tiers[0]["sections"]["table"], before)
+        shifts = tolerance_shifts(tiers[0].sections.table, before)
     text = render_report(
         "error_analysis_tiers.md.j2",
-        {
-            "tiers": tiers,
-            "episodes": len(rows),
-            "full_cell": FULL_CELL_LAYOUTS,
-            "shifts": shifts,
-            "moved": [s for s in shifts if s.moved != "same"],
-            "best_label": BEST_LEARNED,
-            "earlier_episodes": 0 if earlier is None else len(earlier[0]),
-            "generated": today(),
-            "command": command,
-        },
+        TieredErrorAnalysisValues(
+            tiers=tiers,
+            episodes=len(rows),
+            full_cell=FULL_CELL_LAYOUTS,
+            shifts=shifts,
+            moved=[s for s in shifts if s.moved != "same"],
+            best_label=BEST_LEARNED,
+            earlier_episodes=0 if earlier is None else len(earlier[0]),
+            generated=today(),
+            command=command,
+        ),
     )
     (out / "error_analysis.md").write_text(text)
     return text.split("\n")[:-1]

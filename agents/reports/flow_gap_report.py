@@ -309,7 +309,7 @@ def flow_gap_values(
     return {
         # The page's flow − truth comparisons as one family (Holm): each table reads them one by one.
         "gap_family": correct_family(family),
-        **report_values(data),
+        **vars(report_values(data)),
         **_plain_values(data, results, policies_dir),
         **selection_values(result, search_record(results / "ablation")),
         **_student_values(results, policies_dir),

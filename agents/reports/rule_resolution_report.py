@@ -3,6 +3,7 @@ episodes (``flownav rule-resolution --report-only`` rebuilds them without flying
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TypedDict, Unpack
 
@@ -32,7 +33,39 @@ PAGE = "rule_resolution.md"
 FIGURE = "rule_resolution.png"
 
 
-def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dict[str, object]:
+@dataclass(frozen=True)
+class RuleResolutionValues:
+    """Every value ``templates/rule_resolution.md.j2`` words (:func:`page_values`): the study's design, each
+    stage's rows, its picks and verdicts, and the figure's file name ("" where none is drawn)."""
+
+    generated: str
+    command: str
+    rules: tuple[str, ...]
+    tiers: tuple[str, ...]
+    today: str
+    candidates: list[str]
+    layouts: dict[str, int]
+    starts: dict[str, int]
+    search_tried: int
+    tried: int
+    episodes: int
+    search: list[ResolutionRow]
+    refinement: list[ResolutionRow]
+    confirmation: list[ResolutionRow]
+    search_done: bool
+    refinement_done: bool
+    refine_rule: str
+    refine_candidates: list[str]
+    picks: dict[str, str | None]
+    refined: str | None
+    chosen: dict[str, str | None]
+    confirmed: dict[str, bool | None]
+    nearest: ResolutionRow | None
+    missing: list[str]
+    figure: str
+
+
+def page_values(result: RuleResolutionResult, command: str, figure: bool) -> RuleResolutionValues:
     """Every value ``rule_resolution.md`` words (``templates/rule_resolution.md.j2``)."""
     compared = [row for row in result.rows if row.stage == "search" and row.versus_today is not None]
     # The candidate nearest to a pick: the largest drop against the rule's own (None before any comparison).
@@ -43,37 +76,37 @@ def page_values(result: RuleResolutionResult, command: str, figure: bool) -> dic
     def stage(name: str) -> list[ResolutionRow]:
         return [row for row in result.rows if row.stage == name]
 
-    return {
-        "generated": today(),
-        "command": command,
-        "rules": RULES,
-        "tiers": TIERS,
-        "today": TODAY.name,
-        "candidates": [resolution.name for resolution in CANDIDATES],
-        "layouts": result.layouts,
-        "starts": {
+    return RuleResolutionValues(
+        generated=today(),
+        command=command,
+        rules=RULES,
+        tiers=TIERS,
+        today=TODAY.name,
+        candidates=[resolution.name for resolution in CANDIDATES],
+        layouts=result.layouts,
+        starts={
             "search": RULE_RESOLUTION_SEED_START,
             "refinement": RULE_RESOLUTION_REFINE_SEED_START,
             "confirmation": RULE_RESOLUTION_CONFIRM_SEED_START,
         },
-        "search_tried": len(RULES) * len(SEARCH_RESOLUTIONS),
-        "tried": result.configurations_tried,
-        "episodes": sum(row.episodes for row in result.rows),
-        "search": stage("search"),
-        "refinement": stage("refinement"),
-        "confirmation": stage("confirmation"),
-        "search_done": not any(m.endswith("(search)") for m in result.missing),
-        "refinement_done": not any(m.endswith("(refinement)") for m in result.missing),
-        "refine_rule": REFINE_RULE,
-        "refine_candidates": [resolution.name for resolution in REFINE_CANDIDATES],
-        "picks": result.picks,
-        "refined": result.refined,
-        "chosen": result.chosen,
-        "confirmed": result.confirmed,
-        "nearest": nearest,
-        "missing": result.missing,
-        "figure": FIGURE if figure else "",
-    }
+        search_tried=len(RULES) * len(SEARCH_RESOLUTIONS),
+        tried=result.configurations_tried,
+        episodes=sum(row.episodes for row in result.rows),
+        search=stage("search"),
+        refinement=stage("refinement"),
+        confirmation=stage("confirmation"),
+        search_done=not any(m.endswith("(search)") for m in result.missing),
+        refinement_done=not any(m.endswith("(refinement)") for m in result.missing),
+        refine_rule=REFINE_RULE,
+        refine_candidates=[resolution.name for resolution in REFINE_CANDIDATES],
+        picks=result.picks,
+        refined=result.refined,
+        chosen=result.chosen,
+        confirmed=result.confirmed,
+        nearest=nearest,
+        missing=result.missing,
+        figure=FIGURE if figure else "",
+    )
 
 
 def plot_rule_resolution(result: RuleResolutionResult, path: Path) -> bool:

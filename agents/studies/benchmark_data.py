@@ -15,7 +15,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 import yaml
@@ -26,8 +26,8 @@ from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import read_records
 from agents.analysis.statistics import failure, runs_failure
 from agents.analysis.tolerance_rows import ToleranceRow
-from agents.evaluation.leaderboard import summarise_runs
-from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, suite_top_groups
+from agents.evaluation.leaderboard import LeaderboardRow, summarise_runs
+from agents.evaluation.suite import SUITE_RESULTS_FOLDERS, TierTopGroup, suite_top_groups
 from agents.evaluation.sweep import pool_every_seed
 from agents.policies.base import (
     AGENT_NAMES,
@@ -62,6 +62,19 @@ class Rate:
     runs: int = 1
 
 
+class SeedRow(TypedDict):
+    """One training run's rates as ``training_seeds.csv`` holds them (its training seed is "" for a reactive
+    agent; its numbers read as floats)."""
+
+    agent: str
+    train_seed: str
+    episodes: float
+    success_rate: float
+    failure_rate: float
+    collision_rate: float
+    out_of_bounds_rate: float
+
+
 @dataclass(frozen=True)
 class Training:
     """A learned agent's shipped training seeds: minutes per seed (both stages where it started from another's
@@ -77,12 +90,12 @@ class Training:
 class BenchmarkData:
     """The summaries every report section draws on (see :func:`load_benchmark_data`)."""
 
-    leaderboard: list[dict[str, Any]]
+    leaderboard: list[LeaderboardRow]
     layouts: list[int]
     leaderboard_episodes: int
     code_versions: dict[str, list[str]]
-    seed_rows: list[dict[str, Any]]
-    sweep_rows: list[dict[str, Any]]
+    seed_rows: list[SeedRow]
+    sweep_rows: list[PooledRow]
     tolerance: list[ToleranceRow]
     cells: dict[tuple[str, str, float], Rate]
     validation: dict[str, dict[str, Rate]]
@@ -96,9 +109,9 @@ class BenchmarkData:
     # the sweep flew: what a sweep cell's rise is measured from.
     sweep_clean: dict[str, Rate] = field(default_factory=dict)
     # Per suite tier: its best ranked agent, that agent's failure and the tier's top group (suite.md's ranking).
-    suite_top: list[dict[str, Any]] = field(default_factory=list)
+    suite_top: list[TierTopGroup] = field(default_factory=list)
 
-    def best_agents(self) -> tuple[dict[str, Any], dict[str, Any]]:
+    def best_agents(self) -> tuple[LeaderboardRow, LeaderboardRow]:
         """The leaderboard rows of the reactive agent (straight aside) and the learned flow agent with the lowest
         clean failure rate; a privileged agent (it reads what the sensor does not give) is a reference, never
         among them."""
@@ -110,7 +123,7 @@ class BenchmarkData:
         ]
         return min(reactive, key=lambda r: r["failure_rate"]), min(learned, key=lambda r: r["failure_rate"])
 
-    def row(self, agent: str) -> dict[str, Any]:
+    def row(self, agent: str) -> LeaderboardRow:
         """The leaderboard row of ``agent`` (a base name)."""
         return next(r for r in self.leaderboard if r["agent"] == agent)
 
@@ -154,7 +167,26 @@ def _rates_per_agent(rows: Sequence[EpisodeRow]) -> dict[str, Rate]:
     }
 
 
-def _leaderboard(results: Path) -> dict[str, Any]:
+class _LeaderboardSummary(TypedDict):
+    """The leaderboard's part of :class:`BenchmarkData` (its fields of the same names)."""
+
+    leaderboard: list[LeaderboardRow]
+    layouts: list[int]
+    leaderboard_episodes: int
+    code_versions: dict[str, list[str]]
+    failures: dict[str, np.ndarray]
+
+
+class _SweepSummary(TypedDict):
+    """The sweep's part of :class:`BenchmarkData` (its fields of the same names)."""
+
+    sweep_rows: list[PooledRow]
+    tolerance: list[ToleranceRow]
+    cells: dict[tuple[str, str, float], Rate]
+    sweep_clean: dict[str, Rate]
+
+
+def _leaderboard(results: Path) -> _LeaderboardSummary:
     rows = read_records(require(results / "leaderboard_episodes.csv"))
     runs: dict[str, list[str]] = {}
     versions: dict[str, set[str]] = {}
@@ -175,14 +207,24 @@ def _leaderboard(results: Path) -> dict[str, Any]:
     }
 
 
-def _seed_rows(results: Path) -> list[dict[str, Any]]:
+def _seed_rows(results: Path) -> list[SeedRow]:
     with require(results / "training_seeds.csv").open(newline="") as handle:
         rows = list(csv.DictReader(handle))
-    numeric = ("episodes", "success_rate", "failure_rate", "collision_rate", "out_of_bounds_rate")
-    return [{**r, **{key: float(r[key]) for key in numeric}} for r in rows]
+    return [
+        SeedRow(
+            agent=r["agent"],
+            train_seed=r["train_seed"],
+            episodes=float(r["episodes"]),
+            success_rate=float(r["success_rate"]),
+            failure_rate=float(r["failure_rate"]),
+            collision_rate=float(r["collision_rate"]),
+            out_of_bounds_rate=float(r["out_of_bounds_rate"]),
+        )
+        for r in rows
+    ]
 
 
-def _sweep(results: Path) -> dict[str, Any]:
+def _sweep(results: Path) -> _SweepSummary:
     flown = read_records(require(results / "sweep_episodes.csv"))
     rows = pool_every_seed(flown)
     cells: dict[tuple[str, str, float], list[PooledRow]] = {}

@@ -25,11 +25,11 @@ def test_the_page_states_the_physics_it_is_handed(tmp_path: Path) -> None:
     wider = replace(hard, settings={**hard.settings, "field_width": 20.0, "obstacle_density": 0.1})
     physics = replace(frozen, tiers=tuple(wider if t.name == "hard" else t for t in frozen.tiers))
     values = check_values(tmp_path, "cmd", physics)
-    assert (values["field_width"], values["hard_density"]) == (20.0, 0.1)
+    assert (values.field_width, values.hard_density) == (20.0, 0.1)
     radii = physics.capsule_radius_m + physics.hull_radius_m
-    assert values["free_path_m"] == pytest.approx(1.0 / (0.1 * 2 * radii))
-    assert [row["env_id"] for row in values["checks"]][::2] == [t.env_id for t in physics.tiers]
-    assert not any(row["layouts"] for row in values["checks"])  # nothing flown into an empty folder
+    assert values.free_path_m == pytest.approx(1.0 / (0.1 * 2 * radii))
+    assert [row["env_id"] for row in values.checks][::2] == [t.env_id for t in physics.tiers]
+    assert not any(row["layouts"] for row in values.checks)  # nothing flown into an empty folder
 
 
 def test_a_tier_the_physics_lacks_is_refused_by_name() -> None:

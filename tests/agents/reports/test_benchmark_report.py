@@ -301,19 +301,18 @@ def test_the_committed_comparisons_are_paired_tests_on_the_leading_tables_layout
         data.row(WINNER)["failure_rate"] - data.row("bee_ttc")["failure_rate"]
     )
     values = report_values(data)
-    assert values["winner_vs_ttc"] == found and values["flow_vs_oracle"] == data.compare(
-        "ppo_flow", "ppo_oracle"
-    )
+    assert values.winner_vs_ttc == found and values.flow_vs_oracle == data.compare("ppo_flow", "ppo_oracle")
     twin = choices().truth_recipe
     others = [r for r in data.leaderboard if r["agent"] != twin]
-    assert report_values(dataclasses.replace(data, leaderboard=others))["truth_recipe_flown"] is False
+    assert report_values(dataclasses.replace(data, leaderboard=others)).truth_recipe_flown is False
 
 
 @pytest.mark.slow
 def test_the_readme_says_whether_the_suite_is_flown_whole() -> None:
     values = report_values(load_benchmark_data(RESULTS_DIR))
     whole, partial = (
-        render_report("readme_results.md.j2", {**values, "suite_complete": flown}) for flown in (True, False)
+        render_report("readme_results.md.j2", dataclasses.replace(values, suite_complete=flown))
+        for flown in (True, False)
     )
     assert "every agent over all its training seeds on\nevery tier. Its top groups are the agents" in whole
     assert "under way" not in whole and "so far" not in whole

@@ -16,7 +16,12 @@ from agents.analysis.episode_record import is_flow_agent
 from agents.analysis.weaving import turning_and_rotation_error
 from agents.cli import main
 from agents.pages.wording import render_report
-from agents.reports.error_analysis_report import report_values, write_error_analysis
+from agents.reports.error_analysis_report import (
+    ErrorAnalysisValues,
+    SweepSections,
+    report_values,
+    write_error_analysis,
+)
 from agents.studies.error_analysis import best_learned_flow_agent, neutral_level, tolerance_table
 
 
@@ -321,15 +326,12 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
     table = tolerance_table(rows)
     assert best_learned_flow_agent(table) == "ppo_flow@all"
     values = report_values(rows)
-    assert values["best"] == "ppo_flow@all"
+    assert values.best == "ppo_flow@all"
     text = render_report(
         "error_analysis.md.j2",
-        {
-            "values": {**values, "figure": "f.png", "clean_text": "c"},
-            "episodes": 0,
-            "generated": "today",
-            "command": "test",
-        },
+        ErrorAnalysisValues(
+            SweepSections(**vars(values), figure="f.png", clean_text="c"), 0, "today", "test"
+        ),
     )
     reasons = {(r["factor"], r["side"]) for r in table if r["agent"] == "ppo_flow@all"}
     assert "- `brightness` (above): flown to the end of the setting's range [0.0, 4.0]" in text
@@ -339,9 +341,7 @@ def test_what_does_not_break_the_best_learned_flow_agent_says_why() -> None:
         in text
     )
     # forward_speed breaks it, so it is not listed
-    assert {(r["factor"], r["side"]) for r in values["unbroken"]} == set(reasons) - {
-        ("forward_speed", "above")
-    }
+    assert {(r["factor"], r["side"]) for r in values.unbroken} == set(reasons) - {("forward_speed", "above")}
 
 
 def test_the_clean_baseline_holds_only_the_training_runs_the_sweep_flew(tmp_path: Path) -> None:

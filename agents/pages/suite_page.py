@@ -36,7 +36,7 @@ from agents.evaluation.reference_chain import CAMERA_VIEW_REFERENCE, ChainLink
 from agents.evaluation.suite_ranking import tier_failures
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
-from agents.pages.suite_findings import secondary_family
+from agents.pages.suite_findings import findings
 from agents.pages.suite_types import (
     RetiredAgent,
     RetiredTier,
@@ -212,6 +212,7 @@ def suite_values(
     # Holm multiplies a tier's smallest p-value by its number of comparisons: the widest error near the cut.
     holm_factor = max([1, *(len(ranking.comparisons) for ranking in rankings.values())])
     return SuiteValues(
+        **vars(findings(bounds or {}, chains or {}, gains, decisions or {})),
         suite_version=version,
         current_version=SUITE_VERSION,
         seed_start_name=f'SUITE_SEED_STARTS["{version}"]',
@@ -249,11 +250,6 @@ def suite_values(
         retired=list(retired),
         not_flown=dict(NOT_FLOWN_ON.get(version, {})),
         trained_on={gain.learned: _trained_on(gain.learned, version) for gain in gains},
-        gains=list(gains),
-        # A chain of one link compares nothing: only longer chains are worded.
-        chains={name: list(links) for name, links in (chains or {}).items() if len(links) > 1},
-        secondary=secondary_family(bounds or {}, chains or {}, gains),
-        decisions={agent: list(rows) for agent, rows in (decisions or {}).items()},
         included_files=list(included_files),
         not_counted=list(not_counted),
         figure=figure,

@@ -7,15 +7,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypedDict
 
-from agents.analysis.decision_rows import AgentDecision
-from agents.analysis.family import FamilyCorrection
 from agents.analysis.paired import Comparison
 from agents.analysis.reflights import ReflightSummary
 from agents.evaluation.lane import LaneRow, SidewaysRow
-from agents.evaluation.learning_gain import LearningGain
-from agents.evaluation.reference_chain import ChainLink
 from agents.evaluation.suite_report import SuiteRow
 from agents.evaluation.tier_bound import TierBound
+from agents.pages.suite_findings import SuiteFindings
 from agents.pages.velocity_reading import VelocityReading
 
 if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
@@ -83,9 +80,10 @@ class SuiteTier:
 
 
 @dataclass(frozen=True)
-class SuiteValues:
+class SuiteValues(SuiteFindings):
     """Every value ``suite.md`` words: where it comes from, its tiers in suite order, the statistics it ranks
-    with, and its sections beside the tables (each empty when there is nothing to say)."""
+    with, and its sections beside the tables (each empty when there is nothing to say), its findings beyond
+    them among them."""
 
     suite_version: str
     current_version: str
@@ -124,10 +122,6 @@ class SuiteValues:
     retired: list[RetiredAgent]
     not_flown: dict[str, str]
     trained_on: dict[str, str]
-    gains: list[LearningGain]
-    chains: dict[str, list[ChainLink]]
-    secondary: FamilyCorrection
-    decisions: dict[str, list[AgentDecision]]
     included_files: list[tuple[str, str]]
     not_counted: list[tuple[str, str]]
     figure: str

@@ -13,17 +13,16 @@ import dataclasses
 import functools
 import math
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, TypeAlias
+from typing import TYPE_CHECKING
 
 import jinja2
 import jinja2.meta
 import jinja2.nodes
 
-if TYPE_CHECKING:
+if (
+    TYPE_CHECKING
+):  # typeshed's protocol of a dataclass instance: for annotations only, not importable at run time
     from _typeshed import DataclassInstance
-
-    # A template's values: a frozen dataclass of them, or a mapping (a few small templates, and tests).
-    TemplateValues: TypeAlias = DataclassInstance | Mapping[str, object]
 
 
 def rate(value: float) -> str:
@@ -69,7 +68,7 @@ def environment(package: str) -> jinja2.Environment:
 def render(
     package: str,
     template: str,
-    values: TemplateValues,
+    values: DataclassInstance,
     *,
     every_value_used: bool = False,
     filters: Mapping[str, Callable[..., object]] | None = None,
@@ -79,17 +78,23 @@ def render(
     Args:
         package: the package whose ``templates/`` folder holds the template.
         template: its file name.
-        values: what it names: a dataclass's fields (each as it is: a nested dataclass stays one, and Jinja reads
-            its attributes as it reads a mapping's keys), or a mapping's items.
+        values: what it names: a frozen dataclass's fields (each as it is: a nested dataclass stays one, and
+            Jinja reads its attributes as it reads a mapping's keys).
         every_value_used: also fail on a value the template never names: for a writer that computes its
             values for this one template, a value left unused means the template drifted from its data.
         filters: the package's own filters beside :data:`FILTERS` (added to its environment once given).
 
     Raises:
+        TypeError: ``values`` is not a dataclass instance (a mapping's keys are not checked by mypy).
         jinja2.TemplateNotFound: no such template.
         jinja2.UndefinedError: the template names a value ``values`` lacks (on the path it renders).
         ValueError: ``every_value_used`` and a value the template never names.
     """
+    if not dataclasses.is_dataclass(values) or isinstance(values, type):
+        raise TypeError(
+            f"template {template!r}: values must be a dataclass instance (each template gets a frozen dataclass "
+            f"of its values), got {type(values).__name__}"
+        )
     named = template_fields(values)
     if every_value_used:
         unused = unused_values(template_source(package, template), named)
@@ -102,11 +107,9 @@ def render(
     return made.get_template(template).render(**named)
 
 
-def template_fields(values: TemplateValues) -> dict[str, object]:
+def template_fields(values: DataclassInstance) -> dict[str, object]:
     """The names a template is given from ``values``: a dataclass's fields, shallowly (``dataclasses.asdict``
-    would copy every nested value and turn a nested dataclass into a dictionary), or a mapping's items."""
-    if isinstance(values, Mapping):
-        return dict(values)
+    would copy every nested value and turn a nested dataclass into a dictionary)."""
     return {field.name: getattr(values, field.name) for field in dataclasses.fields(values)}
 
 

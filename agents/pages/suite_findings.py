@@ -5,6 +5,7 @@ The ranking in the tables has its own correction (:mod:`agents.analysis.paired`)
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 from agents.analysis.decision_rows import AgentDecision
 from agents.analysis.family import FamilyCorrection, correct_family
@@ -13,20 +14,30 @@ from agents.evaluation.reference_chain import ChainLink
 from agents.evaluation.tier_bound import TierBound
 
 
+@dataclass(frozen=True)
+class SuiteFindings:
+    """The page's findings beyond its tables (:func:`findings`): the learning gains, the chains that hold more
+    than one link, the secondary comparisons as one family, and the logged choices per agent."""
+
+    gains: list[LearningGain]
+    chains: dict[str, list[ChainLink]]
+    secondary: FamilyCorrection
+    decisions: dict[str, list[AgentDecision]]
+
+
 def findings(
     bounds: Mapping[str, TierBound],
     chains: Mapping[str, Sequence[ChainLink]],
     gains: Sequence[LearningGain],
     decisions: Mapping[str, Sequence[AgentDecision]],
-) -> dict[str, object]:
-    """The page's findings beyond its tables, as ``suite.md`` words them: the learning gains, the chains that
-    hold more than one link, the secondary comparisons as one family, and the logged choices per agent."""
-    return {
-        "gains": list(gains),
-        "chains": {name: list(links) for name, links in chains.items() if len(links) > 1},
-        "secondary": secondary_family(bounds, chains, gains),
-        "decisions": {agent: list(rows) for agent, rows in decisions.items()},
-    }
+) -> SuiteFindings:
+    """The page's findings beyond its tables, as ``suite.md`` words them."""
+    return SuiteFindings(
+        gains=list(gains),
+        chains={name: list(links) for name, links in chains.items() if len(links) > 1},
+        secondary=secondary_family(bounds, chains, gains),
+        decisions={agent: list(rows) for agent, rows in decisions.items()},
+    )
 
 
 def secondary_family(

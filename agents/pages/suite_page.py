@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TypedDict
+from typing import TypedDict
 
 import numpy as np
 
@@ -19,7 +19,6 @@ from agents.analysis.paired import (
     BOOTSTRAP_REPS,
     MIN_RANKED_SEEDS,
     SIGNIFICANCE,
-    Comparison,
     TierRanking,
     compare,
     p_value_error,
@@ -38,6 +37,14 @@ from agents.evaluation.suite_ranking import tier_failures
 from agents.evaluation.suite_report import HEADROOM_FAILURE, OUTCOMES, SuiteRow
 from agents.evaluation.tier_bound import TierBound
 from agents.pages.suite_findings import findings
+from agents.pages.suite_types import (
+    RetiredAgent,
+    RetiredTier,
+    SensorReading,
+    ShownRow,
+    SuiteTier,
+    SuiteValues,
+)
 from agents.pages.velocity_reading import VelocityReading
 from agents.policies import (
     NOT_FLOWN_ON,
@@ -51,9 +58,6 @@ from agents.policies.trained_tiers import agent_tiers
 from flownav_env.sensor_specs import VELOCITY_READINGS, translation_noise_m
 from flownav_env.tiers import SUITE_VERSION, SUITE_VERSIONS, TIER_NAMES, tier
 
-if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
-    from typing import NotRequired
-
 # Where the noisy tier flown at other readings of its velocity specification is kept, beside the suite's
 # episodes: <agent>_<reading>.csv for each reading of VELOCITY_READINGS (validation layouts).
 SENSOR_READING_DIR = "sensor_reading"
@@ -63,46 +67,6 @@ STUDENT_RECIPES_DIR = "student_recipes"
 # Where recipes for the camera-limited planner's student are compared per tier on suite v2's validation layouts
 # (flownav ablation --tiers <tier> --suite-version 2), and where the pick is confirmed on fresh ones.
 CAMERA_STUDENT_RECIPES_DIR = "student_recipes_v2"
-
-
-class ShownRow(SuiteRow):
-    """A suite row as a tier's table shows it: what the agent trained on, its name as a table cell (an included
-    agent's name is the user's text) and, ranked, whether it is in the top group and its comparison with the
-    best (None for the best itself); left out of the ranking, why."""
-
-    trained_on: str
-    shown: str
-    in_top: NotRequired[bool]
-    comparison: NotRequired[Comparison | None]
-    why: NotRequired[str]
-
-
-class SensorReading(TypedDict):
-    """An agent flown at another reading of the noisy tier's velocity specification (:func:`reading_values`)."""
-
-    agent: str
-    reading: str
-    noise_m: float
-    layouts: int
-    first_seed: int
-    suite_failure: float
-    failure: float
-    comparison: Comparison
-
-
-class RetiredTier(TypedDict):
-    """A retired agent's failure rate on one tier, per training seed that flew every layout."""
-
-    tier: str
-    failures: list[float]
-
-
-class RetiredAgent(TypedDict):
-    """An agent retired from the suite (:func:`retired_values`): why, and its seeds' failures per tier."""
-
-    agent: str
-    why: str
-    tiers: list[RetiredTier]
 
 
 class BesideSuite(TypedDict):
@@ -135,7 +99,9 @@ def _trained_on(agent: str, version: str = SUITE_VERSION) -> str:
         return "—"
 
 
-def _tier_values(rows: Sequence[SuiteRow], ranking: TierRanking, version: str) -> dict[str, object]:
+def _tier_values(
+    name: str, rows: Sequence[SuiteRow], ranking: TierRanking, version: str, bound: TierBound | None
+) -> SuiteTier:
     by_agent: dict[str, ShownRow] = {
         row["agent"]: {
             **row,
@@ -152,14 +118,19 @@ def _tier_values(rows: Sequence[SuiteRow], ranking: TierRanking, version: str) -
         )
     apart: list[ShownRow] = [{**by_agent[agent], "why": why} for agent, why in ranking.left_out.items()]
     best = by_agent[ranking.best]
-    return {
-        "ranked": ranked,
-        "provisional": sorted((r for r in apart if not r["privileged"]), key=lambda r: r["failure_rate"]),
-        "references": sorted((r for r in apart if r["privileged"]), key=lambda r: r["failure_rate"]),
-        "best": best,
-        "top_group": [markdown_cell(agent) for agent in ranking.top_group],
-        "room": best["failure_rate"] >= HEADROOM_FAILURE,
-    }
+    spec = tier(name, version)
+    return SuiteTier(
+        name=name,
+        env_id=spec.env_id,
+        why=spec.why,
+        ranked=ranked,
+        provisional=sorted((r for r in apart if not r["privileged"]), key=lambda r: r["failure_rate"]),
+        references=sorted((r for r in apart if r["privileged"]), key=lambda r: r["failure_rate"]),
+        best=best,
+        top_group=[markdown_cell(agent) for agent in ranking.top_group],
+        room=best["failure_rate"] >= HEADROOM_FAILURE,
+        bound=bound,
+    )
 
 
 def _failures_by_seed(path: Path) -> dict[int, float]:
@@ -222,71 +193,67 @@ def suite_values(
     reflights: Sequence[ReflightSummary] = (),
     velocity_reading: VelocityReading | None = None,
     decisions: Mapping[str, Sequence[AgentDecision]] | None = None,
-) -> dict[str, object]:
+) -> SuiteValues:
     """Every value ``suite.md`` (of suite ``version``) words: the tiers in suite order, each with its ranked,
     provisional and reference rows, its best agent, top group and headroom. With ``included_files`` (score CSVs
     whose rows are marked ``included``, each with its verification) the page is ``suite_with_included.md``, and ``not_counted`` the (agent,
     tier) rows it could not count again (no episodes beside their CSV); ``figure`` is the figure it shows."""
-    tiers = []
-    for name in TIER_NAMES:
-        if name not in rankings:
-            continue
-        spec = tier(name, version)
-        rows = [row for row in table if row["tier"] == name]
-        tiers.append(
-            {
-                "name": name,
-                "env_id": spec.env_id,
-                "why": spec.why,
-                **_tier_values(rows, rankings[name], version),
-                "bound": (bounds or {}).get(name),
-            }
+    tiers = [
+        _tier_values(
+            name,
+            [row for row in table if row["tier"] == name],
+            rankings[name],
+            version,
+            (bounds or {}).get(name),
         )
+        for name in TIER_NAMES
+        if name in rankings
+    ]
     # Holm multiplies a tier's smallest p-value by its number of comparisons: the widest error near the cut.
     holm_factor = max([1, *(len(ranking.comparisons) for ranking in rankings.values())])
-    return {
-        "suite_version": version,
-        "current_version": SUITE_VERSION,
-        "seed_start_name": f'SUITE_SEED_STARTS["{version}"]',
-        "generated": generated,
-        "command": command,
-        "machine": machine,
-        "reflights": list(reflights),
-        "velocity_reading": velocity_reading,
-        "first_layout": layouts.start,
-        "last_layout": layouts.stop - 1,
-        "layouts": len(layouts),
-        "tiers": tiers,
-        "outcomes": [outcome for outcome in OUTCOMES if outcome != "failure"],
-        "headroom_failure": HEADROOM_FAILURE,
-        "min_seeds": MIN_RANKED_SEEDS,
-        "significance": SIGNIFICANCE,
-        "bootstrap_draws": BOOTSTRAP_REPS,
-        "p_value_error": p_value_error(SIGNIFICANCE),
-        "holm_factor": holm_factor,
-        "holm_p_value_error": p_value_error(SIGNIFICANCE, multiplier=holm_factor),
-        "missing": list(missing),
-        "readings": list(readings),
-        "suite_noise_m": translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),
-        "suite_reading": VELOCITY_READINGS[SUITE_READING][0],
-        "reading_dir": SENSOR_READING_DIR,
-        "recipe_reports": dict(recipe_reports or {}),
-        "camera_recipe_reports": dict(camera_recipe_reports or {}),
-        "camera_reference": CAMERA_VIEW_REFERENCE,
-        "camera_margin": CAMERA_MARGIN,
-        "lanes": list(lanes),
-        "sideways": list(sideways),
-        "near_edge_m": NEAR_EDGE_M,
-        "lane_dir": LANE_DIR,
-        "lane_seed": LANE_SEED_START,
-        "retired": list(retired),
-        "not_flown": dict(NOT_FLOWN_ON.get(version, {})),
-        "trained_on": {gain.learned: _trained_on(gain.learned, version) for gain in gains},
-        **findings(bounds or {}, chains or {}, gains, decisions or {}),
-        "included_files": list(included_files),
-        "not_counted": list(not_counted),
-        "figure": figure,
-    }
+    return SuiteValues(
+        **vars(findings(bounds or {}, chains or {}, gains, decisions or {})),
+        suite_version=version,
+        current_version=SUITE_VERSION,
+        seed_start_name=f'SUITE_SEED_STARTS["{version}"]',
+        generated=generated,
+        command=command,
+        machine=machine,
+        reflights=list(reflights),
+        velocity_reading=velocity_reading,
+        first_layout=layouts.start,
+        last_layout=layouts.stop - 1,
+        layouts=len(layouts),
+        tiers=tiers,
+        outcomes=[outcome for outcome in OUTCOMES if outcome != "failure"],
+        headroom_failure=HEADROOM_FAILURE,
+        min_seeds=MIN_RANKED_SEEDS,
+        significance=SIGNIFICANCE,
+        bootstrap_draws=BOOTSTRAP_REPS,
+        p_value_error=p_value_error(SIGNIFICANCE),
+        holm_factor=holm_factor,
+        holm_p_value_error=p_value_error(SIGNIFICANCE, multiplier=holm_factor),
+        missing=list(missing),
+        readings=list(readings),
+        suite_noise_m=translation_noise_m(VELOCITY_READINGS[SUITE_READING][1]),
+        suite_reading=VELOCITY_READINGS[SUITE_READING][0],
+        reading_dir=SENSOR_READING_DIR,
+        recipe_reports=dict(recipe_reports or {}),
+        camera_recipe_reports=dict(camera_recipe_reports or {}),
+        camera_reference=CAMERA_VIEW_REFERENCE,
+        camera_margin=CAMERA_MARGIN,
+        lanes=list(lanes),
+        sideways=list(sideways),
+        near_edge_m=NEAR_EDGE_M,
+        lane_dir=LANE_DIR,
+        lane_seed=LANE_SEED_START,
+        retired=list(retired),
+        not_flown=dict(NOT_FLOWN_ON.get(version, {})),
+        trained_on={gain.learned: _trained_on(gain.learned, version) for gain in gains},
+        included_files=list(included_files),
+        not_counted=list(not_counted),
+        figure=figure,
+    )
 
 
 def beside_suite(
@@ -339,6 +306,6 @@ def camera_student_recipe_reports() -> dict[str, str]:
     return {page.parent.name: page.relative_to(RESULTS_DIR).as_posix() for page in pages}
 
 
-def suite_page(values: Mapping[str, object]) -> str:
+def suite_page(values: SuiteValues) -> str:
     """``suite.md``'s text from :func:`suite_values`."""
     return render("agents.pages", "suite.md.j2", values, filters={"cell": markdown_cell})

@@ -13,6 +13,7 @@ from agents.evaluation.suite_ranking import rank_suite, tier_failures
 from agents.pages.suite_page import suite_page, suite_values
 from agents.pages.suite_plot import plot_suite
 from agents.pages.suite_sections import page_sections
+from agents.pages.suite_types import SuiteValues
 
 
 def write_suite_page(flight: SuiteFlight, command: str) -> list[str]:
@@ -23,7 +24,7 @@ def write_suite_page(flight: SuiteFlight, command: str) -> list[str]:
     return text.splitlines()
 
 
-def suite_page_values(flight: SuiteFlight, command: str) -> dict[str, object]:
+def suite_page_values(flight: SuiteFlight, command: str) -> SuiteValues:
     """Draw ``suite.png`` from the flight's table and return what ``suite.md`` words."""
     table, rows, runs = flight.table, flight.rows, flight.runs
     whole = {(row["agent"], row["tier"]) for row in table}

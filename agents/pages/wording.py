@@ -14,7 +14,7 @@ from agents.common.study_choices import choices
 from agents.policies.base import base_agent_name
 
 if TYPE_CHECKING:
-    from agents.common.jinja_reports import TemplateValues
+    from _typeshed import DataclassInstance
 
 PACKAGE = "agents.pages"
 
@@ -78,7 +78,7 @@ FILTERS = {
 environment(PACKAGE).filters.update(FILTERS)
 
 
-def render_report(template: str, values: TemplateValues) -> str:
+def render_report(template: str, values: DataclassInstance) -> str:
     """This package's ``template`` rendered with ``values``, its filters those of :data:`FILTERS` and
     :mod:`agents.common.jinja_reports`'s."""
     return render(PACKAGE, template, values)

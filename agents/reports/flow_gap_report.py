@@ -35,6 +35,7 @@ from agents.evaluation.suite import EPISODES_CSV, SUITE_RESULTS_FOLDERS
 from agents.pages.wording import render_report
 from agents.policies import is_learned, shipped_seed_runs
 from agents.reports.benchmark_report import report_values
+from agents.reports.flow_gap_types import FlowGapValues, PlainGapValues, SelectionValues, StudentGapValues
 from agents.studies.benchmark_data import BenchmarkData, Rate, load_benchmark_data
 from agents.studies.confirmation import (
     COMPARED,
@@ -146,22 +147,22 @@ def _suite_rows(results: Path, flow: str, truth: str, policies_dir: Path) -> lis
     return [(t, flow_tiers[t], truth_tiers[t]) for t in TIER_NAMES if t in flow_tiers and t in truth_tiers]
 
 
-def _student_values(results: Path, policies_dir: Path) -> dict[str, object]:
+def _student_values(results: Path, policies_dir: Path) -> StudentGapValues:
     """The planner's flow-only student against its true-depth twin per tier, the planner beside as ceiling."""
     student, twin = choices().student, choices().student_truth
-    return {
-        "student": student,
-        "student_truth": twin,
-        "student_truth_seeds": len(shipped_seed_runs(twin, policies_dir)),
-        "student_not_flown": not_flown_here(student, twin),
-        "student_suite_table": gap_table(
+    return StudentGapValues(
+        student=student,
+        student_truth=twin,
+        student_truth_seeds=len(shipped_seed_runs(twin, policies_dir)),
+        student_not_flown=not_flown_here(student, twin),
+        student_suite_table=gap_table(
             student,
             twin,
             _suite_rows(results, student, twin, policies_dir),
             "tier",
             ceiling=suite_matrices(results, "planner", policies_dir),
         ),
-    }
+    )
 
 
 def confirmation_rows(result: ConfirmationResult, results: Path, policies_dir: Path) -> list[Row]:
@@ -178,17 +179,17 @@ def confirmation_rows(result: ConfirmationResult, results: Path, policies_dir: P
     ]
 
 
-def selection_values(result: ConfirmationResult, search: SearchRecord) -> dict[str, object]:
+def selection_values(result: ConfirmationResult, search: SearchRecord) -> SelectionValues:
     """The search as it happened and what the fresh layouts say about the pick: the pick's rises over its clean
     rate, and its differences from its first stage and from ``ppo_flow``."""
-    return {
-        "search": search,
-        "confirmation_layouts": result.layouts,
-        "pick_rises": [r for r in result.rises if r.agent == PICK],
-        "first_stage": COMPARED[0],
-        "stages": {other: [d for d in result.differences if d.other == other] for other in COMPARED},
-        "after_the_search": [f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH],
-    }
+    return SelectionValues(
+        search=search,
+        confirmation_layouts=result.layouts,
+        pick_rises=[r for r in result.rises if r.agent == PICK],
+        first_stage=COMPARED[0],
+        stages={other: [d for d in result.differences if d.other == other] for other in COMPARED},
+        after_the_search=[f"`{name}`" for name in FLOWN_AFTER_THE_SEARCH],
+    )
 
 
 def not_flown_here(*agents: str) -> dict[str, str]:
@@ -202,15 +203,15 @@ def not_flown_here(*agents: str) -> dict[str, str]:
     }
 
 
-def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> dict[str, object]:
+def _plain_values(data: BenchmarkData, results: Path, policies_dir: Path) -> PlainGapValues:
     flow, truth = choices().plain
     clean = data.validation["clean"]
-    return {
-        "plain_steps": [data.training[a].config["total_timesteps"] for a in (flow, truth)],
-        "plain_validation": [clean[flow], clean[truth]],
-        "plain_suite_table": gap_table(flow, truth, _suite_rows(results, flow, truth, policies_dir), "tier"),
-        "plain_not_flown": not_flown_here(flow, truth),
-    }
+    return PlainGapValues(
+        plain_steps=[data.training[a].config["total_timesteps"] for a in (flow, truth)],
+        plain_validation=[clean[flow], clean[truth]],
+        plain_suite_table=gap_table(flow, truth, _suite_rows(results, flow, truth, policies_dir), "tier"),
+        plain_not_flown=not_flown_here(flow, truth),
+    )
 
 
 def gap_bars(
@@ -294,10 +295,13 @@ def flow_gap_values(
     policies_dir: Path = POLICIES_DIR,
     result: ConfirmationResult | None = None,
     data: BenchmarkData | None = None,
-) -> dict[str, object]:
-    """Every value of the flow-gap template, from the committed data under ``results_dir``; ``result``: the
-    confirmation's comparison (:func:`run_confirmation`) and ``data`` the benchmark's summaries, when the
-    caller has them already."""
+    *,
+    generated: str,
+    command: str,
+) -> FlowGapValues:
+    """Every value of the flow-gap template, from the committed data under ``results_dir``, with the date and
+    the command that wrote the page; ``result``: the confirmation's comparison (:func:`run_confirmation`) and
+    ``data`` the benchmark's summaries, when the caller has them already."""
     results = Path(results_dir)
     data = data if data is not None else load_benchmark_data(results)
     if result is None:
@@ -306,24 +310,27 @@ def flow_gap_values(
     pick_suite = _suite_rows(results, PICK, TRUE_DEPTH_RECIPE, policies_dir)
     family = [(f"{where}, fresh validation", gap(flow, truth)) for where, flow, truth in confirmation]
     family += [(f"`{tier_name}`, suite", gap(flow, truth)) for tier_name, flow, truth in pick_suite]
-    return {
-        # The page's flow − truth comparisons as one family (Holm): each table reads them one by one.
-        "gap_family": correct_family(family),
+    # Each part is handed on whole, by its fields (``vars``: shallow, as the template is given them).
+    return FlowGapValues(
         **vars(report_values(data)),
-        **_plain_values(data, results, policies_dir),
-        **selection_values(result, search_record(results / "ablation")),
-        **_student_values(results, policies_dir),
-        "truth_seeds": {
+        generated=generated,
+        command=command,
+        **vars(_plain_values(data, results, policies_dir)),
+        **vars(selection_values(result, search_record(results / "ablation"))),
+        **vars(_student_values(results, policies_dir)),
+        # The page's flow − truth comparisons as one family (Holm): each table reads them one by one.
+        gap_family=correct_family(family),
+        truth_seeds={
             Path(c).stem: len(shipped_seed_runs(Path(c).stem, policies_dir)) for c in choices().truth_stages
         },
-        "seeds_wanted": choices().gap_seeds,
-        "true_depth_stages": choices().truth_stages,
-        "truth_confirmation_table": gap_table(PICK, TRUE_DEPTH_RECIPE, confirmation, "condition"),
-        "truth_confirmation": [(where, gap(flow, truth)) for where, flow, truth in confirmation],
-        "truth_suite_table": gap_table(PICK, TRUE_DEPTH_RECIPE, pick_suite, "tier"),
-        "suite_version": READ_SUITE_VERSION,
-        "confirmation_layouts_wanted": CONFIRMATION_LAYOUTS,
-    }
+        seeds_wanted=choices().gap_seeds,
+        true_depth_stages=choices().truth_stages,
+        truth_confirmation_table=gap_table(PICK, TRUE_DEPTH_RECIPE, confirmation, "condition"),
+        truth_confirmation=[(where, gap(flow, truth)) for where, flow, truth in confirmation],
+        truth_suite_table=gap_table(PICK, TRUE_DEPTH_RECIPE, pick_suite, "tier"),
+        suite_version=READ_SUITE_VERSION,
+        confirmation_layouts_wanted=CONFIRMATION_LAYOUTS,
+    )
 
 
 def write_flow_gap(
@@ -340,11 +347,7 @@ def write_flow_gap(
     results = Path(results_dir)
     result = run_confirmation(results / "confirmation", report_only=True, policies_dir=policies_dir)
     data = load_benchmark_data(results)  # read once: the values and the figure draw on it
-    values = {
-        **flow_gap_values(results, policies_dir, result, data),
-        "generated": today(),
-        "command": command,
-    }
+    values = flow_gap_values(results, policies_dir, result, data, generated=today(), command=command)
     text = render_report("flow_gap.md.j2", values)
     out = Path(out)
     check_writable_folder(out)

@@ -355,6 +355,22 @@ def _reference_row(agent: str, flown: Sequence[EpisodeRow]) -> AblationRow:
     )
 
 
+@dataclass(frozen=True)
+class AblationValues:
+    """Every value ``ablation.md`` words; ``recipe_layouts_from``: where a confirmation's recipe layouts start."""
+
+    generated: str
+    command: str
+    first_layout: int
+    last_layout: int
+    condition: str
+    seeds: list[int]
+    rows: list[AblationRow]
+    missing: list[str]
+    curves: bool
+    recipe_layouts_from: int | None  # None: the rows flew the tier's recipe layouts, or the ablation layouts
+
+
 def ablation_values(
     rows: list[AblationRow],
     missing: list[str],
@@ -366,19 +382,18 @@ def ablation_values(
     tier: str | None = None,
     *,
     recipe_layouts_from: int | None = None,
-) -> dict[str, object]:
-    """Every value ``ablation.md`` words (``templates/ablation.md.j2``); ``recipe_layouts_from``: where the tier's
-    recipe layouts start, for a confirmation page (None: the rows flew those, or the ablation layouts)."""
+) -> AblationValues:
+    """:class:`AblationValues` of the comparison's ``rows``, flown as ``flights`` says."""
     condition = ", ".join(f"{k}={v}" for k, v in sorted(env.items())) if env else "clean sensors"
-    return {
-        "generated": today(),
-        "command": command,
-        "first_layout": flights.first_layout,
-        "last_layout": flights.first_layout + flights.episodes - 1,
-        "condition": f"tier `{tier}`, {flights.env_id}" if tier else condition,
-        "seeds": list(seeds),
-        "rows": rows,
-        "missing": missing,
-        "curves": curves,
-        "recipe_layouts_from": recipe_layouts_from,
-    }
+    return AblationValues(
+        generated=today(),
+        command=command,
+        first_layout=flights.first_layout,
+        last_layout=flights.first_layout + flights.episodes - 1,
+        condition=f"tier `{tier}`, {flights.env_id}" if tier else condition,
+        seeds=list(seeds),
+        rows=rows,
+        missing=missing,
+        curves=curves,
+        recipe_layouts_from=recipe_layouts_from,
+    )

@@ -11,6 +11,7 @@ apart) and layouts (once for all agents). Each agent's episodes go to ``<out>/<a
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TypedDict, Unpack
 
@@ -30,7 +31,7 @@ from agents.analysis.validation_rows import (
 from agents.common.folders import check_writable_folder, write_text_atomically
 from agents.common.locations import POLICIES_DIR, RESULTS_DIR
 from agents.common.seeds import CONFIRMATION_SEED_START
-from agents.common.study_choices import choices
+from agents.common.study_choices import BenchmarkChoices, choices
 from agents.common.tables import today
 from agents.evaluation.episode_tasks import EpisodeTask, record_label, rows_of
 from agents.evaluation.runner import execute
@@ -204,11 +205,32 @@ def flow_costs(result: ConfirmationResult) -> list[PairedDifference]:
     return [d for d in result.differences if d.other == TRUE_DEPTH_RECIPE]
 
 
+@dataclass(frozen=True)
+class ConfirmationValues:
+    """Every value ``confirmation.md`` words (``templates/confirmation.md.j2``): the confirmation's comparison,
+    the search as it happened, the benchmark's choices, the pick's first stage and the layouts' first seed."""
+
+    result: ConfirmationResult
+    search: SearchRecord
+    c: BenchmarkChoices
+    first_stage: str
+    seed_start: int
+    generated: str
+    command: str
+
+
 def report_lines(result: ConfirmationResult, search: SearchRecord, command: str) -> list[str]:
-    """``confirmation.md`` (its prose is ``templates/confirmation.md.j2``): the search as it happened, then the
-    pick against what it is compared with on fresh layouts."""
-    values = {"result": result, "search": search, "c": choices(), "first_stage": COMPARED[0]}
-    values |= {"seed_start": CONFIRMATION_SEED_START, "generated": today(), "command": command}
+    """``confirmation.md``: the search as it happened, then the pick against what it is compared with on fresh
+    layouts."""
+    values = ConfirmationValues(
+        result=result,
+        search=search,
+        c=choices(),
+        first_stage=COMPARED[0],
+        seed_start=CONFIRMATION_SEED_START,
+        generated=today(),
+        command=command,
+    )
     return render_report("confirmation.md.j2", values).split("\n")[:-1]
 
 

@@ -53,6 +53,19 @@ class LoggedDecision:
     before: dict[str, int] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class DecisionLogValues:
+    """Every value ``decision_log.md`` words (``templates/decision_log.md.j2``): the suite version, the commit
+    that froze it and that commit's date, and each logged choice."""
+
+    command: str
+    generated: str
+    version: str
+    frozen_at: str
+    frozen_date: str
+    decisions: list[LoggedDecision]
+
+
 def read_decisions(path: Path = DECISIONS_FILE) -> tuple[str, str, list[Decision]]:
     """The suite version, the commit that froze it and the choices of ``path``.
 
@@ -143,17 +156,8 @@ def write_decision_log(out: Path = RESULTS_DIR, command: str = "flownav decision
     episodes = version_rows((REPO_ROOT / EPISODES).read_text(encoding="utf-8"), version)
     logged = log_decisions(decisions, version, episodes)
     frozen_date = git("log", "-1", "--format=%cd", "--date=format:%Y-%m-%d %H:%M UTC", frozen_at).strip()
-    text = render_report(
-        "decision_log.md.j2",
-        {
-            "command": command,
-            "generated": today(),
-            "version": version,
-            "frozen_at": frozen_at,
-            "frozen_date": frozen_date,
-            "decisions": logged,
-        },
-    )
+    values = DecisionLogValues(command, today(), version, frozen_at, frozen_date, logged)
+    text = render_report("decision_log.md.j2", values)
     path = Path(out) / PAGE
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")

@@ -22,7 +22,7 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -202,6 +202,13 @@ def robustness(
     return summary
 
 
+@dataclass(frozen=True)
+class RobustnessSummaryValues:
+    """What ``robustness_summary.md`` words (``templates/robustness_summary.md.j2``): a row per curve."""
+
+    summary: Sequence[Mapping[str, object]]
+
+
 def summary_lines(summary: Sequence[Mapping[str, object]]) -> list[str]:
-    """The summary as a Markdown table, a row per curve (``templates/robustness_summary.md.j2``)."""
-    return [render_report("robustness_summary.md.j2", {"summary": summary}).rstrip("\n")]
+    """The summary as a Markdown table, a row per curve."""
+    return [render_report("robustness_summary.md.j2", RobustnessSummaryValues(summary)).rstrip("\n")]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TypedDict, Unpack
 
@@ -199,35 +200,66 @@ def run_calibration(
     )
 
 
+@dataclass(frozen=True)
+class TierCalibrationValues:
+    """Every value ``calibration.md`` words (``templates/calibration.md.j2``): the study's design, the candidate
+    courses' cells by course and agent (the best per course, the pick), the pilot's cells and the settings each
+    pilot factor flew with (in the order they were first flown), and each calibrated tier with its spec."""
+
+    generated: str
+    command: str
+    episodes_csv: str
+    first: int
+    layouts: int
+    courses: list[tuple[str, dict[str, float]]]
+    course_agents: tuple[str, ...]
+    target: tuple[float, ...]
+    cells: dict[str, dict[str, CalibrationCell]]
+    best_per_course: dict[str, CalibrationCell]
+    chosen: dict[str, float] | None
+    chosen_label: str
+    frozen_matches: bool
+    hard_course: str
+    pilot_start: int
+    pilot_csv: str
+    pilot_cells: dict[str, dict[str, CalibrationCell]]
+    pilot_settings: dict[str, dict[str, object]]
+    tiers: dict[str, CalibratedTier]
+    specs: dict[str, Tier]
+    headroom: float
+
+
 def report_lines(result: CalibrationResult, command: str) -> list[str]:
-    """``calibration.md`` (its prose is ``templates/calibration.md.j2``): the search as it happened, the pick and
-    how it compares with the frozen tiers."""
+    """``calibration.md``: the search as it happened, the pick and how it compares with the frozen tiers."""
     cells: dict[str, dict[str, CalibrationCell]] = {}
     pilot_cells: dict[str, dict[str, CalibrationCell]] = {}
     for found, rows in ((cells, result["table"]), (pilot_cells, result["pilot"])):
         for row in rows:
             found.setdefault(row.factor, {})[row.agent] = row
     chosen = result["chosen"]
-    values = {
-        **result,
-        "generated": today(),
-        "command": command,
-        "episodes_csv": EPISODES_CSV,
-        "first": TIER_CALIBRATION_SEED_START,
-        "courses": [(course_label(course), course) for course in STUDY.courses],
-        "course_agents": COURSE_AGENTS,
-        "target": tuple(STUDY.target_failure),
-        "cells": cells,
-        "chosen_label": "" if chosen is None else course_label(chosen),
-        "hard_course": course_label(HARD_COURSE),
-        "pilot_start": SENSOR_PILOT_SEED_START,
-        "pilot_csv": PILOT_CSV,
-        "pilot_cells": pilot_cells,
-        # in the order they were first flown
-        "pilot_settings": {factor: json.loads(text) for factor, text in result["pilot_settings"].items()},
-        "specs": {name: tier(name) for name in result["tiers"]},
-        "headroom": HEADROOM_FAILURE,
-    }
+    values = TierCalibrationValues(
+        generated=today(),
+        command=command,
+        episodes_csv=EPISODES_CSV,
+        first=TIER_CALIBRATION_SEED_START,
+        layouts=result["layouts"],
+        courses=[(course_label(course), course) for course in STUDY.courses],
+        course_agents=COURSE_AGENTS,
+        target=tuple(STUDY.target_failure),
+        cells=cells,
+        best_per_course=result["best_per_course"],
+        chosen=chosen,
+        chosen_label="" if chosen is None else course_label(chosen),
+        frozen_matches=result["frozen_matches"],
+        hard_course=course_label(HARD_COURSE),
+        pilot_start=SENSOR_PILOT_SEED_START,
+        pilot_csv=PILOT_CSV,
+        pilot_cells=pilot_cells,
+        pilot_settings={factor: json.loads(text) for factor, text in result["pilot_settings"].items()},
+        tiers=result["tiers"],
+        specs={name: tier(name) for name in result["tiers"]},
+        headroom=HEADROOM_FAILURE,
+    )
     return render_report("calibration.md.j2", values).split("\n")[:-1]
 
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from agents.analysis.paired import Comparison, compare
 from agents.analysis.records import start_new_file
+from agents.common.agent_entry import SearchRange
 from agents.common.folders import check_writable_folder
 from agents.pages.wording import render_report
 from agents.policies.registry import search_space
@@ -136,25 +137,45 @@ def comparison(result: TuningResult) -> Comparison | None:
     return compare("winner", winner, "defaults", defaults)
 
 
+@dataclass(frozen=True)
+class TuningValues:
+    """Every value ``tuning.md`` words (``templates/tuning.md.j2``): the study (``r``) and its budget, how to
+    rerun it, the agent's search space and defaults, the layouts of each stage, each search trial's failure rate
+    by number, and the winner against the defaults (None where the defaults won)."""
+
+    r: TuningResult
+    budget: Budget
+    command: str
+    env_kwargs: dict[str, object]
+    sampler_seed: int
+    space: dict[str, SearchRange]
+    defaults: dict[str, float]
+    search_seeds: range
+    final_seeds: range
+    search_rate: dict[int, float]
+    winner_params: str
+    comparison: Comparison | None
+
+
 def report_text(
     result: TuningResult, budget: Budget, command: str, env_kwargs: Mapping[str, object], sampler_seed: int
 ) -> str:
-    """``tuning.md`` (its prose is ``templates/tuning.md.j2``): enough to rerun the study and to judge its winner."""
+    """``tuning.md``: enough to rerun the study and to judge its winner."""
     search_seeds, final_seeds = budget.layout_seeds()
-    values = {
-        "r": result,
-        "budget": budget,
-        "command": command,
-        "env_kwargs": dict(env_kwargs),
-        "sampler_seed": sampler_seed,
-        "space": search_space(result.agent),
-        "defaults": default_params(result.agent),
-        "search_seeds": search_seeds,
-        "final_seeds": final_seeds,
-        "search_rate": {trial.number: trial.summary["failure_rate"] for trial in result.search},
-        "winner_params": json.dumps(result.winner.params),
-        "comparison": comparison(result),
-    }
+    values = TuningValues(
+        r=result,
+        budget=budget,
+        command=command,
+        env_kwargs=dict(env_kwargs),
+        sampler_seed=sampler_seed,
+        space=search_space(result.agent),
+        defaults=default_params(result.agent),
+        search_seeds=search_seeds,
+        final_seeds=final_seeds,
+        search_rate={trial.number: trial.summary["failure_rate"] for trial in result.search},
+        winner_params=json.dumps(result.winner.params),
+        comparison=comparison(result),
+    )
     return render_report("tuning.md.j2", values)
 
 

@@ -13,6 +13,7 @@ import math
 import shlex
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
@@ -190,11 +191,23 @@ def _by_band(bands: Sequence[YieldBand]) -> tuple[list[str], dict[str, list[Yiel
     return names, variants
 
 
+@dataclass(frozen=True)
+class YieldReportValues:
+    """Every value ``templates/depth_yield.md.j2`` words: the run's facts, the env's FAST threshold, the
+    scene's frame size, the flights' first seed, and the summary and per-band tables."""
+
+    run: RunFacts
+    env_fast_threshold: int
+    scene_size: str
+    first_seed: str
+    summary_table: str
+    band_table: str
+
+
 def yield_report_values(
     summary: Sequence[YieldSummary], bands: Sequence[YieldBand], run: RunFacts
-) -> dict[str, object]:
-    """Every table of ``templates/depth_yield.md.j2``: :func:`scene_rows`' summary and bands, and the run's
-    facts."""
+) -> YieldReportValues:
+    """The report's values from :func:`scene_rows`' summary and bands, and the run's facts."""
     defaults = EnvSettings()
     summary_columns = {
         "variant": "{variant}",
@@ -211,14 +224,14 @@ def yield_report_values(
         [name, *(f"{row['valid_per_frame']:.1f} / {row['median_rel_error']:.1%}" for row in rows)]
         for name, rows in variants.items()
     ]
-    return {
-        "run": run,
-        "env_fast_threshold": defaults.estimator_arguments()["fast_threshold"],
-        "scene_size": f"{defaults.camera_width}×{defaults.camera_height}",
-        "first_seed": f"{FLIGHT_SEED_START:,}",
-        "summary_table": table(summary, summary_columns),
-        "band_table": markdown_table(["variant", *band_names], by_band),
-    }
+    return YieldReportValues(
+        run=run,
+        env_fast_threshold=defaults.estimator_arguments()["fast_threshold"],
+        scene_size=f"{defaults.camera_width}×{defaults.camera_height}",
+        first_seed=f"{FLIGHT_SEED_START:,}",
+        summary_table=table(summary, summary_columns),
+        band_table=markdown_table(["variant", *band_names], by_band),
+    )
 
 
 def _plot(bands: Sequence[YieldBand], path: Path) -> None:

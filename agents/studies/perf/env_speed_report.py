@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -93,23 +94,90 @@ def plot_env_performance(rows: list[Row], path: Path) -> None:
         points_axis.legend(handles + more_handles, names + more_names, fontsize=8, loc="center right")
 
 
-def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) -> dict[str, object]:
-    """Every figure, table and verdict of ``templates/env_performance.md.j2``, from :func:`measure_env`'s rows
-    (the default config first), its steps and repeats, and the run's facts."""
+@dataclass(frozen=True)
+class RatioTargetValues:
+    """The env/bare target over the configurations (:func:`_ratio_target_values`), and whether the floor loop
+    leaves it reachable at all; where it does, the margin it leaves and what FlowNav adds (else None)."""
+
+    target_ratio: str
+    ratio_low: str
+    ratio_high: str
+    ratio_met: bool
+    ratio_met_for_some: bool
+    ratio_met_configs: str
+    floor: str
+    floor_low: str
+    floor_high: str
+    floor_reaches_target: bool
+    margin: str | None
+    margin_ms: str | None
+    own: str | None
+    own_ms: str | None
+
+
+@dataclass(frozen=True)
+class FloorTargetValues:
+    """The time-to-policy target (:func:`_floor_target_values`): env / floor at the default config, and where
+    the env's step goes beyond the floor loop."""
+
+    floor_target: str
+    env_floor: str
+    env_floor_low: str
+    env_floor_high: str
+    env_floor_met: bool
+    floor_ms: str
+    allowed_ms: str
+    beyond_floor_table: str
+
+
+@dataclass(frozen=True)
+class RealTimeValues:
+    """The real-time target at the default config, and the smallest resolution beside gym-pybullet-drones
+    (:func:`_real_time_values`)."""
+
+    target_real_time: str
+    default_real_time: str
+    real_time_met: bool
+    default_real_time_bare: str
+    pybullet_real_time: str
+    pybullet_vision: str
+    smallest_config: str
+    smallest_real_time: str
+    smallest_real_time_bare: str
+
+
+@dataclass(frozen=True)
+class EnvPerformanceValues(RealTimeValues, FloorTargetValues, RatioTargetValues):
+    """Every value ``templates/env_performance.md.j2`` words (:func:`env_report_values`)."""
+
+    run: RunFacts
+    steps: str
+    repeats: str
+    frame_rate: str
+    substeps: str
+    depth_error_share: str
+    table: str
+    stage_table: str
+
+
+def env_report_values(rows: list[Row], steps: int, repeats: int, run: RunFacts) -> EnvPerformanceValues:
+    """Every figure, table and verdict of the report, from :func:`measure_env`'s rows (the default config
+    first), its steps and repeats, and the run's facts."""
     default = rows[0]
-    return {
-        "run": run,
-        "steps": str(steps),
-        "repeats": str(repeats),
-        "frame_rate": f"{default['frame_rate']:.0f}",
-        "substeps": str(default["substeps"]),
-        "depth_error_share": f"{100 * default['steps_with_depth_error']:.0f}",
-        "table": _speed_table(rows),
-        "stage_table": _stage_table(rows),
-        **_ratio_target_values(rows),
-        **_floor_target_values(default),
-        **_real_time_values(rows),
-    }
+    # Each part is handed on whole, by its fields (``vars``: shallow, as the template is given them).
+    return EnvPerformanceValues(
+        **vars(_ratio_target_values(rows)),
+        **vars(_floor_target_values(default)),
+        **vars(_real_time_values(rows)),
+        run=run,
+        steps=str(steps),
+        repeats=str(repeats),
+        frame_rate=f"{default['frame_rate']:.0f}",
+        substeps=str(default["substeps"]),
+        depth_error_share=f"{100 * default['steps_with_depth_error']:.0f}",
+        table=_speed_table(rows),
+        stage_table=_stage_table(rows),
+    )
 
 
 def _speed_table(rows: list[Row]) -> str:
@@ -143,39 +211,34 @@ def _stage_table(rows: list[Row]) -> str:
     return table(shares, columns)
 
 
-def _ratio_target_values(rows: list[Row]) -> dict[str, str | bool]:
+def _ratio_target_values(rows: list[Row]) -> RatioTargetValues:
     """The env/bare target over the configurations, and whether the floor loop (bare + FAST + one LK pass)
     leaves it reachable at all."""
     default = rows[0]
     ratios = [row["ratio_env_bare"] for row in rows]
     floor = default["ratio_floor_bare"]
-    values: dict[str, str | bool] = {
-        "target_ratio": str(TARGET_RATIO),
-        "ratio_low": f"{min(ratios):.2f}",
-        "ratio_high": f"{max(ratios):.2f}",
-        "ratio_met": bool(max(ratios) <= TARGET_RATIO),
-        "ratio_met_for_some": bool(min(ratios) <= TARGET_RATIO < max(ratios)),
-        "ratio_met_configs": ", ".join(
-            row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO
-        ),
-        "floor": f"{floor:.2f}",
-        "floor_low": f"{default['ratio_floor_min']:.2f}",
-        "floor_high": f"{default['ratio_floor_max']:.2f}",
-        "floor_reaches_target": bool(floor >= TARGET_RATIO),
-    }
-    if floor < TARGET_RATIO:
-        bare_ms = 1e3 / default["steps_per_s_bare"]
-        margin, own = TARGET_RATIO - floor, default["ratio_env_bare"] - floor
-        values |= {
-            "margin": f"{margin:.2f}",
-            "margin_ms": f"{margin * bare_ms:.2f}",
-            "own": f"{own:.2f}",
-            "own_ms": f"{own * bare_ms:.2f}",
-        }
-    return values
+    reachable = floor < TARGET_RATIO
+    bare_ms = 1e3 / default["steps_per_s_bare"]
+    margin, own = TARGET_RATIO - floor, default["ratio_env_bare"] - floor
+    return RatioTargetValues(
+        target_ratio=str(TARGET_RATIO),
+        ratio_low=f"{min(ratios):.2f}",
+        ratio_high=f"{max(ratios):.2f}",
+        ratio_met=bool(max(ratios) <= TARGET_RATIO),
+        ratio_met_for_some=bool(min(ratios) <= TARGET_RATIO < max(ratios)),
+        ratio_met_configs=", ".join(row["config"] for row in rows if row["ratio_env_bare"] <= TARGET_RATIO),
+        floor=f"{floor:.2f}",
+        floor_low=f"{default['ratio_floor_min']:.2f}",
+        floor_high=f"{default['ratio_floor_max']:.2f}",
+        floor_reaches_target=bool(floor >= TARGET_RATIO),
+        margin=f"{margin:.2f}" if reachable else None,
+        margin_ms=f"{margin * bare_ms:.2f}" if reachable else None,
+        own=f"{own:.2f}" if reachable else None,
+        own_ms=f"{own * bare_ms:.2f}" if reachable else None,
+    )
 
 
-def _floor_target_values(default: Row) -> dict[str, str | bool]:
+def _floor_target_values(default: Row) -> FloorTargetValues:
     """The time-to-policy target, env / floor at the default config, and where the env's step goes beyond the
     floor loop, component by component (median ms per step).
 
@@ -202,32 +265,30 @@ def _floor_target_values(default: Row) -> dict[str, str | bool]:
     ]
     total = "env − floor (sum of the stage medians; the timed blocks' medians differ a little)"
     lines.append([total, f"{sum(parts.values()):.2f}", ""])
-    return {
-        "floor_target": str(TARGET_FLOOR_RATIO),
-        "env_floor": f"{default['ratio_env_floor']:.2f}",
-        "env_floor_low": f"{default['ratio_env_floor_min']:.2f}",
-        "env_floor_high": f"{default['ratio_env_floor_max']:.2f}",
-        "env_floor_met": bool(default["ratio_env_floor"] <= TARGET_FLOOR_RATIO),
-        "floor_ms": f"{default['ms_floor']:.2f}",
-        "allowed_ms": f"{(TARGET_FLOOR_RATIO - 1) * default['ms_floor']:.2f}",
-        "beyond_floor_table": markdown_table(
-            ["beyond the floor", "ms per step", "share of env − floor"], lines
-        ),
-    }
+    return FloorTargetValues(
+        floor_target=str(TARGET_FLOOR_RATIO),
+        env_floor=f"{default['ratio_env_floor']:.2f}",
+        env_floor_low=f"{default['ratio_env_floor_min']:.2f}",
+        env_floor_high=f"{default['ratio_env_floor_max']:.2f}",
+        env_floor_met=bool(default["ratio_env_floor"] <= TARGET_FLOOR_RATIO),
+        floor_ms=f"{default['ms_floor']:.2f}",
+        allowed_ms=f"{(TARGET_FLOOR_RATIO - 1) * default['ms_floor']:.2f}",
+        beyond_floor_table=markdown_table(["beyond the floor", "ms per step", "share of env − floor"], lines),
+    )
 
 
-def _real_time_values(rows: list[Row]) -> dict[str, str | bool]:
+def _real_time_values(rows: list[Row]) -> RealTimeValues:
     """The real-time target at the default config, and the smallest resolution beside gym-pybullet-drones."""
     default = rows[0]
     smallest = min(rows[1:] or rows, key=lambda row: row["width"] * row["height"])
-    return {
-        "target_real_time": f"{TARGET_REAL_TIME_FACTOR:.0f}",
-        "default_real_time": f"{default['real_time_factor_env']:.1f}",
-        "real_time_met": bool(default["real_time_factor_env"] >= TARGET_REAL_TIME_FACTOR),
-        "default_real_time_bare": f"{default['real_time_factor_bare']:.1f}",
-        "pybullet_real_time": str(PYBULLET_DRONES_RTF),
-        "pybullet_vision": "×".join(map(str, PYBULLET_DRONES_VISION)),
-        "smallest_config": smallest["config"],
-        "smallest_real_time": f"{smallest['real_time_factor_env']:.1f}",
-        "smallest_real_time_bare": f"{smallest['real_time_factor_bare']:.1f}",
-    }
+    return RealTimeValues(
+        target_real_time=f"{TARGET_REAL_TIME_FACTOR:.0f}",
+        default_real_time=f"{default['real_time_factor_env']:.1f}",
+        real_time_met=bool(default["real_time_factor_env"] >= TARGET_REAL_TIME_FACTOR),
+        default_real_time_bare=f"{default['real_time_factor_bare']:.1f}",
+        pybullet_real_time=str(PYBULLET_DRONES_RTF),
+        pybullet_vision="×".join(map(str, PYBULLET_DRONES_VISION)),
+        smallest_config=smallest["config"],
+        smallest_real_time=f"{smallest['real_time_factor_env']:.1f}",
+        smallest_real_time_bare=f"{smallest['real_time_factor_bare']:.1f}",
+    )

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -129,42 +130,123 @@ def estimator_defaults() -> dict[str, object]:
     return {name: getattr(defaults, name) for name in STATED_SETTINGS}
 
 
+@dataclass(frozen=True)
+class FlightValues:
+    """How the flight was made (:class:`~agents.analysis.perf_rows.FlightDescription`), as the report states it,
+    and the metres flown per frame."""
+
+    layout: str
+    seed: str
+    frames: str
+    width: str
+    height: str
+    fov_deg: str
+    frame_rate: str
+    forward_speed: str
+    metres_per_frame: str
+
+
+@dataclass(frozen=True)
+class EstimatorSettingsValues:
+    """The estimator's default settings the report states (:data:`STATED_SETTINGS`), and whether its
+    forward-backward check runs on one pyramid level."""
+
+    method: str
+    win_size: str
+    max_level: str
+    max_lk_error: str
+    forward_backward: str
+    fb_max_error_px: str
+    fb_max_level: str
+    normalize_brightness: str
+    min_parallax_px: str
+    max_epipolar_error_px: str
+    fb_one_level: bool
+
+
+@dataclass(frozen=True)
+class EstimatorTargetValues:
+    """The verdicts against the bare-baseline target (:func:`_target_values`): the default threshold's points
+    (None where it was not swept) and the working range's thresholds (None where no row reaches it), and each of
+    :data:`ESTIMATOR_CONFIGS`' verdict."""
+
+    default_threshold: str
+    default_swept: bool
+    working_points: str
+    any_working: bool
+    target_ratio: str
+    default_points: str | None
+    working_thresholds: str | None
+    verdict_fb_on: str
+    verdict_fb_off: str
+
+
+@dataclass(frozen=True)
+class EstimatorPerformanceValues(EstimatorTargetValues, EstimatorSettingsValues, FlightValues):
+    """Every value ``templates/estimator_performance.md.j2`` words (:func:`estimator_report_values`)."""
+
+    run: RunFacts
+    repeats: str
+    bare_win_size: str
+    bare_max_level: str
+    equal_counts: str
+    stage_table: str
+
+
+@dataclass(frozen=True)
+class VerdictValues:
+    """One configuration's verdict (``templates/target_verdict.md.j2``): its ratio at the default threshold and
+    whether it meets the target there (both None where the default was not swept), and its range over the rows."""
+
+    swept: bool
+    low: str
+    high: str
+    met_rows: str
+    rows: str
+    at_default: str | None
+    met: bool | None
+
+
 def estimator_report_values(
     rows: list[Row],
     flight: FlightDescription,
     repeats: int,
     defaults: Mapping[str, object],
     run: RunFacts,
-) -> dict[str, object]:
-    """Every figure, table and verdict of ``templates/estimator_performance.md.j2``, from
-    :func:`run_estimator_table`'s rows (Table 3), the flight's description (``Flight.description``), the
-    benchmark's repeats, the estimator's default settings (:func:`estimator_defaults`) and the run's facts."""
-    return {
-        "run": run,
-        "repeats": str(repeats),
-        **_flight_values(flight),
-        **_settings_values(defaults),
-        "bare_win_size": str(WIN_SIZE),
-        "bare_max_level": str(MAX_LEVEL),
-        "equal_counts": str(all(row["equal_counts"] for row in rows)),
-        "stage_table": _stage_table(rows),
-        **_target_values(rows),
-    }
+) -> EstimatorPerformanceValues:
+    """Every figure, table and verdict of the report, from :func:`run_estimator_table`'s rows (Table 3), the
+    flight's description (``Flight.description``), the benchmark's repeats, the estimator's default settings
+    (:func:`estimator_defaults`) and the run's facts."""
+    # Each part is handed on whole, by its fields (``vars``: shallow, as the template is given them).
+    return EstimatorPerformanceValues(
+        **vars(_flight_values(flight)),
+        **vars(_settings_values(defaults)),
+        **vars(_target_values(rows)),
+        run=run,
+        repeats=str(repeats),
+        bare_win_size=str(WIN_SIZE),
+        bare_max_level=str(MAX_LEVEL),
+        equal_counts=str(all(row["equal_counts"] for row in rows)),
+        stage_table=_stage_table(rows),
+    )
 
 
-def _flight_values(flight: FlightDescription) -> dict[str, str]:
-    return {key: str(value) for key, value in flight.items()} | {
-        "fov_deg": f"{flight['fov_deg']:.0f}",
-        "frame_rate": f"{flight['frame_rate']:.0f}",
-        "metres_per_frame": f"{flight['forward_speed'] / flight['frame_rate']:.2f}",
-    }
+def _flight_values(flight: FlightDescription) -> FlightValues:
+    stated = {key: str(value) for key, value in flight.items()}
+    return FlightValues(
+        **stated
+        | {
+            "fov_deg": f"{flight['fov_deg']:.0f}",
+            "frame_rate": f"{flight['frame_rate']:.0f}",
+        },
+        metres_per_frame=f"{flight['forward_speed'] / flight['frame_rate']:.2f}",
+    )
 
 
-def _settings_values(defaults: Mapping[str, object]) -> dict[str, str | bool]:
-    values: dict[str, str | bool] = {name: f"{defaults[name]:g}" for name in _FLOAT_SETTINGS}
-    values.update({name: str(defaults[name]) for name in STATED_SETTINGS if name not in _FLOAT_SETTINGS})
-    values["fb_one_level"] = defaults["fb_max_level"] == 0
-    return values
+def _settings_values(defaults: Mapping[str, object]) -> EstimatorSettingsValues:
+    stated = {name: f"{defaults[name]:g}" for name in _FLOAT_SETTINGS}
+    stated.update({name: str(defaults[name]) for name in STATED_SETTINGS if name not in _FLOAT_SETTINGS})
+    return EstimatorSettingsValues(**stated, fb_one_level=defaults["fb_max_level"] == 0)
 
 
 def _ms(value: float) -> str:
@@ -193,39 +275,37 @@ def _stage_table(rows: list[Row]) -> str:
     return table(cells, columns)
 
 
-def _target_values(rows: list[Row]) -> dict[str, str | bool]:
+def _target_values(rows: list[Row]) -> EstimatorTargetValues:
     """The verdicts against the bare-baseline target: at the default threshold, and over the rows in the working
     range of point counts (all rows where none reaches it), where fixed per-call costs no longer dominate."""
     default = next((row for row in rows if row["fast_threshold"] == DEFAULT_THRESHOLD), None)
     working = [row for row in rows if row["points_found"] >= WORKING_POINTS]
-    values: dict[str, str | bool] = {
-        "default_threshold": str(DEFAULT_THRESHOLD),
-        "default_swept": default is not None,
-        "working_points": str(WORKING_POINTS),
-        "any_working": bool(working),
-        "target_ratio": f"{TARGET_RATIO_BARE:.1f}",
+    verdicts = {
+        f"verdict_{name}": _verdict(working or rows, default, f"ratio_{name}") for name in ESTIMATOR_CONFIGS
     }
-    if default is not None:
-        values["default_points"] = f"{default['points_found']:.0f}"
-    if working:
-        values["working_thresholds"] = ", ".join(str(row["fast_threshold"]) for row in working)
-    for name in ESTIMATOR_CONFIGS:
-        values[f"verdict_{name}"] = _verdict(working or rows, default, f"ratio_{name}")
-    return values
+    return EstimatorTargetValues(
+        default_threshold=str(DEFAULT_THRESHOLD),
+        default_swept=default is not None,
+        working_points=str(WORKING_POINTS),
+        any_working=bool(working),
+        target_ratio=f"{TARGET_RATIO_BARE:.1f}",
+        default_points=None if default is None else f"{default['points_found']:.0f}",
+        working_thresholds=", ".join(str(row["fast_threshold"]) for row in working) if working else None,
+        **verdicts,
+    )
 
 
 def _verdict(working: list[Row], default: Row | None, key: str) -> str:
-    """One configuration's verdict (``templates/target_verdict.md.j2``): its ratio at the default threshold and
-    its range over the working rows."""
+    """One configuration's verdict: its ratio at the default threshold and its range over the working rows."""
     ratios = [row[key] for row in working]
-    fields: dict[str, str | bool] = {
-        "swept": default is not None,
-        "low": f"{min(ratios):.2f}",
-        "high": f"{max(ratios):.2f}",
-        "met_rows": str(sum(bool(ratio <= TARGET_RATIO_BARE) for ratio in ratios)),
-        "rows": str(len(ratios)),
-    }
-    if default is not None:
-        fields.update(at_default=f"{default[key]:.2f}", met=bool(default[key] <= TARGET_RATIO_BARE))
+    fields = VerdictValues(
+        swept=default is not None,
+        low=f"{min(ratios):.2f}",
+        high=f"{max(ratios):.2f}",
+        met_rows=str(sum(bool(ratio <= TARGET_RATIO_BARE) for ratio in ratios)),
+        rows=str(len(ratios)),
+        at_default=None if default is None else f"{default[key]:.2f}",
+        met=None if default is None else bool(default[key] <= TARGET_RATIO_BARE),
+    )
     # The verdict sits inside a line of the report: the template file's final newline is not part of it.
     return render(PACKAGE, "target_verdict.md.j2", fields, every_value_used=True).removesuffix("\n")

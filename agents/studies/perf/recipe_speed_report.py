@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -154,9 +155,52 @@ def _plot(rows: Sequence[Mapping[str, object]], path: Path) -> None:
         axis.legend(loc="lower right", fontsize=8)
 
 
+@dataclass(frozen=True)
+class RecipeTarget:
+    """The time-to-policy target for one recipe (:func:`_target`): its ratio to the reference's minutes per seed,
+    whether it meets the reference's validation bar (None: not flown against it), and whether it meets both."""
+
+    recipe: str
+    ratio: str
+    meets: bool | None
+    met: bool
+
+
+@dataclass(frozen=True)
+class SeedBudget:
+    """One recipe's minutes per training seed and whether they fit the seed budget."""
+
+    recipe: str
+    minutes: float
+    within: bool
+
+
+@dataclass(frozen=True)
+class TrainingPerformanceValues:
+    """Every value ``templates/training_performance.md.j2`` words (:func:`recipe_report_values`)."""
+
+    run: RunFacts
+    table: str
+    repeats: str
+    reference: str
+    quality_table: str
+    clean_layouts: str
+    condition_layouts: str
+    clean_bar: str
+    allowed_rise: str
+    target_ratio: str
+    targets: list[RecipeTarget]
+    quality_flown: bool
+    seed_budget: str
+    budgets: list[SeedBudget]
+    teachers: str
+
+
 # A row is a CSV row whose columns are named from KINDS and CONDITIONS (``minutes_ppo``, ``failure_clean``): no
 # TypedDict spells computed keys, and its numbers are compared and formatted here.
-def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: RunFacts) -> dict[str, object]:
+def recipe_report_values(
+    rows: Sequence[Mapping[str, Any]], repeats: int, run: RunFacts
+) -> TrainingPerformanceValues:
     """Every figure, table and verdict of ``templates/training_performance.md.j2``, from the recipes' rows (the
     reference first, as :func:`run_recipe_benchmark` writes them to the CSV), the number of blocks and the
     run's facts."""
@@ -193,45 +237,40 @@ def recipe_report_values(rows: Sequence[Mapping[str, Any]], repeats: int, run: R
         "meets the bar": "{meets}",
     }
     first, clean, conditions = ABLATION_SEED_START, ABLATION_LAYOUTS["clean"], ABLATION_LAYOUTS["conditions"]
-    return {
-        "run": run,
-        "table": table(times, minutes),
-        "repeats": str(repeats),
-        "reference": reference["recipe"],
-        "quality_table": table(judged, quality),
-        "clean_layouts": f"{first:,}–{first + clean - 1:,}",
-        "condition_layouts": f"{first:,}–{first + conditions - 1:,}",
-        "clean_bar": f"{CLEAN_FAILURE_BAR:.2f}",
-        "allowed_rise": f"{ALLOWED_RISE:.2f}",
-        "target_ratio": f"{TARGET_TIME_RATIO:.2f}",
-        "targets": [_target(r["recipe"], r["ratio_to_reference"], r["meets_quality"]) for r in rows[1:]],
+    return TrainingPerformanceValues(
+        run=run,
+        table=table(times, minutes),
+        repeats=str(repeats),
+        reference=reference["recipe"],
+        quality_table=table(judged, quality),
+        clean_layouts=f"{first:,}–{first + clean - 1:,}",
+        condition_layouts=f"{first:,}–{first + conditions - 1:,}",
+        clean_bar=f"{CLEAN_FAILURE_BAR:.2f}",
+        allowed_rise=f"{ALLOWED_RISE:.2f}",
+        target_ratio=f"{TARGET_TIME_RATIO:.2f}",
+        targets=[_target(r["recipe"], r["ratio_to_reference"], r["meets_quality"]) for r in rows[1:]],
         # The quality section and the ratio target read flownav ablation's lever-search conditions: shown only
         # where some recipe was flown there, else every row would say "not flown".
-        "quality_flown": any(row["meets_quality"] != "" for row in rows),
-        "seed_budget": f"{SEED_BUDGET_MINUTES:g}",
-        "budgets": [
-            {
-                "recipe": r["recipe"],
-                "minutes": r["minutes_per_seed"],
-                "within": float(r["minutes_per_seed"]) <= SEED_BUDGET_MINUTES,
-            }
+        quality_flown=any(row["meets_quality"] != "" for row in rows),
+        seed_budget=f"{SEED_BUDGET_MINUTES:g}",
+        budgets=[
+            SeedBudget(
+                recipe=r["recipe"],
+                minutes=r["minutes_per_seed"],
+                within=float(r["minutes_per_seed"]) <= SEED_BUDGET_MINUTES,
+            )
             for r in rows
         ],
-        "teachers": ", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
-    }
+        teachers=", ".join(f"`{row['recipe']}`" for row in rows if row["teacher_env_steps"]),
+    )
 
 
-def _target(recipe: str, ratio: float, meets_quality: bool | str) -> dict[str, object]:
+def _target(recipe: str, ratio: float, meets_quality: bool | str) -> RecipeTarget:
     """The time-to-policy target for one recipe: ``ratio`` (to the reference's minutes per seed) at most a third,
     and the reference's validation bar met (``meets_quality``; "" and None: not flown against it)."""
     meets = None if meets_quality == "" else bool(meets_quality)
     fast = ratio <= TARGET_TIME_RATIO
-    return {
-        "recipe": recipe,
-        "ratio": f"{ratio:.2f}",
-        "meets": meets,
-        "met": fast and meets is True,
-    }
+    return RecipeTarget(recipe=recipe, ratio=f"{ratio:.2f}", meets=meets, met=fast and meets is True)
 
 
 def _rate(value: float | str) -> str:

@@ -27,6 +27,7 @@ from agents.common.tables import markdown_table, today
 from agents.evaluation.provenance import gl_renderer, is_software_renderer
 
 if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
     from matplotlib.figure import Figure
 
 PACKAGE = "agents.studies.perf"
@@ -112,7 +113,7 @@ def rounded(rows: Iterable[Mapping[str, object]]) -> list[dict[str, object]]:
     return [{key: round(v, 4) if isinstance(v, float) else v for key, v in row.items()} for row in rows]
 
 
-def write_report(path: Path, template: str, values: Mapping[str, object]) -> Path:
+def write_report(path: Path, template: str, values: DataclassInstance) -> Path:
     """``templates/<template>`` filled with ``values`` (every one of them used), written to ``path``."""
     path.write_text(render(PACKAGE, template, values, every_value_used=True))
     return path

@@ -6,14 +6,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any, TypedDict
+from typing import TypedDict
 
 from agents.pages.wording import span
 from agents.studies.thesis.metrics import MetricRow
 from agents.studies.thesis.reference import TABLE3, THESIS_FOCAL_PX, VARIABLE_TESTS
-from agents.studies.thesis.results import SweepRow, TimingRow
-
-Row = dict[str, Any]
+from agents.studies.thesis.results import SweepRow, Table2Row, ThesisRotationQuote, TimingRow
 
 
 class Table3Comparison(TypedDict):
@@ -39,43 +37,44 @@ def _span(values: list[float]) -> str:
     return span(found, 2) if found else "–"
 
 
-def _axes_turned(row: Row) -> int:
+def _axes_turned(quote: ThesisRotationQuote) -> int:
     """How many axes the thesis's case turns about."""
-    return sum(abs(a) > 0 for a in row["thesis"]["unity_deg"])
+    return sum(abs(a) > 0 for a in quote["unity_deg"])
 
 
-def _point_count_gaps(quoted: list[Row]) -> list[str]:
+def _point_count_gaps(quoted: list[tuple[Table2Row, ThesisRotationQuote]]) -> list[str]:
     """The cases where one program keeps less than half the other's points per pair, each as the reading words
     it: ``test 3: 120 against 310``."""
     gaps = []
-    for r in quoted:
-        ours, theirs = r["tracked"] / max(r["frame_pairs"], 1), r["thesis"]["points"]
+    for r, thesis in quoted:
+        ours, theirs = r["tracked"] / max(r["frame_pairs"], 1), thesis["points"]
         if theirs < 0.5 * ours or ours < 0.5 * theirs:
-            gaps.append(f"test {r['thesis']['test']}: {theirs} against {ours:.0f}")
+            gaps.append(f"test {thesis['test']}: {theirs} against {ours:.0f}")
     return gaps
 
 
-def table2_reading(rows: list[Row]) -> dict[str, str] | None:
+def table2_reading(rows: list[Table2Row]) -> dict[str, str] | None:
     """The figures of the README's reading of Table 2: single- and two-axis cases, thesis and FlowNav, and the
     worst thesis case as a rotation error; None where no case quotes the thesis."""
-    quoted = [r for r in rows if r.get("thesis")]
+    # Each case that quotes the thesis, beside its quote.
+    quoted = [(r, thesis) for r in rows if (thesis := r.get("thesis"))]
     if not quoted:
         return None
-    single = [r for r in quoted if _axes_turned(r) == 1]
-    double = [r for r in quoted if _axes_turned(r) >= 2]
+    single = [(r, thesis) for r, thesis in quoted if _axes_turned(thesis) == 1]
+    double = [(r, thesis) for r, thesis in quoted if _axes_turned(thesis) >= 2]
     # The thesis's case with the largest mean error: that error in pixels and as a rotation error in degrees.
-    worst = max(quoted, key=lambda r: r["thesis"]["mean_px"])
+    _, worst = max(quoted, key=lambda pair: pair[1]["mean_px"])
     return {
-        "single_thesis": _span([r["thesis"]["mean_px"] for r in single]),
-        "single_ours": _span([r["matrix_mean_px"] for r in single]),
-        "double_tests": ", ".join(str(r["thesis"]["test"]) for r in double),
-        "double_thesis": _span([r["thesis"]["mean_px"] for r in double]),
-        "double_ours": _span([r["matrix_mean_px"] for r in double]),
-        "double_ours_inliers": _span([r["matrix_mean_inliers_px"] for r in double]),
-        "order_shift": f"{max((r.get('euler_order_shift_px', 0.0) for r in double), default=0.0):.2f}",
-        "worst_test": str(worst["thesis"]["test"]),
-        "worst_px": f"{worst['thesis']['mean_px']:g}",
-        "worst_deg": f"{math.degrees(worst['thesis']['mean_px'] / THESIS_FOCAL_PX):.1f}",
+        "single_thesis": _span([thesis["mean_px"] for _, thesis in single]),
+        "single_ours": _span([r["matrix_mean_px"] for r, _ in single]),
+        "double_tests": ", ".join(str(thesis["test"]) for _, thesis in double),
+        "double_thesis": _span([thesis["mean_px"] for _, thesis in double]),
+        "double_ours": _span([r["matrix_mean_px"] for r, _ in double]),
+        "double_ours_inliers": _span([r["matrix_mean_inliers_px"] for r, _ in double]),
+        "order_shift": f"{max((r.get('euler_order_shift_px', 0.0) for r, _ in double), default=0.0):.2f}",
+        "worst_test": str(worst["test"]),
+        "worst_px": f"{worst['mean_px']:g}",
+        "worst_deg": f"{math.degrees(worst['mean_px'] / THESIS_FOCAL_PX):.1f}",
         "count_outliers": "; ".join(_point_count_gaps(quoted)),
     }
 

@@ -4,12 +4,12 @@ and FlowNav's rows differ, computed from the three-capsule run's measured motion
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from agents.pages.wording import pct
-from agents.studies.thesis.comparison import Row
 from agents.studies.thesis.reference import THESIS_FOCAL_PX
+from agents.studies.thesis.results import SweepRow
 
 # The thesis's breaking point, and the derotation error (px) taken to break depths at this scene's parallax.
 BREAKING_ERROR = 0.08
@@ -32,7 +32,10 @@ READINGS = (
 )
 
 
-def _row(sweeps: list[Row], variable: str, value: float, method: str = "thesis") -> Row:
+def _row(
+    sweeps: Sequence[SweepRow], variable: str, value: float, method: str = "thesis"
+) -> SweepRow | dict[str, float]:
+    """The sweep's row of ``method`` at ``variable`` = ``value``; empty where it was not flown."""
     for row in sweeps:
         if row["variable"] == variable and row["method"] == method and math.isclose(row["value"], value):
             return row

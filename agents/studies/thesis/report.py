@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -92,21 +93,36 @@ def _experiment_values(result: ExperimentResult) -> dict[str, object]:
     }
 
 
+@dataclass(frozen=True)
+class ThesisReadmeValues:
+    """What ``agents/pages/templates/thesis_readme.md.j2`` states: the experiments this run ran and its wall
+    time, the thesis's focal length, every experiment's section (its JSON result with the comparisons with the
+    thesis beside it), the rotation- and translation-error section (None without the three-capsule result), the
+    hand-written discussion (may be empty) and the machine of the first result."""
+
+    ran: str
+    wall_s: str
+    thesis_focal_px: str
+    experiments: list[dict[str, object]]
+    motion: dict[str, object] | None
+    discussion: str
+    hardware: str
+
+
 def readme_values(
     results: dict[str, ExperimentResult], ran: list[str], wall_s: float, discussion: str
-) -> dict[str, object]:
-    """What ``agents/pages/templates/thesis_readme.md.j2`` states: every experiment's section from its JSON
-    result, the rotation- and translation-error section from the three-capsule one, the hand-written
-    ``discussion`` (may be empty) and the machine of the first result."""
-    return {
-        "ran": ", ".join(ran),
-        "wall_s": f"{wall_s:.0f}",
-        "thesis_focal_px": f"{THESIS_FOCAL_PX:g}",
-        "experiments": [_experiment_values(result) for result in results.values()],
-        "motion": motion_values(results["three_capsule"]) if "three_capsule" in results else None,
-        "discussion": discussion,
-        "hardware": next(iter(results.values()))["hardware"] if results else "",
-    }
+) -> ThesisReadmeValues:
+    """The README's values from every experiment's JSON result, the experiments this run ran, its wall time and
+    the hand-written ``discussion``."""
+    return ThesisReadmeValues(
+        ran=", ".join(ran),
+        wall_s=f"{wall_s:.0f}",
+        thesis_focal_px=f"{THESIS_FOCAL_PX:g}",
+        experiments=[_experiment_values(result) for result in results.values()],
+        motion=motion_values(results["three_capsule"]) if "three_capsule" in results else None,
+        discussion=discussion,
+        hardware=next(iter(results.values()))["hardware"] if results else "",
+    )
 
 
 def write_readme(out_dir: Path, ran: list[str], wall_s: float) -> Path:

@@ -3,9 +3,12 @@ measured and the figures it drew (``report.py`` adds the run's own facts and wor
 
 from __future__ import annotations
 
-from typing import TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 from agents.studies.thesis.metrics import MetricRow
+
+if TYPE_CHECKING:  # typing has it from Python 3.11; annotations are not evaluated at run time
+    from typing import NotRequired
 
 
 class TimingRow(TypedDict):
@@ -15,6 +18,41 @@ class TimingRow(TypedDict):
     stage: str
     mean_ms: float
     median_ms: float
+
+
+class ThesisRotationQuote(TypedDict):
+    """A row of the thesis's Table 2 as a case quotes it (``ThesisRotationCase``): its Unity angles and what it
+    measured (None: every point an outlier)."""
+
+    test: int
+    unity_deg: list[float]
+    mean_px: float
+    mean_inliers_px: float | None
+    points: int
+    points_inliers: int
+
+
+class Table2Row(TypedDict):
+    """One pure rotation of Table 2 (``rotation.py``): the case, its frame pairs and angles flown, the thesis's
+    row it quotes (absent: none), the mean residual after compensating with the exact rotation (``matrix``) and
+    with the thesis's Euler derotation (``euler``), with and without outliers, and the outliers; the residual
+    uncompensated, the points detected and tracked (of the Euler pass), and what an Euler-order mix-up moves a
+    point (px)."""
+
+    case: str
+    frame_pairs: int
+    flown_deg: list[float]
+    thesis: NotRequired[ThesisRotationQuote]
+    matrix_mean_px: float
+    matrix_mean_inliers_px: float
+    matrix_outliers: int
+    uncompensated_mean_px: float
+    detected: int
+    tracked: int
+    euler_mean_px: float
+    euler_mean_inliers_px: float
+    euler_outliers: int
+    euler_order_shift_px: float
 
 
 class SweepRow(MetricRow):
@@ -48,7 +86,7 @@ class ExperimentResult(TypedDict, total=False):
 
     rows: list[MetricRow]
     figures: list[str]
-    table2: list[dict[str, object]]
+    table2: list[Table2Row]
     focal_px: float
     table3: list[TimingRow]
     fast_threshold: int

@@ -3,10 +3,13 @@ writer can insist that every value it gives is named."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import jinja2
 import pytest
 
 from agents.common.jinja_reports import environment, names_in, render, template_source, unused_values
+from agents.studies.perf.estimator_speed_report import VerdictValues
 
 
 def _render(text: str, **values: object) -> str:
@@ -40,12 +43,34 @@ def test_names_and_unused_values() -> None:
     assert "board" in names_in(template_source("agents.pages", "benchmark.md.j2"))
 
 
+@dataclasses.dataclass(frozen=True)
+class _StaleVerdict(VerdictValues):
+    """A verdict's values with one its template does not name."""
+
+    stale: str
+
+
 def test_every_value_used_names_the_template_and_the_value() -> None:
     names = names_in(template_source("agents.studies.perf", "target_verdict.md.j2"))
-    values = {name: "1" for name in names} | {"swept": True, "met": True, "stale": "x"}
+    fields = {name: "1" for name in names} | {"swept": True, "met": True}
     with pytest.raises(ValueError, match=r"template 'target_verdict\.md\.j2': value 'stale' is not used"):
-        render("agents.studies.perf", "target_verdict.md.j2", values, every_value_used=True)
-    del values["stale"]
-    assert render("agents.studies.perf", "target_verdict.md.j2", values, every_value_used=True).startswith(
-        "1× → **met**"
-    )
+        render(
+            "agents.studies.perf",
+            "target_verdict.md.j2",
+            _StaleVerdict(**fields, stale="x"),
+            every_value_used=True,
+        )
+    assert render(
+        "agents.studies.perf", "target_verdict.md.j2", VerdictValues(**fields), every_value_used=True
+    ).startswith("1× → **met**")
+
+
+def test_a_mapping_of_values_is_refused_naming_the_template() -> None:
+    # Each template gets a frozen dataclass of its values, which mypy checks; a dictionary's keys it cannot.
+    with pytest.raises(
+        TypeError, match=r"^template 'suite\.md\.j2': values must be a dataclass instance"
+    ) as raised:
+        render("agents.pages", "suite.md.j2", {"tiers": []})  # type: ignore[arg-type]
+    assert "\n" not in str(raised.value) and str(raised.value).endswith("got dict")
+    with pytest.raises(TypeError, match="got type"):
+        render("agents.studies.perf", "target_verdict.md.j2", VerdictValues)  # type: ignore[arg-type]

@@ -3,6 +3,7 @@ headroom and what is not yet flown."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from agents.pages.suite_page import (
     suite_page,
     suite_values,
 )
+from agents.pages.suite_types import SuiteValues
 from flownav_env.tiers import SUITE_VERSION, TIERS
 
 
@@ -31,7 +33,7 @@ def _row(agent: str, tier: str, matrix: np.ndarray, privileged: bool = False) ->
     return row
 
 
-def _values(missing: list[str]) -> dict:
+def _values(missing: list[str]) -> SuiteValues:
     rng = np.random.default_rng(0)
     matrices = {
         "bee_ttc": (rng.random((1, 60)) < 0.3).astype(float),
@@ -55,12 +57,12 @@ def _values(missing: list[str]) -> dict:
 
 def test_references_and_provisional_agents_are_listed_apart_and_never_best() -> None:
     values = _values([])
-    (hard,) = values["tiers"]
-    assert hard["best"]["agent"] == "bee_ttc" and hard["top_group"] == ["bee_ttc"]
-    assert [row["agent"] for row in hard["ranked"]] == ["bee_ttc", "straight"]
-    assert [row["agent"] for row in hard["provisional"]] == ["ppo_flow"]
-    assert [row["agent"] for row in hard["references"]] == ["ppo_oracle"]
-    assert hard["room"] is True and hard["env_id"] == TIERS["hard"].env_id
+    (hard,) = values.tiers
+    assert hard.best["agent"] == "bee_ttc" and hard.top_group == ["bee_ttc"]
+    assert [row["agent"] for row in hard.ranked] == ["bee_ttc", "straight"]
+    assert [row["agent"] for row in hard.provisional] == ["ppo_flow"]
+    assert [row["agent"] for row in hard.references] == ["ppo_oracle"]
+    assert hard.room is True and hard.env_id == TIERS["hard"].env_id
 
 
 def test_the_page_renders_every_branch() -> None:
@@ -87,7 +89,7 @@ def test_the_reading_section_pairs_the_committed_flights_by_layout() -> None:
         assert row["layouts"] == 100 and row["first_seed"] >= 500_000  # validation layouts only
         assert row["noise_m"] == translation_noise_m(VELOCITY_READINGS["3d_speed"][1])
         assert row["comparison"].difference == pytest.approx(row["failure"] - row["suite_failure"])
-    page = suite_page({**_values([]), "readings": readings})
+    page = suite_page(dataclasses.replace(_values([]), readings=readings))
     assert "## How much of the noisy tier rests on one reading of one specification" in page
     assert "## How much of the noisy tier" not in suite_page(_values([]))
 
@@ -105,8 +107,7 @@ def test_the_bound_section_classifies_each_planner_failure_by_the_independent_ch
     assert bound["infeasible_share"] == pytest.approx(1 / 60)
     assert bound["gap"].difference == pytest.approx(0.5 - 2 / 60) and bound["gap"].low > 0
     values = _values([])
-    values["tiers"][0]["bound"] = bound
-    page = suite_page(values)
+    page = suite_page(dataclasses.replace(values, tiers=[dataclasses.replace(values.tiers[0], bound=bound)]))
     assert "## What each tier allows" in page and "| `hard` | 0.03 [" in page
     assert "## What each tier allows" not in suite_page(_values([]))
 
@@ -121,8 +122,8 @@ def test_a_real_layout_is_checked_from_the_envs_privileged_keys() -> None:
 
 
 def test_each_row_says_which_tiers_its_agent_trained_on() -> None:
-    (hard,) = _values([])["tiers"]
-    rows = {row["agent"]: row for row in [*hard["ranked"], *hard["provisional"], *hard["references"]]}
+    (hard,) = _values([]).tiers
+    rows = {row["agent"]: row for row in [*hard.ranked, *hard.provisional, *hard.references]}
     assert rows["bee_ttc"]["trained_on"] == "—"
     assert rows["ppo_flow"]["trained_on"] == "v1: clean (none of v2's)"  # FlowNav-v0 with its defaults
 
@@ -167,7 +168,7 @@ def test_each_tiers_comparison_of_recipes_for_the_student_is_linked() -> None:
         "hard": f"{STUDENT_RECIPES_DIR}/hard/ablation.md",
         "noisy": f"{STUDENT_RECIPES_DIR}/noisy/ablation.md",
     }
-    text = suite_page(_values([]) | {"recipe_reports": links})
+    text = suite_page(dataclasses.replace(_values([]), recipe_reports=links))
     assert "Recipes tried for the planner's flow student" in text
     assert "[`hard`](student_recipes/hard/ablation.md), [`noisy`](student_recipes/noisy/ablation.md)." in text
     assert "Recipes tried" not in suite_page(_values([]))
@@ -177,13 +178,13 @@ def test_the_camera_students_committed_recipe_pages_and_its_minutes_per_seed_are
     links = camera_student_recipe_reports()
     assert links["hard"] == "student_recipes_v2/hard/ablation.md"
     assert links["recipe_speed"] == "student_recipes_v2/recipe_speed/training_performance.md"
-    text = suite_page(_values([]) | {"recipe_reports": {"hard": "x.md"}, "camera_recipe_reports": links})
+    text = suite_page(
+        dataclasses.replace(_values([]), recipe_reports={"hard": "x.md"}, camera_recipe_reports=links)
+    )
     assert "[`recipe_speed`](student_recipes_v2/recipe_speed/training_performance.md)" in text
 
 
 def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_kept(tmp_path: Path) -> None:
-    import dataclasses
-
     from helpers import EPISODE
 
     from agents.analysis.records import append_record
@@ -208,7 +209,7 @@ def test_a_retired_agent_is_listed_with_its_seeds_failures_from_the_episodes_it_
     assert found["why"] == RETIRED_AGENTS[retired]
     assert found["tiers"] == [{"tier": "hard", "failures": [0.5]}]
     assert all(r["tiers"] == [] for r in retired_values(tmp_path / "none.csv", layouts=[10, 11]))
-    text = suite_page(_values([]) | {"retired": [found]})
+    text = suite_page(dataclasses.replace(_values([]), retired=[found]))
     assert "### Retired from the suite" in text
     assert f"- `{retired}`: {RETIRED_AGENTS[retired]}. `hard`: 0.50." in text
     assert "Retired from the suite" not in suite_page(_values([]))
@@ -218,8 +219,8 @@ def test_the_agents_a_version_does_not_fly_are_listed_with_why() -> None:
     from agents.policies import NOT_FLOWN_ON
 
     text = suite_page(
-        _values([]) | {"not_flown": {"ppo_x": "a reference no chain needs"}, "suite_version": "2"}
+        dataclasses.replace(_values([]), not_flown={"ppo_x": "a reference no chain needs"}, suite_version="2")
     )
     assert "### Not flown on suite v2" in text and "- `ppo_x`: a reference no chain needs." in text
-    assert "### Not flown on suite" not in suite_page(_values([]) | {"not_flown": {}})
-    assert _values([])["not_flown"] == NOT_FLOWN_ON.get(SUITE_VERSION, {})
+    assert "### Not flown on suite" not in suite_page(dataclasses.replace(_values([]), not_flown={}))
+    assert _values([]).not_flown == NOT_FLOWN_ON.get(SUITE_VERSION, {})

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from agents.analysis.paired import MIN_RANKED_SEEDS, Comparison
-from agents.common.jinja_reports import environment
+from agents.common.jinja_reports import environment, template_fields
 from agents.common.locations import REPO_ROOT, RESULTS_DIR
 from agents.common.study_choices import choices
 from agents.pages.wording import FILTERS, PACKAGE, render_report
@@ -282,11 +282,11 @@ def _variants(name: str, value: Any) -> list[Any]:
 @pytest.mark.slow
 @pytest.mark.parametrize("template", TEMPLATES)
 def test_every_template_renders_every_branch_from_the_committed_values(template: str) -> None:
-    values = {**flow_gap_values(RESULTS_DIR), "generated": "today", "command": "test"}
+    values = flow_gap_values(RESULTS_DIR, generated="today", command="test")
     texts = {render_report(template, values)}
-    for name, value in values.items():
+    for name, value in template_fields(values).items():
         for variant in _variants(name, value):
-            texts.add(render_report(template, {**values, name: variant}))
+            texts.add(render_report(template, dataclasses.replace(values, **{name: variant})))
     assert len(texts) > 1 and all(
         "{{" not in text and "{%" not in text and "overlap" not in text for text in texts
     )

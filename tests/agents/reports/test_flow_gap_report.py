@@ -164,8 +164,8 @@ def test_the_selection_keeps_the_picks_rises_and_each_stages_differences() -> No
     )
     search = SearchRecord(configs=["a", "b", "c"], layouts=[900_000, 900_049], differences=[])
     values = selection_values(result, search)
-    assert values["pick_rises"] == result.rises[:1] and values["search"] == search
-    assert {k: [d.difference for d in found] for k, found in values["stages"].items()} == {
+    assert values.pick_rises == result.rises[:1] and values.search == search
+    assert {k: [d.difference for d in found] for k, found in values.stages.items()} == {
         COMPARED[0]: [-0.01],
         COMPARED[1]: [-0.06],
     }

@@ -12,7 +12,12 @@ from agents.common.jinja_reports import render
 from agents.common.yaml_config import load_config
 from agents.policies.teachers import make_teacher
 from agents.studies.perf.recipe_speed import block_ratios, measure_stage, stage_minutes, stage_work
-from agents.studies.perf.recipe_speed_report import parse_recipe, recipe_report_values, run_recipe_benchmark
+from agents.studies.perf.recipe_speed_report import (
+    RecipeTarget,
+    parse_recipe,
+    recipe_report_values,
+    run_recipe_benchmark,
+)
 from agents.studies.perf.report_kit import RunFacts
 from agents.training.train_config import TrainConfig
 
@@ -133,13 +138,13 @@ def recipe_row(name: str, ratio: float, meets: bool | str, teacher_steps: int) -
 def test_the_target_needs_both_a_third_of_the_time_and_the_quality(ratio, meets, verdict) -> None:
     rows = [recipe_row("old", 1.0, True, 0), recipe_row("new", ratio, meets, 10)]
     values = recipe_report_values(rows, 3, RunFacts("flownav bench recipe", 60.0, "now", "-", 2, True))
-    assert values["targets"] == [
-        {
-            "recipe": "new",
-            "ratio": f"{ratio:.2f}",
-            "meets": None if meets == "" else meets,
-            "met": verdict.endswith("**met**"),
-        }
+    assert values.targets == [
+        RecipeTarget(
+            recipe="new",
+            ratio=f"{ratio:.2f}",
+            meets=None if meets == "" else meets,
+            met=verdict.endswith("**met**"),
+        )
     ]
     report = render("agents.studies.perf", "training_performance.md.j2", values, every_value_used=True)
     assert (

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agents.common.jinja_reports import names_in, render, template_source, unused_values
+from agents.common.jinja_reports import names_in, render, template_fields, template_source, unused_values
 from agents.studies.perf import env_speed_report, estimator_speed_report, report_kit
 from agents.studies.perf.report_kit import RunFacts
 
@@ -48,7 +48,7 @@ def facts(case: dict[str, Any]) -> RunFacts:
     )
 
 
-def estimator_values(case: dict[str, Any]) -> dict[str, Any]:
+def estimator_values(case: dict[str, Any]) -> estimator_speed_report.EstimatorPerformanceValues:
     return estimator_speed_report.estimator_report_values(
         case["rows"],
         case["flight"],
@@ -166,13 +166,20 @@ def test_templates_ship_as_package_data() -> None:
     assert shipped >= {report_kit.TEMPLATES / "env_performance.md.j2"}
 
 
+@dataclasses.dataclass(frozen=True)
+class _Drifted(estimator_speed_report.EstimatorPerformanceValues):
+    """The report's values with one its template does not name."""
+
+    extra: str
+
+
 def test_an_edited_template_that_drifts_from_its_values_fails() -> None:
     text = template_source(report_kit.PACKAGE, "estimator_performance.md.j2")
     assert "equal_counts" in names_in(text)
     edited = text.replace("{{ equal_counts }}", "True")
     values = estimator_values(copy.deepcopy(estimator_case("full")))
-    assert unused_values(edited, values) == ["equal_counts"]
-    drifted = {**values, "extra": "1"}
+    assert unused_values(edited, template_fields(values)) == ["equal_counts"]
+    drifted = _Drifted(**template_fields(values), extra="1")
     with pytest.raises(
         ValueError, match=r"template 'estimator_performance\.md\.j2': value 'extra' is not used"
     ):

@@ -14,6 +14,7 @@ ignoring only the lines that record when, where and with which commit it was wri
 from __future__ import annotations
 
 import difflib
+import filecmp
 import shutil
 import time
 from collections.abc import Sequence
@@ -81,12 +82,22 @@ def missing_inputs(report: Report) -> str:
 
 def _stage_inputs(report: Report, out: Path) -> None:
     """Copy ``report``'s committed inputs to the same places under ``out`` (nothing when ``out`` is
-    ``results/``). Copies, not links: a writer that appended to a linked CSV would change the committed one."""
+    ``results/``). Copies, not links: a writer that appended to a linked CSV would change the committed one.
+
+    Raises:
+        ValueError: ``out`` already holds a different file at an input's place (say, the ``results/`` of another
+            checkout than the installed one, with episodes not yet committed): it is left alone, never replaced.
+    """
     for pattern in report.inputs:
         for source in sorted(RESULTS_DIR.glob(pattern)):
             target = out / source.relative_to(RESULTS_DIR)
-            if target.exists() and target.samefile(source):
+            if target.exists() and (target.samefile(source) or filecmp.cmp(source, target, shallow=False)):
                 continue
+            if target.exists():
+                raise ValueError(
+                    f"{target} differs from the committed {source} it would be replaced by: regenerate into "
+                    f"a fresh --out, or into results/ of the checkout flownav runs from ({RESULTS_DIR.parent})"
+                )
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, target)
 

@@ -57,6 +57,21 @@ def test_regenerating_elsewhere_leaves_the_committed_report_and_its_data_alone(t
     assert {path: (path.stat().st_mtime_ns, path.stat().st_size) for path in committed} == before
 
 
+def test_regenerating_never_replaces_a_different_file_at_an_inputs_place(tmp_path: Path) -> None:
+    # Episodes flown into another checkout's results/ and not committed yet must survive a report run there.
+    (report,) = select_reports(["ablation-speed-1.5"])
+    regenerate(tmp_path, ["ablation-speed-1.5"])
+    staged = tmp_path / "ablation/speed_1.5/reference/bee_ttc.csv"
+    staged.write_text(staged.read_text() + "a row not committed yet\n")
+    kept = staged.read_bytes()
+    with pytest.raises(
+        ValueError, match=r"bee_ttc\.csv differs from the committed .* regenerate into a fresh --out"
+    ):
+        regenerate(tmp_path, ["ablation-speed-1.5"])
+    assert staged.read_bytes() == kept
+    assert report.path == "ablation/speed_1.5/ablation.md"
+
+
 def test_a_report_whose_data_is_not_committed_is_skipped_and_says_so(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
